@@ -1,0 +1,366 @@
+//! CPU reference G-buffer creation: the specification the GPU pass (`gbuffer.wgsl`) is
+//! tested against.
+//!
+//! A sort-middle rasterizer parallel over screen tiles (rayon):
+//! 1. vertex stage: world → clip (`vs_main`);
+//! 2. clipping in homogeneous space against the near and far planes and a guard band
+//!    (|x|, |y| ≤ 4w), fan-triangulated;
+//! 3. setup: viewport transform, snapping to 1/256 pixel (8 sub-pixel bits, as GPUs do),
+//!    integer edge functions; zero-area triangles are dropped; no face culling;
+//! 4. binning into 32 × 32 pixel tiles, in submission order;
+//! 5. per tile: coverage at pixel centres with the top-left fill rule, perspective-correct
+//!    attribute interpolation, screen-linear depth, depth test `Less`, then the fragment
+//!    stage (`fs_main`): octahedral normal, albedo × bilinear texture sample (mip 0, repeat,
+//!    sRGB decoded before filtering), packed material.
+
+use glam::{Vec2, Vec3, Vec4};
+use rayon::prelude::*;
+use scene::{Camera, Scene};
+
+use crate::{Frame, GBuffer, GBufferError, Image, NO_MATERIAL, normal::pack_octahedral, pack_material, srgb_to_linear};
+
+/// Side of a screen tile in pixels.
+pub const TILE: u32 = 32;
+/// Sub-pixel precision: positions snap to 1/`SUBPIXEL` pixel.
+pub const SUBPIXEL: i64 = 256;
+/// Guard band in units of w: triangles are clipped to |x|, |y| ≤ GUARD_BAND · w.
+const GUARD_BAND: f32 = 4.0;
+
+/// The G-buffer plus, per pixel, the index of the triangle that wrote it (triangles numbered
+/// in submission order over all meshes; `u32::MAX` where none did). Tests use the ids to find
+/// silhouette and triangle edges.
+pub struct Rasterized {
+    /// The G-buffer.
+    pub gbuffer: GBuffer,
+    /// Triangle id per pixel.
+    pub triangle_id: Image<u32>,
+}
+
+#[derive(Clone, Copy)]
+struct ClipVertex {
+    clip: Vec4,
+    normal: Vec3,
+    uv: Vec2,
+}
+
+impl ClipVertex {
+    fn lerp(self, other: Self, t: f32) -> Self {
+        Self {
+            clip: self.clip.lerp(other.clip, t),
+            normal: self.normal.lerp(other.normal, t),
+            uv: self.uv.lerp(other.uv, t),
+        }
+    }
+}
+
+/// A triangle ready for scan conversion.
+struct SetupTriangle {
+    id: u32,
+    material: u32,
+    /// Snapped framebuffer positions in 1/SUBPIXEL pixels, y down.
+    v: [[i64; 3]; 2],
+    /// Twice the signed area (positive after reordering).
+    area: i64,
+    /// 1 where the edge opposite vertex i is a top or left edge, else 0.
+    top_left: [i64; 3],
+    z: [f32; 3],
+    inv_w: [f32; 3],
+    normal_over_w: [Vec3; 3],
+    uv_over_w: [Vec2; 3],
+    /// Inclusive pixel bounds, clamped to the image.
+    bounds: [u32; 4],
+}
+
+/// Sutherland–Hodgman clipping against `dot(plane, clip) >= 0`.
+fn clip_polygon(poly: Vec<ClipVertex>, plane: Vec4) -> Vec<ClipVertex> {
+    let mut out = Vec::with_capacity(poly.len() + 2);
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let (da, db) = (plane.dot(a.clip), plane.dot(b.clip));
+        if da >= 0.0 {
+            out.push(a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            out.push(a.lerp(b, da / (da - db)));
+        }
+    }
+    out
+}
+
+/// Edge function of a→b at p (fixed point); positive inside a positively oriented triangle.
+fn edge(a: [i64; 2], b: [i64; 2], p: [i64; 2]) -> i64 {
+    (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+}
+
+/// Top-left rule for a positively oriented triangle in y-down coordinates: left edges go
+/// up (dy < 0), top edges are horizontal going right.
+fn is_top_left(a: [i64; 2], b: [i64; 2]) -> bool {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    dy < 0 || (dy == 0 && dx > 0)
+}
+
+fn setup(verts: [ClipVertex; 3], id: u32, material: u32, width: u32, height: u32) -> Option<SetupTriangle> {
+    let (w, h) = (width as f32, height as f32);
+    let mut fixed = [[0i64; 2]; 3];
+    for (f, v) in fixed.iter_mut().zip(&verts) {
+        let ndc = v.clip.truncate() / v.clip.w;
+        let x = ndc.x * (w * 0.5) + w * 0.5;
+        let y = -ndc.y * (h * 0.5) + h * 0.5;
+        *f = [(x * SUBPIXEL as f32).round() as i64, (y * SUBPIXEL as f32).round() as i64];
+    }
+    let mut order = [0usize, 1, 2];
+    let mut area = edge(fixed[0], fixed[1], fixed[2]);
+    if area == 0 {
+        return None;
+    }
+    if area < 0 {
+        order = [0, 2, 1];
+        area = -area;
+    }
+    let v = order.map(|i| fixed[i]);
+    let vs = order.map(|i| verts[i]);
+    let top_left = [0, 1, 2].map(|i| i64::from(is_top_left(v[(i + 1) % 3], v[(i + 2) % 3])));
+    let (min_x, max_x) = (v.iter().map(|p| p[0]).min()?, v.iter().map(|p| p[0]).max()?);
+    let (min_y, max_y) = (v.iter().map(|p| p[1]).min()?, v.iter().map(|p| p[1]).max()?);
+    let half = SUBPIXEL / 2;
+    let x0 = (min_x - half + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
+    let y0 = (min_y - half + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
+    let x1 = (max_x - half).div_euclid(SUBPIXEL).min(i64::from(width) - 1);
+    let y1 = (max_y - half).div_euclid(SUBPIXEL).min(i64::from(height) - 1);
+    if x0 > x1 || y0 > y1 {
+        return None;
+    }
+    let inv_w = vs.map(|v| 1.0 / v.clip.w);
+    Some(SetupTriangle {
+        id,
+        material,
+        v: [v.map(|p| p[0]), v.map(|p| p[1])],
+        area,
+        top_left,
+        z: vs.map(|v| v.clip.z / v.clip.w),
+        inv_w,
+        normal_over_w: [0, 1, 2].map(|i| vs[i].normal * inv_w[i]),
+        uv_over_w: [0, 1, 2].map(|i| vs[i].uv * inv_w[i]),
+        bounds: [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
+    })
+}
+
+/// Material constants the fragment stage needs, with the texture decoded to linear floats.
+struct FragmentMaterial<'a> {
+    base_color: Vec4,
+    roughness: f32,
+    metallic: f32,
+    texture: Option<&'a LinearTexture>,
+}
+
+/// A texture decoded from sRGB to linear floats, as an `Rgba8UnormSrgb` view reads it.
+pub struct LinearTexture {
+    width: u32,
+    height: u32,
+    texels: Vec<Vec4>,
+}
+
+impl LinearTexture {
+    /// Decodes a scene texture.
+    pub fn new(t: &scene::Texture) -> Self {
+        let lut: Vec<f32> = (0..256).map(|v| srgb_to_linear(v as f32 / 255.0)).collect();
+        let texels = t
+            .rgba8
+            .chunks_exact(4)
+            .map(|c| Vec4::new(lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize], f32::from(c[3]) / 255.0))
+            .collect();
+        Self { width: t.width, height: t.height, texels }
+    }
+
+    /// Bilinear sample of mip 0 with repeat addressing (`textureSampleLevel(t, s, uv, 0.0)`
+    /// with a linear, repeating sampler).
+    pub fn sample(&self, uv: Vec2) -> Vec4 {
+        let (w, h) = (self.width as i64, self.height as i64);
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = uv.y * self.height as f32 - 0.5;
+        let (fx, fy) = (x.floor(), y.floor());
+        let (tx, ty) = (x - fx, y - fy);
+        if !(fx.is_finite() && fy.is_finite()) {
+            return Vec4::ZERO;
+        }
+        let (ix, iy) = (fx as i64, fy as i64);
+        let texel = |dx: i64, dy: i64| {
+            let (u, v) = ((ix + dx).rem_euclid(w), (iy + dy).rem_euclid(h));
+            self.texels[(v * w + u) as usize]
+        };
+        let top = texel(0, 0).lerp(texel(1, 0), tx);
+        let bottom = texel(0, 1).lerp(texel(1, 1), tx);
+        top.lerp(bottom, ty)
+    }
+}
+
+/// Fragment stage (`fs_main`): albedo RGBA8, normal word, material word.
+fn fragment(material: &FragmentMaterial, id: u32, normal: Vec3, uv: Vec2) -> ([u8; 4], u32, u32) {
+    let texel = material.texture.map_or(Vec4::ONE, |t| t.sample(uv));
+    let rgb = (material.base_color.truncate() * texel.truncate()).clamp(Vec3::ZERO, Vec3::ONE);
+    let unorm = |c: f32| (c * 255.0).round() as u8;
+    let albedo = [unorm(rgb.x), unorm(rgb.y), unorm(rgb.z), 255];
+    (albedo, pack_octahedral(normal), pack_material(material.roughness, material.metallic, id))
+}
+
+struct Tile {
+    x: u32,
+    y: u32,
+    w: u32,
+    h: u32,
+    depth: Vec<f32>,
+    linear_depth: Vec<f32>,
+    normal: Vec<u32>,
+    albedo: Vec<[u8; 4]>,
+    material: Vec<u32>,
+    triangle: Vec<u32>,
+}
+
+fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], materials: &[FragmentMaterial]) {
+    for &t in bin {
+        let tri = &triangles[t as usize];
+        let [bx0, by0, bx1, by1] = tri.bounds;
+        let (x0, x1) = (bx0.max(tile.x), bx1.min(tile.x + tile.w - 1));
+        let (y0, y1) = (by0.max(tile.y), by1.min(tile.y + tile.h - 1));
+        let v = |i: usize| [tri.v[0][i], tri.v[1][i]];
+        let area = tri.area as f32;
+        for py in y0..=y1 {
+            for px in x0..=x1 {
+                let p = [i64::from(px) * SUBPIXEL + SUBPIXEL / 2, i64::from(py) * SUBPIXEL + SUBPIXEL / 2];
+                let e = [edge(v(1), v(2), p), edge(v(2), v(0), p), edge(v(0), v(1), p)];
+                if (0..3).any(|i| e[i] + tri.top_left[i] <= 0) {
+                    continue;
+                }
+                let l = e.map(|e| e as f32 / area);
+                let z = l[0] * tri.z[0] + l[1] * tri.z[1] + l[2] * tri.z[2];
+                let i = ((py - tile.y) * tile.w + (px - tile.x)) as usize;
+                if !(0.0..=1.0).contains(&z) || z >= tile.depth[i] {
+                    continue;
+                }
+                let one_over_w = l[0] * tri.inv_w[0] + l[1] * tri.inv_w[1] + l[2] * tri.inv_w[2];
+                let w = 1.0 / one_over_w;
+                let normal = (tri.normal_over_w[0] * l[0] + tri.normal_over_w[1] * l[1] + tri.normal_over_w[2] * l[2]) * w;
+                let uv = (tri.uv_over_w[0] * l[0] + tri.uv_over_w[1] * l[1] + tri.uv_over_w[2] * l[2]) * w;
+                let (albedo, n, m) = fragment(&materials[tri.material as usize], tri.material, normal, uv);
+                tile.depth[i] = z;
+                tile.linear_depth[i] = w;
+                tile.normal[i] = n;
+                tile.albedo[i] = albedo;
+                tile.material[i] = m;
+                tile.triangle[i] = tri.id;
+            }
+        }
+    }
+}
+
+/// Rasterizes `scene` seen by `camera` into a `width × height` G-buffer.
+pub fn rasterize(scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<Rasterized, GBufferError> {
+    crate::validate(scene, camera, width, height)?;
+    let frame = Frame::new(camera, width, height);
+
+    // Vertex stage and primitive assembly, numbered in submission order.
+    let mut first_id = Vec::with_capacity(scene.meshes.len());
+    let mut next = 0u32;
+    for m in &scene.meshes {
+        first_id.push(next);
+        next += m.triangle_count() as u32;
+    }
+    let planes = [
+        Vec4::new(0.0, 0.0, 1.0, 0.0),                // z >= 0 (near)
+        Vec4::new(0.0, 0.0, -1.0, 1.0),               // z <= w (far)
+        Vec4::new(1.0, 0.0, 0.0, GUARD_BAND),         // x >= -g w
+        Vec4::new(-1.0, 0.0, 0.0, GUARD_BAND),        // x <= g w
+        Vec4::new(0.0, 1.0, 0.0, GUARD_BAND),         // y >= -g w
+        Vec4::new(0.0, -1.0, 0.0, GUARD_BAND),        // y <= g w
+    ];
+    let triangles: Vec<SetupTriangle> = scene
+        .meshes
+        .par_iter()
+        .zip(first_id.par_iter())
+        .flat_map_iter(|(mesh, &first)| {
+            let clip: Vec<Vec4> = mesh.positions.iter().map(|p| frame.view_proj * p.extend(1.0)).collect();
+            mesh.indices.chunks_exact(3).enumerate().flat_map(move |(t, idx)| {
+                let vert = |i: u32| ClipVertex { clip: clip[i as usize], normal: mesh.normals[i as usize], uv: mesh.uvs[i as usize] };
+                let mut poly = vec![vert(idx[0]), vert(idx[1]), vert(idx[2])];
+                let inside = |v: &ClipVertex| planes.iter().all(|p| p.dot(v.clip) >= 0.0);
+                if !poly.iter().all(inside) {
+                    for p in planes {
+                        poly = clip_polygon(poly, p);
+                        if poly.len() < 3 {
+                            break;
+                        }
+                    }
+                }
+                let id = first + t as u32;
+                (1..poly.len().saturating_sub(1))
+                    .filter_map(|k| setup([poly[0], poly[k], poly[k + 1]], id, mesh.material, width, height))
+                    .collect::<Vec<_>>()
+            })
+        })
+        .collect();
+
+    // Binning.
+    let (tiles_x, tiles_y) = (width.div_ceil(TILE), height.div_ceil(TILE));
+    let mut bins = vec![Vec::<u32>::new(); (tiles_x * tiles_y) as usize];
+    for (i, t) in triangles.iter().enumerate() {
+        let [x0, y0, x1, y1] = t.bounds;
+        for ty in y0 / TILE..=y1 / TILE {
+            for tx in x0 / TILE..=x1 / TILE {
+                bins[(ty * tiles_x + tx) as usize].push(i as u32);
+            }
+        }
+    }
+
+    let textures: Vec<LinearTexture> = scene.textures.par_iter().map(LinearTexture::new).collect();
+    let materials: Vec<FragmentMaterial> = scene
+        .materials
+        .iter()
+        .map(|m| FragmentMaterial {
+            base_color: m.base_color,
+            roughness: m.roughness,
+            metallic: m.metallic,
+            texture: m.base_color_texture.map(|t| &textures[t as usize]),
+        })
+        .collect();
+
+    let tiles: Vec<Tile> = bins
+        .par_iter()
+        .enumerate()
+        .map(|(i, bin)| {
+            let (x, y) = ((i as u32 % tiles_x) * TILE, (i as u32 / tiles_x) * TILE);
+            let (w, h) = (TILE.min(width - x), TILE.min(height - y));
+            let n = (w * h) as usize;
+            let mut tile = Tile {
+                x,
+                y,
+                w,
+                h,
+                depth: vec![1.0; n],
+                linear_depth: vec![0.0; n],
+                normal: vec![0; n],
+                albedo: vec![[0; 4]; n],
+                material: vec![NO_MATERIAL; n],
+                triangle: vec![u32::MAX; n],
+            };
+            raster_tile(&mut tile, &triangles, bin, &materials);
+            tile
+        })
+        .collect();
+
+    let mut gbuffer = GBuffer::cleared(width, height);
+    let mut triangle_id = Image::filled(width, height, u32::MAX);
+    for t in &tiles {
+        for ly in 0..t.h {
+            for lx in 0..t.w {
+                let (i, x, y) = ((ly * t.w + lx) as usize, t.x + lx, t.y + ly);
+                gbuffer.depth.set(x, y, t.depth[i]);
+                gbuffer.linear_depth.set(x, y, t.linear_depth[i]);
+                gbuffer.normal.set(x, y, t.normal[i]);
+                gbuffer.albedo.set(x, y, t.albedo[i]);
+                gbuffer.material.set(x, y, t.material[i]);
+                triangle_id.set(x, y, t.triangle[i]);
+            }
+        }
+    }
+    Ok(Rasterized { gbuffer, triangle_id })
+}

@@ -1,0 +1,400 @@
+//! GPU G-buffer creation: a render pipeline writing all targets at once (MRT), the twin of
+//! [`crate::cpu::rasterize`]. Shader: `shaders/gbuffer/gbuffer.wgsl`.
+
+use ::gpu::{Gpu, GpuError, transfer};
+use glam::Vec4;
+use scene::{Camera, Scene};
+
+use crate::{
+    ALBEDO_FORMAT, DEPTH_FORMAT, Frame, GBuffer, GBufferError, Image, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, NO_MATERIAL,
+    NORMAL_FORMAT,
+};
+
+/// Vertex layout of the uploaded scene (WGSL `vs_main` inputs).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuVertex {
+    /// World position.
+    pub position: [f32; 3],
+    /// Normal.
+    pub normal: [f32; 3],
+    /// Texture coordinate.
+    pub uv: [f32; 2],
+}
+
+/// A material as the shaders see it (WGSL `Material`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuMaterial {
+    /// Linear base colour factor.
+    pub base_color: Vec4,
+    /// Emitted radiance.
+    pub emissive: [f32; 3],
+    /// Perceptual roughness.
+    pub roughness: f32,
+    /// Metalness.
+    pub metallic: f32,
+    /// Index in the scene's material list (the G-buffer's material id).
+    pub id: u32,
+    /// Padding to 16-byte alignment.
+    pub _pad: [u32; 2],
+}
+
+impl GpuMaterial {
+    /// The GPU form of material `id` of a scene.
+    pub fn new(m: &scene::Material, id: u32) -> Self {
+        Self {
+            base_color: m.base_color,
+            emissive: m.emissive.to_array(),
+            roughness: m.roughness,
+            metallic: m.metallic,
+            id,
+            _pad: [0; 2],
+        }
+    }
+}
+
+/// The five G-buffer textures of one resolution (see the layout table in the crate docs).
+pub struct GBufferTargets {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Hardware depth.
+    pub depth: wgpu::Texture,
+    /// View-space depth.
+    pub linear_depth: wgpu::Texture,
+    /// Octahedral normal word.
+    pub normal: wgpu::Texture,
+    /// Albedo.
+    pub albedo: wgpu::Texture,
+    /// Material word.
+    pub material: wgpu::Texture,
+}
+
+impl GBufferTargets {
+    /// Creates the targets; they can be rendered to, sampled, bound as storage (colour
+    /// targets) and copied.
+    pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Result<Self, GpuError> {
+        transfer::check_texture_size(device, "G-buffer", width, height)?;
+        let make = |label: &str, format: wgpu::TextureFormat, storage: bool| {
+            let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
+            if storage {
+                usage |= wgpu::TextureUsages::STORAGE_BINDING;
+            }
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        Ok(Self {
+            width,
+            height,
+            depth: make("gbuffer depth", DEPTH_FORMAT, false),
+            linear_depth: make("gbuffer linear depth", LINEAR_DEPTH_FORMAT, true),
+            normal: make("gbuffer normal", NORMAL_FORMAT, true),
+            albedo: make("gbuffer albedo", ALBEDO_FORMAT, true),
+            material: make("gbuffer material", MATERIAL_FORMAT, true),
+        })
+    }
+
+    /// Total bytes of all targets (for bandwidth figures).
+    pub fn bytes(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height) * 20
+    }
+
+    /// Reads every target back into a CPU [`GBuffer`].
+    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<GBuffer, GBufferError> {
+        let read = |t: &wgpu::Texture, aspect| transfer::read_texture(device, queue, t, aspect);
+        let all = wgpu::TextureAspect::All;
+        let img = |bytes: Vec<u8>| -> Result<Image<u32>, GBufferError> {
+            Image::from_vec(self.width, self.height, bytemuck::cast_slice(&bytes).to_vec())
+                .map_err(|e| GBufferError::Gpu(GpuError::Readback(e.to_string())))
+        };
+        let as_f32 = |i: Image<u32>| i.map(f32::from_bits);
+        Ok(GBuffer {
+            depth: as_f32(img(read(&self.depth, wgpu::TextureAspect::DepthOnly)?)?),
+            linear_depth: as_f32(img(read(&self.linear_depth, all)?)?),
+            normal: img(read(&self.normal, all)?)?,
+            albedo: img(read(&self.albedo, all)?)?.map(u32::to_le_bytes),
+            material: img(read(&self.material, all)?)?,
+        })
+    }
+}
+
+struct Draw {
+    first_index: u32,
+    index_count: u32,
+    base_vertex: i32,
+    material: usize,
+}
+
+/// A scene uploaded for the G-buffer pass: one vertex and one index buffer, a bind group per
+/// material, and the materials as a storage buffer for later passes.
+pub struct GpuScene {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    draws: Vec<Draw>,
+    material_groups: Vec<wgpu::BindGroup>,
+    /// All materials ([`GpuMaterial`]), indexed by material id.
+    pub materials: wgpu::Buffer,
+    /// Number of triangles.
+    pub triangle_count: u64,
+}
+
+impl GpuScene {
+    /// Uploads `scene` (textures as `Rgba8UnormSrgb`, mip 0) for `pass`.
+    pub fn upload(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene, pass: &GBufferPass) -> Result<Self, GBufferError> {
+        scene.validate()?;
+        let mut vertices = Vec::new();
+        let mut indices = Vec::new();
+        let mut draws = Vec::new();
+        for m in &scene.meshes {
+            draws.push(Draw {
+                first_index: indices.len() as u32,
+                index_count: m.indices.len() as u32,
+                base_vertex: vertices.len() as i32,
+                material: m.material as usize,
+            });
+            indices.extend_from_slice(&m.indices);
+            vertices.extend(m.positions.iter().zip(&m.normals).zip(&m.uvs).map(|((p, n), uv)| GpuVertex {
+                position: p.to_array(),
+                normal: n.to_array(),
+                uv: uv.to_array(),
+            }));
+        }
+        let vertices = transfer::buffer_init(device, "scene vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::VERTEX)?;
+        let indices = transfer::buffer_init(device, "scene indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX)?;
+
+        let white = scene::Texture { name: "white".into(), width: 1, height: 1, rgba8: vec![255; 4] };
+        let textures = scene
+            .textures
+            .iter()
+            .map(|t| upload_texture(device, queue, t))
+            .collect::<Result<Vec<_>, _>>()?;
+        let white = upload_texture(device, queue, &white)?;
+        let gpu_materials: Vec<GpuMaterial> = scene.materials.iter().enumerate().map(|(i, m)| GpuMaterial::new(m, i as u32)).collect();
+        let material_groups = scene
+            .materials
+            .iter()
+            .zip(&gpu_materials)
+            .map(|(m, g)| {
+                let uniform = transfer::buffer_init(device, "material", bytemuck::bytes_of(g), wgpu::BufferUsages::UNIFORM)?;
+                let texture = m.base_color_texture.map_or(&white, |t| &textures[t as usize]);
+                let view = texture.create_view(&Default::default());
+                Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("material"),
+                    layout: &pass.material_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
+                        wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&pass.sampler) },
+                    ],
+                }))
+            })
+            .collect::<Result<Vec<_>, GpuError>>()?;
+        let materials = transfer::buffer_init(device, "materials", bytemuck::cast_slice(&gpu_materials), wgpu::BufferUsages::STORAGE)?;
+        Ok(Self { vertices, indices, draws, material_groups, materials, triangle_count: scene.triangle_count() as u64 })
+    }
+}
+
+fn upload_texture(device: &wgpu::Device, queue: &wgpu::Queue, t: &scene::Texture) -> Result<wgpu::Texture, GpuError> {
+    transfer::check_texture_size(device, &format!("texture {:?}", t.name), t.width, t.height)?;
+    let size = wgpu::Extent3d { width: t.width, height: t.height, depth_or_array_layers: 1 };
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(&t.name),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba8UnormSrgb,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo { texture: &texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect: wgpu::TextureAspect::All },
+        &t.rgba8,
+        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * t.width), rows_per_image: Some(t.height) },
+        size,
+    );
+    Ok(texture)
+}
+
+/// The G-buffer pass: pipeline and frame uniforms, built once.
+pub struct GBufferPass {
+    pipeline: wgpu::RenderPipeline,
+    material_layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    frame: wgpu::Buffer,
+    frame_group: wgpu::BindGroup,
+}
+
+impl GBufferPass {
+    /// Builds the pipeline.
+    pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
+        let module = ::gpu::shader::module(device, "gbuffer/gbuffer.wgsl")?;
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer frame"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+                count: None,
+            }],
+        });
+        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("gbuffer material"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gbuffer"),
+            bind_group_layouts: &[Some(&frame_layout), Some(&material_layout)],
+            immediate_size: 0,
+        });
+        let target = |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("gbuffer"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: size_of::<GpuVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2],
+                })],
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[target(LINEAR_DEPTH_FORMAT), target(NORMAL_FORMAT), target(ALBEDO_FORMAT), target(MATERIAL_FORMAT)],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("base colour"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let frame = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame"),
+            size: size_of::<Frame>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let frame_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gbuffer frame"),
+            layout: &frame_layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: frame.as_entire_binding() }],
+        });
+        Ok(Self { pipeline, material_layout, sampler, frame, frame_group })
+    }
+
+    /// Writes the camera for the next [`GBufferPass::encode`].
+    pub fn write_frame(&self, queue: &wgpu::Queue, frame: &Frame) {
+        queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(frame));
+    }
+
+    /// Records the G-buffer pass: clears every target and draws the scene.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        targets: &GBufferTargets,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let views = [&targets.linear_depth, &targets.normal, &targets.albedo, &targets.material].map(|t| t.create_view(&Default::default()));
+        let clears = [0.0, 0.0, 0.0, f64::from(NO_MATERIAL)];
+        let attachments: Vec<_> = views
+            .iter()
+            .zip(clears)
+            .map(|(view, c)| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color { r: c, g: 0.0, b: 0.0, a: 0.0 }), store: wgpu::StoreOp::Store },
+                })
+            })
+            .collect();
+        let depth_view = targets.depth.create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("gbuffer"),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth_view,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.frame_group, &[]);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for d in &scene.draws {
+            pass.set_bind_group(1, &scene.material_groups[d.material], &[]);
+            pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex, 0..1);
+        }
+    }
+}
+
+/// Convenience for tests and examples: uploads `scene`, renders its G-buffer on `gpu` and
+/// reads it back.
+pub fn run(gpu: &Gpu, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<GBuffer, GBufferError> {
+    crate::validate(scene, camera, width, height)?;
+    let pass = GBufferPass::new(&gpu.device)?;
+    let gpu_scene = GpuScene::upload(&gpu.device, &gpu.queue, scene, &pass)?;
+    let targets = GBufferTargets::new(&gpu.device, width, height)?;
+    pass.write_frame(&gpu.queue, &Frame::new(camera, width, height));
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    pass.encode(&mut encoder, &gpu_scene, &targets, None);
+    gpu.queue.submit([encoder.finish()]);
+    targets.read(&gpu.device, &gpu.queue)
+}

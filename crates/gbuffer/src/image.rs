@@ -1,0 +1,121 @@
+//! `Image<T>`: the one CPU image type of the workspace (row-major, origin top-left).
+
+use std::path::Path;
+
+/// A `width × height` image, row-major from the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image<T> {
+    width: u32,
+    height: u32,
+    data: Vec<T>,
+}
+
+/// Errors converting or writing images.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    /// Data length does not match the size.
+    #[error("image of {width}×{height} needs {expected} pixels, got {got}")]
+    Size {
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// Pixels needed.
+        expected: usize,
+        /// Pixels given.
+        got: usize,
+    },
+    /// PNG encoding or file error.
+    #[error("{path}: {message}")]
+    Write {
+        /// File.
+        path: String,
+        /// Problem.
+        message: String,
+    },
+}
+
+impl<T: Copy> Image<T> {
+    /// An image with every pixel set to `value`.
+    pub fn filled(width: u32, height: u32, value: T) -> Self {
+        Self { width, height, data: vec![value; width as usize * height as usize] }
+    }
+
+    /// Wraps row-major pixels; fails if the length is not `width × height`.
+    pub fn from_vec(width: u32, height: u32, data: Vec<T>) -> Result<Self, ImageError> {
+        let expected = width as usize * height as usize;
+        if data.len() != expected {
+            return Err(ImageError::Size { width, height, expected, got: data.len() });
+        }
+        Ok(Self { width, height, data })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// The pixel at (x, y). Panics when out of bounds, like slice indexing.
+    pub fn get(&self, x: u32, y: u32) -> T {
+        self.data[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Sets the pixel at (x, y).
+    pub fn set(&mut self, x: u32, y: u32, value: T) {
+        self.data[y as usize * self.width as usize + x as usize] = value;
+    }
+
+    /// All pixels, row-major.
+    pub fn pixels(&self) -> &[T] {
+        &self.data
+    }
+
+    /// All pixels, mutable.
+    pub fn pixels_mut(&mut self) -> &mut [T] {
+        &mut self.data
+    }
+
+    /// Applies `f` to every pixel.
+    pub fn map<U: Copy>(&self, f: impl Fn(T) -> U) -> Image<U> {
+        Image { width: self.width, height: self.height, data: self.data.iter().map(|&p| f(p)).collect() }
+    }
+}
+
+/// Linear → sRGB transfer function (IEC 61966-2-1).
+pub fn linear_to_srgb(v: f32) -> f32 {
+    let v = v.clamp(0.0, 1.0);
+    if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
+}
+
+/// sRGB → linear transfer function (IEC 61966-2-1).
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.040_45 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+}
+
+impl Image<[f32; 4]> {
+    /// Writes linear RGB as an 8-bit sRGB PNG (clamped to \[0, 1\]; alpha dropped).
+    pub fn write_png(&self, path: &Path) -> Result<(), ImageError> {
+        let bytes: Vec<u8> = self
+            .data
+            .iter()
+            .flat_map(|p| [p[0], p[1], p[2]].map(|c| (linear_to_srgb(c) * 255.0).round() as u8))
+            .collect();
+        image::save_buffer(path, &bytes, self.width, self.height, image::ExtendedColorType::Rgb8)
+            .map_err(|e| ImageError::Write { path: path.display().to_string(), message: e.to_string() })
+    }
+
+    /// Writes linear RGBA as a 32-bit float OpenEXR file.
+    pub fn write_exr(&self, path: &Path) -> Result<(), ImageError> {
+        let w = self.width as usize;
+        exr::prelude::write_rgba_file(path, w, self.height as usize, |x, y| {
+            let p = self.data[y * w + x];
+            (p[0], p[1], p[2], p[3])
+        })
+        .map_err(|e| ImageError::Write { path: path.display().to_string(), message: e.to_string() })
+    }
+}

@@ -1,0 +1,214 @@
+//! G-buffer layout and creation: compact normal encodings, position from depth, a CPU
+//! reference rasterizer and the GPU pass that writes every target at once (MRT).
+//!
+//! Papers: Ishmukhametov 2013 §1.3 (deferred shading, G-buffer creation), ch. 3 (G-buffer
+//! layouts of S.T.A.L.K.E.R., Killzone 2, Battlefield 3; §3.6 position from depth and compact
+//! normal storage); Holländer 2013 §4.2.
+//!
+//! # Layout
+//!
+//! | target | format | bits/pixel | content |
+//! |---|---|---|---|
+//! | `depth` | `Depth32Float` | 32 | hardware depth z/w in \[0, 1\] (cleared to 1) |
+//! | `linear_depth` | `R32Float` | 32 | view-space depth (distance along the view axis); 0 = no surface |
+//! | `normal` | `R32Uint` | 32 | world-space normal, octahedral, two snorm16 (`pack2x16snorm`) |
+//! | `albedo` | `Rgba8Unorm` | 32 | linear base colour × texture; alpha 1 where covered, 0 elsewhere |
+//! | `material` | `R32Uint` | 32 | roughness unorm8 \| metallic unorm8 ≪ 8 \| material id ≪ 16; `u32::MAX` = none |
+//!
+//! 160 bits per pixel, like S.T.A.L.K.E.R. (2005), but with hardware depth instead of a stored
+//! position and 32-bit octahedral normals (0.003° worst error, see [`normal`]). Emissive
+//! radiance is looked up from the material id during composition.
+//!
+//! ```no_run
+//! let scene = scene::cornell_box();
+//! let camera = scene.camera_or_framed();
+//! let gb = gbuffer::cpu::rasterize(&scene, &camera, 320, 240)?;
+//! let p = gbuffer::position::from_depth(&gbuffer::Frame::new(&camera, 320, 240), 160, 120, gb.gbuffer.depth.get(160, 120));
+//! # Ok::<(), gbuffer::GBufferError>(())
+//! ```
+
+pub mod cpu;
+pub mod gpu;
+mod image;
+pub mod normal;
+pub mod position;
+
+pub use image::{Image, ImageError, linear_to_srgb, srgb_to_linear};
+
+use glam::{Mat4, Vec4};
+use scene::Camera;
+
+/// Depth target format.
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Linear view depth target format.
+pub const LINEAR_DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+/// Packed normal target format.
+pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// Albedo target format.
+pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+/// Packed material target format.
+pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// Material word of pixels no surface covers.
+pub const NO_MATERIAL: u32 = u32::MAX;
+/// Largest image side accepted by the CPU rasterizer (the GPU path checks the device limit).
+pub const MAX_SIZE: u32 = 16384;
+
+/// A G-buffer on the CPU, texel for texel what the GPU targets hold.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GBuffer {
+    /// Hardware depth z/w, 1 where nothing was drawn.
+    pub depth: Image<f32>,
+    /// View-space depth, 0 where nothing was drawn.
+    pub linear_depth: Image<f32>,
+    /// Octahedral normal as two snorm16 ([`normal::pack_octahedral`]).
+    pub normal: Image<u32>,
+    /// Linear albedo, RGBA8.
+    pub albedo: Image<[u8; 4]>,
+    /// Packed roughness, metallic, material id ([`pack_material`]).
+    pub material: Image<u32>,
+}
+
+impl GBuffer {
+    /// An empty (cleared) G-buffer.
+    pub fn cleared(width: u32, height: u32) -> Self {
+        Self {
+            depth: Image::filled(width, height, 1.0),
+            linear_depth: Image::filled(width, height, 0.0),
+            normal: Image::filled(width, height, 0),
+            albedo: Image::filled(width, height, [0; 4]),
+            material: Image::filled(width, height, NO_MATERIAL),
+        }
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.depth.width()
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.depth.height()
+    }
+}
+
+/// Packs roughness and metallic (unorm8, round half to even like WGSL `round`) and a 16-bit
+/// material id into the `material` target's word.
+pub fn pack_material(roughness: f32, metallic: f32, id: u32) -> u32 {
+    let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round_ties_even() as u32;
+    q(roughness) | (q(metallic) << 8) | (id << 16)
+}
+
+/// Unpacks [`pack_material`]: (roughness, metallic, material id).
+pub fn unpack_material(word: u32) -> (f32, f32, u32) {
+    ((word & 0xff) as f32 / 255.0, ((word >> 8) & 0xff) as f32 / 255.0, word >> 16)
+}
+
+/// Per-frame camera data shared by screen-space passes (WGSL `Frame` in `gbuffer/frame.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Frame {
+    /// World → clip.
+    pub view_proj: Mat4,
+    /// World → view.
+    pub view: Mat4,
+    /// Clip → world.
+    pub inv_view_proj: Mat4,
+    /// View → world.
+    pub inv_view: Mat4,
+    /// Eye position (xyz).
+    pub eye: Vec4,
+    /// Width, height, 1 / width, 1 / height.
+    pub viewport: Vec4,
+    /// tan(fov_y / 2) × aspect, tan(fov_y / 2): the view ray at unit view depth.
+    pub tan_half_fov: Vec4,
+}
+
+impl Frame {
+    /// Frame data for `camera` rendering a `width × height` image.
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
+        let aspect = width as f32 / height.max(1) as f32;
+        let view = camera.view();
+        let view_proj = camera.projection(aspect) * view;
+        let t = (camera.fov_y * 0.5).tan();
+        Self {
+            view_proj,
+            view,
+            inv_view_proj: view_proj.inverse(),
+            inv_view: view.inverse(),
+            eye: camera.eye.extend(1.0),
+            viewport: Vec4::new(width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32),
+            tan_half_fov: Vec4::new(t * aspect, t, 0.0, 0.0),
+        }
+    }
+}
+
+/// Errors of G-buffer creation.
+#[derive(Debug, thiserror::Error)]
+pub enum GBufferError {
+    /// Width or height is zero or too large.
+    #[error("invalid G-buffer size {width}×{height} (each side must be 1..={max})")]
+    InvalidSize {
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+        /// Largest allowed side.
+        max: u32,
+    },
+    /// The camera is unusable (non-finite, zero field of view, near >= far ...).
+    #[error("invalid camera: {0}")]
+    InvalidCamera(String),
+    /// The scene breaks an invariant (see `scene::Scene::validate`).
+    #[error("invalid scene: {0}")]
+    InvalidScene(#[from] scene::SceneErrorKind),
+    /// Too many materials for the 16-bit material id.
+    #[error("{0} materials exceed the 65535 the G-buffer's 16-bit material id can address")]
+    TooManyMaterials(usize),
+    /// A GPU resource could not be created or read.
+    #[error(transparent)]
+    Gpu(#[from] ::gpu::GpuError),
+}
+
+/// Checks size, camera and material count before rendering.
+pub(crate) fn validate(scene: &scene::Scene, camera: &Camera, width: u32, height: u32) -> Result<(), GBufferError> {
+    if width == 0 || height == 0 || width > MAX_SIZE || height > MAX_SIZE {
+        return Err(GBufferError::InvalidSize { width, height, max: MAX_SIZE });
+    }
+    let ok = camera.eye.is_finite()
+        && camera.target.is_finite()
+        && camera.up.is_finite()
+        && camera.eye != camera.target
+        && camera.fov_y > 0.0
+        && camera.fov_y < std::f32::consts::PI
+        && camera.near > 0.0
+        && camera.far > camera.near
+        && camera.far.is_finite();
+    if !ok {
+        return Err(GBufferError::InvalidCamera(format!("{camera:?}")));
+    }
+    if scene.materials.len() >= 0xffff {
+        return Err(GBufferError::TooManyMaterials(scene.materials.len()));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_matches_wgsl_layout() {
+        // 4 mat4 + 3 vec4, no padding: WGSL `Frame` is 320 bytes with these offsets.
+        assert_eq!(std::mem::size_of::<Frame>(), 4 * 64 + 3 * 16);
+        assert_eq!(std::mem::offset_of!(Frame, eye), 256);
+        assert_eq!(std::mem::offset_of!(Frame, tan_half_fov), 288);
+    }
+
+    #[test]
+    fn material_word_round_trips() {
+        let w = pack_material(0.5, 1.0, 1234);
+        let (r, m, id) = unpack_material(w);
+        assert!((r - 128.0 / 255.0).abs() < 1e-6 && m == 1.0 && id == 1234);
+        assert_eq!(pack_material(2.0, -1.0, 0), 255);
+    }
+}

@@ -1,0 +1,69 @@
+//! wgpu plumbing shared by every kernel of the workspace.
+//!
+//! - [`Gpu`]: instance, adapter, device and queue chosen from the environment
+//!   (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`, `WGPU_POWER_PREF`), with only the optional
+//!   features the adapter has and the adapter's own limits.
+//! - [`test_gpu`]: the device helper every GPU test uses (skips with a reason, fails under `CI`).
+//! - [`shader`]: loading WGSL from the workspace's `shaders/` folder, with `#import`.
+//! - [`transfer`]: upload and readback helpers.
+//! - [`PassTimer`]: GPU time of named passes from timestamp queries.
+//!
+//! ```no_run
+//! let gpu = gpu::Gpu::from_env()?;
+//! println!("running on {}", gpu.describe());
+//! # Ok::<(), gpu::GpuError>(())
+//! ```
+
+mod device;
+pub mod shader;
+mod timer;
+pub mod transfer;
+
+pub use device::{Gpu, test_gpu};
+pub use timer::{PassTime, PassTimer};
+pub use wgpu;
+
+/// Everything that can go wrong while talking to the GPU.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter at all (no Vulkan/Metal/DX12 driver).
+    #[error("no GPU adapter found ({0}); install a Vulkan driver (e.g. Debian's mesa-vulkan-drivers) or use the CPU path")]
+    NoAdapter(String),
+    /// `WGPU_ADAPTER_NAME` names no adapter present.
+    #[error("WGPU_ADAPTER_NAME={wanted:?} matches no adapter; available: {available}")]
+    AdapterNotFound {
+        /// The requested name.
+        wanted: String,
+        /// Adapters that exist, comma-separated.
+        available: String,
+    },
+    /// The adapter refused to create a device.
+    #[error("could not create a device on {adapter}: {source}")]
+    RequestDevice {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's error.
+        source: wgpu::RequestDeviceError,
+    },
+    /// A shader file is missing or does not compile.
+    #[error("shader {name}: {message}")]
+    Shader {
+        /// Path relative to `shaders/`.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A resource is larger than the device allows.
+    #[error("{what} needs {needed} but the device allows at most {limit}")]
+    TooLarge {
+        /// The resource.
+        what: String,
+        /// Requested size.
+        needed: u64,
+        /// Device limit.
+        limit: u64,
+    },
+    /// Mapping a buffer for readback failed or the device was lost.
+    #[error("GPU readback failed: {0}")]
+    Readback(String),
+}

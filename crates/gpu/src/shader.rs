@@ -1,0 +1,54 @@
+//! WGSL loading from the workspace's `shaders/` folder.
+//!
+//! WGSL has no include mechanism; a file may start with lines of the form
+//! `// #import gbuffer/normal_encoding.wgsl`, and [`source`] prepends those files (recursively,
+//! each once). Every file is embedded at build time, so programs run from any directory.
+
+use crate::GpuError;
+
+include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+
+/// Names of all WGSL files, relative to `shaders/` (e.g. `gbuffer/gbuffer.wgsl`).
+pub fn names() -> impl Iterator<Item = &'static str> {
+    SHADERS.iter().map(|(name, _)| *name)
+}
+
+fn raw(name: &str) -> Result<&'static str, GpuError> {
+    SHADERS.iter().find(|(n, _)| *n == name).map(|(_, src)| *src).ok_or_else(|| {
+        GpuError::Shader { name: name.into(), message: "no such file under shaders/".into() }
+    })
+}
+
+/// The source of a shader with its `#import`s resolved.
+pub fn source(name: &str) -> Result<String, GpuError> {
+    let mut seen = Vec::new();
+    let mut out = String::new();
+    resolve(name, &mut seen, &mut out)?;
+    Ok(out)
+}
+
+fn resolve(name: &str, seen: &mut Vec<String>, out: &mut String) -> Result<(), GpuError> {
+    if seen.iter().any(|s| s == name) {
+        return Ok(());
+    }
+    seen.push(name.to_owned());
+    let src = raw(name)?;
+    for line in src.lines() {
+        if let Some(dep) = line.trim().strip_prefix("// #import ") {
+            resolve(dep.trim(), seen, out)?;
+        }
+    }
+    out.push_str(&format!("// ---- {name}\n"));
+    out.push_str(src);
+    out.push('\n');
+    Ok(())
+}
+
+/// Compiles a shader from `shaders/` into a module.
+pub fn module(device: &wgpu::Device, name: &str) -> Result<wgpu::ShaderModule, GpuError> {
+    let src = source(name)?;
+    Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(name),
+        source: wgpu::ShaderSource::Wgsl(src.into()),
+    }))
+}

@@ -1,0 +1,130 @@
+//! Upload and readback helpers. Readback is for tests, examples and the final image of a
+//! program: nothing reads back between the passes of a pipeline.
+
+use wgpu::util::DeviceExt;
+
+use crate::GpuError;
+
+/// Fails with [`GpuError::TooLarge`] when `size` bytes exceed the device's buffer limits for `usage`.
+pub fn check_buffer_size(
+    device: &wgpu::Device,
+    what: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> Result<(), GpuError> {
+    let limits = device.limits();
+    let mut limit = limits.max_buffer_size;
+    if usage.contains(wgpu::BufferUsages::STORAGE) {
+        limit = limit.min(u64::from(limits.max_storage_buffer_binding_size));
+    }
+    if usage.contains(wgpu::BufferUsages::UNIFORM) {
+        limit = limit.min(u64::from(limits.max_uniform_buffer_binding_size));
+    }
+    if size > limit {
+        return Err(GpuError::TooLarge { what: what.into(), needed: size, limit });
+    }
+    Ok(())
+}
+
+/// Fails with [`GpuError::TooLarge`] when a 2D texture of `width × height` exceeds the device limit.
+pub fn check_texture_size(device: &wgpu::Device, what: &str, width: u32, height: u32) -> Result<(), GpuError> {
+    let limit = device.limits().max_texture_dimension_2d;
+    let needed = width.max(height);
+    if needed > limit || width == 0 || height == 0 {
+        return Err(GpuError::TooLarge { what: format!("{what} ({width}×{height})"), needed: u64::from(needed), limit: u64::from(limit) });
+    }
+    Ok(())
+}
+
+/// A buffer holding `contents` (at least 4 bytes, so empty inputs still bind), size-checked.
+pub fn buffer_init(
+    device: &wgpu::Device,
+    label: &str,
+    contents: &[u8],
+    usage: wgpu::BufferUsages,
+) -> Result<wgpu::Buffer, GpuError> {
+    check_buffer_size(device, label, contents.len() as u64, usage)?;
+    let padded;
+    let contents = if contents.len() < 4 {
+        padded = [0u8; 4];
+        &padded[..]
+    } else {
+        contents
+    };
+    Ok(device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage }))
+}
+
+fn map_and_copy(device: &wgpu::Device, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let slice = staging.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| GpuError::Readback(e.to_string()))?
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    let bytes = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
+    staging.unmap();
+    Ok(bytes)
+}
+
+/// Copies a whole buffer (which needs `COPY_SRC`) back to the CPU.
+pub fn read_buffer(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: buffer.size(),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    queue.submit([encoder.finish()]);
+    map_and_copy(device, &staging)
+}
+
+/// Copies mip 0 of a 2D texture (which needs `COPY_SRC`) back to the CPU with tightly packed
+/// rows. For depth-stencil formats, `aspect` picks the plane (e.g. `DepthOnly`).
+pub fn read_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    aspect: wgpu::TextureAspect,
+) -> Result<Vec<u8>, GpuError> {
+    let texel = u64::from(texture.format().block_copy_size(Some(aspect)).ok_or_else(|| {
+        GpuError::Readback(format!("format {:?} has no copyable aspect {aspect:?}", texture.format()))
+    })?);
+    let (w, h) = (u64::from(texture.width()), u64::from(texture.height()));
+    let row = w * texel;
+    let align = u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let padded_row = row.div_ceil(align) * align;
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture readback"),
+        size: padded_row * h,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &staging,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded_row as u32),
+                rows_per_image: Some(h as u32),
+            },
+        },
+        texture.size(),
+    );
+    queue.submit([encoder.finish()]);
+    let padded = map_and_copy(device, &staging)?;
+    let mut out = Vec::with_capacity((row * h) as usize);
+    for y in 0..h as usize {
+        let start = y * padded_row as usize;
+        out.extend_from_slice(&padded[start..start + row as usize]);
+    }
+    Ok(out)
+}

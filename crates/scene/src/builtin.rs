@@ -1,0 +1,288 @@
+//! Built-in scenes: the Cornell box, many spheres on a plane, and a textured checkerboard.
+
+use std::f32::consts::{PI, TAU};
+
+use glam::{Vec2, Vec3};
+
+use crate::{Camera, Light, Material, Mesh, Scene, Texture, light::SplitMix};
+
+/// Accumulates flat-shaded quads and smooth spheres into one mesh per material.
+struct Builder {
+    scene: Scene,
+}
+
+impl Builder {
+    fn new() -> Self {
+        Self { scene: Scene::default() }
+    }
+
+    fn material(&mut self, name: &str, rgb: Vec3, roughness: f32, metallic: f32) -> u32 {
+        self.scene.materials.push(Material {
+            name: name.into(),
+            base_color: rgb.extend(1.0),
+            roughness,
+            metallic,
+            ..Default::default()
+        });
+        self.scene.materials.len() as u32 - 1
+    }
+
+    fn mesh(&mut self, name: &str, material: u32) -> &mut Mesh {
+        self.scene.meshes.push(Mesh { name: name.into(), material, ..Default::default() });
+        self.scene.meshes.last_mut().expect("just pushed")
+    }
+
+    /// A planar quad a-b-c-d with a flat normal turned to face `towards`, and UVs 0..`uv_scale`.
+    fn quad(mesh: &mut Mesh, corners: [Vec3; 4], towards: Vec3, uv_scale: f32) {
+        let [a, b, c, d] = corners;
+        let mut n = (b - a).cross(c - a).normalize();
+        let flip = n.dot(towards - (a + c) * 0.5) < 0.0;
+        if flip {
+            n = -n;
+        }
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend([a, b, c, d]);
+        mesh.normals.extend([n; 4]);
+        mesh.uvs.extend([Vec2::ZERO, Vec2::new(uv_scale, 0.0), Vec2::splat(uv_scale), Vec2::new(0.0, uv_scale)]);
+        let tris = if flip { [0, 2, 1, 0, 3, 2] } else { [0, 1, 2, 0, 2, 3] };
+        mesh.indices.extend(tris.map(|i| base + i));
+    }
+
+    /// The four sides and top of a block whose top face is `top` (at any height) and bottom is at y = 0.
+    fn block(mesh: &mut Mesh, top: [Vec3; 4]) {
+        let center = top.iter().copied().sum::<Vec3>() / 4.0 * Vec3::new(1.0, 0.5, 1.0);
+        let away = |face: Vec3| 2.0 * face - center;
+        Self::quad(mesh, top, away((top[0] + top[2]) * 0.5), 1.0);
+        for i in 0..4 {
+            let (p, q) = (top[i], top[(i + 1) % 4]);
+            let (p0, q0) = (p * Vec3::new(1.0, 0.0, 1.0), q * Vec3::new(1.0, 0.0, 1.0));
+            Self::quad(mesh, [p0, q0, q, p], away((p + q0) * 0.5), 1.0);
+        }
+    }
+
+    /// A UV sphere with smooth normals.
+    fn sphere(mesh: &mut Mesh, center: Vec3, radius: f32, slices: u32, stacks: u32) {
+        let base = mesh.positions.len() as u32;
+        for j in 0..=stacks {
+            let v = j as f32 / stacks as f32;
+            let theta = v * PI;
+            for i in 0..=slices {
+                let u = i as f32 / slices as f32;
+                let phi = u * TAU;
+                let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+                mesh.positions.push(center + n * radius);
+                mesh.normals.push(n);
+                mesh.uvs.push(Vec2::new(u, v));
+            }
+        }
+        let row = slices + 1;
+        for j in 0..stacks {
+            for i in 0..slices {
+                let (a, b) = (base + j * row + i, base + (j + 1) * row + i);
+                if j > 0 {
+                    mesh.indices.extend([a, b, a + 1]);
+                }
+                if j + 1 < stacks {
+                    mesh.indices.extend([a + 1, b, b + 1]);
+                }
+            }
+        }
+    }
+}
+
+/// The Cornell box with the measured dimensions of the Cornell Program of Computer Graphics
+/// (in metres: 0.556 wide, 0.5488 high, 0.5592 deep; short and tall blocks; light opening
+/// 0.13 × 0.105 under the ceiling), seen from its standard camera at (0.278, 0.273, −0.8)
+/// with a 39.3° vertical field of view. Red wall at x = 0.556, green wall at x = 0.
+/// The light opening is an emissive quad with one point light just below it.
+pub fn cornell_box() -> Scene {
+    let mut b = Builder::new();
+    let white = b.material("white", Vec3::new(0.725, 0.71, 0.68), 0.9, 0.0);
+    let red = b.material("red", Vec3::new(0.63, 0.065, 0.05), 0.9, 0.0);
+    let green = b.material("green", Vec3::new(0.14, 0.45, 0.091), 0.9, 0.0);
+    let light = b.material("light", Vec3::splat(0.78), 0.9, 0.0);
+    b.scene.materials[light as usize].emissive = Vec3::new(17.0, 12.0, 4.0) / 17.0 * 4.0;
+
+    let mm = |x: f32, y: f32, z: f32| Vec3::new(x, y, z) / 1000.0;
+    let inside = mm(278.0, 274.4, 279.6);
+    let (w, h, d) = (556.0, 548.8, 559.2);
+    let room = b.mesh("room", white);
+    Builder::quad(room, [mm(0.0, 0.0, 0.0), mm(w, 0.0, 0.0), mm(w, 0.0, d), mm(0.0, 0.0, d)], inside, 1.0);
+    Builder::quad(room, [mm(0.0, h, 0.0), mm(w, h, 0.0), mm(w, h, d), mm(0.0, h, d)], inside, 1.0);
+    Builder::quad(room, [mm(0.0, 0.0, d), mm(w, 0.0, d), mm(w, h, d), mm(0.0, h, d)], inside, 1.0);
+    let red_wall = b.mesh("red wall", red);
+    Builder::quad(red_wall, [mm(w, 0.0, 0.0), mm(w, 0.0, d), mm(w, h, d), mm(w, h, 0.0)], inside, 1.0);
+    let green_wall = b.mesh("green wall", green);
+    Builder::quad(green_wall, [mm(0.0, 0.0, 0.0), mm(0.0, 0.0, d), mm(0.0, h, d), mm(0.0, h, 0.0)], inside, 1.0);
+    let blocks = b.mesh("blocks", white);
+    Builder::block(blocks, [mm(130.0, 165.0, 65.0), mm(82.0, 165.0, 225.0), mm(240.0, 165.0, 272.0), mm(290.0, 165.0, 114.0)]);
+    Builder::block(blocks, [mm(423.0, 330.0, 247.0), mm(265.0, 330.0, 296.0), mm(314.0, 330.0, 456.0), mm(472.0, 330.0, 406.0)]);
+    let lamp = b.mesh("light", light);
+    let ly = h - 1.0;
+    Builder::quad(lamp, [mm(343.0, ly, 227.0), mm(213.0, ly, 227.0), mm(213.0, ly, 332.0), mm(343.0, ly, 332.0)], inside, 1.0);
+
+    b.scene.lights.push(Light::Point {
+        position: mm(278.0, 500.0, 279.5),
+        color: Vec3::new(1.0, 0.85, 0.65),
+        intensity: 0.12,
+        radius: 1.2,
+    });
+    b.scene.camera = Some(Camera {
+        eye: mm(278.0, 273.0, -800.0),
+        target: mm(278.0, 273.0, 0.0),
+        up: Vec3::Y,
+        fov_y: 39.3077f32.to_radians(),
+        near: 0.05,
+        far: 3.0,
+    });
+    b.scene
+}
+
+/// An `n × n` grid of spheres (radius 0.4, spacing 1) on a ground plane, with materials that
+/// vary in colour, roughness and metalness, and `n` scattered point lights.
+pub fn spheres_on_plane(n: u32) -> Scene {
+    let n = n.clamp(1, 256);
+    let mut b = Builder::new();
+    let ground = b.material("ground", Vec3::splat(0.6), 0.7, 0.0);
+    let half = n as f32 * 0.5 + 1.0;
+    let plane = b.mesh("ground", ground);
+    Builder::quad(
+        plane,
+        [Vec3::new(-half, 0.0, -half), Vec3::new(half, 0.0, -half), Vec3::new(half, 0.0, half), Vec3::new(-half, 0.0, half)],
+        Vec3::Y * 10.0,
+        1.0,
+    );
+    let mut rng = SplitMix(7);
+    for k in 0..8u32 {
+        let rgb = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.8 + 0.1;
+        b.material(&format!("sphere {k}"), rgb, 0.15 + 0.1 * k as f32, if k % 3 == 0 { 1.0 } else { 0.0 });
+    }
+    for k in 0..8u32 {
+        let mesh = b.mesh(&format!("spheres {k}"), 1 + k);
+        for i in 0..n * n {
+            if i % 8 != k {
+                continue;
+            }
+            let (x, z) = ((i % n) as f32 - (n as f32 - 1.0) * 0.5, (i / n) as f32 - (n as f32 - 1.0) * 0.5);
+            Builder::sphere(mesh, Vec3::new(x, 0.4, z), 0.4, 24, 12);
+        }
+    }
+    b.scene.meshes.retain(|m| !m.indices.is_empty());
+    let bounds = b.scene.bounds();
+    b.scene.lights = crate::scatter_point_lights(bounds, n as usize, 11);
+    let mut cam = Camera::look_at(Vec3::new(0.0, n as f32 * 0.6 + 1.0, n as f32 * 0.9 + 2.0), Vec3::ZERO);
+    cam.fit_planes(bounds);
+    b.scene.camera = Some(cam);
+    b.scene
+}
+
+/// A 256² texture of 8 × 8 black-and-white checks (sRGB 0.1 and 0.9).
+fn checker_texture() -> Texture {
+    let size = 256u32;
+    let rgba8 = (0..size * size)
+        .flat_map(|i| {
+            let (x, y) = (i % size, i / size);
+            let v = if ((x / 32) + (y / 32)) % 2 == 0 { 230 } else { 26 };
+            [v, v, v, 255]
+        })
+        .collect();
+    Texture { name: "checker".into(), width: size, height: size, rgba8 }
+}
+
+/// A 40 × 40 ground plane textured with a checkerboard repeated 20 times (so checks alias
+/// towards the horizon), with boxes and spheres on it, seen from a low grazing camera; one
+/// directional and two point lights. For texture-filtering and aliasing tests.
+pub fn checkerboard() -> Scene {
+    let mut b = Builder::new();
+    b.scene.textures.push(checker_texture());
+    let ground = b.material("checker", Vec3::ONE, 0.6, 0.0);
+    b.scene.materials[ground as usize].base_color_texture = Some(0);
+    let boxes = b.material("boxes", Vec3::new(0.8, 0.35, 0.1), 0.4, 0.0);
+    let balls = b.material("balls", Vec3::new(0.9, 0.9, 0.95), 0.2, 1.0);
+    let s = 20.0;
+    let plane = b.mesh("ground", ground);
+    Builder::quad(
+        plane,
+        [Vec3::new(-s, 0.0, -s), Vec3::new(s, 0.0, -s), Vec3::new(s, 0.0, s), Vec3::new(-s, 0.0, s)],
+        Vec3::Y * 10.0,
+        20.0,
+    );
+    let cubes = b.mesh("boxes", boxes);
+    for (x, z, e) in [(-2.0, -3.0, 0.8), (1.5, -6.0, 1.2), (4.0, -12.0, 1.5)] {
+        let c = [Vec3::new(x - e, 2.0 * e, z - e), Vec3::new(x + e, 2.0 * e, z - e), Vec3::new(x + e, 2.0 * e, z + e), Vec3::new(x - e, 2.0 * e, z + e)];
+        Builder::block(cubes, c);
+    }
+    let spheres = b.mesh("balls", balls);
+    for (x, z, r) in [(0.0, -1.0, 0.7), (-4.0, -8.0, 1.0), (3.0, -3.0, 0.5)] {
+        Builder::sphere(spheres, Vec3::new(x, r, z), r, 32, 16);
+    }
+    b.scene.lights.push(Light::Directional { direction: Vec3::new(-0.4, -1.0, -0.3).normalize(), color: Vec3::ONE, intensity: 1.0 });
+    b.scene.lights.push(Light::Point { position: Vec3::new(-1.0, 2.0, 0.0), color: Vec3::new(1.0, 0.6, 0.3), intensity: 2.0, radius: 8.0 });
+    b.scene.lights.push(Light::Point { position: Vec3::new(3.0, 3.0, -7.0), color: Vec3::new(0.3, 0.6, 1.0), intensity: 4.0, radius: 12.0 });
+    b.scene.camera = Some(Camera { eye: Vec3::new(0.0, 1.6, 4.0), target: Vec3::new(0.0, 0.6, -6.0), up: Vec3::Y, fov_y: 50f32.to_radians(), near: 0.1, far: 80.0 });
+    b.scene
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtins_validate() {
+        for scene in [cornell_box(), spheres_on_plane(4), checkerboard()] {
+            scene.validate().expect("built-in scene is valid");
+        }
+    }
+
+    #[test]
+    fn cornell_box_has_its_measured_extent() {
+        let b = cornell_box().bounds();
+        assert!((b.min - Vec3::ZERO).abs().max_element() < 1e-6);
+        assert!((b.max - Vec3::new(0.556, 0.5488, 0.5592)).abs().max_element() < 1e-6);
+    }
+
+    #[test]
+    fn room_normals_face_inwards_and_block_normals_outwards() {
+        let s = cornell_box();
+        let inside = Vec3::new(0.278, 0.274, 0.28);
+        for m in s.meshes.iter().filter(|m| m.name != "blocks") {
+            for (p, n) in m.positions.iter().zip(&m.normals) {
+                assert!(n.dot(inside - *p) > 0.0, "{}: normal {n} at {p} faces out", m.name);
+            }
+        }
+        let blocks = s.meshes.iter().find(|m| m.name == "blocks").expect("blocks");
+        // Every block face normal points away from the nearer block's vertical axis.
+        for t in blocks.indices.chunks_exact(3) {
+            let c = t.iter().map(|&i| blocks.positions[i as usize]).sum::<Vec3>() / 3.0;
+            let (short, tall) = (Vec3::new(0.1855, c.y, 0.169), Vec3::new(0.3685, c.y, 0.35125));
+            let axis = if c.distance(short) < c.distance(tall) { short } else { tall };
+            let n = blocks.normals[t[0] as usize];
+            assert!(n.dot(c - axis) > 0.0 || n.y > 0.9, "block normal {n} at {c}");
+        }
+    }
+
+    #[test]
+    fn winding_agrees_with_normals() {
+        for scene in [cornell_box(), spheres_on_plane(3), checkerboard()] {
+            for m in &scene.meshes {
+                for t in m.indices.chunks_exact(3) {
+                    let [a, b, c] = [t[0], t[1], t[2]].map(|i| m.positions[i as usize]);
+                    let geometric = (b - a).cross(c - a);
+                    if geometric.length() < 1e-9 {
+                        continue;
+                    }
+                    let shading = m.normals[t[0] as usize] + m.normals[t[1] as usize] + m.normals[t[2] as usize];
+                    assert!(geometric.dot(shading) > 0.0, "{}: triangle winding disagrees with normals", m.name);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn checker_texture_is_two_tone() {
+        let t = checker_texture();
+        assert_eq!(t.rgba8.len(), 256 * 256 * 4);
+        assert_eq!(t.rgba8[0], 230);
+        assert_eq!(t.rgba8[32 * 4], 26);
+    }
+}

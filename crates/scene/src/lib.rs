@@ -1,0 +1,311 @@
+//! Scenes for the deferred-rendering toolkit: meshes, materials, cameras and lights, loaders
+//! for glTF 2.0, OBJ and PLY, built-in test scenes, and a triangle BVH for ray queries.
+//!
+//! Conventions (DESIGN.md): right-handed, +Y up, a camera looks down its local −Z; radiance
+//! and colours are linear; meshes are stored in world space (node transforms are applied when
+//! loading).
+//!
+//! ```no_run
+//! let scene = scene::Scene::load("scene.gltf")?;
+//! println!("{} triangles, {} lights", scene.triangle_count(), scene.lights.len());
+//! # Ok::<(), scene::SceneError>(())
+//! ```
+
+mod builtin;
+mod bvh;
+mod camera;
+mod light;
+mod load;
+
+use std::path::{Path, PathBuf};
+
+pub use builtin::{checkerboard, cornell_box, spheres_on_plane};
+pub use bvh::{Bvh, Hit};
+pub use camera::Camera;
+pub use glam;
+pub use light::{Light, scatter_point_lights};
+
+use glam::{Vec2, Vec3, Vec4};
+
+/// A triangle mesh in world space with one material.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Name from the file, or a generated one.
+    pub name: String,
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Unit vertex normals, one per position.
+    pub normals: Vec<Vec3>,
+    /// Texture coordinates, one per position (zero when the file has none).
+    pub uvs: Vec<Vec2>,
+    /// Three indices per triangle.
+    pub indices: Vec<u32>,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+}
+
+impl Mesh {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Area-weighted smooth vertex normals from the triangles.
+    pub fn compute_normals(&mut self) {
+        let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        for t in self.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            for &i in t {
+                normals[i as usize] += n;
+            }
+        }
+        self.normals = normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Y)).collect();
+    }
+
+    /// Checks the invariants every consumer relies on: finite data, matching lengths, indices
+    /// in range, a multiple of three indices.
+    fn validate(&self) -> Result<(), SceneErrorKind> {
+        let n = self.positions.len();
+        let bad = |what: String| Err(SceneErrorKind::InvalidMesh { mesh: self.name.clone(), problem: what });
+        if self.normals.len() != n || self.uvs.len() != n {
+            return bad(format!("{n} positions but {} normals and {} uvs", self.normals.len(), self.uvs.len()));
+        }
+        if self.indices.len() % 3 != 0 {
+            return bad(format!("{} indices is not a multiple of 3", self.indices.len()));
+        }
+        if let Some(i) = self.indices.iter().find(|&&i| i as usize >= n) {
+            return bad(format!("index {i} out of range for {n} vertices"));
+        }
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return bad(format!("vertex {i} has a non-finite position {:?}", self.positions[i]));
+        }
+        if self.normals.iter().any(|v| !v.is_finite()) || self.uvs.iter().any(|u| !u.is_finite()) {
+            return bad("non-finite normal or texture coordinate".into());
+        }
+        Ok(())
+    }
+}
+
+/// An RGBA8 texture whose colour channels are sRGB-encoded (as glTF base colour textures are).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// Name or file it came from.
+    pub name: String,
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// `width × height` texels, row-major from the top-left, 4 bytes each.
+    pub rgba8: Vec<u8>,
+}
+
+/// A metallic-roughness material (glTF 2.0 core model, without the secondary textures).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name from the file.
+    pub name: String,
+    /// Linear base colour and alpha factor.
+    pub base_color: Vec4,
+    /// Index into [`Scene::textures`] of the base colour texture.
+    pub base_color_texture: Option<u32>,
+    /// Perceptual roughness in \[0, 1\].
+    pub roughness: f32,
+    /// Metalness in \[0, 1\].
+    pub metallic: f32,
+    /// Emitted radiance (linear).
+    pub emissive: Vec3,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            base_color: Vec4::new(0.8, 0.8, 0.8, 1.0),
+            base_color_texture: None,
+            roughness: 0.8,
+            metallic: 0.0,
+            emissive: Vec3::ZERO,
+        }
+    }
+}
+
+/// An axis-aligned bounding box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Minimum corner.
+    pub min: Vec3,
+    /// Maximum corner.
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The empty box (grows from nothing).
+    pub const EMPTY: Self = Self { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY };
+
+    /// The box grown to contain `p`.
+    pub fn grow(self, p: Vec3) -> Self {
+        Self { min: self.min.min(p), max: self.max.max(p) }
+    }
+
+    /// Centre point.
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Length of the diagonal.
+    pub fn diagonal(&self) -> f32 {
+        (self.max - self.min).length()
+    }
+}
+
+/// Meshes, materials, textures, an optional camera and lights.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// Meshes in world space.
+    pub meshes: Vec<Mesh>,
+    /// Materials; every mesh indexes one.
+    pub materials: Vec<Material>,
+    /// Textures; materials index them.
+    pub textures: Vec<Texture>,
+    /// The scene's own camera (glTF camera or a built-in scene's), if any.
+    pub camera: Option<Camera>,
+    /// Lights from the file or the built-in scene.
+    pub lights: Vec<Light>,
+}
+
+impl Scene {
+    /// Loads a scene, choosing the loader by extension: `.gltf`, `.glb`, `.obj`, `.ply`.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        Self::load_with_progress(path, &mut |_, _| {})
+    }
+
+    /// Like [`Scene::load`], calling `progress(done, total)` as meshes are converted.
+    pub fn load_with_progress(
+        path: impl AsRef<Path>,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> Result<Self, SceneError> {
+        let path = path.as_ref();
+        let err = |kind| SceneError { path: path.to_owned(), kind };
+        if !path.is_file() {
+            return Err(err(SceneErrorKind::Io(std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "no such file",
+            ))));
+        }
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        let scene = match ext.as_str() {
+            "gltf" | "glb" => load::gltf::load(path, progress),
+            "obj" => load::obj::load(path, progress),
+            "ply" => load::ply::load(path, progress),
+            _ => Err(SceneErrorKind::UnsupportedFormat(ext)),
+        }
+        .map_err(err)?;
+        scene.validate().map_err(err)?;
+        Ok(scene)
+    }
+
+    /// Checks every mesh and reference; loaders and built-ins call it, so a `Scene` from
+    /// [`Scene::load`] is always consistent. Call it after editing a scene by hand.
+    pub fn validate(&self) -> Result<(), SceneErrorKind> {
+        if self.meshes.iter().all(|m| m.indices.is_empty()) {
+            return Err(SceneErrorKind::NoMeshes);
+        }
+        for m in &self.meshes {
+            m.validate()?;
+            if m.material as usize >= self.materials.len() {
+                return Err(SceneErrorKind::InvalidMesh {
+                    mesh: m.name.clone(),
+                    problem: format!("material {} does not exist", m.material),
+                });
+            }
+        }
+        for (i, mat) in self.materials.iter().enumerate() {
+            if let Some(t) = mat.base_color_texture
+                && t as usize >= self.textures.len()
+            {
+                return Err(SceneErrorKind::Texture { index: i, problem: format!("material {:?} names missing texture {t}", mat.name) });
+            }
+        }
+        for t in &self.textures {
+            if t.rgba8.len() != t.width as usize * t.height as usize * 4 || t.width == 0 || t.height == 0 {
+                return Err(SceneErrorKind::Texture { index: 0, problem: format!("texture {:?} has inconsistent size", t.name) });
+            }
+        }
+        Ok(())
+    }
+
+    /// Total number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(Mesh::triangle_count).sum()
+    }
+
+    /// Bounds of all vertices.
+    pub fn bounds(&self) -> Aabb {
+        self.meshes.iter().flat_map(|m| &m.positions).fold(Aabb::EMPTY, |b, &p| b.grow(p))
+    }
+
+    /// The scene's camera, or one framing the scene's bounds.
+    pub fn camera_or_framed(&self) -> Camera {
+        self.camera.unwrap_or_else(|| Camera::framing(self.bounds()))
+    }
+}
+
+/// A loading or validation error, naming the file.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {kind}", path.display())]
+pub struct SceneError {
+    /// The file that failed.
+    pub path: PathBuf,
+    /// What went wrong.
+    pub kind: SceneErrorKind,
+}
+
+/// What went wrong with a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneErrorKind {
+    /// The file could not be read.
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
+    /// The extension names no supported format.
+    #[error("unsupported scene format {0:?} (expected .gltf, .glb, .obj or .ply)")]
+    UnsupportedFormat(String),
+    /// The glTF parser or importer refused the file (truncated buffer, bad JSON, ...).
+    #[error("invalid glTF: {0}")]
+    Gltf(String),
+    /// The OBJ/MTL parser refused the file.
+    #[error("invalid OBJ: {0}")]
+    Obj(String),
+    /// The PLY parser refused the file.
+    #[error("invalid PLY: {0}")]
+    Ply(String),
+    /// The file holds no triangles.
+    #[error("the scene has no triangle meshes")]
+    NoMeshes,
+    /// A mesh breaks an invariant (NaN positions, bad indices, ...).
+    #[error("mesh {mesh:?}: {problem}")]
+    InvalidMesh {
+        /// Mesh name.
+        mesh: String,
+        /// The problem.
+        problem: String,
+    },
+    /// A texture could not be decoded or is inconsistent.
+    #[error("texture {index}: {problem}")]
+    Texture {
+        /// Texture or material index.
+        index: usize,
+        /// The problem.
+        problem: String,
+    },
+}
+
+/// The folder of third-party test assets: `$DEFERRED_FIXTURES` if set, else `../shared/fixtures`
+/// beside the workspace (see its `SOURCES.md`). `None` when neither exists.
+pub fn shared_fixtures() -> Option<PathBuf> {
+    let dir = match std::env::var_os("DEFERRED_FIXTURES") {
+        Some(d) => PathBuf::from(d),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/fixtures"),
+    };
+    dir.is_dir().then(|| dir.canonicalize().unwrap_or(dir))
+}

@@ -1,0 +1,63 @@
+// #import gbuffer/frame.wgsl
+// #import gbuffer/normal_encoding.wgsl
+// G-buffer creation (Ishmukhametov 2013 §1.3 step 2): one render pass writing all targets
+// at once (MRT). Mirrors `gbuffer::cpu::rasterize`; layout documented in `gbuffer::layout`.
+
+struct Material {
+    base_color: vec4<f32>,
+    emissive: vec3<f32>,
+    roughness: f32,
+    metallic: f32,
+    id: u32,
+    _pad0: u32,
+    _pad1: u32,
+};
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(1) @binding(0) var<uniform> material: Material;
+@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
+@group(1) @binding(2) var base_color_sampler: sampler;
+
+struct VertexOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) uv: vec2<f32>,
+    @location(2) view_depth: f32,
+};
+
+@vertex
+fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>, @location(2) uv: vec2<f32>) -> VertexOut {
+    var out: VertexOut;
+    out.clip = frame.view_proj * vec4<f32>(position, 1.0);
+    out.normal = normal;
+    out.uv = uv;
+    out.view_depth = out.clip.w;
+    return out;
+}
+
+struct GBufferOut {
+    @location(0) linear_depth: f32,
+    @location(1) normal: u32,
+    @location(2) albedo: vec4<f32>,
+    @location(3) material: u32,
+};
+
+// roughness (unorm8) | metallic (unorm8) << 8 | material id << 16.
+fn pack_material(roughness: f32, metallic: f32, id: u32) -> u32 {
+    let r = u32(round(clamp(roughness, 0.0, 1.0) * 255.0));
+    let m = u32(round(clamp(metallic, 0.0, 1.0) * 255.0));
+    return r | (m << 8u) | (id << 16u);
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> GBufferOut {
+    var out: GBufferOut;
+    out.linear_depth = in.view_depth;
+    let l2 = dot(in.normal, in.normal);
+    let n = select(vec3<f32>(0.0, 0.0, 1.0), in.normal * inverseSqrt(l2), l2 > 1e-30);
+    out.normal = pack2x16snorm(encode_octahedral_snorm(n));
+    let texel = textureSampleLevel(base_color_texture, base_color_sampler, in.uv, 0.0);
+    out.albedo = vec4<f32>(clamp(material.base_color.rgb * texel.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+    out.material = pack_material(material.roughness, material.metallic, material.id);
+    return out;
+}
