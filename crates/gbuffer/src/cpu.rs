@@ -59,8 +59,8 @@ struct SetupTriangle {
     material: u32,
     /// Snapped framebuffer positions in 1/SUBPIXEL pixels, y down.
     v: [[i64; 3]; 2],
-    /// Twice the signed area (positive after reordering).
-    area: i64,
+    /// Unsnapped framebuffer positions (pixels), for attribute interpolation.
+    screen: [Vec2; 3],
     /// 1 where the edge opposite vertex i is a top or left edge, else 0.
     top_left: [i64; 3],
     z: [f32; 3],
@@ -102,20 +102,19 @@ fn is_top_left(a: [i64; 2], b: [i64; 2]) -> bool {
 fn setup(verts: [ClipVertex; 3], id: u32, material: u32, width: u32, height: u32) -> Option<SetupTriangle> {
     let (w, h) = (width as f32, height as f32);
     let mut fixed = [[0i64; 2]; 3];
-    for (f, v) in fixed.iter_mut().zip(&verts) {
+    let mut screen = [Vec2::ZERO; 3];
+    for ((f, s), v) in fixed.iter_mut().zip(&mut screen).zip(&verts) {
         let ndc = v.clip.truncate() / v.clip.w;
-        let x = ndc.x * (w * 0.5) + w * 0.5;
-        let y = -ndc.y * (h * 0.5) + h * 0.5;
-        *f = [(x * SUBPIXEL as f32).round() as i64, (y * SUBPIXEL as f32).round() as i64];
+        *s = Vec2::new(ndc.x * (w * 0.5) + w * 0.5, -ndc.y * (h * 0.5) + h * 0.5);
+        *f = [(s.x * SUBPIXEL as f32).round() as i64, (s.y * SUBPIXEL as f32).round() as i64];
     }
     let mut order = [0usize, 1, 2];
-    let mut area = edge(fixed[0], fixed[1], fixed[2]);
+    let area = edge(fixed[0], fixed[1], fixed[2]);
     if area == 0 {
         return None;
     }
     if area < 0 {
         order = [0, 2, 1];
-        area = -area;
     }
     let v = order.map(|i| fixed[i]);
     let vs = order.map(|i| verts[i]);
@@ -135,7 +134,7 @@ fn setup(verts: [ClipVertex; 3], id: u32, material: u32, width: u32, height: u32
         id,
         material,
         v: [v.map(|p| p[0]), v.map(|p| p[1])],
-        area,
+        screen: order.map(|i| screen[i]),
         top_left,
         z: vs.map(|v| v.clip.z / v.clip.w),
         inv_w,
@@ -223,7 +222,9 @@ fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], materi
         let (x0, x1) = (bx0.max(tile.x), bx1.min(tile.x + tile.w - 1));
         let (y0, y1) = (by0.max(tile.y), by1.min(tile.y + tile.h - 1));
         let v = |i: usize| [tri.v[0][i], tri.v[1][i]];
-        let area = tri.area as f32;
+        let s = &tri.screen;
+        let edge_f = |a: Vec2, b: Vec2, p: Vec2| (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+        let area = edge_f(s[0], s[1], s[2]);
         for py in y0..=y1 {
             for px in x0..=x1 {
                 let p = [i64::from(px) * SUBPIXEL + SUBPIXEL / 2, i64::from(py) * SUBPIXEL + SUBPIXEL / 2];
@@ -231,7 +232,10 @@ fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], materi
                 if (0..3).any(|i| e[i] + tri.top_left[i] <= 0) {
                     continue;
                 }
-                let l = e.map(|e| e as f32 / area);
+                // Coverage is decided on snapped positions; attributes are interpolated with
+                // barycentrics of the unsnapped positions, as the GPU's plane equations are.
+                let c = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+                let l = [edge_f(s[1], s[2], c), edge_f(s[2], s[0], c), edge_f(s[0], s[1], c)].map(|e| e / area);
                 let z = l[0] * tri.z[0] + l[1] * tri.z[1] + l[2] * tri.z[2];
                 let i = ((py - tile.y) * tile.w + (px - tile.x)) as usize;
                 if !(0.0..=1.0).contains(&z) || z >= tile.depth[i] {

@@ -1,0 +1,180 @@
+//! The GPU G-buffer pass against the CPU reference, and the WGSL normal encodings against
+//! their Rust twins.
+//!
+//! Rule for pixels allowed to differ: a pixel may differ only where the CPU's triangle-id
+//! image is not constant over its 3 × 3 neighbourhood (a silhouette or triangle edge, where
+//! sub-pixel snapping and fill-rule details can hand the pixel to a neighbour). All other
+//! pixels must match within the tolerances below, and at least 99.5 % of all pixels must match.
+
+mod common;
+
+use gbuffer::{GBuffer, cpu, gpu::run, normal};
+use glam::Vec3;
+use proptest::prelude::*;
+
+/// Hardware depth: the GPU interpolates z/w in f32 from the same snapped vertices.
+const DEPTH_TOL: f32 = 2e-6;
+/// Linear depth, relative: perspective-correct interpolation in f32.
+const LINEAR_DEPTH_REL_TOL: f32 = 1e-4;
+/// Normal, degrees after decoding both words (interpolation order and f32 rounding).
+const NORMAL_TOL_DEG: f32 = 0.05;
+/// Albedo, 8-bit steps: GPU bilinear filtering uses fixed-point weights.
+const ALBEDO_TOL: i32 = 3;
+
+fn pixel_matches(cpu: &GBuffer, gpu: &GBuffer, x: u32, y: u32) -> bool {
+    let (dc, dg) = (cpu.depth.get(x, y), gpu.depth.get(x, y));
+    if (dc - dg).abs() > DEPTH_TOL {
+        return false;
+    }
+    if dc >= 1.0 {
+        return gpu.material.get(x, y) == gbuffer::NO_MATERIAL;
+    }
+    let (lc, lg) = (cpu.linear_depth.get(x, y), gpu.linear_depth.get(x, y));
+    let normal_ok = normal::angle_deg(normal::unpack_octahedral(cpu.normal.get(x, y)), normal::unpack_octahedral(gpu.normal.get(x, y)))
+        <= NORMAL_TOL_DEG;
+    let albedo_ok = cpu.albedo.get(x, y).iter().zip(gpu.albedo.get(x, y)).all(|(&a, b)| (i32::from(a) - i32::from(b)).abs() <= ALBEDO_TOL);
+    (lc - lg).abs() <= LINEAR_DEPTH_REL_TOL * lc && normal_ok && albedo_ok && cpu.material.get(x, y) == gpu.material.get(x, y)
+}
+
+fn is_edge(ids: &gbuffer::Image<u32>, x: u32, y: u32) -> bool {
+    let id = ids.get(x, y);
+    (-1i32..=1).any(|dy| {
+        (-1i32..=1).any(|dx| {
+            let (nx, ny) = (x as i32 + dx, y as i32 + dy);
+            nx >= 0 && ny >= 0 && (nx as u32) < ids.width() && (ny as u32) < ids.height() && ids.get(nx as u32, ny as u32) != id
+        })
+    })
+}
+
+/// Compares; on failure writes expected/actual/difference images and returns a message.
+fn compare(name: &str, scene: &scene::Scene, camera: &scene::Camera, w: u32, h: u32) -> Result<(), String> {
+    let Some(gpu) = gpu::test_gpu() else { return Ok(()) };
+    let expected = cpu::rasterize(scene, camera, w, h).map_err(|e| e.to_string())?;
+    let actual = run(gpu, scene, camera, w, h).map_err(|e| e.to_string())?;
+    let (mut matched, mut bad_interior) = (0u32, Vec::new());
+    let mut diff = vec![[0u8, 0, 0, 255]; (w * h) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            if pixel_matches(&expected.gbuffer, &actual, x, y) {
+                matched += 1;
+            } else if is_edge(&expected.triangle_id, x, y) {
+                diff[(y * w + x) as usize] = [255, 255, 0, 255];
+            } else {
+                diff[(y * w + x) as usize] = [255, 0, 0, 255];
+                bad_interior.push((x, y));
+            }
+        }
+    }
+    let fraction = f64::from(matched) / f64::from(w * h);
+    if bad_interior.is_empty() && fraction >= 0.995 {
+        return Ok(());
+    }
+    let dir = common::test_output(name);
+    common::write_rgba8(dir.join("expected_albedo.png"), w, h, expected.gbuffer.albedo.pixels());
+    common::write_rgba8(dir.join("actual_albedo.png"), w, h, actual.albedo.pixels());
+    common::write_rgba8(dir.join("difference.png"), w, h, &diff);
+    let (x, y) = bad_interior.first().copied().unwrap_or((0, 0));
+    Err(format!(
+        "{name}: {:.3}% matched, {} interior mismatches, e.g. ({x},{y}): depth {} vs {}, lin {} vs {}, normal {:08x} vs {:08x}, albedo {:?} vs {:?}, material {:08x} vs {:08x}; images in {}",
+        fraction * 100.0,
+        bad_interior.len(),
+        expected.gbuffer.depth.get(x, y),
+        actual.depth.get(x, y),
+        expected.gbuffer.linear_depth.get(x, y),
+        actual.linear_depth.get(x, y),
+        expected.gbuffer.normal.get(x, y),
+        actual.normal.get(x, y),
+        expected.gbuffer.albedo.get(x, y),
+        actual.albedo.get(x, y),
+        expected.gbuffer.material.get(x, y),
+        actual.material.get(x, y),
+        dir.display()
+    ))
+}
+
+#[test]
+fn cornell_box_gbuffer_matches_cpu() {
+    let s = scene::cornell_box();
+    compare("cornell", &s, &s.camera.expect("camera"), 160, 120).unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn checkerboard_gbuffer_matches_cpu() {
+    let s = scene::checkerboard();
+    compare("checkerboard", &s, &s.camera.expect("camera"), 200, 120).unwrap_or_else(|e| panic!("{e}"));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_scenes_match_cpu(seed in 0u64..1_000_000, cam in 0u64..1_000_000, tris in 1usize..40, w in 8u32..128, h in 8u32..128) {
+        let scene = common::random_scene(seed, tris);
+        let camera = common::random_camera(cam);
+        if let Err(e) = compare("random", &scene, &camera, w, h) {
+            return Err(TestCaseError::fail(format!("seed {seed} cam {cam}: {e}")));
+        }
+    }
+}
+
+#[test]
+fn wgsl_normal_encodings_match_rust() {
+    use gpu::wgpu;
+    let Some(gpu) = gpu::test_gpu() else { return };
+    let normals: Vec<Vec3> = normal::fibonacci_sphere(4096).collect();
+    let input: Vec<[f32; 4]> = normals.iter().map(|n| n.extend(0.0).to_array()).collect();
+    let count = normals.len();
+    let d = &gpu.device;
+    let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    let input_buf = gpu::transfer::buffer_init(d, "normals", bytemuck::cast_slice(&input), storage).expect("buffer");
+    let encoded = gpu::transfer::buffer_init(d, "encoded", &vec![0u8; count * 5 * 8], storage).expect("buffer");
+    let decoded = gpu::transfer::buffer_init(d, "decoded", &vec![0u8; count * 5 * 16], storage).expect("buffer");
+    let module = gpu::shader::module(d, "gbuffer/encode_normals.wgsl").expect("shader");
+    let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("encode_normals"),
+        layout: None,
+        module: &module,
+        entry_point: Some("encode_normals"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let group = d.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: input_buf.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: encoded.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 2, resource: decoded.as_entire_binding() },
+        ],
+    });
+    let mut enc = d.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups((count as u32).div_ceil(64), 1, 1);
+    }
+    gpu.queue.submit([enc.finish()]);
+    let e_bytes = gpu::transfer::read_buffer(d, &gpu.queue, &encoded).expect("read");
+    let d_bytes = gpu::transfer::read_buffer(d, &gpu.queue, &decoded).expect("read");
+    let e: &[[f32; 2]] = bytemuck::cast_slice(&e_bytes);
+    let dec: &[[f32; 4]] = bytemuck::cast_slice(&d_bytes);
+    for (k, enc_kind) in normal::NormalEncoding::ALL.into_iter().enumerate() {
+        for (i, &n) in normals.iter().enumerate().filter(|(_, n)| n.z >= enc_kind.domain_min_z() + 1e-3) {
+            let cpu_e = enc_kind.encode(n);
+            let gpu_e = e[k * count + i];
+            // Tolerance: WGSL's atan2/sin/cos/sqrt may differ from Rust's by a few ulp.
+            assert!((cpu_e.x - gpu_e[0]).abs() < 1e-5 && (cpu_e.y - gpu_e[1]).abs() < 1e-5, "{}: encode {n}: {cpu_e} vs {gpu_e:?}", enc_kind.name());
+            let g = dec[k * count + i];
+            let angle = normal::angle_deg(enc_kind.decode(cpu_e), Vec3::new(g[0], g[1], g[2]));
+            assert!(angle < 0.01, "{}: decode of {n} differs by {angle}°", enc_kind.name());
+        }
+    }
+}
+
+#[test]
+fn zero_size_is_an_error_not_a_panic() {
+    let Some(gpu) = gpu::test_gpu() else { return };
+    let s = scene::cornell_box();
+    assert!(run(gpu, &s, &s.camera.expect("camera"), 0, 16).is_err());
+}
