@@ -1,17 +1,8 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
+// #import gbuffer/material.wgsl
 // G-buffer creation (Ishmukhametov 2013 §1.3 step 2): one render pass writing all targets
 // at once (MRT). Mirrors `gbuffer::cpu::rasterize`; layout documented in `gbuffer::layout`.
-
-struct Material {
-    base_color: vec4<f32>,
-    emissive: vec3<f32>,
-    roughness: f32,
-    metallic: f32,
-    id: u32,
-    _pad0: u32,
-    _pad1: u32,
-};
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(1) @binding(0) var<uniform> material: Material;

@@ -169,11 +169,9 @@ pub enum GBufferError {
     Gpu(#[from] ::gpu::GpuError),
 }
 
-/// Checks size, camera and material count before rendering.
-pub(crate) fn validate(scene: &scene::Scene, camera: &Camera, width: u32, height: u32) -> Result<(), GBufferError> {
-    if width == 0 || height == 0 || width > MAX_SIZE || height > MAX_SIZE {
-        return Err(GBufferError::InvalidSize { width, height, max: MAX_SIZE });
-    }
+/// Rejects cameras that cannot project (non-finite, eye at the target, field of view
+/// outside (0, π), planes not 0 < near < far < ∞).
+pub fn validate_camera(camera: &Camera) -> Result<(), GBufferError> {
     let ok = camera.eye.is_finite()
         && camera.target.is_finite()
         && camera.up.is_finite()
@@ -186,6 +184,15 @@ pub(crate) fn validate(scene: &scene::Scene, camera: &Camera, width: u32, height
     if !ok {
         return Err(GBufferError::InvalidCamera(format!("{camera:?}")));
     }
+    Ok(())
+}
+
+/// Checks size, camera and material count before rendering.
+pub(crate) fn validate(scene: &scene::Scene, camera: &Camera, width: u32, height: u32) -> Result<(), GBufferError> {
+    if width == 0 || height == 0 || width > MAX_SIZE || height > MAX_SIZE {
+        return Err(GBufferError::InvalidSize { width, height, max: MAX_SIZE });
+    }
+    validate_camera(camera)?;
     if scene.materials.len() >= 0xffff {
         return Err(GBufferError::TooManyMaterials(scene.materials.len()));
     }

@@ -1,0 +1,33 @@
+// #import gbuffer/material.wgsl
+// Composition (Ishmukhametov 2013 §1.3 step 4): albedo × (ambient + diffuse) + specular,
+// plus the material's emissive radiance. Twin of `pipeline::cpu::composition`.
+
+struct CompositionParams {
+    ambient: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> composition: CompositionParams;
+@group(0) @binding(1) var<storage, read> materials: array<Material>;
+@group(0) @binding(2) var albedo_in: texture_2d<f32>;
+@group(0) @binding(3) var material_in: texture_2d<u32>;
+@group(0) @binding(4) var diffuse_in: texture_2d<f32>;
+@group(0) @binding(5) var specular_in: texture_2d<f32>;
+@group(0) @binding(6) var radiance_out: texture_storage_2d<rgba32float, write>;
+
+@compute @workgroup_size(8, 8)
+fn composition_main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(albedo_in);
+    if id.x >= size.x || id.y >= size.y { return; }
+    let pixel = id.xy;
+    let word = textureLoad(material_in, pixel, 0).x;
+    var out = vec4<f32>(0.0);
+    if word != 0xffffffffu {
+        let albedo = textureLoad(albedo_in, pixel, 0).rgb;
+        let metallic = f32((word >> 8u) & 0xffu) / 255.0;
+        let diffuse = textureLoad(diffuse_in, pixel, 0).rgb;
+        let specular = textureLoad(specular_in, pixel, 0).rgb;
+        let emissive = materials[word >> 16u].emissive;
+        out = vec4<f32>(albedo * (1.0 - metallic) * (composition.ambient.rgb + diffuse) + specular + emissive, 1.0);
+    }
+    textureStore(radiance_out, pixel, out);
+}

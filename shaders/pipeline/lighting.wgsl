@@ -1,0 +1,85 @@
+// Lights and the BRDF of the deferred renderer; mirrors `pipeline::cpu` (same names).
+//
+// Light accumulation (Ishmukhametov 2013 §1.3 step 3) sums, per pixel and light,
+//   E = Att · (N·L) · colour · intensity
+//   diffuse  += E / π
+//   specular += E · D_GGX(N·H) · V_SmithGGX(N·L, N·V) · F_Schlick(V·H, F0)
+// with F0 = mix(0.04, albedo, metallic) and α = roughness². Composition (step 4):
+//   colour = albedo · (1 − metallic) · (ambient + diffuse) + specular + emissive.
+// Point and spot attenuation: saturate(1 − (d/r)⁴)² / max(d², 1e-4), exactly zero at r.
+
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_SPOT: u32 = 1u;
+const LIGHT_DIRECTIONAL: u32 = 2u;
+const INV_PI: f32 = 0.318309886183791;
+
+struct Light {
+    position: vec3<f32>,
+    radius: f32,
+    // colour × intensity
+    color: vec3<f32>,
+    kind: u32,
+    // direction the light travels (spot, directional)
+    direction: vec3<f32>,
+    cos_outer: f32,
+    cos_inner: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+};
+
+// Distance window: 1 at the light, 0 at and beyond its radius.
+fn distance_attenuation(d: f32, radius: f32) -> f32 {
+    let x = d / radius;
+    let x2 = x * x;
+    let w = clamp(1.0 - x2 * x2, 0.0, 1.0);
+    return w * w / max(d * d, 1e-4);
+}
+
+// Direction to the light and attenuation at `p` (zero outside the light's influence).
+fn light_incidence(light: Light, p: vec3<f32>) -> vec4<f32> {
+    if light.kind == LIGHT_DIRECTIONAL {
+        return vec4<f32>(-light.direction, 1.0);
+    }
+    let to_light = light.position - p;
+    let d = length(to_light);
+    let l = to_light / max(d, 1e-6);
+    var att = distance_attenuation(d, light.radius);
+    if light.kind == LIGHT_SPOT {
+        att *= smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
+    }
+    return vec4<f32>(l, att);
+}
+
+struct Accumulated {
+    diffuse: vec3<f32>,
+    specular: vec3<f32>,
+};
+
+fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, roughness: f32, metallic: f32) -> Accumulated {
+    var out: Accumulated;
+    out.diffuse = vec3<f32>(0.0);
+    out.specular = vec3<f32>(0.0);
+    let inc = light_incidence(light, p);
+    let l = inc.xyz;
+    let n_dot_l = clamp(dot(n, l), 0.0, 1.0);
+    if inc.w <= 0.0 || n_dot_l <= 0.0 {
+        return out;
+    }
+    let e = light.color * (inc.w * n_dot_l);
+    out.diffuse = e * INV_PI;
+    let h = normalize(l + v);
+    let n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
+    let n_dot_h = clamp(dot(n, h), 0.0, 1.0);
+    let v_dot_h = clamp(dot(v, h), 0.0, 1.0);
+    let a = max(roughness * roughness, 1e-3);
+    let a2 = a * a;
+    let k = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
+    let d = a2 * INV_PI / (k * k);
+    let vis = 0.5 / (n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2) + n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2));
+    let f0 = mix(vec3<f32>(0.04), albedo, metallic);
+    let fw = pow(1.0 - v_dot_h, 5.0);
+    let f = f0 + (vec3<f32>(1.0) - f0) * fw;
+    out.specular = e * (d * vis) * f;
+    return out;
+}
