@@ -17,7 +17,10 @@ use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 use scene::{Camera, Scene};
 
-use crate::{Frame, GBuffer, GBufferError, Image, NO_MATERIAL, normal::pack_octahedral, pack_material, srgb_to_linear};
+use crate::{
+    Frame, GBuffer, GBufferError, Image, NO_MATERIAL, normal::pack_octahedral, pack_material,
+    srgb_to_linear,
+};
 
 /// Side of a screen tile in pixels.
 pub const TILE: u32 = 32;
@@ -99,14 +102,23 @@ fn is_top_left(a: [i64; 2], b: [i64; 2]) -> bool {
     dy < 0 || (dy == 0 && dx > 0)
 }
 
-fn setup(verts: [ClipVertex; 3], id: u32, material: u32, width: u32, height: u32) -> Option<SetupTriangle> {
+fn setup(
+    verts: [ClipVertex; 3],
+    id: u32,
+    material: u32,
+    width: u32,
+    height: u32,
+) -> Option<SetupTriangle> {
     let (w, h) = (width as f32, height as f32);
     let mut fixed = [[0i64; 2]; 3];
     let mut screen = [Vec2::ZERO; 3];
     for ((f, s), v) in fixed.iter_mut().zip(&mut screen).zip(&verts) {
         let ndc = v.clip.truncate() / v.clip.w;
         *s = Vec2::new(ndc.x * (w * 0.5) + w * 0.5, -ndc.y * (h * 0.5) + h * 0.5);
-        *f = [(s.x * SUBPIXEL as f32).round() as i64, (s.y * SUBPIXEL as f32).round() as i64];
+        *f = [
+            (s.x * SUBPIXEL as f32).round() as i64,
+            (s.y * SUBPIXEL as f32).round() as i64,
+        ];
     }
     let mut order = [0usize, 1, 2];
     let area = edge(fixed[0], fixed[1], fixed[2]);
@@ -124,8 +136,12 @@ fn setup(verts: [ClipVertex; 3], id: u32, material: u32, width: u32, height: u32
     let half = SUBPIXEL / 2;
     let x0 = (min_x - half + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
     let y0 = (min_y - half + SUBPIXEL - 1).div_euclid(SUBPIXEL).max(0);
-    let x1 = (max_x - half).div_euclid(SUBPIXEL).min(i64::from(width) - 1);
-    let y1 = (max_y - half).div_euclid(SUBPIXEL).min(i64::from(height) - 1);
+    let x1 = (max_x - half)
+        .div_euclid(SUBPIXEL)
+        .min(i64::from(width) - 1);
+    let y1 = (max_y - half)
+        .div_euclid(SUBPIXEL)
+        .min(i64::from(height) - 1);
     if x0 > x1 || y0 > y1 {
         return None;
     }
@@ -166,9 +182,20 @@ impl LinearTexture {
         let texels = t
             .rgba8
             .chunks_exact(4)
-            .map(|c| Vec4::new(lut[c[0] as usize], lut[c[1] as usize], lut[c[2] as usize], f32::from(c[3]) / 255.0))
+            .map(|c| {
+                Vec4::new(
+                    lut[c[0] as usize],
+                    lut[c[1] as usize],
+                    lut[c[2] as usize],
+                    f32::from(c[3]) / 255.0,
+                )
+            })
             .collect();
-        Self { width: t.width, height: t.height, texels }
+        Self {
+            width: t.width,
+            height: t.height,
+            texels,
+        }
     }
 
     /// Bilinear sample of mip 0 with repeat addressing (`textureSampleLevel(t, s, uv, 0.0)`
@@ -199,7 +226,11 @@ fn fragment(material: &FragmentMaterial, id: u32, normal: Vec3, uv: Vec2) -> ([u
     let rgb = (material.base_color.truncate() * texel.truncate()).clamp(Vec3::ZERO, Vec3::ONE);
     let unorm = |c: f32| (c * 255.0).round() as u8;
     let albedo = [unorm(rgb.x), unorm(rgb.y), unorm(rgb.z), 255];
-    (albedo, pack_octahedral(normal), pack_material(material.roughness, material.metallic, id))
+    (
+        albedo,
+        pack_octahedral(normal),
+        pack_material(material.roughness, material.metallic, id),
+    )
 }
 
 struct Tile {
@@ -215,7 +246,12 @@ struct Tile {
     triangle: Vec<u32>,
 }
 
-fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], materials: &[FragmentMaterial]) {
+fn raster_tile(
+    tile: &mut Tile,
+    triangles: &[SetupTriangle],
+    bin: &[u32],
+    materials: &[FragmentMaterial],
+) {
     for &t in bin {
         let tri = &triangles[t as usize];
         let [bx0, by0, bx1, by1] = tri.bounds;
@@ -223,19 +259,32 @@ fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], materi
         let (y0, y1) = (by0.max(tile.y), by1.min(tile.y + tile.h - 1));
         let v = |i: usize| [tri.v[0][i], tri.v[1][i]];
         let s = &tri.screen;
-        let edge_f = |a: Vec2, b: Vec2, p: Vec2| (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+        let edge_f =
+            |a: Vec2, b: Vec2, p: Vec2| (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
         let area = edge_f(s[0], s[1], s[2]);
         for py in y0..=y1 {
             for px in x0..=x1 {
-                let p = [i64::from(px) * SUBPIXEL + SUBPIXEL / 2, i64::from(py) * SUBPIXEL + SUBPIXEL / 2];
-                let e = [edge(v(1), v(2), p), edge(v(2), v(0), p), edge(v(0), v(1), p)];
+                let p = [
+                    i64::from(px) * SUBPIXEL + SUBPIXEL / 2,
+                    i64::from(py) * SUBPIXEL + SUBPIXEL / 2,
+                ];
+                let e = [
+                    edge(v(1), v(2), p),
+                    edge(v(2), v(0), p),
+                    edge(v(0), v(1), p),
+                ];
                 if (0..3).any(|i| e[i] + tri.top_left[i] <= 0) {
                     continue;
                 }
                 // Coverage is decided on snapped positions; attributes are interpolated with
                 // barycentrics of the unsnapped positions, as the GPU's plane equations are.
                 let c = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
-                let l = [edge_f(s[1], s[2], c), edge_f(s[2], s[0], c), edge_f(s[0], s[1], c)].map(|e| e / area);
+                let l = [
+                    edge_f(s[1], s[2], c),
+                    edge_f(s[2], s[0], c),
+                    edge_f(s[0], s[1], c),
+                ]
+                .map(|e| e / area);
                 let z = l[0] * tri.z[0] + l[1] * tri.z[1] + l[2] * tri.z[2];
                 let i = ((py - tile.y) * tile.w + (px - tile.x)) as usize;
                 if !(0.0..=1.0).contains(&z) || z >= tile.depth[i] {
@@ -243,9 +292,15 @@ fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], materi
                 }
                 let one_over_w = l[0] * tri.inv_w[0] + l[1] * tri.inv_w[1] + l[2] * tri.inv_w[2];
                 let w = 1.0 / one_over_w;
-                let normal = (tri.normal_over_w[0] * l[0] + tri.normal_over_w[1] * l[1] + tri.normal_over_w[2] * l[2]) * w;
-                let uv = (tri.uv_over_w[0] * l[0] + tri.uv_over_w[1] * l[1] + tri.uv_over_w[2] * l[2]) * w;
-                let (albedo, n, m) = fragment(&materials[tri.material as usize], tri.material, normal, uv);
+                let normal = (tri.normal_over_w[0] * l[0]
+                    + tri.normal_over_w[1] * l[1]
+                    + tri.normal_over_w[2] * l[2])
+                    * w;
+                let uv =
+                    (tri.uv_over_w[0] * l[0] + tri.uv_over_w[1] * l[1] + tri.uv_over_w[2] * l[2])
+                        * w;
+                let (albedo, n, m) =
+                    fragment(&materials[tri.material as usize], tri.material, normal, uv);
                 tile.depth[i] = z;
                 tile.linear_depth[i] = w;
                 tile.normal[i] = n;
@@ -258,7 +313,12 @@ fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], materi
 }
 
 /// Rasterizes `scene` seen by `camera` into a `width × height` G-buffer.
-pub fn rasterize(scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<Rasterized, GBufferError> {
+pub fn rasterize(
+    scene: &Scene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+) -> Result<Rasterized, GBufferError> {
     crate::validate(scene, camera, width, height)?;
     let frame = Frame::new(camera, width, height);
 
@@ -270,36 +330,55 @@ pub fn rasterize(scene: &Scene, camera: &Camera, width: u32, height: u32) -> Res
         next += m.triangle_count() as u32;
     }
     let planes = [
-        Vec4::new(0.0, 0.0, 1.0, 0.0),                // z >= 0 (near)
-        Vec4::new(0.0, 0.0, -1.0, 1.0),               // z <= w (far)
-        Vec4::new(1.0, 0.0, 0.0, GUARD_BAND),         // x >= -g w
-        Vec4::new(-1.0, 0.0, 0.0, GUARD_BAND),        // x <= g w
-        Vec4::new(0.0, 1.0, 0.0, GUARD_BAND),         // y >= -g w
-        Vec4::new(0.0, -1.0, 0.0, GUARD_BAND),        // y <= g w
+        Vec4::new(0.0, 0.0, 1.0, 0.0),         // z >= 0 (near)
+        Vec4::new(0.0, 0.0, -1.0, 1.0),        // z <= w (far)
+        Vec4::new(1.0, 0.0, 0.0, GUARD_BAND),  // x >= -g w
+        Vec4::new(-1.0, 0.0, 0.0, GUARD_BAND), // x <= g w
+        Vec4::new(0.0, 1.0, 0.0, GUARD_BAND),  // y >= -g w
+        Vec4::new(0.0, -1.0, 0.0, GUARD_BAND), // y <= g w
     ];
     let triangles: Vec<SetupTriangle> = scene
         .meshes
         .par_iter()
         .zip(first_id.par_iter())
         .flat_map_iter(|(mesh, &first)| {
-            let clip: Vec<Vec4> = mesh.positions.iter().map(|p| frame.view_proj * p.extend(1.0)).collect();
-            mesh.indices.chunks_exact(3).enumerate().flat_map(move |(t, idx)| {
-                let vert = |i: u32| ClipVertex { clip: clip[i as usize], normal: mesh.normals[i as usize], uv: mesh.uvs[i as usize] };
-                let mut poly = vec![vert(idx[0]), vert(idx[1]), vert(idx[2])];
-                let inside = |v: &ClipVertex| planes.iter().all(|p| p.dot(v.clip) >= 0.0);
-                if !poly.iter().all(inside) {
-                    for p in planes {
-                        poly = clip_polygon(poly, p);
-                        if poly.len() < 3 {
-                            break;
+            let clip: Vec<Vec4> = mesh
+                .positions
+                .iter()
+                .map(|p| frame.view_proj * p.extend(1.0))
+                .collect();
+            mesh.indices
+                .chunks_exact(3)
+                .enumerate()
+                .flat_map(move |(t, idx)| {
+                    let vert = |i: u32| ClipVertex {
+                        clip: clip[i as usize],
+                        normal: mesh.normals[i as usize],
+                        uv: mesh.uvs[i as usize],
+                    };
+                    let mut poly = vec![vert(idx[0]), vert(idx[1]), vert(idx[2])];
+                    let inside = |v: &ClipVertex| planes.iter().all(|p| p.dot(v.clip) >= 0.0);
+                    if !poly.iter().all(inside) {
+                        for p in planes {
+                            poly = clip_polygon(poly, p);
+                            if poly.len() < 3 {
+                                break;
+                            }
                         }
                     }
-                }
-                let id = first + t as u32;
-                (1..poly.len().saturating_sub(1))
-                    .filter_map(|k| setup([poly[0], poly[k], poly[k + 1]], id, mesh.material, width, height))
-                    .collect::<Vec<_>>()
-            })
+                    let id = first + t as u32;
+                    (1..poly.len().saturating_sub(1))
+                        .filter_map(|k| {
+                            setup(
+                                [poly[0], poly[k], poly[k + 1]],
+                                id,
+                                mesh.material,
+                                width,
+                                height,
+                            )
+                        })
+                        .collect::<Vec<_>>()
+                })
         })
         .collect();
 
@@ -366,5 +445,8 @@ pub fn rasterize(scene: &Scene, camera: &Camera, width: u32, height: u32) -> Res
             }
         }
     }
-    Ok(Rasterized { gbuffer, triangle_id })
+    Ok(Rasterized {
+        gbuffer,
+        triangle_id,
+    })
 }

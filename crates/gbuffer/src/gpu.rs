@@ -6,8 +6,8 @@ use glam::Vec4;
 use scene::{Camera, Scene};
 
 use crate::{
-    ALBEDO_FORMAT, DEPTH_FORMAT, Frame, GBuffer, GBufferError, Image, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, NO_MATERIAL,
-    NORMAL_FORMAT,
+    ALBEDO_FORMAT, DEPTH_FORMAT, Frame, GBuffer, GBufferError, Image, LINEAR_DEPTH_FORMAT,
+    MATERIAL_FORMAT, NO_MATERIAL, NORMAL_FORMAT,
 };
 
 /// Vertex layout of the uploaded scene (WGSL `vs_main` inputs).
@@ -78,13 +78,19 @@ impl GBufferTargets {
     pub fn new(device: &wgpu::Device, width: u32, height: u32) -> Result<Self, GpuError> {
         transfer::check_texture_size(device, "G-buffer", width, height)?;
         let make = |label: &str, format: wgpu::TextureFormat, storage: bool| {
-            let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
+            let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC;
             if storage {
                 usage |= wgpu::TextureUsages::STORAGE_BINDING;
             }
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
-                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
@@ -110,12 +116,20 @@ impl GBufferTargets {
     }
 
     /// Reads every target back into a CPU [`GBuffer`].
-    pub fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<GBuffer, GBufferError> {
+    pub fn read(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<GBuffer, GBufferError> {
         let read = |t: &wgpu::Texture, aspect| transfer::read_texture(device, queue, t, aspect);
         let all = wgpu::TextureAspect::All;
         let img = |bytes: Vec<u8>| -> Result<Image<u32>, GBufferError> {
-            Image::from_vec(self.width, self.height, bytemuck::cast_slice(&bytes).to_vec())
-                .map_err(|e| GBufferError::Gpu(GpuError::Readback(e.to_string())))
+            Image::from_vec(
+                self.width,
+                self.height,
+                bytemuck::cast_slice(&bytes).to_vec(),
+            )
+            .map_err(|e| GBufferError::Gpu(GpuError::Readback(e.to_string())))
         };
         let as_f32 = |i: Image<u32>| i.map(f32::from_bits);
         Ok(GBuffer {
@@ -150,7 +164,12 @@ pub struct GpuScene {
 
 impl GpuScene {
     /// Uploads `scene` (textures as `Rgba8UnormSrgb`, mip 0) for `pass`.
-    pub fn upload(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene, pass: &GBufferPass) -> Result<Self, GBufferError> {
+    pub fn upload(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        pass: &GBufferPass,
+    ) -> Result<Self, GBufferError> {
         scene.validate()?;
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
@@ -163,50 +182,112 @@ impl GpuScene {
                 material: m.material as usize,
             });
             indices.extend_from_slice(&m.indices);
-            vertices.extend(m.positions.iter().zip(&m.normals).zip(&m.uvs).map(|((p, n), uv)| GpuVertex {
-                position: p.to_array(),
-                normal: n.to_array(),
-                uv: uv.to_array(),
-            }));
+            vertices.extend(
+                m.positions
+                    .iter()
+                    .zip(&m.normals)
+                    .zip(&m.uvs)
+                    .map(|((p, n), uv)| GpuVertex {
+                        position: p.to_array(),
+                        normal: n.to_array(),
+                        uv: uv.to_array(),
+                    }),
+            );
         }
-        let vertices = transfer::buffer_init(device, "scene vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::VERTEX)?;
-        let indices = transfer::buffer_init(device, "scene indices", bytemuck::cast_slice(&indices), wgpu::BufferUsages::INDEX)?;
+        let vertices = transfer::buffer_init(
+            device,
+            "scene vertices",
+            bytemuck::cast_slice(&vertices),
+            wgpu::BufferUsages::VERTEX,
+        )?;
+        let indices = transfer::buffer_init(
+            device,
+            "scene indices",
+            bytemuck::cast_slice(&indices),
+            wgpu::BufferUsages::INDEX,
+        )?;
 
-        let white = scene::Texture { name: "white".into(), width: 1, height: 1, rgba8: vec![255; 4] };
+        let white = scene::Texture {
+            name: "white".into(),
+            width: 1,
+            height: 1,
+            rgba8: vec![255; 4],
+        };
         let textures = scene
             .textures
             .iter()
             .map(|t| upload_texture(device, queue, t))
             .collect::<Result<Vec<_>, _>>()?;
         let white = upload_texture(device, queue, &white)?;
-        let gpu_materials: Vec<GpuMaterial> = scene.materials.iter().enumerate().map(|(i, m)| GpuMaterial::new(m, i as u32)).collect();
+        let gpu_materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .enumerate()
+            .map(|(i, m)| GpuMaterial::new(m, i as u32))
+            .collect();
         let material_groups = scene
             .materials
             .iter()
             .zip(&gpu_materials)
             .map(|(m, g)| {
-                let uniform = transfer::buffer_init(device, "material", bytemuck::bytes_of(g), wgpu::BufferUsages::UNIFORM)?;
-                let texture = m.base_color_texture.map_or(&white, |t| &textures[t as usize]);
+                let uniform = transfer::buffer_init(
+                    device,
+                    "material",
+                    bytemuck::bytes_of(g),
+                    wgpu::BufferUsages::UNIFORM,
+                )?;
+                let texture = m
+                    .base_color_texture
+                    .map_or(&white, |t| &textures[t as usize]);
                 let view = texture.create_view(&Default::default());
                 Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("material"),
                     layout: &pass.material_layout,
                     entries: &[
-                        wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
-                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
-                        wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&pass.sampler) },
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: uniform.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(&view),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::Sampler(&pass.sampler),
+                        },
                     ],
                 }))
             })
             .collect::<Result<Vec<_>, GpuError>>()?;
-        let materials = transfer::buffer_init(device, "materials", bytemuck::cast_slice(&gpu_materials), wgpu::BufferUsages::STORAGE)?;
-        Ok(Self { vertices, indices, draws, material_groups, materials, triangle_count: scene.triangle_count() as u64 })
+        let materials = transfer::buffer_init(
+            device,
+            "materials",
+            bytemuck::cast_slice(&gpu_materials),
+            wgpu::BufferUsages::STORAGE,
+        )?;
+        Ok(Self {
+            vertices,
+            indices,
+            draws,
+            material_groups,
+            materials,
+            triangle_count: scene.triangle_count() as u64,
+        })
     }
 }
 
-fn upload_texture(device: &wgpu::Device, queue: &wgpu::Queue, t: &scene::Texture) -> Result<wgpu::Texture, GpuError> {
+fn upload_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    t: &scene::Texture,
+) -> Result<wgpu::Texture, GpuError> {
     transfer::check_texture_size(device, &format!("texture {:?}", t.name), t.width, t.height)?;
-    let size = wgpu::Extent3d { width: t.width, height: t.height, depth_or_array_layers: 1 };
+    let size = wgpu::Extent3d {
+        width: t.width,
+        height: t.height,
+        depth_or_array_layers: 1,
+    };
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(&t.name),
         size,
@@ -218,9 +299,18 @@ fn upload_texture(device: &wgpu::Device, queue: &wgpu::Queue, t: &scene::Texture
         view_formats: &[],
     });
     queue.write_texture(
-        wgpu::TexelCopyTextureInfo { texture: &texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect: wgpu::TextureAspect::All },
+        wgpu::TexelCopyTextureInfo {
+            texture: &texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
         &t.rgba8,
-        wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * t.width), rows_per_image: Some(t.height) },
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4 * t.width),
+            rows_per_image: Some(t.height),
+        },
         size,
     );
     Ok(texture)
@@ -244,7 +334,11 @@ impl GBufferPass {
             entries: &[wgpu::BindGroupLayoutEntry {
                 binding: 0,
                 visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
                 count: None,
             }],
         });
@@ -254,7 +348,11 @@ impl GBufferPass {
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
                     visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
                     count: None,
                 },
                 wgpu::BindGroupLayoutEntry {
@@ -280,7 +378,13 @@ impl GBufferPass {
             bind_group_layouts: &[Some(&frame_layout), Some(&material_layout)],
             immediate_size: 0,
         });
-        let target = |format| Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL });
+        let target = |format| {
+            Some(wgpu::ColorTargetState {
+                format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        };
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("gbuffer"),
             layout: Some(&layout),
@@ -329,9 +433,18 @@ impl GBufferPass {
         let frame_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gbuffer frame"),
             layout: &frame_layout,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: frame.as_entire_binding() }],
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: frame.as_entire_binding(),
+            }],
         });
-        Ok(Self { pipeline, material_layout, sampler, frame, frame_group })
+        Ok(Self {
+            pipeline,
+            material_layout,
+            sampler,
+            frame,
+            frame_group,
+        })
     }
 
     /// Writes the camera for the next [`GBufferPass::encode`].
@@ -347,7 +460,50 @@ impl GBufferPass {
         targets: &GBufferTargets,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let views = [&targets.linear_depth, &targets.normal, &targets.albedo, &targets.material].map(|t| t.create_view(&Default::default()));
+        let mut pass = Self::begin(encoder, targets, "gbuffer", timestamp_writes);
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.frame_group, &[]);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for d in &scene.draws {
+            pass.set_bind_group(1, &scene.material_groups[d.material], &[]);
+            pass.draw_indexed(
+                d.first_index..d.first_index + d.index_count,
+                d.base_vertex,
+                0..1,
+            );
+        }
+    }
+
+    /// Records a pass that only clears and stores every target: the write-bandwidth
+    /// baseline the benchmark compares the G-buffer pass against.
+    pub fn encode_clear(
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &GBufferTargets,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        drop(Self::begin(
+            encoder,
+            targets,
+            "gbuffer clear",
+            timestamp_writes,
+        ));
+    }
+
+    /// Begins a render pass over all targets, clearing them.
+    fn begin<'e>(
+        encoder: &'e mut wgpu::CommandEncoder,
+        targets: &GBufferTargets,
+        label: &str,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) -> wgpu::RenderPass<'e> {
+        let views = [
+            &targets.linear_depth,
+            &targets.normal,
+            &targets.albedo,
+            &targets.material,
+        ]
+        .map(|t| t.create_view(&Default::default()));
         let clears = [0.0, 0.0, 0.0, f64::from(NO_MATERIAL)];
         let attachments: Vec<_> = views
             .iter()
@@ -357,37 +513,46 @@ impl GBufferPass {
                     view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color { r: c, g: 0.0, b: 0.0, a: 0.0 }), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: c,
+                            g: 0.0,
+                            b: 0.0,
+                            a: 0.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })
             })
             .collect();
         let depth_view = targets.depth.create_view(&Default::default());
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("gbuffer"),
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
             color_attachments: &attachments,
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &depth_view,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
                 stencil_ops: None,
             }),
             timestamp_writes,
             occlusion_query_set: None,
             multiview_mask: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.frame_group, &[]);
-        pass.set_vertex_buffer(0, scene.vertices.slice(..));
-        pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for d in &scene.draws {
-            pass.set_bind_group(1, &scene.material_groups[d.material], &[]);
-            pass.draw_indexed(d.first_index..d.first_index + d.index_count, d.base_vertex, 0..1);
-        }
+        })
     }
 }
 
 /// Convenience for tests and examples: uploads `scene`, renders its G-buffer on `gpu` and
 /// reads it back.
-pub fn run(gpu: &Gpu, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<GBuffer, GBufferError> {
+pub fn run(
+    gpu: &Gpu,
+    scene: &Scene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+) -> Result<GBuffer, GBufferError> {
     crate::validate(scene, camera, width, height)?;
     let pass = GBufferPass::new(&gpu.device)?;
     let gpu_scene = GpuScene::upload(&gpu.device, &gpu.queue, scene, &pass)?;

@@ -38,16 +38,29 @@ pub enum ImageError {
 impl<T: Copy> Image<T> {
     /// An image with every pixel set to `value`.
     pub fn filled(width: u32, height: u32, value: T) -> Self {
-        Self { width, height, data: vec![value; width as usize * height as usize] }
+        Self {
+            width,
+            height,
+            data: vec![value; width as usize * height as usize],
+        }
     }
 
     /// Wraps row-major pixels; fails if the length is not `width × height`.
     pub fn from_vec(width: u32, height: u32, data: Vec<T>) -> Result<Self, ImageError> {
         let expected = width as usize * height as usize;
         if data.len() != expected {
-            return Err(ImageError::Size { width, height, expected, got: data.len() });
+            return Err(ImageError::Size {
+                width,
+                height,
+                expected,
+                got: data.len(),
+            });
         }
-        Ok(Self { width, height, data })
+        Ok(Self {
+            width,
+            height,
+            data,
+        })
     }
 
     /// Width in pixels.
@@ -82,19 +95,31 @@ impl<T: Copy> Image<T> {
 
     /// Applies `f` to every pixel.
     pub fn map<U: Copy>(&self, f: impl Fn(T) -> U) -> Image<U> {
-        Image { width: self.width, height: self.height, data: self.data.iter().map(|&p| f(p)).collect() }
+        Image {
+            width: self.width,
+            height: self.height,
+            data: self.data.iter().map(|&p| f(p)).collect(),
+        }
     }
 }
 
 /// Linear → sRGB transfer function (IEC 61966-2-1).
 pub fn linear_to_srgb(v: f32) -> f32 {
     let v = v.clamp(0.0, 1.0);
-    if v <= 0.003_130_8 { v * 12.92 } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 }
+    if v <= 0.003_130_8 {
+        v * 12.92
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
 }
 
 /// sRGB → linear transfer function (IEC 61966-2-1).
 pub fn srgb_to_linear(v: f32) -> f32 {
-    if v <= 0.040_45 { v / 12.92 } else { ((v + 0.055) / 1.055).powf(2.4) }
+    if v <= 0.040_45 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 impl Image<[f32; 4]> {
@@ -105,8 +130,17 @@ impl Image<[f32; 4]> {
             .iter()
             .flat_map(|p| [p[0], p[1], p[2]].map(|c| (linear_to_srgb(c) * 255.0).round() as u8))
             .collect();
-        image::save_buffer(path, &bytes, self.width, self.height, image::ExtendedColorType::Rgb8)
-            .map_err(|e| ImageError::Write { path: path.display().to_string(), message: e.to_string() })
+        image::save_buffer(
+            path,
+            &bytes,
+            self.width,
+            self.height,
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| ImageError::Write {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
     }
 
     /// Writes linear RGBA as a 32-bit float OpenEXR file.
@@ -116,6 +150,9 @@ impl Image<[f32; 4]> {
             let p = self.data[y * w + x];
             (p[0], p[1], p[2], p[3])
         })
-        .map_err(|e| ImageError::Write { path: path.display().to_string(), message: e.to_string() })
+        .map_err(|e| ImageError::Write {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })
     }
 }

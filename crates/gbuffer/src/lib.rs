@@ -100,7 +100,11 @@ pub fn pack_material(roughness: f32, metallic: f32, id: u32) -> u32 {
 
 /// Unpacks [`pack_material`]: (roughness, metallic, material id).
 pub fn unpack_material(word: u32) -> (f32, f32, u32) {
-    ((word & 0xff) as f32 / 255.0, ((word >> 8) & 0xff) as f32 / 255.0, word >> 16)
+    (
+        (word & 0xff) as f32 / 255.0,
+        ((word >> 8) & 0xff) as f32 / 255.0,
+        word >> 16,
+    )
 }
 
 /// Per-frame camera data shared by screen-space passes (WGSL `Frame` in `gbuffer/frame.wgsl`).
@@ -136,7 +140,12 @@ impl Frame {
             inv_view_proj: view_proj.inverse(),
             inv_view: view.inverse(),
             eye: camera.eye.extend(1.0),
-            viewport: Vec4::new(width as f32, height as f32, 1.0 / width as f32, 1.0 / height as f32),
+            viewport: Vec4::new(
+                width as f32,
+                height as f32,
+                1.0 / width as f32,
+                1.0 / height as f32,
+            ),
             tan_half_fov: Vec4::new(t * aspect, t, 0.0, 0.0),
         }
     }
@@ -188,9 +197,18 @@ pub fn validate_camera(camera: &Camera) -> Result<(), GBufferError> {
 }
 
 /// Checks size, camera and material count before rendering.
-pub(crate) fn validate(scene: &scene::Scene, camera: &Camera, width: u32, height: u32) -> Result<(), GBufferError> {
+pub(crate) fn validate(
+    scene: &scene::Scene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+) -> Result<(), GBufferError> {
     if width == 0 || height == 0 || width > MAX_SIZE || height > MAX_SIZE {
-        return Err(GBufferError::InvalidSize { width, height, max: MAX_SIZE });
+        return Err(GBufferError::InvalidSize {
+            width,
+            height,
+            max: MAX_SIZE,
+        });
     }
     validate_camera(camera)?;
     if scene.materials.len() >= 0xffff {

@@ -34,7 +34,10 @@ fn safe_normalize2(v: Vec2) -> Vec2 {
 }
 
 fn oct_wrap(v: Vec2) -> Vec2 {
-    let sign = Vec2::new(if v.x >= 0.0 { 1.0 } else { -1.0 }, if v.y >= 0.0 { 1.0 } else { -1.0 });
+    let sign = Vec2::new(
+        if v.x >= 0.0 { 1.0 } else { -1.0 },
+        if v.y >= 0.0 { 1.0 } else { -1.0 },
+    );
     (Vec2::ONE - Vec2::new(v.y.abs(), v.x.abs())) * sign
 }
 
@@ -79,7 +82,13 @@ pub fn unpack_octahedral(w: u32) -> Vec3 {
 
 impl NormalEncoding {
     /// All encodings, in the order of the WGSL test kernel.
-    pub const ALL: [Self; 5] = [Self::XyReconstructZ, Self::Spherical, Self::SphereMap, Self::Stereographic, Self::Octahedral];
+    pub const ALL: [Self; 5] = [
+        Self::XyReconstructZ,
+        Self::Spherical,
+        Self::SphereMap,
+        Self::Stereographic,
+        Self::Octahedral,
+    ];
 
     /// Short name for tables.
     pub fn name(self) -> &'static str {
@@ -108,7 +117,9 @@ impl NormalEncoding {
         let e = match self {
             Self::XyReconstructZ => Vec2::new(n.x, n.y),
             Self::Spherical => Vec2::new(n.y.atan2(n.x) / PI, n.z),
-            Self::SphereMap => safe_normalize2(Vec2::new(n.x, n.y)) * (n.z * 0.5 + 0.5).max(0.0).sqrt(),
+            Self::SphereMap => {
+                safe_normalize2(Vec2::new(n.x, n.y)) * (n.z * 0.5 + 0.5).max(0.0).sqrt()
+            }
             Self::Stereographic => Vec2::new(n.x, n.y) / (n.z + 1.0) / STEREO_SCALE,
             Self::Octahedral => encode_octahedral_snorm(n),
         };
@@ -167,7 +178,9 @@ pub fn angle_deg(a: Vec3, b: Vec3) -> f32 {
 /// `count` Fibonacci-sphere normals inside its domain.
 pub fn measure_error(encoding: NormalEncoding, bits: u32, count: usize) -> (f32, f32) {
     use rayon::prelude::*;
-    let normals: Vec<Vec3> = fibonacci_sphere(count).filter(|n| n.z >= encoding.domain_min_z()).collect();
+    let normals: Vec<Vec3> = fibonacci_sphere(count)
+        .filter(|n| n.z >= encoding.domain_min_z())
+        .collect();
     let (max, sum) = normals
         .par_iter()
         .map(|&n| {

@@ -9,12 +9,23 @@ use scene::{Camera, Material, Mesh, Scene};
 
 /// A screen-filling grid of `n × n` quads (2 triangles each) at z = 0, seen head-on.
 fn grid_scene(n: u32) -> Scene {
-    let mut mesh = Mesh { name: "grid".into(), ..Default::default() };
+    let mut mesh = Mesh {
+        name: "grid".into(),
+        ..Default::default()
+    };
     for j in 0..=n {
         for i in 0..=n {
             // Irregular vertex positions so edges have arbitrary slopes.
-            let jitter = if i > 0 && i < n && j > 0 && j < n { ((i * 7 + j * 13) % 5) as f32 * 0.03 } else { 0.0 };
-            mesh.positions.push(Vec3::new(i as f32 / n as f32 * 4.0 - 2.0 + jitter, j as f32 / n as f32 * 4.0 - 2.0 - jitter, 0.0));
+            let jitter = if i > 0 && i < n && j > 0 && j < n {
+                ((i * 7 + j * 13) % 5) as f32 * 0.03
+            } else {
+                0.0
+            };
+            mesh.positions.push(Vec3::new(
+                i as f32 / n as f32 * 4.0 - 2.0 + jitter,
+                j as f32 / n as f32 * 4.0 - 2.0 - jitter,
+                0.0,
+            ));
             mesh.normals.push(Vec3::Z);
             mesh.uvs.push(Vec2::ZERO);
         }
@@ -22,30 +33,55 @@ fn grid_scene(n: u32) -> Scene {
     for j in 0..n {
         for i in 0..n {
             let a = j * (n + 1) + i;
-            mesh.indices.extend([a, a + 1, a + n + 2, a, a + n + 2, a + n + 1]);
+            mesh.indices
+                .extend([a, a + 1, a + n + 2, a, a + n + 2, a + n + 1]);
         }
     }
-    Scene { meshes: vec![mesh], materials: vec![Material::default()], ..Default::default() }
+    Scene {
+        meshes: vec![mesh],
+        materials: vec![Material::default()],
+        ..Default::default()
+    }
 }
 
 #[test]
 fn coverage_is_watertight_and_never_doubled() {
     let scene = grid_scene(7);
-    let camera = Camera { eye: Vec3::new(0.0, 0.0, 3.0), target: Vec3::ZERO, up: Vec3::Y, fov_y: 50f32.to_radians(), near: 0.5, far: 10.0 };
+    let camera = Camera {
+        eye: Vec3::new(0.0, 0.0, 3.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        fov_y: 50f32.to_radians(),
+        near: 0.5,
+        far: 10.0,
+    };
     let (w, h) = (61, 47);
     let full = cpu::rasterize(&scene, &camera, w, h).expect("raster");
-    assert!(full.triangle_id.pixels().iter().all(|&t| t != u32::MAX), "gap in a closed grid");
+    assert!(
+        full.triangle_id.pixels().iter().all(|&t| t != u32::MAX),
+        "gap in a closed grid"
+    );
     // Each triangle alone: the coverage counts must sum to exactly one per pixel.
     let mut count = vec![0u32; (w * h) as usize];
     let mesh = &scene.meshes[0];
     for t in mesh.indices.chunks_exact(3) {
-        let single = Scene { meshes: vec![Mesh { indices: t.to_vec(), ..mesh.clone() }], ..scene.clone() };
+        let single = Scene {
+            meshes: vec![Mesh {
+                indices: t.to_vec(),
+                ..mesh.clone()
+            }],
+            ..scene.clone()
+        };
         let r = cpu::rasterize(&single, &camera, w, h).expect("raster");
         for (c, &id) in count.iter_mut().zip(r.triangle_id.pixels()) {
             *c += u32::from(id != u32::MAX);
         }
     }
-    assert!(count.iter().all(|&c| c == 1), "pixels covered {:?} times", count.iter().filter(|&&c| c != 1).collect::<Vec<_>>());
+    assert!(
+        count.iter().all(|&c| c == 1),
+        "pixels covered {:?} times",
+        count.iter().filter(|&&c| c != 1).collect::<Vec<_>>()
+    );
 }
 
 #[test]
@@ -66,21 +102,35 @@ fn position_from_depth_both_ways_agrees_with_ray_casts() {
             let a = position::from_depth(&frame, x, y, depth);
             let b = position::from_view_ray(&frame, x, y, r.gbuffer.linear_depth.get(x, y));
             let scale = (a - camera.eye).length();
-            assert!((a - b).length() < 2e-4 * scale, "({x},{y}): inverse projection {a} vs view ray {b}");
+            assert!(
+                (a - b).length() < 2e-4 * scale,
+                "({x},{y}): inverse projection {a} vs view ray {b}"
+            );
             let ray = b - camera.eye;
             if let Some(hit) = bvh.closest_hit(camera.eye, ray, 10.0) {
                 // The ray through the pixel centre hits the rasterized surface unless the pixel
                 // straddles an edge; compare where the triangle ids agree.
                 let tri = r.triangle_id.get(x, y);
-                let global: u32 = scene.meshes[..hit.mesh as usize].iter().map(|m| m.triangle_count() as u32).sum::<u32>() + hit.triangle;
+                let global: u32 = scene.meshes[..hit.mesh as usize]
+                    .iter()
+                    .map(|m| m.triangle_count() as u32)
+                    .sum::<u32>()
+                    + hit.triangle;
                 if tri == global {
-                    assert!((hit.position - a).length() < 1e-3 * scale, "({x},{y}): ray {} vs depth {a}", hit.position);
+                    assert!(
+                        (hit.position - a).length() < 1e-3 * scale,
+                        "({x},{y}): ray {} vs depth {a}",
+                        hit.position
+                    );
                     checked += 1;
                 }
             }
         }
     }
-    assert!(checked > (w * h) as usize * 9 / 10, "only {checked} pixels compared");
+    assert!(
+        checked > (w * h) as usize * 9 / 10,
+        "only {checked} pixels compared"
+    );
 }
 
 /// Documented bounds (docs/gbuffer.md) on the maximum angular error, in degrees, of each
@@ -103,8 +153,15 @@ fn normal_encodings_stay_within_documented_error_bounds() {
     for (enc, max8, max16) in MAX_ERROR_BOUNDS {
         let (m8, mean8) = gbuffer::normal::measure_error(enc, 8, 200_000);
         let (m16, mean16) = gbuffer::normal::measure_error(enc, 16, 200_000);
-        eprintln!("{:22} 8 bit: max {m8:.4}° mean {mean8:.4}°   16 bit: max {m16:.5}° mean {mean16:.5}°", enc.name());
-        assert!(m8 <= max8 && m16 <= max16 && m16 < m8 / 10.0, "{}: {m8}° / {m16}° above {max8}° / {max16}°", enc.name());
+        eprintln!(
+            "{:22} 8 bit: max {m8:.4}° mean {mean8:.4}°   16 bit: max {m16:.5}° mean {mean16:.5}°",
+            enc.name()
+        );
+        assert!(
+            m8 <= max8 && m16 <= max16 && m16 < m8 / 10.0,
+            "{}: {m8}° / {m16}° above {max8}° / {max16}°",
+            enc.name()
+        );
         assert!(mean8 < m8 && mean16 < m16);
     }
 }
@@ -114,7 +171,11 @@ fn encodings_without_quantization_are_exact_on_their_domain() {
     for enc in NormalEncoding::ALL {
         for n in gbuffer::normal::fibonacci_sphere(5000).filter(|n| n.z >= enc.domain_min_z()) {
             let d = enc.decode(enc.encode(n));
-            assert!(gbuffer::normal::angle_deg(n, d) < 0.05, "{}: {n} -> {d}", enc.name());
+            assert!(
+                gbuffer::normal::angle_deg(n, d) < 0.05,
+                "{}: {n} -> {d}",
+                enc.name()
+            );
         }
     }
 }
@@ -130,14 +191,26 @@ fn xy_encoding_loses_the_sign_of_z() {
 fn bad_sizes_and_cameras_are_errors() {
     let scene = scene::cornell_box();
     let camera = scene.camera.expect("camera");
-    assert!(matches!(cpu::rasterize(&scene, &camera, 0, 10), Err(GBufferError::InvalidSize { .. })));
-    assert!(matches!(cpu::rasterize(&scene, &camera, 10, 100_000), Err(GBufferError::InvalidSize { .. })));
+    assert!(matches!(
+        cpu::rasterize(&scene, &camera, 0, 10),
+        Err(GBufferError::InvalidSize { .. })
+    ));
+    assert!(matches!(
+        cpu::rasterize(&scene, &camera, 10, 100_000),
+        Err(GBufferError::InvalidSize { .. })
+    ));
     let mut bad = camera;
     bad.eye.x = f32::NAN;
-    assert!(matches!(cpu::rasterize(&scene, &bad, 10, 10), Err(GBufferError::InvalidCamera(_))));
+    assert!(matches!(
+        cpu::rasterize(&scene, &bad, 10, 10),
+        Err(GBufferError::InvalidCamera(_))
+    ));
     let mut bad = camera;
     bad.near = bad.far;
-    assert!(matches!(cpu::rasterize(&scene, &bad, 10, 10), Err(GBufferError::InvalidCamera(_))));
+    assert!(matches!(
+        cpu::rasterize(&scene, &bad, 10, 10),
+        Err(GBufferError::InvalidCamera(_))
+    ));
 }
 
 #[test]
@@ -145,15 +218,33 @@ fn triangles_behind_the_camera_and_crossing_the_near_plane_are_clipped() {
     // A large floor passing under and behind the eye: it must cover the lower half without
     // wrapping around (a w <= 0 vertex mishandled would fill the upper half too).
     let scene = common::random_scene(1, 0);
-    let mut floor = Mesh { name: "floor".into(), ..Default::default() };
-    for p in [Vec3::new(-50.0, -1.0, -50.0), Vec3::new(50.0, -1.0, -50.0), Vec3::new(50.0, -1.0, 50.0), Vec3::new(-50.0, -1.0, 50.0)] {
+    let mut floor = Mesh {
+        name: "floor".into(),
+        ..Default::default()
+    };
+    for p in [
+        Vec3::new(-50.0, -1.0, -50.0),
+        Vec3::new(50.0, -1.0, -50.0),
+        Vec3::new(50.0, -1.0, 50.0),
+        Vec3::new(-50.0, -1.0, 50.0),
+    ] {
         floor.positions.push(p);
         floor.normals.push(Vec3::Y);
         floor.uvs.push(Vec2::ZERO);
     }
     floor.indices = vec![0, 1, 2, 0, 2, 3];
-    let scene = Scene { meshes: vec![floor], ..scene };
-    let camera = Camera { eye: Vec3::ZERO, target: Vec3::new(0.0, 0.0, -1.0), up: Vec3::Y, fov_y: 60f32.to_radians(), near: 0.1, far: 100.0 };
+    let scene = Scene {
+        meshes: vec![floor],
+        ..scene
+    };
+    let camera = Camera {
+        eye: Vec3::ZERO,
+        target: Vec3::new(0.0, 0.0, -1.0),
+        up: Vec3::Y,
+        fov_y: 60f32.to_radians(),
+        near: 0.1,
+        far: 100.0,
+    };
     let r = cpu::rasterize(&scene, &camera, 64, 64).expect("raster");
     for x in 0..64 {
         assert_eq!(r.triangle_id.get(x, 2), u32::MAX, "sky covered at x={x}");

@@ -30,10 +30,20 @@ fn pixel_matches(cpu: &GBuffer, gpu: &GBuffer, x: u32, y: u32) -> bool {
         return gpu.material.get(x, y) == gbuffer::NO_MATERIAL;
     }
     let (lc, lg) = (cpu.linear_depth.get(x, y), gpu.linear_depth.get(x, y));
-    let normal_ok = normal::angle_deg(normal::unpack_octahedral(cpu.normal.get(x, y)), normal::unpack_octahedral(gpu.normal.get(x, y)))
-        <= NORMAL_TOL_DEG;
-    let albedo_ok = cpu.albedo.get(x, y).iter().zip(gpu.albedo.get(x, y)).all(|(&a, b)| (i32::from(a) - i32::from(b)).abs() <= ALBEDO_TOL);
-    (lc - lg).abs() <= LINEAR_DEPTH_REL_TOL * lc && normal_ok && albedo_ok && cpu.material.get(x, y) == gpu.material.get(x, y)
+    let normal_ok = normal::angle_deg(
+        normal::unpack_octahedral(cpu.normal.get(x, y)),
+        normal::unpack_octahedral(gpu.normal.get(x, y)),
+    ) <= NORMAL_TOL_DEG;
+    let albedo_ok = cpu
+        .albedo
+        .get(x, y)
+        .iter()
+        .zip(gpu.albedo.get(x, y))
+        .all(|(&a, b)| (i32::from(a) - i32::from(b)).abs() <= ALBEDO_TOL);
+    (lc - lg).abs() <= LINEAR_DEPTH_REL_TOL * lc
+        && normal_ok
+        && albedo_ok
+        && cpu.material.get(x, y) == gpu.material.get(x, y)
 }
 
 fn is_edge(ids: &gbuffer::Image<u32>, x: u32, y: u32) -> bool {
@@ -41,14 +51,26 @@ fn is_edge(ids: &gbuffer::Image<u32>, x: u32, y: u32) -> bool {
     (-1i32..=1).any(|dy| {
         (-1i32..=1).any(|dx| {
             let (nx, ny) = (x as i32 + dx, y as i32 + dy);
-            nx >= 0 && ny >= 0 && (nx as u32) < ids.width() && (ny as u32) < ids.height() && ids.get(nx as u32, ny as u32) != id
+            nx >= 0
+                && ny >= 0
+                && (nx as u32) < ids.width()
+                && (ny as u32) < ids.height()
+                && ids.get(nx as u32, ny as u32) != id
         })
     })
 }
 
 /// Compares; on failure writes expected/actual/difference images and returns a message.
-fn compare(name: &str, scene: &scene::Scene, camera: &scene::Camera, w: u32, h: u32) -> Result<(), String> {
-    let Some(gpu) = gpu::test_gpu() else { return Ok(()) };
+fn compare(
+    name: &str,
+    scene: &scene::Scene,
+    camera: &scene::Camera,
+    w: u32,
+    h: u32,
+) -> Result<(), String> {
+    let Some(gpu) = gpu::test_gpu() else {
+        return Ok(());
+    };
     let expected = cpu::rasterize(scene, camera, w, h).map_err(|e| e.to_string())?;
     let actual = run(gpu, scene, camera, w, h).map_err(|e| e.to_string())?;
     let (mut matched, mut bad_interior) = (0u32, Vec::new());
@@ -70,7 +92,12 @@ fn compare(name: &str, scene: &scene::Scene, camera: &scene::Camera, w: u32, h: 
         return Ok(());
     }
     let dir = common::test_output(name);
-    common::write_rgba8(dir.join("expected_albedo.png"), w, h, expected.gbuffer.albedo.pixels());
+    common::write_rgba8(
+        dir.join("expected_albedo.png"),
+        w,
+        h,
+        expected.gbuffer.albedo.pixels(),
+    );
     common::write_rgba8(dir.join("actual_albedo.png"), w, h, actual.albedo.pixels());
     common::write_rgba8(dir.join("difference.png"), w, h, &diff);
     let (x, y) = bad_interior.first().copied().unwrap_or((0, 0));
@@ -101,7 +128,8 @@ fn cornell_box_gbuffer_matches_cpu() {
 #[test]
 fn checkerboard_gbuffer_matches_cpu() {
     let s = scene::checkerboard();
-    compare("checkerboard", &s, &s.camera.expect("camera"), 200, 120).unwrap_or_else(|e| panic!("{e}"));
+    compare("checkerboard", &s, &s.camera.expect("camera"), 200, 120)
+        .unwrap_or_else(|e| panic!("{e}"));
 }
 
 proptest! {
@@ -126,9 +154,12 @@ fn wgsl_normal_encodings_match_rust() {
     let count = normals.len();
     let d = &gpu.device;
     let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-    let input_buf = gpu::transfer::buffer_init(d, "normals", bytemuck::cast_slice(&input), storage).expect("buffer");
-    let encoded = gpu::transfer::buffer_init(d, "encoded", &vec![0u8; count * 5 * 8], storage).expect("buffer");
-    let decoded = gpu::transfer::buffer_init(d, "decoded", &vec![0u8; count * 5 * 16], storage).expect("buffer");
+    let input_buf = gpu::transfer::buffer_init(d, "normals", bytemuck::cast_slice(&input), storage)
+        .expect("buffer");
+    let encoded = gpu::transfer::buffer_init(d, "encoded", &vec![0u8; count * 5 * 8], storage)
+        .expect("buffer");
+    let decoded = gpu::transfer::buffer_init(d, "decoded", &vec![0u8; count * 5 * 16], storage)
+        .expect("buffer");
     let module = gpu::shader::module(d, "gbuffer/encode_normals.wgsl").expect("shader");
     let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some("encode_normals"),
@@ -142,9 +173,18 @@ fn wgsl_normal_encodings_match_rust() {
         label: None,
         layout: &pipeline.get_bind_group_layout(0),
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: input_buf.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: encoded.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: decoded.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: input_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: encoded.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: decoded.as_entire_binding(),
+            },
         ],
     });
     let mut enc = d.create_command_encoder(&Default::default());
@@ -160,14 +200,26 @@ fn wgsl_normal_encodings_match_rust() {
     let e: &[[f32; 2]] = bytemuck::cast_slice(&e_bytes);
     let dec: &[[f32; 4]] = bytemuck::cast_slice(&d_bytes);
     for (k, enc_kind) in normal::NormalEncoding::ALL.into_iter().enumerate() {
-        for (i, &n) in normals.iter().enumerate().filter(|(_, n)| n.z >= enc_kind.domain_min_z() + 1e-3) {
+        for (i, &n) in normals
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| n.z >= enc_kind.domain_min_z() + 1e-3)
+        {
             let cpu_e = enc_kind.encode(n);
             let gpu_e = e[k * count + i];
             // Tolerance: WGSL's atan2/sin/cos/sqrt may differ from Rust's by a few ulp.
-            assert!((cpu_e.x - gpu_e[0]).abs() < 1e-5 && (cpu_e.y - gpu_e[1]).abs() < 1e-5, "{}: encode {n}: {cpu_e} vs {gpu_e:?}", enc_kind.name());
+            assert!(
+                (cpu_e.x - gpu_e[0]).abs() < 1e-5 && (cpu_e.y - gpu_e[1]).abs() < 1e-5,
+                "{}: encode {n}: {cpu_e} vs {gpu_e:?}",
+                enc_kind.name()
+            );
             let g = dec[k * count + i];
             let angle = normal::angle_deg(enc_kind.decode(cpu_e), Vec3::new(g[0], g[1], g[2]));
-            assert!(angle < 0.01, "{}: decode of {n} differs by {angle}°", enc_kind.name());
+            assert!(
+                angle < 0.01,
+                "{}: decode of {n} differs by {angle}°",
+                enc_kind.name()
+            );
         }
     }
 }

@@ -51,7 +51,11 @@ impl Gpu {
                     .find(|a| a.get_info().name.to_lowercase().contains(&needle))
                     .ok_or_else(|| GpuError::AdapterNotFound {
                         wanted,
-                        available: if names.is_empty() { "none".into() } else { names.join(", ") },
+                        available: if names.is_empty() {
+                            "none".into()
+                        } else {
+                            names.join(", ")
+                        },
                     })?
             }
             _ => instance
@@ -72,19 +76,33 @@ impl Gpu {
                 ..Default::default()
             })
             .await
-            .map_err(|source| GpuError::RequestDevice { adapter: info.name.clone(), source })?;
-        Ok(Self { instance, adapter, device, queue, info })
+            .map_err(|source| GpuError::RequestDevice {
+                adapter: info.name.clone(),
+                source,
+            })?;
+        Ok(Self {
+            instance,
+            adapter,
+            device,
+            queue,
+            info,
+        })
     }
 
     /// Whether GPU pass timing with timestamp queries is available.
     pub fn has_timestamps(&self) -> bool {
-        self.device.features().contains(wgpu::Features::TIMESTAMP_QUERY)
+        self.device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
     }
 
     /// One line naming the adapter, its backend and driver.
     pub fn describe(&self) -> String {
         let i = &self.info;
-        format!("{} ({:?}, driver {} {})", i.name, i.backend, i.driver, i.driver_info)
+        format!(
+            "{} ({:?}, driver {} {})",
+            i.name, i.backend, i.driver, i.driver_info
+        )
     }
 
     /// True for software rasterizers (llvmpipe, lavapipe, WARP, SwiftShader).

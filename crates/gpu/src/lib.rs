@@ -27,7 +27,9 @@ pub use wgpu;
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
     /// No adapter at all (no Vulkan/Metal/DX12 driver).
-    #[error("no GPU adapter found ({0}); install a Vulkan driver (e.g. Debian's mesa-vulkan-drivers) or use the CPU path")]
+    #[error(
+        "no GPU adapter found ({0}); install a Vulkan driver (e.g. Debian's mesa-vulkan-drivers) or use the CPU path"
+    )]
     NoAdapter(String),
     /// `WGPU_ADAPTER_NAME` names no adapter present.
     #[error("WGPU_ADAPTER_NAME={wanted:?} matches no adapter; available: {available}")]

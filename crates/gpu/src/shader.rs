@@ -14,9 +14,14 @@ pub fn names() -> impl Iterator<Item = &'static str> {
 }
 
 fn raw(name: &str) -> Result<&'static str, GpuError> {
-    SHADERS.iter().find(|(n, _)| *n == name).map(|(_, src)| *src).ok_or_else(|| {
-        GpuError::Shader { name: name.into(), message: "no such file under shaders/".into() }
-    })
+    SHADERS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, src)| *src)
+        .ok_or_else(|| GpuError::Shader {
+            name: name.into(),
+            message: "no such file under shaders/".into(),
+        })
 }
 
 /// The source of a shader with its `#import`s resolved.

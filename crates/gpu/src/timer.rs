@@ -9,6 +9,15 @@ pub struct PassTime {
     pub name: String,
     /// Milliseconds between the pass's begin and end timestamps.
     pub ms: f64,
+    /// Milliseconds from the first timed pass's begin to this pass's begin.
+    pub start_ms: f64,
+}
+
+impl PassTime {
+    /// Milliseconds from the first timed pass's begin to this pass's end.
+    pub fn end_ms(&self) -> f64 {
+        self.start_ms + self.ms
+    }
 }
 
 /// Records a begin and an end timestamp around each named pass and reports milliseconds.
@@ -39,21 +48,28 @@ pub struct PassTimer {
 impl PassTimer {
     /// A timer for up to `capacity` passes per frame.
     pub fn new(device: &wgpu::Device, capacity: u32) -> Self {
-        let queries = device.features().contains(wgpu::Features::TIMESTAMP_QUERY).then(|| {
-            let set = device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("pass timer"),
-                ty: wgpu::QueryType::Timestamp,
-                count: capacity * 2,
+        let queries = device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+            .then(|| {
+                let set = device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("pass timer"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: capacity * 2,
+                });
+                let resolve = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("pass timer resolve"),
+                    size: u64::from(capacity) * 2 * 8,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                (set, resolve)
             });
-            let resolve = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("pass timer resolve"),
-                size: u64::from(capacity) * 2 * 8,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            });
-            (set, resolve)
-        });
-        Self { queries, capacity, names: Vec::new() }
+        Self {
+            queries,
+            capacity,
+            names: Vec::new(),
+        }
     }
 
     /// Whether timestamps are recorded at all.
@@ -65,7 +81,10 @@ impl PassTimer {
         let (set, _) = self.queries.as_ref()?;
         let index = self.names.len() as u32;
         if index >= self.capacity {
-            log::warn!("pass timer full ({} passes): {name} is not timed", self.capacity);
+            log::warn!(
+                "pass timer full ({} passes): {name} is not timed",
+                self.capacity
+            );
             return None;
         }
         self.names.push(name.to_owned());
@@ -74,20 +93,22 @@ impl PassTimer {
 
     /// Timestamp writes for a render pass named `name`.
     pub fn render_pass(&mut self, name: &str) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
-        self.next(name).map(|(query_set, i)| wgpu::RenderPassTimestampWrites {
-            query_set,
-            beginning_of_pass_write_index: Some(i),
-            end_of_pass_write_index: Some(i + 1),
-        })
+        self.next(name)
+            .map(|(query_set, i)| wgpu::RenderPassTimestampWrites {
+                query_set,
+                beginning_of_pass_write_index: Some(i),
+                end_of_pass_write_index: Some(i + 1),
+            })
     }
 
     /// Timestamp writes for a compute pass named `name`.
     pub fn compute_pass(&mut self, name: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.next(name).map(|(query_set, i)| wgpu::ComputePassTimestampWrites {
-            query_set,
-            beginning_of_pass_write_index: Some(i),
-            end_of_pass_write_index: Some(i + 1),
-        })
+        self.next(name)
+            .map(|(query_set, i)| wgpu::ComputePassTimestampWrites {
+                query_set,
+                beginning_of_pass_write_index: Some(i),
+                end_of_pass_write_index: Some(i + 1),
+            })
     }
 
     /// Resolves the recorded timestamps; call once after the last timed pass of the encoder.
@@ -102,19 +123,23 @@ impl PassTimer {
     /// Waits for the submitted work, returns each pass's time and clears the list of passes.
     pub fn read(&mut self, gpu: &Gpu) -> Result<Vec<PassTime>, GpuError> {
         let names = std::mem::take(&mut self.names);
-        let Some((_, buffer)) = &self.queries else { return Ok(Vec::new()) };
+        let Some((_, buffer)) = &self.queries else {
+            return Ok(Vec::new());
+        };
         if names.is_empty() {
             return Ok(Vec::new());
         }
         let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, buffer)?;
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
         let period = f64::from(gpu.queue.get_timestamp_period());
+        let ms = |a: u64, b: u64| b.wrapping_sub(a) as f64 * period * 1e-6;
         Ok(names
             .into_iter()
             .enumerate()
-            .map(|(i, name)| {
-                let dt = ticks[2 * i + 1].wrapping_sub(ticks[2 * i]);
-                PassTime { name, ms: dt as f64 * period * 1e-6 }
+            .map(|(i, name)| PassTime {
+                name,
+                ms: ms(ticks[2 * i], ticks[2 * i + 1]),
+                start_ms: ms(ticks[0], ticks[2 * i]),
             })
             .collect())
     }

@@ -21,17 +21,30 @@ pub fn check_buffer_size(
         limit = limit.min(u64::from(limits.max_uniform_buffer_binding_size));
     }
     if size > limit {
-        return Err(GpuError::TooLarge { what: what.into(), needed: size, limit });
+        return Err(GpuError::TooLarge {
+            what: what.into(),
+            needed: size,
+            limit,
+        });
     }
     Ok(())
 }
 
 /// Fails with [`GpuError::TooLarge`] when a 2D texture of `width × height` exceeds the device limit.
-pub fn check_texture_size(device: &wgpu::Device, what: &str, width: u32, height: u32) -> Result<(), GpuError> {
+pub fn check_texture_size(
+    device: &wgpu::Device,
+    what: &str,
+    width: u32,
+    height: u32,
+) -> Result<(), GpuError> {
     let limit = device.limits().max_texture_dimension_2d;
     let needed = width.max(height);
     if needed > limit || width == 0 || height == 0 {
-        return Err(GpuError::TooLarge { what: format!("{what} ({width}×{height})"), needed: u64::from(needed), limit: u64::from(limit) });
+        return Err(GpuError::TooLarge {
+            what: format!("{what} ({width}×{height})"),
+            needed: u64::from(needed),
+            limit: u64::from(limit),
+        });
     }
     Ok(())
 }
@@ -51,7 +64,13 @@ pub fn buffer_init(
     } else {
         contents
     };
-    Ok(device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage }))
+    Ok(
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage,
+        }),
+    )
 }
 
 fn map_and_copy(device: &wgpu::Device, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
@@ -66,13 +85,20 @@ fn map_and_copy(device: &wgpu::Device, staging: &wgpu::Buffer) -> Result<Vec<u8>
     rx.recv()
         .map_err(|e| GpuError::Readback(e.to_string()))?
         .map_err(|e| GpuError::Readback(e.to_string()))?;
-    let bytes = slice.get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?.to_vec();
+    let bytes = slice
+        .get_mapped_range()
+        .map_err(|e| GpuError::Readback(e.to_string()))?
+        .to_vec();
     staging.unmap();
     Ok(bytes)
 }
 
 /// Copies a whole buffer (which needs `COPY_SRC`) back to the CPU.
-pub fn read_buffer(device: &wgpu::Device, queue: &wgpu::Queue, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+pub fn read_buffer(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+) -> Result<Vec<u8>, GpuError> {
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
         size: buffer.size(),
@@ -93,9 +119,17 @@ pub fn read_texture(
     texture: &wgpu::Texture,
     aspect: wgpu::TextureAspect,
 ) -> Result<Vec<u8>, GpuError> {
-    let texel = u64::from(texture.format().block_copy_size(Some(aspect)).ok_or_else(|| {
-        GpuError::Readback(format!("format {:?} has no copyable aspect {aspect:?}", texture.format()))
-    })?);
+    let texel = u64::from(
+        texture
+            .format()
+            .block_copy_size(Some(aspect))
+            .ok_or_else(|| {
+                GpuError::Readback(format!(
+                    "format {:?} has no copyable aspect {aspect:?}",
+                    texture.format()
+                ))
+            })?,
+    );
     let (w, h) = (u64::from(texture.width()), u64::from(texture.height()));
     let row = w * texel;
     let align = u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
@@ -108,7 +142,12 @@ pub fn read_texture(
     });
     let mut encoder = device.create_command_encoder(&Default::default());
     encoder.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect },
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect,
+        },
         wgpu::TexelCopyBufferInfo {
             buffer: &staging,
             layout: wgpu::TexelCopyBufferLayout {

@@ -4,7 +4,9 @@
 use std::f32::consts::FRAC_1_PI;
 use std::time::Instant;
 
-use gbuffer::{Frame, GBuffer, Image, NO_MATERIAL, normal::unpack_octahedral, position, unpack_material};
+use gbuffer::{
+    Frame, GBuffer, Image, NO_MATERIAL, normal::unpack_octahedral, position, unpack_material,
+};
 use glam::Vec3;
 use rayon::prelude::*;
 use scene::{Camera, Light, Scene};
@@ -33,13 +35,25 @@ pub fn light_incidence(light: &GpuLight, p: Vec3) -> (Vec3, f32) {
     let l = to_light / d.max(1e-6);
     let mut att = distance_attenuation(d, light.radius);
     if light.kind == 1 {
-        att *= smoothstep(light.cos_outer, light.cos_inner, (-l).dot(Vec3::from(light.direction)));
+        att *= smoothstep(
+            light.cos_outer,
+            light.cos_inner,
+            (-l).dot(Vec3::from(light.direction)),
+        );
     }
     (l, att)
 }
 
 /// One light's (diffuse, specular) contribution (`shade_light`).
-pub fn shade_light(light: &GpuLight, p: Vec3, n: Vec3, v: Vec3, albedo: Vec3, roughness: f32, metallic: f32) -> (Vec3, Vec3) {
+pub fn shade_light(
+    light: &GpuLight,
+    p: Vec3,
+    n: Vec3,
+    v: Vec3,
+    albedo: Vec3,
+    roughness: f32,
+    metallic: f32,
+) -> (Vec3, Vec3) {
     let (l, att) = light_incidence(light, p);
     let n_dot_l = n.dot(l).clamp(0.0, 1.0);
     if att <= 0.0 || n_dot_l <= 0.0 {
@@ -55,7 +69,8 @@ pub fn shade_light(light: &GpuLight, p: Vec3, n: Vec3, v: Vec3, albedo: Vec3, ro
     let k = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
     let d = a2 * FRAC_1_PI / (k * k);
     let vis = 0.5
-        / (n_dot_l * (n_dot_v * n_dot_v * (1.0 - a2) + a2).sqrt() + n_dot_v * (n_dot_l * n_dot_l * (1.0 - a2) + a2).sqrt());
+        / (n_dot_l * (n_dot_v * n_dot_v * (1.0 - a2) + a2).sqrt()
+            + n_dot_v * (n_dot_l * n_dot_l * (1.0 - a2) + a2).sqrt());
     let f0 = Vec3::splat(0.04).lerp(albedo, metallic);
     let f = f0 + (Vec3::ONE - f0) * (1.0 - v_dot_h).powi(5);
     (e * FRAC_1_PI, e * (d * vis) * f)
@@ -66,7 +81,11 @@ fn albedo_of(p: [u8; 4]) -> Vec3 {
 }
 
 /// Light accumulation: per pixel, the sums of diffuse and specular over all lights.
-pub fn light_accumulation(gb: &GBuffer, frame: &Frame, lights: &[GpuLight]) -> (Image<Vec3>, Image<Vec3>) {
+pub fn light_accumulation(
+    gb: &GBuffer,
+    frame: &Frame,
+    lights: &[GpuLight],
+) -> (Image<Vec3>, Image<Vec3>) {
     let (w, h) = (gb.width(), gb.height());
     let rows: Vec<(Vec<Vec3>, Vec<Vec3>)> = (0..h)
         .into_par_iter()
@@ -82,10 +101,12 @@ pub fn light_accumulation(gb: &GBuffer, frame: &Frame, lights: &[GpuLight]) -> (
                     let v = (frame.eye.truncate() - p).normalize();
                     let albedo = albedo_of(gb.albedo.get(x, y));
                     let (roughness, metallic, _) = unpack_material(gb.material.get(x, y));
-                    lights.iter().fold((Vec3::ZERO, Vec3::ZERO), |(d, s), light| {
-                        let (dl, sl) = shade_light(light, p, n, v, albedo, roughness, metallic);
-                        (d + dl, s + sl)
-                    })
+                    lights
+                        .iter()
+                        .fold((Vec3::ZERO, Vec3::ZERO), |(d, s), light| {
+                            let (dl, sl) = shade_light(light, p, n, v, albedo, roughness, metallic);
+                            (d + dl, s + sl)
+                        })
                 })
                 .unzip()
         })
@@ -96,7 +117,13 @@ pub fn light_accumulation(gb: &GBuffer, frame: &Frame, lights: &[GpuLight]) -> (
 }
 
 /// Composition: `albedo · (1 − metallic) · (ambient + diffuse) + specular + emissive`.
-pub fn composition(gb: &GBuffer, diffuse: &Image<Vec3>, specular: &Image<Vec3>, emissive: &[Vec3], ambient: Vec3) -> Image<[f32; 4]> {
+pub fn composition(
+    gb: &GBuffer,
+    diffuse: &Image<Vec3>,
+    specular: &Image<Vec3>,
+    emissive: &[Vec3],
+    ambient: Vec3,
+) -> Image<[f32; 4]> {
     let pixels: Vec<[f32; 4]> = (0..gb.width() * gb.height())
         .into_par_iter()
         .map(|i| {
@@ -116,10 +143,22 @@ pub fn composition(gb: &GBuffer, diffuse: &Image<Vec3>, specular: &Image<Vec3>, 
 }
 
 /// Renders a frame on the CPU: rasterize the G-buffer, accumulate lights, compose.
-pub fn render(scene: &Scene, camera: &Camera, lights: &[Light], width: u32, height: u32, ambient: Vec3) -> Result<Rendered, RenderError> {
+pub fn render(
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    width: u32,
+    height: u32,
+    ambient: Vec3,
+) -> Result<Rendered, RenderError> {
     crate::validate_lights(lights)?;
     let mut timings = Vec::new();
-    let mut timed = |name: &str, t: Instant| timings.push(PassTiming { name: name.into(), ms: t.elapsed().as_secs_f64() * 1e3 });
+    let mut timed = |name: &str, t: Instant| {
+        timings.push(PassTiming {
+            name: name.into(),
+            ms: t.elapsed().as_secs_f64() * 1e3,
+        })
+    };
     let t = Instant::now();
     let gb = gbuffer::cpu::rasterize(scene, camera, width, height)?.gbuffer;
     timed("gbuffer", t);

@@ -18,34 +18,49 @@ const ACCUM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 fn storage_texture(device: &wgpu::Device, label: &str, width: u32, height: u32) -> wgpu::Texture {
     device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
-        size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format: ACCUM_FORMAT,
-        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC,
+        usage: wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     })
 }
 
 fn tv(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) }
+    wgpu::BindGroupEntry {
+        binding,
+        resource: wgpu::BindingResource::TextureView(view),
+    }
 }
 
 fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
 }
 
-fn compute_pipeline(device: &wgpu::Device, shader: &str, entry: &str) -> Result<wgpu::ComputePipeline, ::gpu::GpuError> {
+fn compute_pipeline(
+    device: &wgpu::Device,
+    shader: &str,
+    entry: &str,
+) -> Result<wgpu::ComputePipeline, ::gpu::GpuError> {
     let module = ::gpu::shader::module(device, shader)?;
-    Ok(device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: None,
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    }))
+    Ok(
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: None,
+            module: &module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        }),
+    )
 }
 
 /// A deferred renderer for one scene at one resolution.
@@ -65,7 +80,13 @@ pub struct GpuRenderer {
 
 impl GpuRenderer {
     /// Uploads `scene` and `lights` and builds pipelines and targets for `width × height`.
-    pub fn new(gpu: &Gpu, scene: &Scene, lights: &[Light], width: u32, height: u32) -> Result<Self, RenderError> {
+    pub fn new(
+        gpu: &Gpu,
+        scene: &Scene,
+        lights: &[Light],
+        width: u32,
+        height: u32,
+    ) -> Result<Self, RenderError> {
         crate::validate_lights(lights)?;
         let device = &gpu.device;
         transfer::check_texture_size(device, "frame", width, height)?;
@@ -83,23 +104,58 @@ impl GpuRenderer {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             })
         };
-        let frame = uniform("frame", bytemuck::bytes_of(&Frame::new(&scene.camera_or_framed(), width, height)));
-        let params = uniform("light params", bytemuck::bytes_of(&[lights.len() as u32, 0, 0, 0]));
-        let ambient = uniform("ambient", bytemuck::bytes_of(&crate::DEFAULT_AMBIENT.extend(0.0)));
+        let frame = uniform(
+            "frame",
+            bytemuck::bytes_of(&Frame::new(&scene.camera_or_framed(), width, height)),
+        );
+        let params = uniform(
+            "light params",
+            bytemuck::bytes_of(&[lights.len() as u32, 0, 0, 0]),
+        );
+        let ambient = uniform(
+            "ambient",
+            bytemuck::bytes_of(&crate::DEFAULT_AMBIENT.extend(0.0)),
+        );
         let gpu_lights: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
-        let lights_buffer = transfer::buffer_init(device, "lights", bytemuck::cast_slice(&gpu_lights), wgpu::BufferUsages::STORAGE)?;
+        let lights_buffer = transfer::buffer_init(
+            device,
+            "lights",
+            bytemuck::cast_slice(&gpu_lights),
+            wgpu::BufferUsages::STORAGE,
+        )?;
 
-        let accumulation = compute_pipeline(device, "pipeline/light_accumulation.wgsl", "light_accumulation")?;
-        let depth_view = targets.depth.create_view(&wgpu::TextureViewDescriptor { aspect: wgpu::TextureAspect::DepthOnly, ..Default::default() });
-        let (normal, albedo, material) = (view(&targets.normal), view(&targets.albedo), view(&targets.material));
-        let (diffuse_view, specular_view, radiance_view) = (view(&diffuse), view(&specular), view(&radiance));
+        let accumulation = compute_pipeline(
+            device,
+            "pipeline/light_accumulation.wgsl",
+            "light_accumulation",
+        )?;
+        let depth_view = targets.depth.create_view(&wgpu::TextureViewDescriptor {
+            aspect: wgpu::TextureAspect::DepthOnly,
+            ..Default::default()
+        });
+        let (normal, albedo, material) = (
+            view(&targets.normal),
+            view(&targets.albedo),
+            view(&targets.material),
+        );
+        let (diffuse_view, specular_view, radiance_view) =
+            (view(&diffuse), view(&specular), view(&radiance));
         let accumulation_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("light accumulation"),
             layout: &accumulation.get_bind_group_layout(0),
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: frame.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: params.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: lights_buffer.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: lights_buffer.as_entire_binding(),
+                },
                 tv(3, &depth_view),
                 tv(4, &normal),
                 tv(5, &albedo),
@@ -108,13 +164,20 @@ impl GpuRenderer {
                 tv(8, &specular_view),
             ],
         });
-        let composition = compute_pipeline(device, "pipeline/composition.wgsl", "composition_main")?;
+        let composition =
+            compute_pipeline(device, "pipeline/composition.wgsl", "composition_main")?;
         let composition_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("composition"),
             layout: &composition.get_bind_group_layout(0),
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: ambient.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: gpu_scene.materials.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: ambient.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: gpu_scene.materials.as_entire_binding(),
+                },
                 tv(2, &albedo),
                 tv(3, &material),
                 tv(4, &diffuse_view),
@@ -141,13 +204,25 @@ impl GpuRenderer {
     /// GPU timestamps around each pass.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let (w, h) = (self.targets.width, self.targets.height);
-        self.gbuffer_pass.encode(encoder, &self.scene, &self.targets, self.timer.render_pass("gbuffer"));
+        self.gbuffer_pass.encode(
+            encoder,
+            &self.scene,
+            &self.targets,
+            self.timer.render_pass("gbuffer"),
+        );
         let groups = (w.div_ceil(8), h.div_ceil(8));
         for (name, pipeline, group) in [
-            ("light accumulation", &self.accumulation, &self.accumulation_group),
+            (
+                "light accumulation",
+                &self.accumulation,
+                &self.accumulation_group,
+            ),
             ("composition", &self.composition, &self.composition_group),
         ] {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(name), timestamp_writes: self.timer.compute_pass(name) });
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(name),
+                timestamp_writes: self.timer.compute_pass(name),
+            });
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, group, &[]);
             pass.dispatch_workgroups(groups.0, groups.1, 1);
@@ -157,20 +232,44 @@ impl GpuRenderer {
 
     /// Renders a frame from `camera` with `ambient`, reads the radiance back and reports
     /// the GPU time of each pass.
-    pub fn render(&mut self, gpu: &Gpu, camera: &Camera, ambient: Vec3) -> Result<Rendered, RenderError> {
+    pub fn render(
+        &mut self,
+        gpu: &Gpu,
+        camera: &Camera,
+        ambient: Vec3,
+    ) -> Result<Rendered, RenderError> {
         let (w, h) = (self.targets.width, self.targets.height);
         gbuffer::validate_camera(camera)?;
         let frame = Frame::new(camera, w, h);
-        gpu.queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
-        gpu.queue.write_buffer(&self.ambient, 0, bytemuck::bytes_of(&ambient.extend(0.0)));
+        gpu.queue
+            .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
+        gpu.queue
+            .write_buffer(&self.ambient, 0, bytemuck::bytes_of(&ambient.extend(0.0)));
         self.gbuffer_pass.write_frame(&gpu.queue, &frame);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         self.encode(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
-        let timings = self.timer.read(gpu)?.into_iter().map(|t| PassTiming { name: t.name, ms: t.ms }).collect();
-        let bytes = transfer::read_texture(&gpu.device, &gpu.queue, &self.radiance, wgpu::TextureAspect::All)?;
-        let pixels: Vec<[f32; 4]> = bytemuck::cast_slice::<u8, Vec4>(&bytes).iter().map(|v| v.to_array()).collect();
-        let image = Image::from_vec(w, h, pixels).map_err(|e| ::gpu::GpuError::Readback(e.to_string()))?;
+        let timings = self
+            .timer
+            .read(gpu)?
+            .into_iter()
+            .map(|t| PassTiming {
+                name: t.name,
+                ms: t.ms,
+            })
+            .collect();
+        let bytes = transfer::read_texture(
+            &gpu.device,
+            &gpu.queue,
+            &self.radiance,
+            wgpu::TextureAspect::All,
+        )?;
+        let pixels: Vec<[f32; 4]> = bytemuck::cast_slice::<u8, Vec4>(&bytes)
+            .iter()
+            .map(|v| v.to_array())
+            .collect();
+        let image =
+            Image::from_vec(w, h, pixels).map_err(|e| ::gpu::GpuError::Readback(e.to_string()))?;
         Ok(Rendered { image, timings })
     }
 }

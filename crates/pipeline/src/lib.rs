@@ -63,10 +63,26 @@ impl From<&Light> for GpuLight {
             _pad: [0; 3],
         };
         match *light {
-            Light::Point { position, color, intensity, radius } => {
-                Self { position: position.to_array(), radius, color: (color * intensity).to_array(), ..base }
-            }
-            Light::Spot { position, direction, color, intensity, radius, inner_angle, outer_angle } => Self {
+            Light::Point {
+                position,
+                color,
+                intensity,
+                radius,
+            } => Self {
+                position: position.to_array(),
+                radius,
+                color: (color * intensity).to_array(),
+                ..base
+            },
+            Light::Spot {
+                position,
+                direction,
+                color,
+                intensity,
+                radius,
+                inner_angle,
+                outer_angle,
+            } => Self {
                 position: position.to_array(),
                 radius,
                 color: (color * intensity).to_array(),
@@ -76,9 +92,16 @@ impl From<&Light> for GpuLight {
                 cos_inner: inner_angle.cos().max(outer_angle.cos() + 1e-4),
                 ..base
             },
-            Light::Directional { direction, color, intensity } => {
-                Self { color: (color * intensity).to_array(), kind: 2, direction: direction.to_array(), ..base }
-            }
+            Light::Directional {
+                direction,
+                color,
+                intensity,
+            } => Self {
+                color: (color * intensity).to_array(),
+                kind: 2,
+                direction: direction.to_array(),
+                ..base
+            },
         }
     }
 }
@@ -123,12 +146,20 @@ pub enum RenderError {
 pub fn validate_lights(lights: &[Light]) -> Result<(), RenderError> {
     for (index, light) in lights.iter().enumerate() {
         let g = GpuLight::from(light);
-        let finite = g.position.iter().chain(&g.color).chain(&g.direction).all(|v| v.is_finite())
+        let finite = g
+            .position
+            .iter()
+            .chain(&g.color)
+            .chain(&g.direction)
+            .all(|v| v.is_finite())
             && g.radius.is_finite()
             && g.cos_inner.is_finite()
             && g.cos_outer.is_finite();
         if !finite || g.radius <= 0.0 || g.color.iter().any(|&c| c < 0.0) {
-            return Err(RenderError::InvalidLight { index, light: *light });
+            return Err(RenderError::InvalidLight {
+                index,
+                light: *light,
+            });
         }
     }
     Ok(())
@@ -145,7 +176,11 @@ pub fn psnr(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>) -> f64 {
         .map(|(p, q)| (0..3).map(|c| (to(p[c]) - to(q[c])).powi(2)).sum::<f64>())
         .sum::<f64>()
         / (a.pixels().len() * 3).max(1) as f64;
-    if mse == 0.0 { f64::INFINITY } else { -10.0 * mse.log10() }
+    if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        -10.0 * mse.log10()
+    }
 }
 
 #[cfg(test)]
@@ -162,9 +197,19 @@ mod tests {
 
     #[test]
     fn invalid_lights_are_rejected() {
-        let bad = Light::Point { position: Vec3::NAN, color: Vec3::ONE, intensity: 1.0, radius: 1.0 };
+        let bad = Light::Point {
+            position: Vec3::NAN,
+            color: Vec3::ONE,
+            intensity: 1.0,
+            radius: 1.0,
+        };
         assert!(validate_lights(&[bad]).is_err());
-        let bad = Light::Point { position: Vec3::ZERO, color: Vec3::ONE, intensity: 1.0, radius: 0.0 };
+        let bad = Light::Point {
+            position: Vec3::ZERO,
+            color: Vec3::ONE,
+            intensity: 1.0,
+            radius: 0.0,
+        };
         assert!(validate_lights(&[bad]).is_err());
     }
 }

@@ -4,13 +4,24 @@ use glam::Vec3;
 use pipeline::{DEFAULT_AMBIENT, cpu, gpu::GpuRenderer, psnr};
 use scene::Light;
 
-fn write_failure(name: &str, expected: &gbuffer::Image<[f32; 4]>, actual: &gbuffer::Image<[f32; 4]>) -> String {
-    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../target/test-output").join(name);
+fn write_failure(
+    name: &str,
+    expected: &gbuffer::Image<[f32; 4]>,
+    actual: &gbuffer::Image<[f32; 4]>,
+) -> String {
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../target/test-output")
+        .join(name);
     let _ = std::fs::create_dir_all(&dir);
     let diff = gbuffer::Image::from_vec(
         expected.width(),
         expected.height(),
-        expected.pixels().iter().zip(actual.pixels()).map(|(a, b)| [0, 1, 2, 3].map(|c| ((a[c] - b[c]).abs() * 10.0).min(1.0))).collect(),
+        expected
+            .pixels()
+            .iter()
+            .zip(actual.pixels())
+            .map(|(a, b)| [0, 1, 2, 3].map(|c| ((a[c] - b[c]).abs() * 10.0).min(1.0)))
+            .collect(),
     )
     .expect("same size");
     let _ = expected.write_png(&dir.join("expected.png"));
@@ -26,8 +37,15 @@ fn check(name: &str, scene: &scene::Scene, lights: &[Light], w: u32, h: u32) {
     let mut renderer = GpuRenderer::new(gpu, scene, lights, w, h).expect("gpu renderer");
     let actual = renderer.render(gpu, &camera, DEFAULT_AMBIENT).expect("gpu");
     let db = psnr(&expected.image, &actual.image);
-    assert!(db >= 40.0, "{name}: PSNR {db:.1} dB < 40 dB; images in {}", write_failure(name, &expected.image, &actual.image));
-    assert_eq!(actual.timings.len(), if gpu.has_timestamps() { 3 } else { 0 });
+    assert!(
+        db >= 40.0,
+        "{name}: PSNR {db:.1} dB < 40 dB; images in {}",
+        write_failure(name, &expected.image, &actual.image)
+    );
+    assert_eq!(
+        actual.timings.len(),
+        if gpu.has_timestamps() { 3 } else { 0 }
+    );
 }
 
 #[test]
@@ -40,7 +58,11 @@ fn cornell_box_gpu_matches_cpu() {
 fn checkerboard_with_all_light_kinds_gpu_matches_cpu() {
     let s = scene::checkerboard();
     let mut lights = s.lights.clone();
-    lights.push("spot:0,3,0,0,-1,-0.3,8,15,30,1,1,0.8,6".parse().expect("spot"));
+    lights.push(
+        "spot:0,3,0,0,-1,-0.3,8,15,30,1,1,0.8,6"
+            .parse()
+            .expect("spot"),
+    );
     check("checkerboard", &s, &lights, 160, 90);
 }
 
@@ -67,8 +89,20 @@ fn no_lights_leaves_ambient_and_emission_only() {
     let out = cpu::render(&s, &camera, &[], 64, 64, Vec3::ZERO).expect("render");
     // Without lights or ambient, only the emissive light opening is non-black.
     let lit = out.image.pixels().iter().filter(|p| p[0] > 0.0).count();
-    let emissive = s.materials.iter().find(|m| m.name == "light").expect("light").emissive;
-    assert!(lit > 0 && out.image.pixels().iter().all(|p| p[0] == 0.0 || (p[0] - emissive.x).abs() < 1e-6));
+    let emissive = s
+        .materials
+        .iter()
+        .find(|m| m.name == "light")
+        .expect("light")
+        .emissive;
+    assert!(
+        lit > 0
+            && out
+                .image
+                .pixels()
+                .iter()
+                .all(|p| p[0] == 0.0 || (p[0] - emissive.x).abs() < 1e-6)
+    );
 }
 
 #[test]
@@ -78,12 +112,19 @@ fn energy_is_additive_over_lights() {
     let camera = s.camera.expect("camera");
     let a: Light = "point:0.2,0.4,0.2,1.0,1,0.5,0.2,0.05".parse().expect("a");
     let b: Light = "point:0.4,0.3,0.4,0.8,0.2,0.5,1,0.05".parse().expect("b");
-    let render = |l: &[Light]| cpu::render(&s, &camera, l, 48, 48, Vec3::ZERO).expect("render").image;
+    let render = |l: &[Light]| {
+        cpu::render(&s, &camera, l, 48, 48, Vec3::ZERO)
+            .expect("render")
+            .image
+    };
     let (both, only_a, only_b, none) = (render(&[a, b]), render(&[a]), render(&[b]), render(&[]));
     for i in 0..both.pixels().len() {
         for c in 0..3 {
             let sum = only_a.pixels()[i][c] + only_b.pixels()[i][c] - none.pixels()[i][c];
-            assert!((both.pixels()[i][c] - sum).abs() <= 1e-5 * (1.0 + sum.abs()), "pixel {i}");
+            assert!(
+                (both.pixels()[i][c] - sum).abs() <= 1e-5 * (1.0 + sum.abs()),
+                "pixel {i}"
+            );
         }
     }
 }

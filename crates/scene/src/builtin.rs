@@ -13,7 +13,9 @@ struct Builder {
 
 impl Builder {
     fn new() -> Self {
-        Self { scene: Scene::default() }
+        Self {
+            scene: Scene::default(),
+        }
     }
 
     fn material(&mut self, name: &str, rgb: Vec3, roughness: f32, metallic: f32) -> u32 {
@@ -28,7 +30,11 @@ impl Builder {
     }
 
     fn mesh(&mut self, name: &str, material: u32) -> &mut Mesh {
-        self.scene.meshes.push(Mesh { name: name.into(), material, ..Default::default() });
+        self.scene.meshes.push(Mesh {
+            name: name.into(),
+            material,
+            ..Default::default()
+        });
         self.scene.meshes.last_mut().expect("just pushed")
     }
 
@@ -43,8 +49,17 @@ impl Builder {
         let base = mesh.positions.len() as u32;
         mesh.positions.extend([a, b, c, d]);
         mesh.normals.extend([n; 4]);
-        mesh.uvs.extend([Vec2::ZERO, Vec2::new(uv_scale, 0.0), Vec2::splat(uv_scale), Vec2::new(0.0, uv_scale)]);
-        let tris = if flip { [0, 2, 1, 0, 3, 2] } else { [0, 1, 2, 0, 2, 3] };
+        mesh.uvs.extend([
+            Vec2::ZERO,
+            Vec2::new(uv_scale, 0.0),
+            Vec2::splat(uv_scale),
+            Vec2::new(0.0, uv_scale),
+        ]);
+        let tris = if flip {
+            [0, 2, 1, 0, 3, 2]
+        } else {
+            [0, 1, 2, 0, 2, 3]
+        };
         mesh.indices.extend(tris.map(|i| base + i));
     }
 
@@ -69,7 +84,11 @@ impl Builder {
             for i in 0..=slices {
                 let u = i as f32 / slices as f32;
                 let phi = u * TAU;
-                let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+                let n = Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.cos(),
+                    -theta.sin() * phi.sin(),
+                );
                 mesh.positions.push(center + n * radius);
                 mesh.normals.push(n);
                 mesh.uvs.push(Vec2::new(u, v));
@@ -107,19 +126,80 @@ pub fn cornell_box() -> Scene {
     let inside = mm(278.0, 274.4, 279.6);
     let (w, h, d) = (556.0, 548.8, 559.2);
     let room = b.mesh("room", white);
-    Builder::quad(room, [mm(0.0, 0.0, 0.0), mm(w, 0.0, 0.0), mm(w, 0.0, d), mm(0.0, 0.0, d)], inside, 1.0);
-    Builder::quad(room, [mm(0.0, h, 0.0), mm(w, h, 0.0), mm(w, h, d), mm(0.0, h, d)], inside, 1.0);
-    Builder::quad(room, [mm(0.0, 0.0, d), mm(w, 0.0, d), mm(w, h, d), mm(0.0, h, d)], inside, 1.0);
+    Builder::quad(
+        room,
+        [
+            mm(0.0, 0.0, 0.0),
+            mm(w, 0.0, 0.0),
+            mm(w, 0.0, d),
+            mm(0.0, 0.0, d),
+        ],
+        inside,
+        1.0,
+    );
+    Builder::quad(
+        room,
+        [mm(0.0, h, 0.0), mm(w, h, 0.0), mm(w, h, d), mm(0.0, h, d)],
+        inside,
+        1.0,
+    );
+    Builder::quad(
+        room,
+        [mm(0.0, 0.0, d), mm(w, 0.0, d), mm(w, h, d), mm(0.0, h, d)],
+        inside,
+        1.0,
+    );
     let red_wall = b.mesh("red wall", red);
-    Builder::quad(red_wall, [mm(w, 0.0, 0.0), mm(w, 0.0, d), mm(w, h, d), mm(w, h, 0.0)], inside, 1.0);
+    Builder::quad(
+        red_wall,
+        [mm(w, 0.0, 0.0), mm(w, 0.0, d), mm(w, h, d), mm(w, h, 0.0)],
+        inside,
+        1.0,
+    );
     let green_wall = b.mesh("green wall", green);
-    Builder::quad(green_wall, [mm(0.0, 0.0, 0.0), mm(0.0, 0.0, d), mm(0.0, h, d), mm(0.0, h, 0.0)], inside, 1.0);
+    Builder::quad(
+        green_wall,
+        [
+            mm(0.0, 0.0, 0.0),
+            mm(0.0, 0.0, d),
+            mm(0.0, h, d),
+            mm(0.0, h, 0.0),
+        ],
+        inside,
+        1.0,
+    );
     let blocks = b.mesh("blocks", white);
-    Builder::block(blocks, [mm(130.0, 165.0, 65.0), mm(82.0, 165.0, 225.0), mm(240.0, 165.0, 272.0), mm(290.0, 165.0, 114.0)]);
-    Builder::block(blocks, [mm(423.0, 330.0, 247.0), mm(265.0, 330.0, 296.0), mm(314.0, 330.0, 456.0), mm(472.0, 330.0, 406.0)]);
+    Builder::block(
+        blocks,
+        [
+            mm(130.0, 165.0, 65.0),
+            mm(82.0, 165.0, 225.0),
+            mm(240.0, 165.0, 272.0),
+            mm(290.0, 165.0, 114.0),
+        ],
+    );
+    Builder::block(
+        blocks,
+        [
+            mm(423.0, 330.0, 247.0),
+            mm(265.0, 330.0, 296.0),
+            mm(314.0, 330.0, 456.0),
+            mm(472.0, 330.0, 406.0),
+        ],
+    );
     let lamp = b.mesh("light", light);
     let ly = h - 1.0;
-    Builder::quad(lamp, [mm(343.0, ly, 227.0), mm(213.0, ly, 227.0), mm(213.0, ly, 332.0), mm(343.0, ly, 332.0)], inside, 1.0);
+    Builder::quad(
+        lamp,
+        [
+            mm(343.0, ly, 227.0),
+            mm(213.0, ly, 227.0),
+            mm(213.0, ly, 332.0),
+            mm(343.0, ly, 332.0),
+        ],
+        inside,
+        1.0,
+    );
 
     b.scene.lights.push(Light::Point {
         position: mm(278.0, 500.0, 279.5),
@@ -148,14 +228,24 @@ pub fn spheres_on_plane(n: u32) -> Scene {
     let plane = b.mesh("ground", ground);
     Builder::quad(
         plane,
-        [Vec3::new(-half, 0.0, -half), Vec3::new(half, 0.0, -half), Vec3::new(half, 0.0, half), Vec3::new(-half, 0.0, half)],
+        [
+            Vec3::new(-half, 0.0, -half),
+            Vec3::new(half, 0.0, -half),
+            Vec3::new(half, 0.0, half),
+            Vec3::new(-half, 0.0, half),
+        ],
         Vec3::Y * 10.0,
         1.0,
     );
     let mut rng = SplitMix(7);
     for k in 0..8u32 {
         let rgb = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.8 + 0.1;
-        b.material(&format!("sphere {k}"), rgb, 0.15 + 0.1 * k as f32, if k % 3 == 0 { 1.0 } else { 0.0 });
+        b.material(
+            &format!("sphere {k}"),
+            rgb,
+            0.15 + 0.1 * k as f32,
+            if k % 3 == 0 { 1.0 } else { 0.0 },
+        );
     }
     for k in 0..8u32 {
         let mesh = b.mesh(&format!("spheres {k}"), 1 + k);
@@ -163,14 +253,20 @@ pub fn spheres_on_plane(n: u32) -> Scene {
             if i % 8 != k {
                 continue;
             }
-            let (x, z) = ((i % n) as f32 - (n as f32 - 1.0) * 0.5, (i / n) as f32 - (n as f32 - 1.0) * 0.5);
+            let (x, z) = (
+                (i % n) as f32 - (n as f32 - 1.0) * 0.5,
+                (i / n) as f32 - (n as f32 - 1.0) * 0.5,
+            );
             Builder::sphere(mesh, Vec3::new(x, 0.4, z), 0.4, 24, 12);
         }
     }
     b.scene.meshes.retain(|m| !m.indices.is_empty());
     let bounds = b.scene.bounds();
     b.scene.lights = crate::scatter_point_lights(bounds, n as usize, 11);
-    let mut cam = Camera::look_at(Vec3::new(0.0, n as f32 * 0.6 + 1.0, n as f32 * 0.9 + 2.0), Vec3::ZERO);
+    let mut cam = Camera::look_at(
+        Vec3::new(0.0, n as f32 * 0.6 + 1.0, n as f32 * 0.9 + 2.0),
+        Vec3::ZERO,
+    );
     cam.fit_planes(bounds);
     b.scene.camera = Some(cam);
     b.scene
@@ -182,11 +278,20 @@ fn checker_texture() -> Texture {
     let rgba8 = (0..size * size)
         .flat_map(|i| {
             let (x, y) = (i % size, i / size);
-            let v = if ((x / 32) + (y / 32)) % 2 == 0 { 230 } else { 26 };
+            let v = if ((x / 32) + (y / 32)) % 2 == 0 {
+                230
+            } else {
+                26
+            };
             [v, v, v, 255]
         })
         .collect();
-    Texture { name: "checker".into(), width: size, height: size, rgba8 }
+    Texture {
+        name: "checker".into(),
+        width: size,
+        height: size,
+        rgba8,
+    }
 }
 
 /// A 40 × 40 ground plane textured with a checkerboard repeated 20 times (so checks alias
@@ -203,23 +308,54 @@ pub fn checkerboard() -> Scene {
     let plane = b.mesh("ground", ground);
     Builder::quad(
         plane,
-        [Vec3::new(-s, 0.0, -s), Vec3::new(s, 0.0, -s), Vec3::new(s, 0.0, s), Vec3::new(-s, 0.0, s)],
+        [
+            Vec3::new(-s, 0.0, -s),
+            Vec3::new(s, 0.0, -s),
+            Vec3::new(s, 0.0, s),
+            Vec3::new(-s, 0.0, s),
+        ],
         Vec3::Y * 10.0,
         20.0,
     );
     let cubes = b.mesh("boxes", boxes);
     for (x, z, e) in [(-2.0, -3.0, 0.8), (1.5, -6.0, 1.2), (4.0, -12.0, 1.5)] {
-        let c = [Vec3::new(x - e, 2.0 * e, z - e), Vec3::new(x + e, 2.0 * e, z - e), Vec3::new(x + e, 2.0 * e, z + e), Vec3::new(x - e, 2.0 * e, z + e)];
+        let c = [
+            Vec3::new(x - e, 2.0 * e, z - e),
+            Vec3::new(x + e, 2.0 * e, z - e),
+            Vec3::new(x + e, 2.0 * e, z + e),
+            Vec3::new(x - e, 2.0 * e, z + e),
+        ];
         Builder::block(cubes, c);
     }
     let spheres = b.mesh("balls", balls);
     for (x, z, r) in [(0.0, -1.0, 0.7), (-4.0, -8.0, 1.0), (3.0, -3.0, 0.5)] {
         Builder::sphere(spheres, Vec3::new(x, r, z), r, 32, 16);
     }
-    b.scene.lights.push(Light::Directional { direction: Vec3::new(-0.4, -1.0, -0.3).normalize(), color: Vec3::ONE, intensity: 1.0 });
-    b.scene.lights.push(Light::Point { position: Vec3::new(-1.0, 2.0, 0.0), color: Vec3::new(1.0, 0.6, 0.3), intensity: 2.0, radius: 8.0 });
-    b.scene.lights.push(Light::Point { position: Vec3::new(3.0, 3.0, -7.0), color: Vec3::new(0.3, 0.6, 1.0), intensity: 4.0, radius: 12.0 });
-    b.scene.camera = Some(Camera { eye: Vec3::new(0.0, 1.6, 4.0), target: Vec3::new(0.0, 0.6, -6.0), up: Vec3::Y, fov_y: 50f32.to_radians(), near: 0.1, far: 80.0 });
+    b.scene.lights.push(Light::Directional {
+        direction: Vec3::new(-0.4, -1.0, -0.3).normalize(),
+        color: Vec3::ONE,
+        intensity: 1.0,
+    });
+    b.scene.lights.push(Light::Point {
+        position: Vec3::new(-1.0, 2.0, 0.0),
+        color: Vec3::new(1.0, 0.6, 0.3),
+        intensity: 2.0,
+        radius: 8.0,
+    });
+    b.scene.lights.push(Light::Point {
+        position: Vec3::new(3.0, 3.0, -7.0),
+        color: Vec3::new(0.3, 0.6, 1.0),
+        intensity: 4.0,
+        radius: 12.0,
+    });
+    b.scene.camera = Some(Camera {
+        eye: Vec3::new(0.0, 1.6, 4.0),
+        target: Vec3::new(0.0, 0.6, -6.0),
+        up: Vec3::Y,
+        fov_y: 50f32.to_radians(),
+        near: 0.1,
+        far: 80.0,
+    });
     b.scene
 }
 
@@ -238,7 +374,12 @@ mod tests {
     fn cornell_box_has_its_measured_extent() {
         let b = cornell_box().bounds();
         assert!((b.min - Vec3::ZERO).abs().max_element() < 1e-6);
-        assert!((b.max - Vec3::new(0.556, 0.5488, 0.5592)).abs().max_element() < 1e-6);
+        assert!(
+            (b.max - Vec3::new(0.556, 0.5488, 0.5592))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
     }
 
     #[test]
@@ -247,17 +388,39 @@ mod tests {
         let inside = Vec3::new(0.278, 0.274, 0.28);
         for m in s.meshes.iter().filter(|m| m.name != "blocks") {
             for (p, n) in m.positions.iter().zip(&m.normals) {
-                assert!(n.dot(inside - *p) > 0.0, "{}: normal {n} at {p} faces out", m.name);
+                assert!(
+                    n.dot(inside - *p) > 0.0,
+                    "{}: normal {n} at {p} faces out",
+                    m.name
+                );
             }
         }
-        let blocks = s.meshes.iter().find(|m| m.name == "blocks").expect("blocks");
+        let blocks = s
+            .meshes
+            .iter()
+            .find(|m| m.name == "blocks")
+            .expect("blocks");
         // Every block face normal points away from the nearer block's vertical axis.
         for t in blocks.indices.chunks_exact(3) {
-            let c = t.iter().map(|&i| blocks.positions[i as usize]).sum::<Vec3>() / 3.0;
-            let (short, tall) = (Vec3::new(0.1855, c.y, 0.169), Vec3::new(0.3685, c.y, 0.35125));
-            let axis = if c.distance(short) < c.distance(tall) { short } else { tall };
+            let c = t
+                .iter()
+                .map(|&i| blocks.positions[i as usize])
+                .sum::<Vec3>()
+                / 3.0;
+            let (short, tall) = (
+                Vec3::new(0.1855, c.y, 0.169),
+                Vec3::new(0.3685, c.y, 0.35125),
+            );
+            let axis = if c.distance(short) < c.distance(tall) {
+                short
+            } else {
+                tall
+            };
             let n = blocks.normals[t[0] as usize];
-            assert!(n.dot(c - axis) > 0.0 || n.y > 0.9, "block normal {n} at {c}");
+            assert!(
+                n.dot(c - axis) > 0.0 || n.y > 0.9,
+                "block normal {n} at {c}"
+            );
         }
     }
 
@@ -271,8 +434,14 @@ mod tests {
                     if geometric.length() < 1e-9 {
                         continue;
                     }
-                    let shading = m.normals[t[0] as usize] + m.normals[t[1] as usize] + m.normals[t[2] as usize];
-                    assert!(geometric.dot(shading) > 0.0, "{}: triangle winding disagrees with normals", m.name);
+                    let shading = m.normals[t[0] as usize]
+                        + m.normals[t[1] as usize]
+                        + m.normals[t[2] as usize];
+                    assert!(
+                        geometric.dot(shading) > 0.0,
+                        "{}: triangle winding disagrees with normals",
+                        m.name
+                    );
                 }
             }
         }

@@ -1,7 +1,12 @@
 //! A triangle BVH (obvhs' compressed wide BVH) with closest-hit and any-hit ray queries.
 
 use glam::{Vec2, Vec3, Vec3A};
-use obvhs::{BvhBuildParams, cwbvh::CwBvh, ray::{Ray, RayHit}, triangle::Triangle};
+use obvhs::{
+    BvhBuildParams,
+    cwbvh::CwBvh,
+    ray::{Ray, RayHit},
+    triangle::Triangle,
+};
 
 use crate::Scene;
 
@@ -45,7 +50,11 @@ impl Bvh {
             BvhBuildParams::medium_build(),
             &mut std::time::Duration::default(),
         );
-        Self { bvh, triangles, origin }
+        Self {
+            bvh,
+            triangles,
+            origin,
+        }
     }
 
     fn ray(origin: Vec3, direction: Vec3, t_max: f32) -> Option<Ray> {
@@ -58,7 +67,9 @@ impl Bvh {
     pub fn closest_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> Option<Hit> {
         let ray = Self::ray(origin, direction, t_max)?;
         let mut hit = RayHit::none();
-        if !self.bvh.ray_traverse(ray, &mut hit, |r, id| self.triangles[self.bvh.primitive_indices[id] as usize].intersect(r)) {
+        if !self.bvh.ray_traverse(ray, &mut hit, |r, id| {
+            self.triangles[self.bvh.primitive_indices[id] as usize].intersect(r)
+        }) {
             return None;
         }
         let index = self.bvh.primitive_indices[hit.primitive_id as usize] as usize;
@@ -75,7 +86,11 @@ impl Bvh {
 
     /// Whether anything is hit with `0 <= t <= t_max` (a shadow-ray query).
     pub fn any_hit(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
-        let Some(ray) = Self::ray(origin, direction, t_max) else { return false };
-        !self.bvh.ray_traverse_miss(ray, |r, id| self.triangles[self.bvh.primitive_indices[id] as usize].intersect(r))
+        let Some(ray) = Self::ray(origin, direction, t_max) else {
+            return false;
+        };
+        !self.bvh.ray_traverse_miss(ray, |r, id| {
+            self.triangles[self.bvh.primitive_indices[id] as usize].intersect(r)
+        })
     }
 }

@@ -26,13 +26,24 @@ pub struct Camera {
 impl Camera {
     /// A camera at `eye` looking at `target`, +Y up, 45° vertical field of view, planes 0.1 and 100.
     pub fn look_at(eye: Vec3, target: Vec3) -> Self {
-        Self { eye, target, up: Vec3::Y, fov_y: 45f32.to_radians(), near: 0.1, far: 100.0 }
+        Self {
+            eye,
+            target,
+            up: Vec3::Y,
+            fov_y: 45f32.to_radians(),
+            near: 0.1,
+            far: 100.0,
+        }
     }
 
     /// World → view transform.
     pub fn view(&self) -> Mat4 {
         let forward = (self.target - self.eye).normalize_or(Vec3::NEG_Z);
-        let up = if forward.cross(self.up).length_squared() < 1e-12 { Vec3::Z } else { self.up };
+        let up = if forward.cross(self.up).length_squared() < 1e-12 {
+            Vec3::Z
+        } else {
+            self.up
+        };
         glam::camera::rh::view::look_at_mat4(self.eye, self.eye + forward, up)
     }
 

@@ -60,25 +60,43 @@ impl Mesh {
                 normals[i as usize] += n;
             }
         }
-        self.normals = normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Y)).collect();
+        self.normals = normals
+            .into_iter()
+            .map(|n| n.try_normalize().unwrap_or(Vec3::Y))
+            .collect();
     }
 
     /// Checks the invariants every consumer relies on: finite data, matching lengths, indices
     /// in range, a multiple of three indices.
     fn validate(&self) -> Result<(), SceneErrorKind> {
         let n = self.positions.len();
-        let bad = |what: String| Err(SceneErrorKind::InvalidMesh { mesh: self.name.clone(), problem: what });
+        let bad = |what: String| {
+            Err(SceneErrorKind::InvalidMesh {
+                mesh: self.name.clone(),
+                problem: what,
+            })
+        };
         if self.normals.len() != n || self.uvs.len() != n {
-            return bad(format!("{n} positions but {} normals and {} uvs", self.normals.len(), self.uvs.len()));
+            return bad(format!(
+                "{n} positions but {} normals and {} uvs",
+                self.normals.len(),
+                self.uvs.len()
+            ));
         }
         if self.indices.len() % 3 != 0 {
-            return bad(format!("{} indices is not a multiple of 3", self.indices.len()));
+            return bad(format!(
+                "{} indices is not a multiple of 3",
+                self.indices.len()
+            ));
         }
         if let Some(i) = self.indices.iter().find(|&&i| i as usize >= n) {
             return bad(format!("index {i} out of range for {n} vertices"));
         }
         if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
-            return bad(format!("vertex {i} has a non-finite position {:?}", self.positions[i]));
+            return bad(format!(
+                "vertex {i} has a non-finite position {:?}",
+                self.positions[i]
+            ));
         }
         if self.normals.iter().any(|v| !v.is_finite()) || self.uvs.iter().any(|u| !u.is_finite()) {
             return bad("non-finite normal or texture coordinate".into());
@@ -141,11 +159,17 @@ pub struct Aabb {
 
 impl Aabb {
     /// The empty box (grows from nothing).
-    pub const EMPTY: Self = Self { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY };
+    pub const EMPTY: Self = Self {
+        min: Vec3::INFINITY,
+        max: Vec3::NEG_INFINITY,
+    };
 
     /// The box grown to contain `p`.
     pub fn grow(self, p: Vec3) -> Self {
-        Self { min: self.min.min(p), max: self.max.max(p) }
+        Self {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
     }
 
     /// Centre point.
@@ -186,14 +210,21 @@ impl Scene {
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<Self, SceneError> {
         let path = path.as_ref();
-        let err = |kind| SceneError { path: path.to_owned(), kind };
+        let err = |kind| SceneError {
+            path: path.to_owned(),
+            kind,
+        };
         if !path.is_file() {
             return Err(err(SceneErrorKind::Io(std::io::Error::new(
                 std::io::ErrorKind::NotFound,
                 "no such file",
             ))));
         }
-        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_ascii_lowercase();
         let scene = match ext.as_str() {
             "gltf" | "glb" => load::gltf::load(path, progress),
             "obj" => load::obj::load(path, progress),
@@ -224,12 +255,21 @@ impl Scene {
             if let Some(t) = mat.base_color_texture
                 && t as usize >= self.textures.len()
             {
-                return Err(SceneErrorKind::Texture { index: i, problem: format!("material {:?} names missing texture {t}", mat.name) });
+                return Err(SceneErrorKind::Texture {
+                    index: i,
+                    problem: format!("material {:?} names missing texture {t}", mat.name),
+                });
             }
         }
         for t in &self.textures {
-            if t.rgba8.len() != t.width as usize * t.height as usize * 4 || t.width == 0 || t.height == 0 {
-                return Err(SceneErrorKind::Texture { index: 0, problem: format!("texture {:?} has inconsistent size", t.name) });
+            if t.rgba8.len() != t.width as usize * t.height as usize * 4
+                || t.width == 0
+                || t.height == 0
+            {
+                return Err(SceneErrorKind::Texture {
+                    index: 0,
+                    problem: format!("texture {:?} has inconsistent size", t.name),
+                });
             }
         }
         Ok(())
@@ -242,12 +282,16 @@ impl Scene {
 
     /// Bounds of all vertices.
     pub fn bounds(&self) -> Aabb {
-        self.meshes.iter().flat_map(|m| &m.positions).fold(Aabb::EMPTY, |b, &p| b.grow(p))
+        self.meshes
+            .iter()
+            .flat_map(|m| &m.positions)
+            .fold(Aabb::EMPTY, |b, &p| b.grow(p))
     }
 
     /// The scene's camera, or one framing the scene's bounds.
     pub fn camera_or_framed(&self) -> Camera {
-        self.camera.unwrap_or_else(|| Camera::framing(self.bounds()))
+        self.camera
+            .unwrap_or_else(|| Camera::framing(self.bounds()))
     }
 }
 

@@ -57,10 +57,20 @@ pub(crate) fn default_radius(intensity: f32) -> f32 {
 
 fn parse_floats(s: &str) -> Result<Vec<f32>, String> {
     s.split(',')
-        .map(|v| v.trim().parse::<f32>().map_err(|_| format!("{v:?} is not a number")))
+        .map(|v| {
+            v.trim()
+                .parse::<f32>()
+                .map_err(|_| format!("{v:?} is not a number"))
+        })
         .filter(|v| v.as_ref().map_or(true, |f| f.is_finite()))
         .collect::<Result<Vec<_>, _>>()
-        .and_then(|v| if v.len() == s.split(',').count() { Ok(v) } else { Err("numbers must be finite".into()) })
+        .and_then(|v| {
+            if v.len() == s.split(',').count() {
+                Ok(v)
+            } else {
+                Err("numbers must be finite".into())
+            }
+        })
 }
 
 impl FromStr for Light {
@@ -71,7 +81,9 @@ impl FromStr for Light {
     /// `spot:X,Y,Z,DX,DY,DZ,RADIUS,INNER_DEG,OUTER_DEG[,R,G,B,INTENSITY]`,
     /// `dir:DX,DY,DZ[,R,G,B,INTENSITY]`. Colour defaults to white, intensity to 1.
     fn from_str(s: &str) -> Result<Self, String> {
-        let (kind, rest) = s.split_once(':').ok_or("expected KIND:NUMBERS, e.g. point:0,1,0,5")?;
+        let (kind, rest) = s
+            .split_once(':')
+            .ok_or("expected KIND:NUMBERS, e.g. point:0,1,0,5")?;
         let v = parse_floats(rest)?;
         let base = match kind {
             "point" => 4,
@@ -80,15 +92,33 @@ impl FromStr for Light {
             _ => return Err(format!("unknown light kind {kind:?} (point, spot, dir)")),
         };
         if v.len() != base && v.len() != base + 4 {
-            return Err(format!("{kind} light takes {base} or {} numbers, got {}", base + 4, v.len()));
+            return Err(format!(
+                "{kind} light takes {base} or {} numbers, got {}",
+                base + 4,
+                v.len()
+            ));
         }
-        let (color, intensity) =
-            if v.len() > base { (Vec3::new(v[base], v[base + 1], v[base + 2]), v[base + 3]) } else { (Vec3::ONE, 1.0) };
+        let (color, intensity) = if v.len() > base {
+            (Vec3::new(v[base], v[base + 1], v[base + 2]), v[base + 3])
+        } else {
+            (Vec3::ONE, 1.0)
+        };
         let vec = |i: usize| Vec3::new(v[i], v[i + 1], v[i + 2]);
         let dir = |i: usize| vec(i).try_normalize().ok_or("direction must not be zero");
-        let radius = |r: f32| if r > 0.0 { Ok(r) } else { Err("radius must be positive".to_string()) };
+        let radius = |r: f32| {
+            if r > 0.0 {
+                Ok(r)
+            } else {
+                Err("radius must be positive".to_string())
+            }
+        };
         Ok(match kind {
-            "point" => Light::Point { position: vec(0), color, intensity, radius: radius(v[3])? },
+            "point" => Light::Point {
+                position: vec(0),
+                color,
+                intensity,
+                radius: radius(v[3])?,
+            },
             "spot" => {
                 let (inner, outer) = (v[7].to_radians(), v[8].to_radians());
                 if !(0.0..=outer).contains(&inner) || outer > std::f32::consts::FRAC_PI_2 {
@@ -104,7 +134,11 @@ impl FromStr for Light {
                     outer_angle: outer,
                 }
             }
-            _ => Light::Directional { direction: dir(0)?, color, intensity },
+            _ => Light::Directional {
+                direction: dir(0)?,
+                color,
+                intensity,
+            },
         })
     }
 }

@@ -7,7 +7,10 @@ use scene::{Scene, SceneErrorKind};
 fn fixtures() -> Option<PathBuf> {
     let dir = scene::shared_fixtures();
     if dir.is_none() {
-        assert!(std::env::var_os("CI").is_none(), "CI is set but ../shared/fixtures is missing");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI is set but ../shared/fixtures is missing"
+        );
         eprintln!("skipping: ../shared/fixtures not found (set DEFERRED_FIXTURES)");
     }
     dir
@@ -46,7 +49,10 @@ fn every_fixture_scene_loads_with_its_documented_triangle_count() {
             assert_eq!(s.triangle_count(), tris, "{file}");
         }
         let b = s.bounds();
-        assert!(b.min.is_finite() && b.max.is_finite() && b.diagonal() > 0.0, "{file}");
+        assert!(
+            b.min.is_finite() && b.max.is_finite() && b.diagonal() > 0.0,
+            "{file}"
+        );
     }
 }
 
@@ -55,10 +61,21 @@ fn sponza_bounds_match_its_position_accessors() {
     // x and z as SOURCES.md gives them; y from the POSITION accessors' min/max in
     // sponza.gltf (−0.9067…15.6533: SOURCES.md's −1.00 is the normals' minimum).
     let Some(dir) = fixtures() else { return };
-    let b = Scene::load(dir.join("sponza/dabrovic/sponza.gltf")).expect("sponza").bounds();
-    assert!((b.min.x + 17.40).abs() < 0.01 && (b.max.x - 17.42).abs() < 0.01, "{b:?}");
-    assert!((b.min.z + 7.80).abs() < 0.01 && (b.max.z - 7.80).abs() < 0.01, "{b:?}");
-    assert!((b.min.y + 0.906_689).abs() < 1e-4 && (b.max.y - 15.653_312).abs() < 1e-4, "{b:?}");
+    let b = Scene::load(dir.join("sponza/dabrovic/sponza.gltf"))
+        .expect("sponza")
+        .bounds();
+    assert!(
+        (b.min.x + 17.40).abs() < 0.01 && (b.max.x - 17.42).abs() < 0.01,
+        "{b:?}"
+    );
+    assert!(
+        (b.min.z + 7.80).abs() < 0.01 && (b.max.z - 7.80).abs() < 0.01,
+        "{b:?}"
+    );
+    assert!(
+        (b.min.y + 0.906_689).abs() < 1e-4 && (b.max.y - 15.653_312).abs() < 1e-4,
+        "{b:?}"
+    );
 }
 
 #[test]
@@ -75,7 +92,11 @@ fn damaged_helmet_has_its_base_colour_texture() {
 fn cornell_obj_keeps_its_emissive_light() {
     let Some(dir) = fixtures() else { return };
     let s = Scene::load(dir.join("cornell/CornellBox-Original.obj")).expect("cornell");
-    assert!(s.materials.iter().any(|m| m.name == "light" && m.emissive.x == 17.0));
+    assert!(
+        s.materials
+            .iter()
+            .any(|m| m.name == "light" && m.emissive.x == 17.0)
+    );
 }
 
 #[test]
@@ -90,7 +111,10 @@ fn unknown_extension_is_an_error() {
     let p = tmp("scene.xyz");
     std::fs::write(&p, "hello").expect("write");
     let e = Scene::load(&p).unwrap_err();
-    assert!(matches!(e.kind, SceneErrorKind::UnsupportedFormat(_)), "{e}");
+    assert!(
+        matches!(e.kind, SceneErrorKind::UnsupportedFormat(_)),
+        "{e}"
+    );
 }
 
 #[test]
@@ -109,7 +133,11 @@ fn truncated_gltf_buffer_is_an_error() {
 #[test]
 fn gltf_without_meshes_is_an_error() {
     let p = tmp("empty.gltf");
-    std::fs::write(&p, r#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{}],"scene":0}"#).expect("write");
+    std::fs::write(
+        &p,
+        r#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{}],"scene":0}"#,
+    )
+    .expect("write");
     let e = Scene::load(&p).unwrap_err();
     assert!(matches!(e.kind, SceneErrorKind::NoMeshes), "{e}");
 }
@@ -120,7 +148,11 @@ fn undecodable_texture_is_an_error() {
     std::fs::create_dir_all(&dir).expect("dir");
     std::fs::write(dir.join("m.mtl"), "newmtl m\nKd 1 1 1\nmap_Kd broken.png\n").expect("mtl");
     std::fs::write(dir.join("broken.png"), b"\x89PNG\r\n\x1a\nnot really").expect("png");
-    std::fs::write(dir.join("t.obj"), "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n").expect("obj");
+    std::fs::write(
+        dir.join("t.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n",
+    )
+    .expect("obj");
     let e = Scene::load(dir.join("t.obj")).unwrap_err();
     assert!(matches!(e.kind, SceneErrorKind::Texture { .. }), "{e}");
     assert!(e.to_string().contains("broken.png"), "{e}");
@@ -149,11 +181,18 @@ fn ply_with_out_of_range_index_is_an_error() {
 #[test]
 fn garbage_and_truncated_files_never_panic() {
     let Some(dir) = fixtures() else { return };
-    let sources = ["cornell/CornellBox-Original.obj", "stanford/dragon-100k.ply", "gltf/DamagedHelmet/DamagedHelmet.glb"];
+    let sources = [
+        "cornell/CornellBox-Original.obj",
+        "stanford/dragon-100k.ply",
+        "gltf/DamagedHelmet/DamagedHelmet.glb",
+    ];
     for src in sources {
         let bytes = std::fs::read(dir.join(src)).expect("fixture");
         let ext = src.rsplit('.').next().expect("ext");
-        for (k, cut) in [7usize, 100, 1000, bytes.len() / 3, bytes.len() - 1].into_iter().enumerate() {
+        for (k, cut) in [7usize, 100, 1000, bytes.len() / 3, bytes.len() - 1]
+            .into_iter()
+            .enumerate()
+        {
             let p = tmp(&format!("cut{k}.{ext}"));
             std::fs::write(&p, &bytes[..cut.min(bytes.len())]).expect("write");
             let _ = Scene::load(&p); // an error or a (partial but valid) scene, never a panic
@@ -165,9 +204,21 @@ fn garbage_and_truncated_files_never_panic() {
 fn command_line_lights_parse_and_reject_bad_input() {
     let l: scene::Light = "point:0,1,0,5".parse().expect("point");
     assert!(matches!(l, scene::Light::Point { radius, .. } if radius == 5.0));
-    assert!("spot:0,1,0,0,-1,0,4,20,30,1,1,1,2".parse::<scene::Light>().is_ok());
+    assert!(
+        "spot:0,1,0,0,-1,0,4,20,30,1,1,1,2"
+            .parse::<scene::Light>()
+            .is_ok()
+    );
     assert!("dir:0,-1,0".parse::<scene::Light>().is_ok());
-    for bad in ["point:0,1,0", "point:0,1,0,-1", "laser:1,2,3", "dir:0,0,0", "point:a,b,c,d", "point:0,nan,0,1", "spot:0,1,0,0,-1,0,4,40,30"] {
+    for bad in [
+        "point:0,1,0",
+        "point:0,1,0,-1",
+        "laser:1,2,3",
+        "dir:0,0,0",
+        "point:a,b,c,d",
+        "point:0,nan,0,1",
+        "spot:0,1,0,0,-1,0,4,40,30",
+    ] {
         assert!(bad.parse::<scene::Light>().is_err(), "{bad} accepted");
     }
 }
@@ -178,15 +229,28 @@ fn bvh_closest_and_any_hit_on_the_cornell_box() {
     let bvh = scene::Bvh::build(&s);
     // Straight down from under the ceiling at the box centre: the floor is at y = 0 unless a
     // block is in the way; (0.1, y, 0.5) is clear of both blocks.
-    let hit = bvh.closest_hit(glam::Vec3::new(0.1, 0.5, 0.5), glam::Vec3::NEG_Y, 10.0).expect("floor");
-    assert!((hit.position.y).abs() < 1e-5 && (hit.t - 0.5).abs() < 1e-5, "{hit:?}");
+    let hit = bvh
+        .closest_hit(glam::Vec3::new(0.1, 0.5, 0.5), glam::Vec3::NEG_Y, 10.0)
+        .expect("floor");
+    assert!(
+        (hit.position.y).abs() < 1e-5 && (hit.t - 0.5).abs() < 1e-5,
+        "{hit:?}"
+    );
     assert_eq!(s.meshes[hit.mesh as usize].name, "room");
     // Above the tall block (top at y = 0.33).
-    let hit = bvh.closest_hit(glam::Vec3::new(0.37, 0.5, 0.35), glam::Vec3::NEG_Y, 10.0).expect("block");
+    let hit = bvh
+        .closest_hit(glam::Vec3::new(0.37, 0.5, 0.35), glam::Vec3::NEG_Y, 10.0)
+        .expect("block");
     assert!((hit.position.y - 0.33).abs() < 1e-5, "{hit:?}");
     assert!(bvh.any_hit(glam::Vec3::new(0.37, 0.5, 0.35), glam::Vec3::NEG_Y, 0.2));
     assert!(!bvh.any_hit(glam::Vec3::new(0.37, 0.5, 0.35), glam::Vec3::NEG_Y, 0.1));
     // Leaving through the open front (z < 0), above both blocks, hits nothing.
-    assert!(bvh.closest_hit(glam::Vec3::new(0.1, 0.45, 0.3), glam::Vec3::NEG_Z, 10.0).is_none());
-    assert!(bvh.closest_hit(glam::Vec3::ZERO, glam::Vec3::ZERO, 1.0).is_none());
+    assert!(
+        bvh.closest_hit(glam::Vec3::new(0.1, 0.45, 0.3), glam::Vec3::NEG_Z, 10.0)
+            .is_none()
+    );
+    assert!(
+        bvh.closest_hit(glam::Vec3::ZERO, glam::Vec3::ZERO, 1.0)
+            .is_none()
+    );
 }

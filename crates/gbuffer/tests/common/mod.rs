@@ -9,7 +9,9 @@ use scene::{Camera, Material, Mesh, Scene, Texture};
 
 /// Folder for expected/actual/difference images of failed tests.
 pub fn test_output(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../target/test-output").join(name);
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../target/test-output")
+        .join(name);
     std::fs::create_dir_all(&dir).expect("test output dir");
     dir
 }
@@ -32,8 +34,21 @@ pub fn random_scene(seed: u64, triangles: usize) -> Scene {
         ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
     };
     let mut scene = Scene::default();
-    let checker: Vec<u8> = (0..16 * 16).flat_map(|i| if (i % 16 / 4 + i / 64) % 2 == 0 { [200, 60, 20, 255] } else { [20, 90, 220, 255] }).collect();
-    scene.textures.push(Texture { name: "checker".into(), width: 16, height: 16, rgba8: checker });
+    let checker: Vec<u8> = (0..16 * 16)
+        .flat_map(|i| {
+            if (i % 16 / 4 + i / 64) % 2 == 0 {
+                [200, 60, 20, 255]
+            } else {
+                [20, 90, 220, 255]
+            }
+        })
+        .collect();
+    scene.textures.push(Texture {
+        name: "checker".into(),
+        width: 16,
+        height: 16,
+        rgba8: checker,
+    });
     for k in 0..3 {
         scene.materials.push(Material {
             name: format!("m{k}"),
@@ -45,13 +60,19 @@ pub fn random_scene(seed: u64, triangles: usize) -> Scene {
         });
     }
     for k in 0..3u32 {
-        let mut mesh = Mesh { name: format!("mesh{k}"), material: k, ..Default::default() };
+        let mut mesh = Mesh {
+            name: format!("mesh{k}"),
+            material: k,
+            ..Default::default()
+        };
         for _ in 0..triangles.div_ceil(3) {
             let c = Vec3::new(next(), next(), next()) * 2.0 - 1.0;
             for _ in 0..3 {
                 mesh.indices.push(mesh.positions.len() as u32);
-                mesh.positions.push(c + (Vec3::new(next(), next(), next()) - 0.5) * 1.2);
-                mesh.normals.push((Vec3::new(next(), next(), next()) - 0.5).normalize_or(Vec3::Y));
+                mesh.positions
+                    .push(c + (Vec3::new(next(), next(), next()) - 0.5) * 1.2);
+                mesh.normals
+                    .push((Vec3::new(next(), next(), next()) - 0.5).normalize_or(Vec3::Y));
                 mesh.uvs.push(Vec2::new(next(), next()) * 3.0 - 1.0);
             }
         }
@@ -64,7 +85,11 @@ pub fn random_scene(seed: u64, triangles: usize) -> Scene {
 pub fn random_camera(seed: u64) -> Camera {
     let t = (seed % 1000) as f32 / 1000.0;
     let u = ((seed / 1000) % 1000) as f32 / 1000.0;
-    let dir = Vec3::new((t * 6.283).cos() * (1.0 - u * u).sqrt(), u * 1.6 - 0.8, (t * 6.283).sin());
+    let dir = Vec3::new(
+        (t * 6.283).cos() * (1.0 - u * u).sqrt(),
+        u * 1.6 - 0.8,
+        (t * 6.283).sin(),
+    );
     let mut cam = Camera::look_at(dir.normalize() * (2.5 + 1.5 * u), Vec3::ZERO);
     cam.fov_y = (35.0 + 50.0 * t).to_radians();
     cam.near = 0.3 + u;

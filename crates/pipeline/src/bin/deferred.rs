@@ -52,17 +52,33 @@ struct Args {
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or("expected WIDTHxHEIGHT, e.g. 1920x1080")?;
-    let parse = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("{v:?} is not a positive integer"));
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or("expected WIDTHxHEIGHT, e.g. 1920x1080")?;
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("{v:?} is not a positive integer"))
+    };
     let (w, h) = (parse(w)?, parse(h)?);
     if w == 0 || h == 0 || w > gbuffer::MAX_SIZE || h > gbuffer::MAX_SIZE {
-        return Err(format!("size must be between 1 and {} on each side", gbuffer::MAX_SIZE));
+        return Err(format!(
+            "size must be between 1 and {} on each side",
+            gbuffer::MAX_SIZE
+        ));
     }
     Ok((w, h))
 }
 
 fn parse_vec3(s: &str) -> Result<Vec3, String> {
-    let v: Vec<f32> = s.split(',').map(|c| c.trim().parse::<f32>().map_err(|_| format!("{c:?} is not a number"))).collect::<Result<_, _>>()?;
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|c| {
+            c.trim()
+                .parse::<f32>()
+                .map_err(|_| format!("{c:?} is not a number"))
+        })
+        .collect::<Result<_, _>>()?;
     match v[..] {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(x, y, z)),
         _ => Err("expected three finite numbers X,Y,Z".into()),
@@ -79,7 +95,10 @@ fn load_scene(args: &Args) -> Result<Scene> {
         });
     };
     let bar = indicatif::ProgressBar::new(1).with_message(format!("loading {}", path.display()));
-    bar.set_style(indicatif::ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} meshes").unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()));
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} meshes")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
     bar.enable_steady_tick(std::time::Duration::from_millis(100));
     let scene = Scene::load_with_progress(path, &mut |done, total| {
         bar.set_length(total as u64);
@@ -128,21 +147,33 @@ fn main() -> Result<()> {
     };
     let (device, rendered): (String, Rendered) = match &gpu {
         Some(gpu) => {
-            let mut renderer = pipeline::gpu::GpuRenderer::new(gpu, &scene, &lights, width, height)?;
+            let mut renderer =
+                pipeline::gpu::GpuRenderer::new(gpu, &scene, &lights, width, height)?;
             renderer.render(gpu, &camera, ambient)?; // warm-up: first use of pipelines and caches
-            (format!("GPU {}", gpu.describe()), renderer.render(gpu, &camera, ambient)?)
+            (
+                format!("GPU {}", gpu.describe()),
+                renderer.render(gpu, &camera, ambient)?,
+            )
         }
-        None => ("CPU (reference path, rayon)".into(), pipeline::cpu::render(&scene, &camera, &lights, width, height, ambient)?),
+        None => (
+            "CPU (reference path, rayon)".into(),
+            pipeline::cpu::render(&scene, &camera, &lights, width, height, ambient)?,
+        ),
     };
 
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create {}", args.out.display()))?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
     let png = args.out.join("render.png");
     let exr = args.out.join("render.exr");
     rendered.image.write_png(&png)?;
     rendered.image.write_exr(&exr)?;
 
     println!("device:  {device}");
-    println!("scene:   {} triangles, {} lights, {width}x{height}", scene.triangle_count(), lights.len());
+    println!(
+        "scene:   {} triangles, {} lights, {width}x{height}",
+        scene.triangle_count(),
+        lights.len()
+    );
     println!("wrote:   {} and {}", png.display(), exr.display());
     println!();
     println!("{:<20} {:>10}", "pass", "ms");
@@ -152,7 +183,11 @@ fn main() -> Result<()> {
     if rendered.timings.is_empty() {
         println!("(this GPU has no timestamp queries: no pass times)");
     } else {
-        println!("{:<20} {:>10.3}", "total", rendered.timings.iter().map(|t| t.ms).sum::<f64>());
+        println!(
+            "{:<20} {:>10.3}",
+            "total",
+            rendered.timings.iter().map(|t| t.ms).sum::<f64>()
+        );
     }
     Ok(())
 }

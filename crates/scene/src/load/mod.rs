@@ -20,9 +20,21 @@ pub(crate) fn complete(mut mesh: Mesh) -> Mesh {
 }
 
 /// Decodes an image file's bytes into an RGBA8 texture.
-pub(crate) fn decode_texture(name: String, index: usize, bytes: &[u8]) -> Result<Texture, SceneErrorKind> {
+pub(crate) fn decode_texture(
+    name: String,
+    index: usize,
+    bytes: &[u8],
+) -> Result<Texture, SceneErrorKind> {
     let img = image::load_from_memory(bytes)
-        .map_err(|e| SceneErrorKind::Texture { index, problem: format!("{name}: {e}") })?
+        .map_err(|e| SceneErrorKind::Texture {
+            index,
+            problem: format!("{name}: {e}"),
+        })?
         .to_rgba8();
-    Ok(Texture { name, width: img.width(), height: img.height(), rgba8: img.into_raw() })
+    Ok(Texture {
+        name,
+        width: img.width(),
+        height: img.height(),
+        rgba8: img.into_raw(),
+    })
 }

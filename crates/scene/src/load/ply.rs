@@ -3,7 +3,10 @@
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
-use ply_rs::{parser::Parser, ply::{DefaultElement, Property}};
+use ply_rs::{
+    parser::Parser,
+    ply::{DefaultElement, Property},
+};
 
 use crate::{Material, Mesh, Scene, SceneErrorKind};
 
@@ -40,32 +43,59 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
         .read_ply(&mut reader)
         .map_err(|e| SceneErrorKind::Ply(e.to_string()))?;
     let bad = |s: &str| SceneErrorKind::Ply(s.to_owned());
-    let vertices = ply.payload.get("vertex").ok_or_else(|| bad("no vertex element"))?;
-    let faces = ply.payload.get("face").ok_or_else(|| bad("no face element"))?;
+    let vertices = ply
+        .payload
+        .get("vertex")
+        .ok_or_else(|| bad("no vertex element"))?;
+    let faces = ply
+        .payload
+        .get("face")
+        .ok_or_else(|| bad("no face element"))?;
 
-    let mut mesh = Mesh { name: path.file_stem().map_or("ply".into(), |s| s.to_string_lossy().into_owned()), ..Default::default() };
+    let mut mesh = Mesh {
+        name: path
+            .file_stem()
+            .map_or("ply".into(), |s| s.to_string_lossy().into_owned()),
+        ..Default::default()
+    };
     let has_normals = vertices.first().is_some_and(|v| v.contains_key("nx"));
     for v in vertices {
-        let get = |k: &str| scalar(v.get(k)).ok_or_else(|| bad(&format!("vertex property {k} missing or not a number")));
-        mesh.positions.push(Vec3::new(get("x")?, get("y")?, get("z")?));
+        let get = |k: &str| {
+            scalar(v.get(k))
+                .ok_or_else(|| bad(&format!("vertex property {k} missing or not a number")))
+        };
+        mesh.positions
+            .push(Vec3::new(get("x")?, get("y")?, get("z")?));
         if has_normals {
-            mesh.normals.push(Vec3::new(get("nx")?, get("ny")?, get("nz")?).normalize_or(Vec3::Y));
+            mesh.normals
+                .push(Vec3::new(get("nx")?, get("ny")?, get("nz")?).normalize_or(Vec3::Y));
         }
-        if let (Some(u), Some(t)) = (scalar(v.get("u").or(v.get("s"))), scalar(v.get("v").or(v.get("t")))) {
+        if let (Some(u), Some(t)) = (
+            scalar(v.get("u").or(v.get("s"))),
+            scalar(v.get("v").or(v.get("t"))),
+        ) {
             mesh.uvs.push(Vec2::new(u, 1.0 - t));
         }
     }
     progress(1, 2);
     let n = mesh.positions.len() as i64;
     for f in faces {
-        let idx = list(f.get("vertex_indices").or(f.get("vertex_index"))).ok_or_else(|| bad("face without vertex_indices list"))?;
+        let idx = list(f.get("vertex_indices").or(f.get("vertex_index")))
+            .ok_or_else(|| bad("face without vertex_indices list"))?;
         if let Some(i) = idx.iter().find(|&&i| i < 0 || i >= n) {
-            return Err(bad(&format!("face index {i} out of range for {n} vertices")));
+            return Err(bad(&format!(
+                "face index {i} out of range for {n} vertices"
+            )));
         }
         for k in 1..idx.len().saturating_sub(1) {
-            mesh.indices.extend([idx[0] as u32, idx[k] as u32, idx[k + 1] as u32]);
+            mesh.indices
+                .extend([idx[0] as u32, idx[k] as u32, idx[k + 1] as u32]);
         }
     }
     progress(2, 2);
-    Ok(Scene { meshes: vec![super::complete(mesh)], materials: vec![Material::default()], ..Default::default() })
+    Ok(Scene {
+        meshes: vec![super::complete(mesh)],
+        materials: vec![Material::default()],
+        ..Default::default()
+    })
 }
