@@ -16,7 +16,7 @@
 //! | `material` | `R32Uint` | 32 | roughness unorm8 \| metallic unorm8 ≪ 8 \| material id ≪ 16; `u32::MAX` = none |
 //!
 //! 160 bits per pixel, like S.T.A.L.K.E.R. (2005), but with hardware depth instead of a stored
-//! position and 32-bit octahedral normals (0.003° worst error, see [`normal`]). Emissive
+//! position and 32-bit octahedral normals (0.004° worst error, see [`normal`]). Emissive
 //! radiance is looked up from the material id during composition.
 //!
 //! ```no_run
