@@ -84,20 +84,7 @@ impl GBufferTargets {
             if storage {
                 usage |= wgpu::TextureUsages::STORAGE_BINDING;
             }
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
+            transfer::texture_2d(device, label, width, height, format, usage)
         };
         Ok(Self {
             width,
@@ -288,16 +275,14 @@ fn upload_texture(
         height: t.height,
         depth_or_array_layers: 1,
     };
-    let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(&t.name),
-        size,
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8UnormSrgb,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
+    let texture = transfer::texture_2d(
+        device,
+        &t.name,
+        t.width,
+        t.height,
+        wgpu::TextureFormat::Rgba8UnormSrgb,
+        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+    );
     queue.write_texture(
         wgpu::TexelCopyTextureInfo {
             texture: &texture,

@@ -49,6 +49,31 @@ pub fn check_texture_size(
     Ok(())
 }
 
+/// A 2D texture with one mip level and one sample.
+pub fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
 /// A buffer holding `contents` (at least 4 bytes, so empty inputs still bind), size-checked.
 pub fn buffer_init(
     device: &wgpu::Device,

@@ -254,3 +254,26 @@ fn bvh_closest_and_any_hit_on_the_cornell_box() {
             .is_none()
     );
 }
+
+fn scene_files(dir: &std::path::Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).expect("readable fixtures").flatten() {
+        let p = entry.path();
+        if p.is_dir() {
+            scene_files(&p, out);
+        } else if p.extension().is_some_and(|e| ["obj", "ply", "gltf", "glb"].contains(&e.to_string_lossy().as_ref())) {
+            out.push(p);
+        }
+    }
+}
+
+#[test]
+fn every_scene_file_under_fixtures_loads() {
+    let Some(dir) = fixtures() else { return };
+    let mut files = Vec::new();
+    scene_files(&dir, &mut files);
+    assert!(files.len() >= 70, "only {} scene files found", files.len());
+    for f in files {
+        let s = Scene::load(&f).unwrap_or_else(|e| panic!("{e}"));
+        assert!(s.triangle_count() > 0, "{}", f.display());
+    }
+}
