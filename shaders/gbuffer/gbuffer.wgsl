@@ -10,7 +10,8 @@
 @group(1) @binding(2) var base_color_sampler: sampler;
 
 struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
+    // Invariant: the z-prepass (`vs_depth`) must produce bit-identical depth.
+    @builtin(position) @invariant clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
     @location(1) uv: vec2<f32>,
     @location(2) view_depth: f32,
@@ -23,6 +24,18 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>, @lo
     out.normal = normal;
     out.uv = uv;
     out.view_depth = out.clip.w;
+    return out;
+}
+
+struct DepthOut {
+    @builtin(position) @invariant clip: vec4<f32>,
+};
+
+// Z-prepass (Holländer 2013 §4.2): depth only, so the MRT pass shades each pixel once.
+@vertex
+fn vs_depth(@location(0) position: vec3<f32>) -> DepthOut {
+    var out: DepthOut;
+    out.clip = frame.view_proj * vec4<f32>(position, 1.0);
     return out;
 }
 

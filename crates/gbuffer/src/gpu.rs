@@ -304,6 +304,8 @@ fn upload_texture(
 /// The G-buffer pass: pipeline and frame uniforms, built once.
 pub struct GBufferPass {
     pipeline: wgpu::RenderPipeline,
+    prepass: wgpu::RenderPipeline,
+    after_prepass: wgpu::RenderPipeline,
     material_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     frame: wgpu::Buffer,
@@ -370,37 +372,70 @@ impl GBufferPass {
                 write_mask: wgpu::ColorWrites::ALL,
             })
         };
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("gbuffer"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: size_of::<GpuVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2],
-                })],
-            },
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[target(LINEAR_DEPTH_FORMAT), target(NORMAL_FORMAT), target(ALBEDO_FORMAT), target(MATERIAL_FORMAT)],
-            }),
-            multiview_mask: None,
-            cache: None,
+        let depth_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("gbuffer z-prepass"),
+            bind_group_layouts: &[Some(&frame_layout)],
+            immediate_size: 0,
         });
+        let targets = [
+            target(LINEAR_DEPTH_FORMAT),
+            target(NORMAL_FORMAT),
+            target(ALBEDO_FORMAT),
+            target(MATERIAL_FORMAT),
+        ];
+        // One pipeline shape, three uses: single-pass G-buffer (depth Less, write), z-prepass
+        // (depth only), and the G-buffer after a prepass (depth Equal, no write).
+        let make = |label, compare, write, fragment: bool| {
+            let full = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
+            let attributes = if fragment { &full[..] } else { &full[..1] };
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(if fragment { &layout } else { &depth_layout }),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some(if fragment { "vs_main" } else { "vs_depth" }),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: size_of::<GpuVertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes,
+                    })],
+                },
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(write),
+                    depth_compare: Some(compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: fragment.then(|| wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let pipeline = make("gbuffer", wgpu::CompareFunction::Less, true, true);
+        let prepass = make(
+            "gbuffer z-prepass",
+            wgpu::CompareFunction::Less,
+            true,
+            false,
+        );
+        let after_prepass = make(
+            "gbuffer after z-prepass",
+            wgpu::CompareFunction::Equal,
+            false,
+            true,
+        );
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("base colour"),
             address_mode_u: wgpu::AddressMode::Repeat,
@@ -425,6 +460,8 @@ impl GBufferPass {
         });
         Ok(Self {
             pipeline,
+            prepass,
+            after_prepass,
             material_layout,
             sampler,
             frame,
@@ -445,13 +482,58 @@ impl GBufferPass {
         targets: &GBufferTargets,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let mut pass = Self::begin(encoder, targets, "gbuffer", timestamp_writes);
-        pass.set_pipeline(&self.pipeline);
+        let mut pass = Self::begin(encoder, targets, "gbuffer", true, true, timestamp_writes);
+        self.draw(&mut pass, &self.pipeline, scene, true);
+    }
+
+    /// Records a z-prepass (depth only, Holländer 2013 §4.2) and then the G-buffer pass with
+    /// depth test `Equal`, so each pixel runs the G-buffer fragment shader once. The result
+    /// equals [`GBufferPass::encode`]'s except where two surfaces have exactly equal depth
+    /// (there the last drawn wins instead of the first).
+    pub fn encode_with_prepass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        targets: &GBufferTargets,
+        prepass_timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+        gbuffer_timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let mut pass = Self::begin(
+            encoder,
+            targets,
+            "gbuffer z-prepass",
+            false,
+            true,
+            prepass_timestamps,
+        );
+        self.draw(&mut pass, &self.prepass, scene, false);
+        drop(pass);
+        let mut pass = Self::begin(
+            encoder,
+            targets,
+            "gbuffer after z-prepass",
+            true,
+            false,
+            gbuffer_timestamps,
+        );
+        self.draw(&mut pass, &self.after_prepass, scene, true);
+    }
+
+    fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipeline: &wgpu::RenderPipeline,
+        scene: &GpuScene,
+        materials: bool,
+    ) {
+        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.frame_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
         for d in &scene.draws {
-            pass.set_bind_group(1, &scene.material_groups[d.material], &[]);
+            if materials {
+                pass.set_bind_group(1, &scene.material_groups[d.material], &[]);
+            }
             pass.draw_indexed(
                 d.first_index..d.first_index + d.index_count,
                 d.base_vertex,
@@ -471,15 +553,20 @@ impl GBufferPass {
             encoder,
             targets,
             "gbuffer clear",
+            true,
+            true,
             timestamp_writes,
         ));
     }
 
-    /// Begins a render pass over all targets, clearing them.
+    /// Begins a render pass over the depth target and, with `color`, the colour targets
+    /// (cleared); `clear_depth` clears depth, else it is loaded.
     fn begin<'e>(
         encoder: &'e mut wgpu::CommandEncoder,
         targets: &GBufferTargets,
         label: &str,
+        color: bool,
+        clear_depth: bool,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> wgpu::RenderPass<'e> {
         let views = [
@@ -510,14 +597,19 @@ impl GBufferPass {
                 })
             })
             .collect();
+        let attachments = if color { &attachments[..] } else { &[] };
         let depth_view = targets.depth.create_view(&Default::default());
         encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
-            color_attachments: &attachments,
+            color_attachments: attachments,
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: &depth_view,
                 depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
+                    load: if clear_depth {
+                        wgpu::LoadOp::Clear(1.0)
+                    } else {
+                        wgpu::LoadOp::Load
+                    },
                     store: wgpu::StoreOp::Store,
                 }),
                 stencil_ops: None,
@@ -538,13 +630,29 @@ pub fn run(
     width: u32,
     height: u32,
 ) -> Result<GBuffer, GBufferError> {
+    run_with(gpu, scene, camera, width, height, false)
+}
+
+/// Like [`run`]; with `prepass`, through [`GBufferPass::encode_with_prepass`].
+pub fn run_with(
+    gpu: &Gpu,
+    scene: &Scene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    prepass: bool,
+) -> Result<GBuffer, GBufferError> {
     crate::validate(scene, camera, width, height)?;
     let pass = GBufferPass::new(&gpu.device)?;
     let gpu_scene = GpuScene::upload(&gpu.device, &gpu.queue, scene, &pass)?;
     let targets = GBufferTargets::new(&gpu.device, width, height)?;
     pass.write_frame(&gpu.queue, &Frame::new(camera, width, height));
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    pass.encode(&mut encoder, &gpu_scene, &targets, None);
+    if prepass {
+        pass.encode_with_prepass(&mut encoder, &gpu_scene, &targets, None, None);
+    } else {
+        pass.encode(&mut encoder, &gpu_scene, &targets, None);
+    }
     gpu.queue.submit([encoder.finish()]);
     targets.read(&gpu.device, &gpu.queue)
 }

@@ -8,7 +8,11 @@
 
 mod common;
 
-use gbuffer::{GBuffer, cpu, gpu::run, normal};
+use gbuffer::{
+    GBuffer, cpu,
+    gpu::{run, run_with},
+    normal,
+};
 use glam::Vec3;
 use proptest::prelude::*;
 
@@ -142,6 +146,30 @@ proptest! {
         if let Err(e) = compare("random", &scene, &camera, w, h) {
             return Err(TestCaseError::fail(format!("seed {seed} cam {cam}: {e}")));
         }
+    }
+}
+
+/// The z-prepass path writes the same G-buffer as the single pass (the random scenes have no
+/// exactly coplanar overlaps, so no depth ties).
+#[test]
+fn z_prepass_gives_the_same_gbuffer() {
+    let Some(gpu) = gpu::test_gpu() else { return };
+    let cases = [
+        (scene::cornell_box(), None),
+        (scene::checkerboard(), None),
+        (
+            common::random_scene(7, 30),
+            Some(common::random_camera(4242)),
+        ),
+    ];
+    for (scene, camera) in cases {
+        let camera = camera.unwrap_or_else(|| scene.camera_or_framed());
+        let single = run(gpu, &scene, &camera, 96, 72).expect("single pass");
+        let prepassed = run_with(gpu, &scene, &camera, 96, 72, true).expect("prepass");
+        assert!(
+            single == prepassed,
+            "z-prepass G-buffer differs from the single-pass one"
+        );
     }
 }
 

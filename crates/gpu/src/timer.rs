@@ -27,7 +27,7 @@ impl PassTime {
 ///
 /// ```no_run
 /// # let gpu = gpu::Gpu::from_env()?;
-/// let mut timer = gpu::PassTimer::new(&gpu.device, 8);
+/// let timer = gpu::PassTimer::new(&gpu.device, 8);
 /// let mut encoder = gpu.device.create_command_encoder(&Default::default());
 /// let pass = encoder.begin_compute_pass(&gpu::wgpu::ComputePassDescriptor {
 ///     label: Some("shade"),
@@ -42,7 +42,7 @@ impl PassTime {
 pub struct PassTimer {
     queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
     capacity: u32,
-    names: Vec<String>,
+    names: std::cell::RefCell<Vec<String>>,
 }
 
 impl PassTimer {
@@ -68,7 +68,7 @@ impl PassTimer {
         Self {
             queries,
             capacity,
-            names: Vec::new(),
+            names: Default::default(),
         }
     }
 
@@ -77,9 +77,10 @@ impl PassTimer {
         self.queries.is_some()
     }
 
-    fn next(&mut self, name: &str) -> Option<(&wgpu::QuerySet, u32)> {
+    fn next(&self, name: &str) -> Option<(&wgpu::QuerySet, u32)> {
         let (set, _) = self.queries.as_ref()?;
-        let index = self.names.len() as u32;
+        let mut names = self.names.borrow_mut();
+        let index = names.len() as u32;
         if index >= self.capacity {
             log::warn!(
                 "pass timer full ({} passes): {name} is not timed",
@@ -87,12 +88,12 @@ impl PassTimer {
             );
             return None;
         }
-        self.names.push(name.to_owned());
+        names.push(name.to_owned());
         Some((set, index * 2))
     }
 
     /// Timestamp writes for a render pass named `name`.
-    pub fn render_pass(&mut self, name: &str) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+    pub fn render_pass(&self, name: &str) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
         self.next(name)
             .map(|(query_set, i)| wgpu::RenderPassTimestampWrites {
                 query_set,
@@ -102,7 +103,7 @@ impl PassTimer {
     }
 
     /// Timestamp writes for a compute pass named `name`.
-    pub fn compute_pass(&mut self, name: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+    pub fn compute_pass(&self, name: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
         self.next(name)
             .map(|(query_set, i)| wgpu::ComputePassTimestampWrites {
                 query_set,
@@ -114,15 +115,15 @@ impl PassTimer {
     /// Resolves the recorded timestamps; call once after the last timed pass of the encoder.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
         if let Some((set, buffer)) = &self.queries
-            && !self.names.is_empty()
+            && !self.names.borrow().is_empty()
         {
-            encoder.resolve_query_set(set, 0..self.names.len() as u32 * 2, buffer, 0);
+            encoder.resolve_query_set(set, 0..self.names.borrow().len() as u32 * 2, buffer, 0);
         }
     }
 
     /// Waits for the submitted work, returns each pass's time and clears the list of passes.
-    pub fn read(&mut self, gpu: &Gpu) -> Result<Vec<PassTime>, GpuError> {
-        let names = std::mem::take(&mut self.names);
+    pub fn read(&self, gpu: &Gpu) -> Result<Vec<PassTime>, GpuError> {
+        let names = self.names.take();
         let Some((_, buffer)) = &self.queries else {
             return Ok(Vec::new());
         };

@@ -260,7 +260,10 @@ fn scene_files(dir: &std::path::Path, out: &mut Vec<PathBuf>) {
         let p = entry.path();
         if p.is_dir() {
             scene_files(&p, out);
-        } else if p.extension().is_some_and(|e| ["obj", "ply", "gltf", "glb"].contains(&e.to_string_lossy().as_ref())) {
+        } else if p
+            .extension()
+            .is_some_and(|e| ["obj", "ply", "gltf", "glb"].contains(&e.to_string_lossy().as_ref()))
+        {
             out.push(p);
         }
     }

@@ -58,6 +58,10 @@ struct GBufferResult {
     width: u32,
     height: u32,
     gbuffer: Stat,
+    /// Z-prepass plus the G-buffer pass with depth test Equal (begin of one to end of the other).
+    gbuffer_with_prepass: Stat,
+    /// Single pass time / prepass path time (> 1: the prepass path is faster).
+    prepass_speedup: f64,
     clear_baseline: Stat,
     copy_baseline: Stat,
     ratio_to_clear: f64,
@@ -120,8 +124,8 @@ fn bench_gbuffer(
         })
     };
     let (src, dst) = (copy("copy src"), copy("copy dst"));
-    let mut timer = PassTimer::new(device, 4);
-    let (mut g, mut c, mut k) = (Vec::new(), Vec::new(), Vec::new());
+    let timer = PassTimer::new(device, 6);
+    let (mut g, mut c, mut k, mut z) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for i in 0..frames + 10 {
         let mut encoder = device.create_command_encoder(&Default::default());
         GBufferPass::encode_clear(&mut encoder, &targets, timer.render_pass("clear"));
@@ -141,10 +145,17 @@ fn bench_gbuffer(
             label: Some("copy end"),
             timestamp_writes: timer.compute_pass("copy end"),
         }));
+        pass.encode_with_prepass(
+            &mut encoder,
+            gpu_scene,
+            &targets,
+            timer.render_pass("z-prepass"),
+            timer.render_pass("gbuffer after prepass"),
+        );
         timer.resolve(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
         let t = timer.read(gpu)?;
-        if t.len() != 4 {
+        if t.len() != 6 {
             bail!("the adapter has no timestamp queries; nothing to measure");
         }
         if i >= 10 {
@@ -152,12 +163,15 @@ fn bench_gbuffer(
             g.push(t[1].ms);
             // From the begin of the marker pass before the copy to the end of the one after it.
             k.push(t[3].end_ms() - t[2].start_ms);
+            z.push(t[5].end_ms() - t[4].start_ms);
         }
     }
-    let (g, c, k) = (Stat::of(g), Stat::of(c), Stat::of(k));
+    let (g, c, k, z) = (Stat::of(g), Stat::of(c), Stat::of(k), Stat::of(z));
     Ok(GBufferResult {
         width: w,
         height: h,
+        prepass_speedup: g.median_ms / z.median_ms,
+        gbuffer_with_prepass: z,
         ratio_to_clear: g.median_ms / c.median_ms,
         ratio_to_copy: g.median_ms / k.median_ms,
         gbuffer_bytes: bytes,
@@ -202,7 +216,7 @@ fn main() -> Result<()> {
     for size in [(1920, 1080), (3840, 2160)] {
         let r = bench_gbuffer(&gpu, &scene, &gpu_scene, &pass, &camera, size, args.frames)?;
         println!(
-            "gbuffer {}x{}: {:.3} ms (min {:.3}); clear {:.3} ms; copy {:.3} ms; ×{:.2} clear, ×{:.2} copy",
+            "gbuffer {}x{}: {:.3} ms (min {:.3}); clear {:.3} ms; copy {:.3} ms; ×{:.2} clear, ×{:.2} copy; z-prepass path {:.3} ms (×{:.2})",
             r.width,
             r.height,
             r.gbuffer.median_ms,
@@ -210,7 +224,9 @@ fn main() -> Result<()> {
             r.clear_baseline.median_ms,
             r.copy_baseline.median_ms,
             r.ratio_to_clear,
-            r.ratio_to_copy
+            r.ratio_to_copy,
+            r.gbuffer_with_prepass.median_ms,
+            r.prepass_speedup
         );
         results.push(r);
     }
@@ -271,10 +287,10 @@ fn write_report(dir: &std::path::Path, r: &Report) -> Result<()> {
         "## G-buffer creation (MRT render pass)\n\nScene: `{}`, {} triangles; camera {}.\nTargets: depth32f + r32f linear depth + r32u normal + rgba8 albedo + r32u material = 20 bytes/pixel.\nBaselines in the same run: a pass that only clears and stores the five targets, and a buffer copy of the same number of bytes.\n\n",
         r.scene, r.triangles, r.camera
     ));
-    md.push_str("| size | G-buffer ms (min) | clear-only ms | copy ms | × clear | × copy | Mtri/s | Gpix/s |\n|---|---|---|---|---|---|---|---|\n");
+    md.push_str("| size | G-buffer ms (min) | clear-only ms | copy ms | × clear | × copy | Mtri/s | Gpix/s | z-prepass + G-buffer ms (min) | speed-up |\n|---|---|---|---|---|---|---|---|---|---|\n");
     for g in &r.gbuffer {
         md.push_str(&format!(
-            "| {}×{} | {:.3} ({:.3}) | {:.3} | {:.3} | {:.2} | {:.2} | {:.0} | {:.2} |\n",
+            "| {}×{} | {:.3} ({:.3}) | {:.3} | {:.3} | {:.2} | {:.2} | {:.0} | {:.2} | {:.3} ({:.3}) | {:.2} |\n",
             g.width,
             g.height,
             g.gbuffer.median_ms,
@@ -284,7 +300,10 @@ fn write_report(dir: &std::path::Path, r: &Report) -> Result<()> {
             g.ratio_to_clear,
             g.ratio_to_copy,
             g.triangles_per_second_millions,
-            g.pixels_per_second_billions
+            g.pixels_per_second_billions,
+            g.gbuffer_with_prepass.median_ms,
+            g.gbuffer_with_prepass.min_ms,
+            g.prepass_speedup
         ));
     }
     std::fs::write(base.with_extension("md"), md)?;
