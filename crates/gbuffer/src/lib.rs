@@ -224,7 +224,7 @@ mod tests {
     #[test]
     fn frame_matches_wgsl_layout() {
         // 4 mat4 + 3 vec4, no padding: WGSL `Frame` is 320 bytes with these offsets.
-        assert_eq!(std::mem::size_of::<Frame>(), 4 * 64 + 3 * 16);
+        assert_eq!(size_of::<Frame>(), 4 * 64 + 3 * 16);
         assert_eq!(std::mem::offset_of!(Frame, eye), 256);
         assert_eq!(std::mem::offset_of!(Frame, tan_half_fov), 288);
     }

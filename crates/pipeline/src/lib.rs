@@ -109,7 +109,7 @@ impl From<&Light> for GpuLight {
 /// Time one pass of a frame took.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PassTiming {
-    /// Pass name (`gbuffer`, `light accumulation`, `composition`).
+    /// Pass name (`z-prepass` (GPU only), `gbuffer`, `light accumulation`, `composition`).
     pub name: String,
     /// Milliseconds: GPU timestamps on the GPU path, wall clock on the CPU path.
     pub ms: f64,

@@ -44,7 +44,7 @@ fn check(name: &str, scene: &scene::Scene, lights: &[Light], w: u32, h: u32) {
     );
     assert_eq!(
         actual.timings.len(),
-        if gpu.has_timestamps() { 3 } else { 0 }
+        if gpu.has_timestamps() { 4 } else { 0 }
     );
 }
 
