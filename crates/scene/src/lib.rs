@@ -261,13 +261,13 @@ impl Scene {
                 });
             }
         }
-        for t in &self.textures {
+        for (index, t) in self.textures.iter().enumerate() {
             if t.rgba8.len() != t.width as usize * t.height as usize * 4
                 || t.width == 0
                 || t.height == 0
             {
                 return Err(SceneErrorKind::Texture {
-                    index: 0,
+                    index,
                     problem: format!("texture {:?} has inconsistent size", t.name),
                 });
             }
