@@ -1,5 +1,7 @@
 //! Criterion benches of the CPU reference rasterizer.
 
+#![allow(missing_docs)] // criterion_group! generates an undocumented function
+
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn rasterize(c: &mut Criterion) {

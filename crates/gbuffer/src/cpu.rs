@@ -319,7 +319,9 @@ pub fn rasterize(
     width: u32,
     height: u32,
 ) -> Result<Rasterized, GBufferError> {
-    crate::validate(scene, camera, width, height)?;
+    crate::validate_size(width, height)?;
+    crate::validate_camera(camera)?;
+    crate::validate_scene(scene)?;
     let frame = Frame::new(camera, width, height);
 
     // Vertex stage and primitive assembly, numbered in submission order.

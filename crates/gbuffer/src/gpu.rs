@@ -157,7 +157,7 @@ impl GpuScene {
         scene: &Scene,
         pass: &GBufferPass,
     ) -> Result<Self, GBufferError> {
-        scene.validate()?;
+        crate::validate_scene(scene)?;
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
         let mut draws = Vec::new();
@@ -469,6 +469,11 @@ impl GBufferPass {
         })
     }
 
+    /// The uniform buffer holding the [`Frame`]; later screen-space passes bind it too.
+    pub fn frame_buffer(&self) -> &wgpu::Buffer {
+        &self.frame
+    }
+
     /// Writes the camera for the next [`GBufferPass::encode`].
     pub fn write_frame(&self, queue: &wgpu::Queue, frame: &Frame) {
         queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(frame));
@@ -642,7 +647,8 @@ pub fn run_with(
     height: u32,
     prepass: bool,
 ) -> Result<GBuffer, GBufferError> {
-    crate::validate(scene, camera, width, height)?;
+    crate::validate_size(width, height)?;
+    crate::validate_camera(camera)?;
     let pass = GBufferPass::new(&gpu.device)?;
     let gpu_scene = GpuScene::upload(&gpu.device, &gpu.queue, scene, &pass)?;
     let targets = GBufferTargets::new(&gpu.device, width, height)?;

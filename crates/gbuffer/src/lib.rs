@@ -196,13 +196,8 @@ pub fn validate_camera(camera: &Camera) -> Result<(), GBufferError> {
     Ok(())
 }
 
-/// Checks size, camera and material count before rendering.
-pub(crate) fn validate(
-    scene: &scene::Scene,
-    camera: &Camera,
-    width: u32,
-    height: u32,
-) -> Result<(), GBufferError> {
+/// Rejects image sizes of zero or above [`MAX_SIZE`] on a side.
+pub(crate) fn validate_size(width: u32, height: u32) -> Result<(), GBufferError> {
     if width == 0 || height == 0 || width > MAX_SIZE || height > MAX_SIZE {
         return Err(GBufferError::InvalidSize {
             width,
@@ -210,7 +205,12 @@ pub(crate) fn validate(
             max: MAX_SIZE,
         });
     }
-    validate_camera(camera)?;
+    Ok(())
+}
+
+/// Checks the scene's invariants and that its material ids fit the 16-bit field.
+pub(crate) fn validate_scene(scene: &scene::Scene) -> Result<(), GBufferError> {
+    scene.validate()?;
     if scene.materials.len() >= 0xffff {
         return Err(GBufferError::TooManyMaterials(scene.materials.len()));
     }

@@ -67,7 +67,6 @@ pub struct GpuRenderer {
     accumulation_group: wgpu::BindGroup,
     composition: wgpu::ComputePipeline,
     composition_group: wgpu::BindGroup,
-    frame: wgpu::Buffer,
     ambient: wgpu::Buffer,
     timer: PassTimer,
 }
@@ -98,10 +97,6 @@ impl GpuRenderer {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             })
         };
-        let frame = uniform(
-            "frame",
-            bytemuck::bytes_of(&Frame::new(&scene.camera_or_framed(), width, height)),
-        );
         let params = uniform(
             "light params",
             bytemuck::bytes_of(&[lights.len() as u32, 0, 0, 0]),
@@ -140,7 +135,7 @@ impl GpuRenderer {
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
-                    resource: frame.as_entire_binding(),
+                    resource: gbuffer_pass.frame_buffer().as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: 1,
@@ -188,7 +183,6 @@ impl GpuRenderer {
             accumulation_group,
             composition,
             composition_group,
-            frame,
             ambient,
             timer: PassTimer::new(device, 8),
         })
@@ -238,8 +232,6 @@ impl GpuRenderer {
         let (w, h) = (self.targets.width, self.targets.height);
         gbuffer::validate_camera(camera)?;
         let frame = Frame::new(camera, w, h);
-        gpu.queue
-            .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
         gpu.queue
             .write_buffer(&self.ambient, 0, bytemuck::bytes_of(&ambient.extend(0.0)));
         self.gbuffer_pass.write_frame(&gpu.queue, &frame);

@@ -57,20 +57,12 @@ pub(crate) fn default_radius(intensity: f32) -> f32 {
 
 fn parse_floats(s: &str) -> Result<Vec<f32>, String> {
     s.split(',')
-        .map(|v| {
-            v.trim()
-                .parse::<f32>()
-                .map_err(|_| format!("{v:?} is not a number"))
+        .map(|v| match v.trim().parse::<f32>() {
+            Ok(f) if f.is_finite() => Ok(f),
+            Ok(_) => Err("numbers must be finite".to_string()),
+            Err(_) => Err(format!("{v:?} is not a number")),
         })
-        .filter(|v| v.as_ref().map_or(true, |f| f.is_finite()))
-        .collect::<Result<Vec<_>, _>>()
-        .and_then(|v| {
-            if v.len() == s.split(',').count() {
-                Ok(v)
-            } else {
-                Err("numbers must be finite".into())
-            }
-        })
+        .collect()
 }
 
 impl FromStr for Light {

@@ -30,8 +30,8 @@ struct Args {
     #[arg(long, default_value = "docs/bench")]
     out: PathBuf,
     /// Timed frames per measurement (after 10 warm-up frames).
-    #[arg(long, default_value_t = 100)]
-    frames: usize,
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: u32,
     /// Write the report even on a software rasterizer (its times are not GPU performance).
     #[arg(long)]
     allow_software: bool,
@@ -82,7 +82,7 @@ struct Report {
     scene: String,
     triangles: u64,
     camera: String,
-    frames: usize,
+    frames: u32,
     gbuffer: Vec<GBufferResult>,
 }
 
@@ -109,7 +109,7 @@ fn bench_gbuffer(
     pass: &GBufferPass,
     camera: &Camera,
     (w, h): (u32, u32),
-    frames: usize,
+    frames: u32,
 ) -> Result<GBufferResult> {
     let device = &gpu.device;
     let targets = GBufferTargets::new(device, w, h)?;
