@@ -270,35 +270,16 @@ fn upload_texture(
     t: &scene::Texture,
 ) -> Result<wgpu::Texture, GpuError> {
     transfer::check_texture_size(device, &format!("texture {:?}", t.name), t.width, t.height)?;
-    let size = wgpu::Extent3d {
-        width: t.width,
-        height: t.height,
-        depth_or_array_layers: 1,
-    };
-    let texture = transfer::texture_2d(
+    transfer::texture_init(
         device,
+        queue,
         &t.name,
         t.width,
         t.height,
         wgpu::TextureFormat::Rgba8UnormSrgb,
-        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-    );
-    queue.write_texture(
-        wgpu::TexelCopyTextureInfo {
-            texture: &texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
-        },
+        wgpu::TextureUsages::TEXTURE_BINDING,
         &t.rgba8,
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(4 * t.width),
-            rows_per_image: Some(t.height),
-        },
-        size,
-    );
-    Ok(texture)
+    )
 }
 
 /// The G-buffer pass: pipeline and frame uniforms, built once.

@@ -65,6 +65,9 @@ pub enum GpuError {
         /// Device limit.
         limit: u64,
     },
+    /// Data handed to an upload does not have the size the resource needs.
+    #[error("{0}")]
+    DataSize(String),
     /// Mapping a buffer for readback failed or the device was lost.
     #[error("GPU readback failed: {0}")]
     Readback(String),

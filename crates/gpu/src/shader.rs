@@ -51,9 +51,34 @@ fn resolve(name: &str, seen: &mut Vec<String>, out: &mut String) -> Result<(), G
 
 /// Compiles a shader from `shaders/` into a module.
 pub fn module(device: &wgpu::Device, name: &str) -> Result<wgpu::ShaderModule, GpuError> {
-    let src = source(name)?;
-    Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(name),
+    Ok(module_from_source(device, name, source(name)?))
+}
+
+/// Compiles WGSL text (e.g. [`source`] after a rewrite) into a module labelled `label`.
+pub fn module_from_source(device: &wgpu::Device, label: &str, src: String) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
         source: wgpu::ShaderSource::Wgsl(src.into()),
-    }))
+    })
+}
+
+/// A compute pipeline for `entry` of `module` with the layout derived from the shader and the
+/// given values of its `override` constants.
+pub fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: None,
+        module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
 }

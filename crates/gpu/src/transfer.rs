@@ -74,6 +74,54 @@ pub fn texture_2d(
     })
 }
 
+/// A 2D texture (size-checked) filled with `texels`: tightly packed rows of
+/// `width × block size` bytes. `COPY_DST` is added to `usage`.
+#[allow(clippy::too_many_arguments)]
+pub fn texture_init(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    label: &str,
+    width: u32,
+    height: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+    texels: &[u8],
+) -> Result<wgpu::Texture, GpuError> {
+    check_texture_size(device, label, width, height)?;
+    let texel = format.block_copy_size(None).unwrap_or(4);
+    let expected = u64::from(width) * u64::from(height) * u64::from(texel);
+    if texels.len() as u64 != expected {
+        return Err(GpuError::DataSize(format!(
+            "{label}: {} bytes of texels given, {width}×{height} {format:?} needs {expected}",
+            texels.len()
+        )));
+    }
+    let texture = texture_2d(
+        device,
+        label,
+        width,
+        height,
+        format,
+        usage | wgpu::TextureUsages::COPY_DST,
+    );
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        texels,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(width * texel),
+            rows_per_image: Some(height),
+        },
+        texture.size(),
+    );
+    Ok(texture)
+}
+
 /// A buffer holding `contents` (at least 4 bytes, so empty inputs still bind), size-checked.
 pub fn buffer_init(
     device: &wgpu::Device,

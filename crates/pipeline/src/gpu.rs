@@ -45,16 +45,7 @@ fn compute_pipeline(
     entry: &str,
 ) -> Result<wgpu::ComputePipeline, ::gpu::GpuError> {
     let module = ::gpu::shader::module(device, shader)?;
-    Ok(
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: None,
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        }),
-    )
+    Ok(::gpu::shader::compute_pipeline(device, &module, entry, &[]))
 }
 
 /// A deferred renderer for one scene at one resolution.

@@ -1,0 +1,68 @@
+// Discontinuity buffer (Segovia 2006 §4.5): each pixel against its three positive neighbours
+// (x+1, y), (x, y+1), (x+1, y+1). Red = normal test failed, green = depth test failed.
+// Integer normals and single correctly rounded f32 products, so it equals the CPU exactly.
+
+struct Thresholds {
+    // cos² of the largest continuous angle between normals.
+    cos_squared: f32,
+    // 1 when that angle is at most 90° (cos ≥ 0), else 0.
+    cos_positive: u32,
+    // 1 + the largest continuous relative depth difference.
+    depth_factor: f32,
+    _pad: u32,
+}
+
+@group(0) @binding(0) var linear_depth: texture_2d<f32>;
+@group(0) @binding(1) var normals: texture_2d<u32>;
+@group(0) @binding(2) var discontinuities: texture_storage_2d<rgba8unorm, write>;
+@group(0) @binding(3) var<uniform> thresholds: Thresholds;
+
+// Octahedral snorm16×2 word → unnormalised integer vector with 11-bit components.
+fn octahedral_integer(word: u32) -> vec3<i32> {
+    let one = 32767;
+    let x = max(bitcast<i32>(word << 16u) >> 16u, -one);
+    let y = max(bitcast<i32>(word) >> 16u, -one);
+    let z = one - abs(x) - abs(y);
+    var v = vec3(x, y, z);
+    if z < 0 {
+        v.x = (one - abs(y)) * select(-1, 1, x >= 0);
+        v.y = (one - abs(x)) * select(-1, 1, y >= 0);
+    }
+    return v >> vec3(4u);
+}
+
+fn normals_differ(a: u32, b: u32) -> bool {
+    let v0 = octahedral_integer(a);
+    let v1 = octahedral_integer(b);
+    let d = dot(v0, v1);
+    let dot2 = f32(d) * f32(d);
+    let bound = thresholds.cos_squared * f32(dot(v0, v0)) * f32(dot(v1, v1));
+    if thresholds.cos_positive != 0u {
+        return d <= 0 || dot2 < bound;
+    }
+    return d < 0 && dot2 > bound;
+}
+
+fn depths_differ(a: f32, b: f32) -> bool {
+    return max(a, b) > min(a, b) * thresholds.depth_factor;
+}
+
+@compute @workgroup_size(16, 16)
+fn discontinuity(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(linear_depth);
+    if any(id.xy >= size) {
+        return;
+    }
+    let z = textureLoad(linear_depth, id.xy, 0).r;
+    let nrm = textureLoad(normals, id.xy, 0).r;
+    var normal_edge = false;
+    var depth_edge = false;
+    for (var k = 0u; k < 3u; k++) {
+        let q = id.xy + vec2(select(0u, 1u, k != 1u), select(0u, 1u, k != 0u));
+        if all(q < size) {
+            normal_edge = normal_edge || normals_differ(nrm, textureLoad(normals, q, 0).r);
+            depth_edge = depth_edge || depths_differ(z, textureLoad(linear_depth, q, 0).r);
+        }
+    }
+    textureStore(discontinuities, id.xy, vec4(select(0.0, 1.0, normal_edge), select(0.0, 1.0, depth_edge), 0.0, 1.0));
+}
