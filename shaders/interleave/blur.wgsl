@@ -1,4 +1,6 @@
 // Edge-aware separable Gaussian blur (Segovia 2006 §4.5, Figure 4), one direction per dispatch.
+// The result is the centre plus the weighted mean of the differences to it, so a constant
+// image stays exactly constant however the sums round.
 
 struct BlurParams {
     // (1, 0) for the horizontal pass, (0, 1) for the vertical one.
@@ -37,7 +39,8 @@ fn blur_plain(@builtin(global_invocation_id) id: vec3<u32>) {
     if !inside(p) {
         return;
     }
-    var sum = textureLoad(irradiance, p, 0) * weight(0);
+    let centre = textureLoad(irradiance, p, 0);
+    var sum = vec4(0.0);
     var total = weight(0);
     if !on_discontinuity(p) {
         for (var k = 1; k <= params.radius; k++) {
@@ -45,7 +48,7 @@ fn blur_plain(@builtin(global_invocation_id) id: vec3<u32>) {
             if !inside(q) {
                 break;
             }
-            sum += textureLoad(irradiance, q, 0) * weight(k);
+            sum += (textureLoad(irradiance, q, 0) - centre) * weight(k);
             total += weight(k);
             if on_discontinuity(q) {
                 break;
@@ -57,10 +60,10 @@ fn blur_plain(@builtin(global_invocation_id) id: vec3<u32>) {
         if !inside(q) || on_discontinuity(q) {
             break;
         }
-        sum += textureLoad(irradiance, q, 0) * weight(k);
+        sum += (textureLoad(irradiance, q, 0) - centre) * weight(k);
         total += weight(k);
     }
-    textureStore(blurred, p, sum / total);
+    textureStore(blurred, p, centre + sum / total);
 }
 
 // Fast: taps k and k+1 fetched together at the point between their centres (0.5 texel bias)
@@ -72,7 +75,8 @@ fn blur_fast(@builtin(global_invocation_id) id: vec3<u32>) {
     if !inside(p) {
         return;
     }
-    var sum = textureLoad(irradiance, p, 0) * weight(0);
+    let centre = textureLoad(irradiance, p, 0);
+    var sum = vec4(0.0);
     var total = weight(0);
     for (var side = 0; side < 2; side++) {
         let step = params.direction * select(1, -1, side == 1);
@@ -96,9 +100,9 @@ fn blur_fast(@builtin(global_invocation_id) id: vec3<u32>) {
             if last > k {
                 w += weight(last);
             }
-            sum += textureSampleLevel(irradiance, bilinear, uv, 0.0) * w;
+            sum += (textureSampleLevel(irradiance, bilinear, uv, 0.0) - centre) * w;
             total += w;
         }
     }
-    textureStore(blurred, p, sum / total);
+    textureStore(blurred, p, centre + sum / total);
 }

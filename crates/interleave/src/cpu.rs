@@ -424,7 +424,9 @@ pub fn to_f16(v: [f32; 4]) -> [f32; 4] {
 /// one is on a discontinuity (that one is still blended: it is similar to the previous one) or
 /// the radius is reached; in the − direction it blends neighbours until one is on a
 /// discontinuity (that one is not: it differs from its + neighbour) — so a pixel on a
-/// discontinuity explores only the − direction. The fast variant fetches taps in pairs between
+/// discontinuity explores only the − direction. The average is accumulated as the centre plus
+/// the weighted mean of the differences to it, so a constant image stays exactly constant
+/// whatever the rounding of the sums. The fast variant fetches taps in pairs between
 /// two texel centres and stops at the first pair whose filtered discontinuity value is > 0.
 pub fn blur(
     irradiance: &Image<[f32; 4]>,
@@ -457,11 +459,12 @@ pub fn blur_pass(
     let disc_at = |x: i32, y: i32| on_discontinuity(disc.get(x as u32, y as u32));
     per_texel(image.width(), image.height(), |x, y| {
         let (x, y) = (x as i32, y as i32);
-        let mut sum = at(x, y).map(|c| c * weights[0]);
+        let centre = at(x, y);
+        let mut sum = [0.0f32; 4];
         let mut total = weights[0];
         let mut add = |v: [f32; 4], weight: f32| {
             for c in 0..4 {
-                sum[c] += v[c] * weight;
+                sum[c] += (v[c] - centre[c]) * weight;
             }
             total += weight;
         };
@@ -505,7 +508,7 @@ pub fn blur_pass(
                 }
             }
         }
-        to_f16(sum.map(|c| c / total))
+        to_f16(std::array::from_fn(|c| centre[c] + sum[c] / total))
     })
 }
 
