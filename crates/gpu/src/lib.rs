@@ -14,6 +14,7 @@
 //! # Ok::<(), gpu::GpuError>(())
 //! ```
 
+pub mod bench;
 mod device;
 pub mod shader;
 mod timer;

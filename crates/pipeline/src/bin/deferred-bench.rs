@@ -15,7 +15,10 @@ use gbuffer::{
     gpu::{GBufferPass, GBufferTargets, GpuScene},
 };
 use glam::Vec3;
-use gpu::{Gpu, PassTimer};
+use gpu::{
+    Gpu, PassTimer,
+    bench::{Header, Stat},
+};
 use scene::{Camera, Scene};
 use serde::Serialize;
 
@@ -38,22 +41,6 @@ struct Args {
 }
 
 #[derive(Serialize)]
-struct Stat {
-    median_ms: f64,
-    min_ms: f64,
-}
-
-impl Stat {
-    fn of(mut v: Vec<f64>) -> Self {
-        v.sort_by(f64::total_cmp);
-        Self {
-            median_ms: v[v.len() / 2],
-            min_ms: v[0],
-        }
-    }
-}
-
-#[derive(Serialize)]
 struct GBufferResult {
     width: u32,
     height: u32,
@@ -73,33 +60,13 @@ struct GBufferResult {
 
 #[derive(Serialize)]
 struct Report {
-    date: String,
-    adapter: String,
-    backend: String,
-    driver: String,
-    driver_info: String,
-    device_type: String,
+    #[serde(flatten)]
+    header: Header,
     scene: String,
     triangles: u64,
     camera: String,
     frames: u32,
     gbuffer: Vec<GBufferResult>,
-}
-
-/// Today's date (UTC) as YYYY-MM-DD, from the Unix clock (Hinnant's civil-from-days).
-fn today() -> String {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    let z = (secs / 86_400) as i64 + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    format!("{:04}-{m:02}-{d:02}", yoe + era * 400 + i64::from(m <= 2))
 }
 
 fn bench_gbuffer(
@@ -230,14 +197,8 @@ fn main() -> Result<()> {
         );
         results.push(r);
     }
-    let i = &gpu.info;
     let report = Report {
-        date: today(),
-        adapter: i.name.clone(),
-        backend: format!("{:?}", i.backend),
-        driver: i.driver.clone(),
-        driver_info: i.driver_info.clone(),
-        device_type: format!("{:?}", i.device_type),
+        header: Header::new(&gpu),
         scene: path
             .file_name()
             .map_or("scene".into(), |f| f.to_string_lossy().into_owned()),
@@ -255,34 +216,12 @@ fn main() -> Result<()> {
 
 fn write_report(dir: &std::path::Path, r: &Report) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let slug: String = r
-        .adapter
-        .to_lowercase()
-        .chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
-        .collect();
-    let slug = slug
-        .split('-')
-        .filter(|s| !s.is_empty())
-        .collect::<Vec<_>>()
-        .join("-");
-    let base = dir.join(format!("{slug}-{}", r.date));
+    let base = dir.join(r.header.file_stem(""));
     std::fs::write(
         base.with_extension("json"),
         serde_json::to_string_pretty(r)?,
     )?;
-    let mut md = format!(
-        "# Benchmarks on {} ({})\n\n- Date: {}\n- Adapter: {} ({}, {})\n- Driver: {} {}\n- Timing: GPU timestamp queries, median (and minimum) of {} frames after 10 warm-up frames\n\n",
-        r.adapter,
-        r.backend,
-        r.date,
-        r.adapter,
-        r.device_type,
-        r.backend,
-        r.driver,
-        r.driver_info,
-        r.frames
-    );
+    let mut md = r.header.markdown("Benchmarks", r.frames);
     md.push_str(&format!(
         "## G-buffer creation (MRT render pass)\n\nScene: `{}`, {} triangles; camera {}.\nTargets: depth32f + r32f linear depth + r32u normal + rgba8 albedo + r32u material = 20 bytes/pixel.\nBaselines in the same run: a pass that only clears and stores the five targets, and a buffer copy of the same number of bytes.\n\n",
         r.scene, r.triangles, r.camera
