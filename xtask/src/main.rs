@@ -3,7 +3,8 @@
 //! - `cargo xtask test [ARGS]`: makes sure a Vulkan driver exists (installs Mesa's software
 //!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found), then runs the
 //!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`).
-//! - `cargo xtask bench [ARGS]`: runs the GPU benchmarks (`deferred-bench [ARGS]`, reports
+//! - `cargo xtask bench [ARGS]`: runs the GPU benchmarks (`deferred-bench [ARGS]` and
+//!   `interleave-bench [ARGS]`, reports
 //!   under docs/bench/) and the CPU criterion benches.
 
 use std::{
@@ -120,10 +121,29 @@ fn main() -> Result<()> {
                     "--",
                 ])
                 .args(&rest))?;
-            run(cargo().args(["bench", "-p", "gbuffer", "--", "--quick"]))
+            run(cargo()
+                .args([
+                    "run",
+                    "--release",
+                    "-p",
+                    "interleave",
+                    "--bin",
+                    "interleave-bench",
+                    "--",
+                ])
+                .args(&rest))?;
+            run(cargo().args([
+                "bench",
+                "-p",
+                "gbuffer",
+                "-p",
+                "interleave",
+                "--",
+                "--quick",
+            ]))
         }
         _ => bail!(
-            "usage: cargo xtask test [CARGO TEST ARGS] | cargo xtask bench [deferred-bench ARGS]"
+            "usage: cargo xtask test [CARGO TEST ARGS] | cargo xtask bench [BENCH ARGS: --frames N, --out DIR, --allow-software]"
         ),
     }
 }

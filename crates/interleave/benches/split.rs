@@ -1,5 +1,6 @@
 //! CPU reference timings (criterion): split and gather of a 1920×1080 r32 image, pattern 4×4,
 //! and the 7×7 blur. The GPU benchmarks are in `interleave-bench`.
+#![allow(missing_docs)] // criterion_group! generates an undocumented function
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use gbuffer::Image;

@@ -69,10 +69,11 @@ pub(crate) fn check_size<T: Copy>(
 }
 
 /// An image whose texel (x, y) is `texel(x, y)`, rows in parallel (one GPU thread per texel).
-fn per_texel<T: Send>(width: u32, height: u32, texel: impl Fn(u32, u32) -> T + Sync) -> Image<T>
-where
-    T: Copy,
-{
+fn per_texel<T: Copy + Send>(
+    width: u32,
+    height: u32,
+    texel: impl Fn(u32, u32) -> T + Sync,
+) -> Image<T> {
     let data: Vec<T> = (0..height)
         .into_par_iter()
         .flat_map_iter(|y| (0..width).map(move |x| (x, y)))
@@ -546,8 +547,8 @@ pub fn shade_subsets(
         for light in &lights[first..first + per_subset as usize] {
             let d = glam::Vec3::from_slice(&light.direction[..3]);
             let cos = nrm.dot(d).max(0.0);
-            for c in 0..3 {
-                e[c] += cos * light.color[c];
+            for (e, c) in e.iter_mut().zip(&light.color[..3]) {
+                *e += cos * c;
             }
         }
         to_f16(e)

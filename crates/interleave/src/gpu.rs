@@ -628,7 +628,10 @@ impl BlurPass {
 /// Lights per sub-buffer subset: `count / (n·m)`, which must be a whole number ≥ 1.
 pub fn lights_per_subset(count: usize, pattern: Pattern) -> Result<u32, InterleaveError> {
     let subsets = pattern.count();
-    if count == 0 || count % subsets as usize != 0 || count / subsets as usize > u32::MAX as usize {
+    if count == 0
+        || !count.is_multiple_of(subsets as usize)
+        || count / subsets as usize > u32::MAX as usize
+    {
         return Err(InterleaveError::Lights { count, subsets });
     }
     Ok((count / subsets as usize) as u32)

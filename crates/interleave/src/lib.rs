@@ -307,7 +307,7 @@ impl Block {
 
     /// Checks that the block fits the pattern.
     pub fn validate(self, pattern: Pattern) -> Result<(), InterleaveError> {
-        let ok = |b: u32, s: u32| (1..=MAX_SIZE).contains(&b) && b % s == 0;
+        let ok = |b: u32, s: u32| (1..=MAX_SIZE).contains(&b) && b.is_multiple_of(s);
         if ok(self.p, pattern.n) && ok(self.q, pattern.m) {
             Ok(())
         } else {
