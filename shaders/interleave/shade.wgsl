@@ -1,4 +1,5 @@
 // #import gbuffer/normal_encoding.wgsl
+// #import interleave/pattern.wgsl
 // Shading of interleaved samples (Segovia 2006 §4.3), the crate's probe shader: the pixels of
 // sub-buffer (i, j) receive only the directional lights of subset s = j·n + i.
 //   shade_split: reads the split G-buffer, writes split irradiance (to be gathered);
@@ -15,12 +16,6 @@ struct SubsetLight {
 @group(0) @binding(2) var<storage, read> lights: array<SubsetLight>;
 @group(0) @binding(3) var irradiance: texture_storage_2d<rgba16float, write>;
 
-override width: u32 = 1u;
-override height: u32 = 1u;
-override n: u32 = 1u;
-override m: u32 = 1u;
-override sub_width: u32 = 1u;
-override sub_height: u32 = 1u;
 override per_subset: u32 = 1u;
 
 fn shade(texel: vec2<u32>, subset: u32) -> vec4<f32> {

@@ -1,3 +1,4 @@
+// #import interleave/pattern.wgsl
 // Texel type, bindings and pattern constants shared by the split and gather kernels
 // (Segovia 2006 §3). Written for r32uint; `interleave::gpu` rewrites the three marked
 // declarations (`Texel`, `source`, `destination`) for the format being split, so one kernel
@@ -7,13 +8,6 @@ alias Texel = vec4<u32>;
 @group(0) @binding(0) var source: texture_2d<u32>;
 @group(0) @binding(1) var destination: texture_storage_2d<r32uint, write>;
 
-// Image size, pattern n×m and sub-buffer size ceil(width/n) × ceil(height/m).
-override width: u32 = 1u;
-override height: u32 = 1u;
-override n: u32 = 1u;
-override m: u32 = 1u;
-override sub_width: u32 = 1u;
-override sub_height: u32 = 1u;
 // Sub-block (two-pass) or tile run (tiled) of a × b sub-buffer texels.
 override a: u32 = 1u;
 override b: u32 = 1u;

@@ -41,6 +41,21 @@ pub fn today() -> String {
     format!("{:04}-{m:02}-{d:02}", yoe + era * 400 + i64::from(m <= 2))
 }
 
+/// A benchmark refused to run on a software rasterizer.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{0} is a software rasterizer: its times are not GPU performance (pass --allow-software to measure anyway)"
+)]
+pub struct SoftwareAdapter(pub String);
+
+/// Fails on a software rasterizer unless `allow_software`.
+pub fn require_hardware(gpu: &Gpu, allow_software: bool) -> Result<(), SoftwareAdapter> {
+    if gpu.is_software() && !allow_software {
+        return Err(SoftwareAdapter(gpu.info.name.clone()));
+    }
+    Ok(())
+}
+
 /// Who measured and when: the first fields of every report.
 #[derive(Clone, Debug, Serialize)]
 pub struct Header {

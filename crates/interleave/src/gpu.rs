@@ -337,13 +337,10 @@ impl Splitter {
         image: &wgpu::Texture,
         split: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
-        check_texture("image", image, self.image_size(), self.format)?;
-        check_texture("split texture", split, self.split_size(), self.format)?;
         self.passes(
             device,
             &self.split_pipelines,
-            image,
-            split,
+            (image, split),
             self.split_size(),
         )
     }
@@ -355,25 +352,30 @@ impl Splitter {
         split: &wgpu::Texture,
         image: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
-        check_texture("image", image, self.image_size(), self.format)?;
-        check_texture("split texture", split, self.split_size(), self.format)?;
         self.passes(
             device,
             &self.gather_pipelines,
-            split,
-            image,
+            (split, image),
             self.image_size(),
         )
     }
 
+    /// The passes from `textures.0` to `textures.1`, whose size is `to_size` (the image's or the
+    /// split texture's); the other one must have the other size.
     fn passes(
         &self,
         device: &wgpu::Device,
         pipelines: &[(&'static str, wgpu::ComputePipeline)],
-        from: &wgpu::Texture,
-        to: &wgpu::Texture,
+        (from, to): (&wgpu::Texture, &wgpu::Texture),
         to_size: (u32, u32),
     ) -> Result<Passes, InterleaveError> {
+        let (image, split) = if to_size == self.split_size() {
+            (from, to)
+        } else {
+            (to, from)
+        };
+        check_texture("image", image, self.image_size(), self.format)?;
+        check_texture("split texture", split, self.split_size(), self.format)?;
         let res = wgpu::BindingResource::TextureView;
         let (from_view, to_view) = (view(from), view(to));
         let passes = match (self.variant, &self.intermediate, pipelines) {
@@ -760,7 +762,9 @@ fn check_texel<T>(format: wgpu::TextureFormat) -> Result<(), InterleaveError> {
     Ok(())
 }
 
-fn upload<T: Pod>(
+/// Uploads `image` into a new texture of `format` (texels of the same size), usable by every
+/// kernel of this crate.
+pub fn upload_image<T: Pod>(
     gpu: &Gpu,
     label: &str,
     image: &Image<T>,
@@ -806,7 +810,7 @@ pub fn run_split<T: Pod>(
     check_texel::<T>(format)?;
     crate::cpu::check_size("image", image, layout.width, layout.height)?;
     let splitter = Splitter::new(&gpu.device, layout, variant, format)?;
-    let source = upload(gpu, "image", image, format)?;
+    let source = upload_image(gpu, "image", image, format)?;
     let split = splitter.split_texture(&gpu.device, "split");
     submit(gpu, &splitter.split(&gpu.device, &source, &split)?);
     download(gpu, &split)
@@ -828,7 +832,7 @@ pub fn run_gather<T: Pod>(
         layout.split_height(),
     )?;
     let splitter = Splitter::new(&gpu.device, layout, variant, format)?;
-    let source = upload(gpu, "split", split, format)?;
+    let source = upload_image(gpu, "split", split, format)?;
     let image = splitter.image_texture(&gpu.device, "gathered");
     submit(gpu, &splitter.gather(&gpu.device, &source, &image)?);
     download(gpu, &image)
@@ -848,13 +852,13 @@ pub fn run_discontinuity(
         linear_depth.height(),
     )?;
     let pass = DiscontinuityPass::new(&gpu.device, thresholds)?;
-    let depth = upload(
+    let depth = upload_image(
         gpu,
         "linear depth",
         linear_depth,
         gbuffer::LINEAR_DEPTH_FORMAT,
     )?;
-    let nrm = upload(gpu, "normals", normals, gbuffer::NORMAL_FORMAT)?;
+    let nrm = upload_image(gpu, "normals", normals, gbuffer::NORMAL_FORMAT)?;
     let out = transfer::texture_2d(
         &gpu.device,
         "discontinuities",
@@ -887,13 +891,13 @@ pub fn run_blur(
     )?;
     let pass = BlurPass::new(&gpu.device, blur)?;
     let (w, h) = (irradiance.width(), irradiance.height());
-    let input = upload(
+    let input = upload_image(
         gpu,
         "irradiance",
         &to_f16_texels(irradiance),
         IRRADIANCE_FORMAT,
     )?;
-    let disc = upload(
+    let disc = upload_image(
         gpu,
         "discontinuities",
         discontinuities,
@@ -928,13 +932,13 @@ pub fn run_shading(
     crate::cpu::check_size("normal image", normals, layout.width, layout.height)?;
     let device = &gpu.device;
     let shade = SubsetShading::new(device, layout, lights)?;
-    let depth = upload(
+    let depth = upload_image(
         gpu,
         "linear depth",
         linear_depth,
         gbuffer::LINEAR_DEPTH_FORMAT,
     )?;
-    let nrm = upload(gpu, "normals", normals, gbuffer::NORMAL_FORMAT)?;
+    let nrm = upload_image(gpu, "normals", normals, gbuffer::NORMAL_FORMAT)?;
     let out = BlurPass::irradiance_texture(device, "irradiance", layout.width, layout.height);
     let passes = match shading {
         Shading::Fused => shade.shade_fused(device, &depth, &nrm, &out)?,

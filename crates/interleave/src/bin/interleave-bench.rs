@@ -23,7 +23,7 @@ use gpu::{
 use interleave::{
     Block, Blur, BlurVariant, Pattern, SplitLayout, SplitVariant, Thresholds,
     cpu::SubsetLight,
-    gpu::{BlurPass, DiscontinuityPass, Passes, Splitter, SubsetShading},
+    gpu::{BlurPass, DiscontinuityPass, Passes, Splitter, SubsetShading, upload_image},
 };
 use serde::Serialize;
 
@@ -264,24 +264,6 @@ fn scene_gbuffer(width: u32, height: u32) -> Result<(Image<f32>, Image<u32>)> {
     Ok((gb.linear_depth, gb.normal))
 }
 
-fn upload<T: bytemuck::Pod>(
-    gpu: &Gpu,
-    label: &str,
-    image: &Image<T>,
-    format: wgpu::TextureFormat,
-) -> Result<wgpu::Texture> {
-    Ok(transfer::texture_init(
-        &gpu.device,
-        &gpu.queue,
-        label,
-        image.width(),
-        image.height(),
-        format,
-        wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
-        bytemuck::cast_slice(image.pixels()),
-    )?)
-}
-
 fn name((w, h): (u32, u32)) -> String {
     format!("{w}x{h}")
 }
@@ -290,12 +272,7 @@ fn main() -> Result<()> {
     let args = Args::parse();
     let gpu = Gpu::from_env()?;
     println!("adapter: {}", gpu.describe());
-    if gpu.is_software() && !args.allow_software {
-        bail!(
-            "{} is a software rasterizer: its times are not GPU performance (pass --allow-software to measure anyway)",
-            gpu.info.name
-        );
-    }
+    gpu::bench::require_hardware(&gpu, args.allow_software)?;
     let bench = Bench {
         gpu: &gpu,
         frames: args.frames,
@@ -411,8 +388,8 @@ fn main() -> Result<()> {
     // 3: blur (Table 2) and discontinuity buffer.
     let (w, h) = (1280, 1024);
     let (depth, normals) = scene_gbuffer(w, h)?;
-    let depth_t = upload(&gpu, "linear depth", &depth, gbuffer::LINEAR_DEPTH_FORMAT)?;
-    let normal_t = upload(&gpu, "normals", &normals, gbuffer::NORMAL_FORMAT)?;
+    let depth_t = upload_image(&gpu, "linear depth", &depth, gbuffer::LINEAR_DEPTH_FORMAT)?;
+    let normal_t = upload_image(&gpu, "normals", &normals, gbuffer::NORMAL_FORMAT)?;
     let disc_pass = DiscontinuityPass::new(device, &Thresholds::default())?;
     let disc = bench.texture(
         "discontinuities",
@@ -452,8 +429,8 @@ fn main() -> Result<()> {
     let mut shading = Vec::new();
     for size in SIZES {
         let (depth, normals) = scene_gbuffer(size.0, size.1)?;
-        let depth_t = upload(&gpu, "linear depth", &depth, gbuffer::LINEAR_DEPTH_FORMAT)?;
-        let normal_t = upload(&gpu, "normals", &normals, gbuffer::NORMAL_FORMAT)?;
+        let depth_t = upload_image(&gpu, "linear depth", &depth, gbuffer::LINEAR_DEPTH_FORMAT)?;
+        let normal_t = upload_image(&gpu, "normals", &normals, gbuffer::NORMAL_FORMAT)?;
         let d = bench.texture(
             "discontinuities",
             size,

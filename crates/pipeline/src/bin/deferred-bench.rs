@@ -155,12 +155,7 @@ fn main() -> Result<()> {
     let args = Args::parse();
     let gpu = Gpu::from_env()?;
     println!("adapter: {}", gpu.describe());
-    if gpu.is_software() && !args.allow_software {
-        bail!(
-            "{} is a software rasterizer: its times are not GPU performance (pass --allow-software to measure anyway)",
-            gpu.info.name
-        );
-    }
+    gpu::bench::require_hardware(&gpu, args.allow_software)?;
     let path = match &args.scene {
         Some(p) => p.clone(),
         None => scene::shared_fixtures()
