@@ -61,11 +61,6 @@ impl Passes {
         }
     }
 
-    /// Names of the dispatches, in order.
-    pub fn names(&self) -> Vec<&str> {
-        self.0.iter().map(|p| p.name.as_str()).collect()
-    }
-
     /// These passes followed by `other`.
     pub fn then(mut self, other: Passes) -> Passes {
         self.0.extend(other.0);
@@ -337,6 +332,7 @@ impl Splitter {
         image: &wgpu::Texture,
         split: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
+        self.check(image, split)?;
         self.passes(
             device,
             &self.split_pipelines,
@@ -352,6 +348,7 @@ impl Splitter {
         split: &wgpu::Texture,
         image: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
+        self.check(image, split)?;
         self.passes(
             device,
             &self.gather_pipelines,
@@ -360,8 +357,13 @@ impl Splitter {
         )
     }
 
-    /// The passes from `textures.0` to `textures.1`, whose size is `to_size` (the image's or the
-    /// split texture's); the other one must have the other size.
+    /// Checks that `image` and `split` fit this splitter's layout and format.
+    fn check(&self, image: &wgpu::Texture, split: &wgpu::Texture) -> Result<(), InterleaveError> {
+        check_texture("image", image, self.image_size(), self.format)?;
+        check_texture("split texture", split, self.split_size(), self.format)
+    }
+
+    /// The passes from `textures.0` to `textures.1`, whose size is `to_size`.
     fn passes(
         &self,
         device: &wgpu::Device,
@@ -369,13 +371,6 @@ impl Splitter {
         (from, to): (&wgpu::Texture, &wgpu::Texture),
         to_size: (u32, u32),
     ) -> Result<Passes, InterleaveError> {
-        let (image, split) = if to_size == self.split_size() {
-            (from, to)
-        } else {
-            (to, from)
-        };
-        check_texture("image", image, self.image_size(), self.format)?;
-        check_texture("split texture", split, self.split_size(), self.format)?;
         let res = wgpu::BindingResource::TextureView;
         let (from_view, to_view) = (view(from), view(to));
         let passes = match (self.variant, &self.intermediate, pipelines) {

@@ -186,12 +186,10 @@ impl Bench<'_> {
         )
     }
 
-    /// `copy_texture_to_texture` of a whole texture, between two empty timed marker passes.
-    fn copy(&self, size: (u32, u32), format: wgpu::TextureFormat) -> Result<Stat> {
-        let (src, dst) = (
-            self.texture("copy src", size, format),
-            self.texture("copy dst", size, format),
-        );
+    /// `copy_texture_to_texture` of `src` into a new texture, between two empty timed marker
+    /// passes.
+    fn copy(&self, src: &wgpu::Texture) -> Result<Stat> {
+        let dst = self.texture("copy dst", (src.width(), src.height()), src.format());
         Ok(self
             .time(|encoder, timer| {
                 drop(encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -244,14 +242,18 @@ impl Bench<'_> {
         Ok(t)
     }
 
-    /// Split and gather times of one variant on a 16-byte/pixel image of random texels.
-    fn split_gather(&self, layout: &SplitLayout, variant: SplitVariant) -> Result<(Stat, Stat)> {
+    /// Split and gather times of one variant on `image` (16 bytes/pixel, random texels).
+    fn split_gather(
+        &self,
+        image: &wgpu::Texture,
+        layout: &SplitLayout,
+        variant: SplitVariant,
+    ) -> Result<(Stat, Stat)> {
         let device = &self.gpu.device;
         let splitter = Splitter::new(device, layout, variant, FORMAT)?;
-        let image = self.random_texture("gbuffer", (layout.width, layout.height), FORMAT)?;
         let split = splitter.split_texture(device, "split gbuffer");
-        let s = self.time_passes(&splitter.split(device, &image, &split)?)?;
-        let g = self.time_passes(&splitter.gather(device, &split, &image)?)?;
+        let s = self.time_passes(&splitter.split(device, image, &split)?)?;
+        let g = self.time_passes(&splitter.gather(device, &split, image)?)?;
         Ok((s, g))
     }
 }
@@ -285,10 +287,13 @@ fn main() -> Result<()> {
     let mut sweep = Vec::new();
     let mut split = Vec::new();
     for size in [(1024, 1024), SIZES[0], SIZES[1]] {
-        let copy_ms = bench.copy(size, FORMAT)?;
+        let image = bench.random_texture("gbuffer", size, FORMAT)?;
+        let copy_ms = bench.copy(&image)?;
         // The 1×1 pattern's one-pass split is an identity copy through a compute kernel.
         let identity = SplitLayout::new(size.0, size.1, Pattern::new(1, 1)?)?;
-        let compute_copy = bench.split_gather(&identity, SplitVariant::OnePass)?.0;
+        let compute_copy = bench
+            .split_gather(&image, &identity, SplitVariant::OnePass)?
+            .0;
         let gbps = |ms: f64| 2.0 * f64::from(size.0 * size.1) * 16.0 / ms * 1e-6;
         println!(
             "copy {}: copy_texture_to_texture {:.3} ms ({:.0} GB/s), compute copy {:.3} ms ({:.0} GB/s)",
@@ -317,7 +322,7 @@ fn main() -> Result<()> {
                 }
                 seen.push(block);
                 let variant = SplitVariant::TwoPass(block);
-                let (s, g) = bench.split_gather(&layout, variant)?;
+                let (s, g) = bench.split_gather(&image, &layout, variant)?;
                 sweep.push(SweepResult {
                     width: size.0,
                     height: size.1,
@@ -340,11 +345,11 @@ fn main() -> Result<()> {
             let mut rows = vec![
                 (
                     SplitVariant::OnePass.name(),
-                    bench.split_gather(&layout, SplitVariant::OnePass)?,
+                    bench.split_gather(&image, &layout, SplitVariant::OnePass)?,
                 ),
                 (
                     SplitVariant::Tiled.name(),
-                    bench.split_gather(&layout, SplitVariant::Tiled)?,
+                    bench.split_gather(&image, &layout, SplitVariant::Tiled)?,
                 ),
             ];
             if let Some((sv, s, gv, g)) = best {
