@@ -6,11 +6,13 @@
 //   specular += E · D_GGX(N·H) · V_SmithGGX(N·L, N·V) · F_Schlick(V·H, F0)
 // with F0 = mix(0.04, albedo, metallic) and α = roughness². Composition (step 4):
 //   colour = albedo · (1 − metallic) · (ambient + diffuse) + specular + emissive.
-// Point and spot attenuation: saturate(1 − (d/r)⁴)² / max(d², 1e-4), exactly zero at r.
+// Point, spot and hemispherical attenuation: saturate(1 − (d/r)⁴)² / max(d², 1e-4), exactly zero
+// at r; spot lights fade by smoothstep(cos outer, cos inner, cos θ), hemispherical ones by max(cos θ, 0).
 
 const LIGHT_POINT: u32 = 0u;
 const LIGHT_SPOT: u32 = 1u;
 const LIGHT_DIRECTIONAL: u32 = 2u;
+const LIGHT_HEMISPHERICAL: u32 = 3u;
 const INV_PI: f32 = 0.318309886183791;
 
 struct Light {
@@ -45,8 +47,11 @@ fn light_incidence(light: Light, p: vec3<f32>) -> vec4<f32> {
     let d = length(to_light);
     let l = to_light / max(d, 1e-6);
     var att = distance_attenuation(d, light.radius);
+    let cos_emission = dot(-l, light.direction);
     if light.kind == LIGHT_SPOT {
-        att *= smoothstep(light.cos_outer, light.cos_inner, dot(-l, light.direction));
+        att *= smoothstep(light.cos_outer, light.cos_inner, cos_emission);
+    } else if light.kind == LIGHT_HEMISPHERICAL {
+        att *= max(cos_emission, 0.0);
     }
     return vec4<f32>(l, att);
 }
@@ -57,16 +62,27 @@ struct Accumulated {
 };
 
 fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, roughness: f32, metallic: f32) -> Accumulated {
+    let inc = light_incidence(light, p);
+    if inc.w <= 0.0 {
+        var none: Accumulated;
+        none.diffuse = vec3<f32>(0.0);
+        none.specular = vec3<f32>(0.0);
+        return none;
+    }
+    return reflect_light(light.color * inc.w, inc.xyz, n, v, albedo, roughness, metallic);
+}
+
+// Light arriving along `l` with attenuated `intensity` (irradiance intensity · N·L), reflected
+// towards `v`: Lambert E/π and GGX E·D·V·F.
+fn reflect_light(intensity: vec3<f32>, l: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, roughness: f32, metallic: f32) -> Accumulated {
     var out: Accumulated;
     out.diffuse = vec3<f32>(0.0);
     out.specular = vec3<f32>(0.0);
-    let inc = light_incidence(light, p);
-    let l = inc.xyz;
     let n_dot_l = clamp(dot(n, l), 0.0, 1.0);
-    if inc.w <= 0.0 || n_dot_l <= 0.0 {
+    if n_dot_l <= 0.0 {
         return out;
     }
-    let e = light.color * (inc.w * n_dot_l);
+    let e = intensity * n_dot_l;
     out.diffuse = e * INV_PI;
     let h = normalize(l + v);
     let n_dot_v = clamp(dot(n, v), 1e-4, 1.0);

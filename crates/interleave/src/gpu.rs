@@ -61,6 +61,26 @@ impl Passes {
         }
     }
 
+    /// One dispatch of `pipeline` over `workgroups` with `resources` bound in order to
+    /// bindings 0, 1, … of group 0 (for kernels composed with this crate's passes).
+    pub fn dispatch(
+        device: &wgpu::Device,
+        name: &str,
+        pipeline: &wgpu::ComputePipeline,
+        resources: &[wgpu::BindingResource<'_>],
+        workgroups: (u32, u32),
+    ) -> Passes {
+        Passes(vec![pass(device, name, pipeline, resources, workgroups)])
+    }
+
+    /// The same passes, all timed under `name` (a stage of a larger pipeline).
+    pub fn named(mut self, name: &str) -> Passes {
+        for p in &mut self.0 {
+            p.name = name.to_owned();
+        }
+        self
+    }
+
     /// These passes followed by `other`.
     pub fn then(mut self, other: Passes) -> Passes {
         self.0.extend(other.0);
@@ -777,7 +797,11 @@ pub fn upload_image<T: Pod>(
     )?)
 }
 
-fn download<T: Pod>(gpu: &Gpu, texture: &wgpu::Texture) -> Result<Image<T>, InterleaveError> {
+/// Reads `texture` back into an image of texels `T` (of the format's texel size).
+pub fn download_image<T: Pod>(
+    gpu: &Gpu,
+    texture: &wgpu::Texture,
+) -> Result<Image<T>, InterleaveError> {
     let bytes = transfer::read_texture(&gpu.device, &gpu.queue, texture, wgpu::TextureAspect::All)?;
     Image::from_vec(
         texture.width(),
@@ -808,7 +832,7 @@ pub fn run_split<T: Pod>(
     let source = upload_image(gpu, "image", image, format)?;
     let split = splitter.split_texture(&gpu.device, "split");
     submit(gpu, &splitter.split(&gpu.device, &source, &split)?);
-    download(gpu, &split)
+    download_image(gpu, &split)
 }
 
 /// Convenience for tests and examples: gathers a split image on the GPU.
@@ -830,7 +854,7 @@ pub fn run_gather<T: Pod>(
     let source = upload_image(gpu, "split", split, format)?;
     let image = splitter.image_texture(&gpu.device, "gathered");
     submit(gpu, &splitter.gather(&gpu.device, &source, &image)?);
-    download(gpu, &image)
+    download_image(gpu, &image)
 }
 
 /// Convenience for tests and examples: the discontinuity buffer on the GPU.
@@ -863,7 +887,7 @@ pub fn run_discontinuity(
         USAGE,
     );
     submit(gpu, &pass.bind(&gpu.device, &depth, &nrm, &out)?);
-    download(gpu, &out)
+    download_image(gpu, &out)
 }
 
 /// Linear RGBA as f16 texels of an [`IRRADIANCE_FORMAT`] texture.
@@ -901,7 +925,7 @@ pub fn run_blur(
     let scratch = BlurPass::irradiance_texture(&gpu.device, "blur scratch", w, h);
     let out = BlurPass::irradiance_texture(&gpu.device, "blurred", w, h);
     submit(gpu, &pass.bind(&gpu.device, &input, &disc, &scratch, &out)?);
-    Ok(download::<[half::f16; 4]>(gpu, &out)?.map(|p| p.map(half::f16::to_f32)))
+    Ok(download_image::<[half::f16; 4]>(gpu, &out)?.map(|p| p.map(half::f16::to_f32)))
 }
 
 /// How [`run_shading`] reaches the sub-buffers.
@@ -952,5 +976,5 @@ pub fn run_shading(
         }
     };
     submit(gpu, &passes);
-    Ok(download::<[half::f16; 4]>(gpu, &out)?.map(|p| p.map(half::f16::to_f32)))
+    Ok(download_image::<[half::f16; 4]>(gpu, &out)?.map(|p| p.map(half::f16::to_f32)))
 }

@@ -34,12 +34,11 @@ pub fn light_incidence(light: &GpuLight, p: Vec3) -> (Vec3, f32) {
     let d = to_light.length();
     let l = to_light / d.max(1e-6);
     let mut att = distance_attenuation(d, light.radius);
+    let cos_emission = (-l).dot(Vec3::from(light.direction));
     if light.kind == 1 {
-        att *= smoothstep(
-            light.cos_outer,
-            light.cos_inner,
-            (-l).dot(Vec3::from(light.direction)),
-        );
+        att *= smoothstep(light.cos_outer, light.cos_inner, cos_emission);
+    } else if light.kind == 3 {
+        att *= cos_emission.max(0.0);
     }
     (l, att)
 }
@@ -55,11 +54,30 @@ pub fn shade_light(
     metallic: f32,
 ) -> (Vec3, Vec3) {
     let (l, att) = light_incidence(light, p);
-    let n_dot_l = n.dot(l).clamp(0.0, 1.0);
-    if att <= 0.0 || n_dot_l <= 0.0 {
+    if att <= 0.0 {
         return (Vec3::ZERO, Vec3::ZERO);
     }
-    let e = Vec3::from(light.color) * (att * n_dot_l);
+    let intensity = Vec3::from(light.color) * att;
+    reflect_light(intensity, l, n, v, albedo, roughness, metallic)
+}
+
+/// The (diffuse, specular) light reflected towards `v` from light arriving along `l` with
+/// attenuated `intensity` (irradiance `intensity · N·L`): Lambert `E/π` and GGX `E·D·V·F`
+/// (`reflect_light`).
+pub fn reflect_light(
+    intensity: Vec3,
+    l: Vec3,
+    n: Vec3,
+    v: Vec3,
+    albedo: Vec3,
+    roughness: f32,
+    metallic: f32,
+) -> (Vec3, Vec3) {
+    let n_dot_l = n.dot(l).clamp(0.0, 1.0);
+    if n_dot_l <= 0.0 {
+        return (Vec3::ZERO, Vec3::ZERO);
+    }
+    let e = intensity * n_dot_l;
     let h = (l + v).normalize();
     let n_dot_v = n.dot(v).clamp(1e-4, 1.0);
     let n_dot_h = n.dot(h).clamp(0.0, 1.0);

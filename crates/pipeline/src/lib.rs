@@ -20,6 +20,7 @@
 
 pub mod cpu;
 pub mod gpu;
+pub mod indirect;
 
 use gbuffer::Image;
 use glam::Vec3;
@@ -38,9 +39,9 @@ pub struct GpuLight {
     pub radius: f32,
     /// Colour × intensity.
     pub color: [f32; 3],
-    /// 0 point, 1 spot, 2 directional.
+    /// 0 point, 1 spot, 2 directional, 3 hemispherical.
     pub kind: u32,
-    /// Direction the light travels (spot, directional).
+    /// Direction the light travels (spot, directional); the emitter's normal (hemispherical).
     pub direction: [f32; 3],
     /// Cosine of the outer cone angle (spot).
     pub cos_outer: f32,
@@ -92,6 +93,20 @@ impl From<&Light> for GpuLight {
                 cos_inner: inner_angle.cos().max(outer_angle.cos() + 1e-4),
                 ..base
             },
+            Light::Hemispherical {
+                position,
+                direction,
+                color,
+                intensity,
+                radius,
+            } => Self {
+                position: position.to_array(),
+                radius,
+                color: (color * intensity).to_array(),
+                kind: 3,
+                direction: direction.to_array(),
+                ..base
+            },
             Light::Directional {
                 direction,
                 color,
@@ -132,6 +147,23 @@ pub enum RenderError {
     /// A GPU resource could not be created or read.
     #[error(transparent)]
     Gpu(#[from] ::gpu::GpuError),
+    /// A bad interleaving pattern, blur, threshold or texture for the indirect stage.
+    #[error(transparent)]
+    Interleave(#[from] interleave::InterleaveError),
+    /// VPL generation failed.
+    #[error(transparent)]
+    Vpl(#[from] indirect::vpl::VplError),
+    /// The VPL set has another number of subsets than the pattern has sub-buffers.
+    #[error("the VPLs come in {vpl_subsets} subsets but the pattern has {sub_buffers} sub-buffers")]
+    Subsets {
+        /// Subsets of the VPL set.
+        vpl_subsets: u32,
+        /// Sub-buffers n·m.
+        sub_buffers: u32,
+    },
+    /// The VPL clamp distance is negative or not finite.
+    #[error("the VPL clamp distance must be finite and >= 0, got {0}")]
+    Clamp(f32),
     /// A light has non-finite or negative parameters.
     #[error("light {index} is invalid: {light:?}")]
     InvalidLight {

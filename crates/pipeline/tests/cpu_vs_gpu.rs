@@ -4,31 +4,8 @@ use glam::Vec3;
 use pipeline::{DEFAULT_AMBIENT, cpu, gpu::GpuRenderer, psnr};
 use scene::Light;
 
-fn write_failure(
-    name: &str,
-    expected: &gbuffer::Image<[f32; 4]>,
-    actual: &gbuffer::Image<[f32; 4]>,
-) -> String {
-    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../target/test-output")
-        .join(name);
-    let _ = std::fs::create_dir_all(&dir);
-    let diff = gbuffer::Image::from_vec(
-        expected.width(),
-        expected.height(),
-        expected
-            .pixels()
-            .iter()
-            .zip(actual.pixels())
-            .map(|(a, b)| [0, 1, 2, 3].map(|c| ((a[c] - b[c]).abs() * 10.0).min(1.0)))
-            .collect(),
-    )
-    .expect("same size");
-    let _ = expected.write_png(&dir.join("expected.png"));
-    let _ = actual.write_png(&dir.join("actual.png"));
-    let _ = diff.write_png(&dir.join("difference.png"));
-    dir.display().to_string()
-}
+mod common;
+use common::write_failure;
 
 fn check(name: &str, scene: &scene::Scene, lights: &[Light], w: u32, h: u32) {
     let Some(gpu) = gpu::test_gpu() else { return };

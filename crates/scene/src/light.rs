@@ -38,6 +38,21 @@ pub enum Light {
         /// Angle (radians) beyond which the light is zero.
         outer_angle: f32,
     },
+    /// Hemispherical point light (Segovia 2006 §4.3; the emission of a virtual point light and
+    /// of a small Lambertian area light): intensity `intensity · cos θ` around `direction`,
+    /// zero behind it, with the same finite-radius attenuation as a point light.
+    Hemispherical {
+        /// Position.
+        position: Vec3,
+        /// Unit direction of maximal emission (the emitter's normal).
+        direction: Vec3,
+        /// Linear colour.
+        color: Vec3,
+        /// Intensity along `direction`.
+        intensity: f32,
+        /// Influence radius.
+        radius: f32,
+    },
     /// Light from infinitely far away.
     Directional {
         /// Unit direction the light travels in.
@@ -71,7 +86,8 @@ impl FromStr for Light {
     /// Parses a light from the command line:
     /// `point:X,Y,Z,RADIUS[,R,G,B,INTENSITY]`,
     /// `spot:X,Y,Z,DX,DY,DZ,RADIUS,INNER_DEG,OUTER_DEG[,R,G,B,INTENSITY]`,
-    /// `dir:DX,DY,DZ[,R,G,B,INTENSITY]`. Colour defaults to white, intensity to 1.
+    /// `hemi:X,Y,Z,DX,DY,DZ,RADIUS[,R,G,B,INTENSITY]`, `dir:DX,DY,DZ[,R,G,B,INTENSITY]`.
+    /// Colour defaults to white, intensity to 1.
     fn from_str(s: &str) -> Result<Self, String> {
         let (kind, rest) = s
             .split_once(':')
@@ -80,8 +96,13 @@ impl FromStr for Light {
         let base = match kind {
             "point" => 4,
             "spot" => 9,
+            "hemi" => 7,
             "dir" | "directional" => 3,
-            _ => return Err(format!("unknown light kind {kind:?} (point, spot, dir)")),
+            _ => {
+                return Err(format!(
+                    "unknown light kind {kind:?} (point, spot, hemi, dir)"
+                ));
+            }
         };
         if v.len() != base && v.len() != base + 4 {
             return Err(format!(
@@ -126,6 +147,13 @@ impl FromStr for Light {
                     outer_angle: outer,
                 }
             }
+            "hemi" => Light::Hemispherical {
+                position: vec(0),
+                direction: dir(3)?,
+                color,
+                intensity,
+                radius: radius(v[6])?,
+            },
             _ => Light::Directional {
                 direction: dir(0)?,
                 color,

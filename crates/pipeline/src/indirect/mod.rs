@@ -1,0 +1,177 @@
+//! One-bounce indirect light by instant radiosity with interleaved deferred shading — the
+//! pipeline of Segovia 2006 §4 applied as in §6.2: G-buffer creation (BC), split (BS),
+//! shading with no shadow map of one VPL subset per sub-buffer (SNSM), gather (BG),
+//! discontinuity buffer (DB), edge-aware blur (B), then composition with the albedo and the
+//! direct light. [`Interleaving::Reference`] is the non-interleaved frame where every pixel
+//! shades every VPL.
+//!
+//! ```
+//! use pipeline::indirect::{IndirectConfig, vpl};
+//! let scene = scene::cornell_box();
+//! let camera = scene.camera_or_framed();
+//! let gb = gbuffer::cpu::rasterize(&scene, &camera, 64, 48)?.gbuffer;
+//! let frame = gbuffer::Frame::new(&camera, 64, 48);
+//! let config = IndirectConfig::new(scene.bounds());
+//! let set = vpl::generate(&scene, &scene::Bvh::build(&scene), &scene.lights, &vpl::VplConfig {
+//!     count: 256,
+//!     subsets: config.subsets(),
+//!     seed: 1,
+//! })?;
+//! let stages = pipeline::indirect::cpu::indirect(&gb, &frame, &set, &config)?;
+//! let (diffuse, _specular) = stages.result();
+//! assert_eq!(diffuse.width(), 64);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+pub mod cpu;
+pub mod gpu;
+pub mod vpl;
+
+use gbuffer::Image;
+use interleave::{Blur, BlurVariant, Pattern, SplitVariant, Thresholds};
+use scene::Aabb;
+
+use crate::RenderError;
+
+/// How the shading is interleaved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interleaving {
+    /// The paper's pipeline: split the G-buffer (BS), shade the sub-buffers (SNSM), gather
+    /// (BG), with the given split variant.
+    Split(SplitVariant),
+    /// Shading in sub-buffer order straight from the G-buffer, writing each pixel in place
+    /// (§3.1's indirection): no BS and no BG pass, the same image.
+    Fused,
+    /// No interleaving: every pixel shades every VPL (the reference).
+    Reference,
+}
+
+/// Configuration of the indirect-light stage.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IndirectConfig {
+    /// Interleaved sampling pattern n × m (one VPL subset per sub-buffer).
+    pub pattern: Pattern,
+    /// Split/fused interleaving or the reference.
+    pub interleaving: Interleaving,
+    /// Edge-aware blur of the gathered irradiance (`None`: unfiltered). Not applied to the
+    /// reference.
+    pub blur: Option<Blur>,
+    /// Discontinuity thresholds for the blur.
+    pub thresholds: Thresholds,
+    /// Distance below which a VPL's `1/d²` is clamped (world units).
+    pub clamp_distance: f32,
+}
+
+impl IndirectConfig {
+    /// The defaults for a scene of `bounds`: 4×4 pattern, fused interleaving, 5×5 fast blur,
+    /// 30°/5 % thresholds, clamp at [`default_clamp`].
+    pub fn new(bounds: Aabb) -> Self {
+        Self {
+            pattern: Pattern { n: 4, m: 4 },
+            interleaving: Interleaving::Fused,
+            blur: Some(Blur {
+                kernel: 5,
+                variant: BlurVariant::Fast,
+            }),
+            thresholds: Thresholds::default(),
+            clamp_distance: default_clamp(bounds),
+        }
+    }
+
+    /// Number of VPL subsets this configuration shades: n·m, or 1 for the reference.
+    pub fn subsets(&self) -> u32 {
+        match self.interleaving {
+            Interleaving::Reference => 1,
+            _ => self.pattern.count(),
+        }
+    }
+
+    /// The pattern the shading runs with (1×1 for the reference).
+    pub fn shading_pattern(&self) -> Pattern {
+        match self.interleaving {
+            Interleaving::Reference => Pattern { n: 1, m: 1 },
+            _ => self.pattern,
+        }
+    }
+
+    /// The blur that is applied (none for the reference).
+    pub fn applied_blur(&self) -> Option<Blur> {
+        match self.interleaving {
+            Interleaving::Reference => None,
+            _ => self.blur,
+        }
+    }
+
+    /// Checks the configuration against a VPL set: valid pattern, blur, thresholds and clamp,
+    /// and as many VPL subsets as sub-buffers (any subset count for the reference, which
+    /// shades them all).
+    pub fn validate(&self, set: &vpl::VplSet) -> Result<(), RenderError> {
+        Pattern::new(self.pattern.n, self.pattern.m)?;
+        if let Some(blur) = &self.blur {
+            blur.validate()?;
+        }
+        self.thresholds.validate()?;
+        if let Interleaving::Split(variant) = self.interleaving {
+            variant.validate(self.pattern)?;
+        }
+        if !(self.clamp_distance.is_finite() && self.clamp_distance >= 0.0) {
+            return Err(RenderError::Clamp(self.clamp_distance));
+        }
+        if self.interleaving != Interleaving::Reference && set.subsets != self.pattern.count() {
+            return Err(RenderError::Subsets {
+                vpl_subsets: set.subsets,
+                sub_buffers: self.pattern.count(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The subset scale of the shading: one subset of a set of `set.subsets` estimates the
+    /// whole set when multiplied by `set.subsets`; the reference shades all of them once.
+    pub fn scale(&self, set: &vpl::VplSet) -> f32 {
+        match self.interleaving {
+            Interleaving::Reference => 1.0,
+            _ => set.subsets as f32,
+        }
+    }
+
+    /// VPLs each shading invocation sums.
+    pub fn per_invocation(&self, set: &vpl::VplSet) -> u32 {
+        match self.interleaving {
+            Interleaving::Reference => set.vpls.len() as u32,
+            _ => set.per_subset,
+        }
+    }
+}
+
+/// The default VPL clamp distance: 2 % of the scene's bounding-box diagonal.
+pub fn default_clamp(bounds: Aabb) -> f32 {
+    0.02 * bounds.diagonal()
+}
+
+/// The images of every stage of the indirect pipeline (for dumps, tests and pictures).
+/// Irradiance images are RGB in `[f32; 4]` with values rounded to f16, as the GPU stores them.
+pub struct IndirectStages {
+    /// The split G-buffer normals (BS; `None` when fused or the reference).
+    pub split_normal: Option<Image<u32>>,
+    /// Diffuse light of the shading pass in its layout (split for [`Interleaving::Split`]).
+    pub shaded_diffuse: Image<[f32; 4]>,
+    /// Diffuse light `Σ E/π` per pixel after the gather, before the blur.
+    pub diffuse: Image<[f32; 4]>,
+    /// Specular light `Σ E·D·V·F` per pixel after the gather, before the blur.
+    pub specular: Image<[f32; 4]>,
+    /// The discontinuity buffer (DB; `None` without blur).
+    pub discontinuities: Option<Image<[u8; 4]>>,
+    /// Diffuse and specular after the blur (B; `None` without blur).
+    pub blurred: Option<(Image<[f32; 4]>, Image<[f32; 4]>)>,
+}
+
+impl IndirectStages {
+    /// The diffuse and specular indirect light that the composition uses.
+    pub fn result(&self) -> (&Image<[f32; 4]>, &Image<[f32; 4]>) {
+        match &self.blurred {
+            Some((d, s)) => (d, s),
+            None => (&self.diffuse, &self.specular),
+        }
+    }
+}

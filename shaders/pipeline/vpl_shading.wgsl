@@ -1,0 +1,119 @@
+// #import gbuffer/frame.wgsl
+// #import gbuffer/normal_encoding.wgsl
+// #import pipeline/lighting.wgsl
+// SNSM — shading with no shadow map (Segovia 2006 §4.3, §6.2): each pixel sums the diffuse and
+// glossy light reflected from the hemispherical VPLs of its subset, visibility ignored. Twin of
+// `pipeline::indirect::cpu::shade_vpls`.
+//
+// A VPL of flux Φ at q with normal n_q lights p with intensity Φ/π · max(n_q·(p − q)/d, 0)
+// / max(d², clamp²): the clamp bounds the 1/d² singularity of VPLs close to the receiver.
+// The domain is the split layout: invocation (x, y) is texel (x mod sub_width, y mod sub_height)
+// of sub-buffer (i, j) = (x div sub_width, y div sub_height), the image pixel
+// ((x mod sub_width)·n + i, (y mod sub_height)·m + j), and shades subset j·n + i, scaled by
+// `scale` (the subset count: one subset estimates the whole set). n = m = 1 is the reference.
+//   shade_split: reads the split G-buffer at (x, y), writes split irradiance at (x, y) (BS/BG around it);
+//   shade_fused: reads the G-buffer and writes the irradiance at the image pixel (no BS/BG).
+
+struct Vpl {
+    position: vec3<f32>,
+    _pad0: f32,
+    normal: vec3<f32>,
+    _pad1: f32,
+    flux: vec3<f32>,
+    _pad2: f32,
+};
+
+struct ShadingParams {
+    per_subset: u32,
+    scale: f32,
+    clamp_squared: f32,
+    _pad: u32,
+};
+
+override width: u32 = 1u;
+override height: u32 = 1u;
+override n: u32 = 1u;
+override m: u32 = 1u;
+override sub_width: u32 = 1u;
+override sub_height: u32 = 1u;
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<uniform> params: ShadingParams;
+@group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
+@group(0) @binding(3) var linear_depth: texture_2d<f32>;
+@group(0) @binding(4) var normals: texture_2d<u32>;
+@group(0) @binding(5) var albedos: texture_2d<f32>;
+@group(0) @binding(6) var materials: texture_2d<u32>;
+@group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(8) var specular_out: texture_storage_2d<rgba16float, write>;
+
+const INV_PI_VPL: f32 = 0.318309886183791;
+
+// The clamped intensity of `vpl` towards p; the direction to it goes to `l`.
+fn vpl_intensity(vpl: Vpl, p: vec3<f32>, l: ptr<function, vec3<f32>>) -> vec3<f32> {
+    let to_vpl = vpl.position - p;
+    let d2 = dot(to_vpl, to_vpl);
+    let dir = to_vpl * inverseSqrt(max(d2, 1e-30));
+    *l = dir;
+    let cos_vpl = max(-dot(vpl.normal, dir), 0.0);
+    return vpl.flux * (INV_PI_VPL * cos_vpl / max(d2, params.clamp_squared));
+}
+
+// Sums the subset's VPLs at G-buffer texel `texel`, which holds image pixel `pixel`, scaled.
+fn shade(texel: vec2<u32>, pixel: vec2<u32>, subset: u32) -> Accumulated {
+    var sum: Accumulated;
+    sum.diffuse = vec3<f32>(0.0);
+    sum.specular = vec3<f32>(0.0);
+    let depth = textureLoad(linear_depth, texel, 0).r;
+    if depth > 0.0 {
+        let p = position_from_view_ray(frame, pixel, depth);
+        let nrm = decode_octahedral_snorm(unpack2x16snorm(textureLoad(normals, texel, 0).x));
+        let v = normalize(frame.eye.xyz - p);
+        let albedo = textureLoad(albedos, texel, 0).rgb;
+        let word = textureLoad(materials, texel, 0).x;
+        let roughness = f32(word & 0xffu) / 255.0;
+        let metallic = f32((word >> 8u) & 0xffu) / 255.0;
+        let first = subset * params.per_subset;
+        for (var k = first; k < first + params.per_subset; k++) {
+            var l: vec3<f32>;
+            let intensity = vpl_intensity(vpls[k], p, &l);
+            let c = reflect_light(intensity, l, nrm, v, albedo, roughness, metallic);
+            sum.diffuse += c.diffuse;
+            sum.specular += c.specular;
+        }
+    }
+    sum.diffuse *= params.scale;
+    sum.specular *= params.scale;
+    return sum;
+}
+
+fn store(texel: vec2<u32>, sum: Accumulated) {
+    textureStore(diffuse_out, texel, vec4<f32>(sum.diffuse, 0.0));
+    textureStore(specular_out, texel, vec4<f32>(sum.specular, 0.0));
+}
+
+@compute @workgroup_size(8, 8)
+fn shade_split(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= n * sub_width || id.y >= m * sub_height {
+        return;
+    }
+    let i = id.x / sub_width;
+    let j = id.y / sub_height;
+    let pixel = vec2((id.x % sub_width) * n + i, (id.y % sub_height) * m + j);
+    // Padding texels (pixel outside the image) hold depth 0 and get zero.
+    store(id.xy, shade(id.xy, pixel, j * n + i));
+}
+
+@compute @workgroup_size(8, 8)
+fn shade_fused(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= n * sub_width || id.y >= m * sub_height {
+        return;
+    }
+    let i = id.x / sub_width;
+    let j = id.y / sub_height;
+    let pixel = vec2((id.x % sub_width) * n + i, (id.y % sub_height) * m + j);
+    if pixel.x >= width || pixel.y >= height {
+        return;
+    }
+    store(pixel, shade(pixel, pixel, j * n + i));
+}
