@@ -11,6 +11,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use scene::{Camera, Light, Scene};
 
+use crate::indirect::{IndirectConfig, IndirectStages, vpl::VplSet};
 use crate::{GpuLight, PassTiming, RenderError, Rendered};
 
 /// Distance window: 1 at the light, 0 at and beyond its radius (`distance_attenuation`).
@@ -134,25 +135,31 @@ pub fn light_accumulation(
     (image(d), image(s))
 }
 
-/// Composition: `albedo · (1 − metallic) · (ambient + diffuse) + specular + emissive`.
+/// Composition: `albedo · (1 − metallic) · (ambient + diffuse + indirect diffuse) + specular
+/// + indirect specular + emissive`.
 pub fn composition(
     gb: &GBuffer,
-    diffuse: &Image<Vec3>,
-    specular: &Image<Vec3>,
+    (diffuse, specular): (&Image<Vec3>, &Image<Vec3>),
+    indirect: Option<(&Image<[f32; 4]>, &Image<[f32; 4]>)>,
     emissive: &[Vec3],
     ambient: Vec3,
 ) -> Image<[f32; 4]> {
+    let rgb = |p: [f32; 4]| Vec3::new(p[0], p[1], p[2]);
     let pixels: Vec<[f32; 4]> = (0..gb.width() * gb.height())
         .into_par_iter()
         .map(|i| {
-            let word = gb.material.pixels()[i as usize];
+            let i = i as usize;
+            let word = gb.material.pixels()[i];
             if word == NO_MATERIAL {
                 return [0.0; 4];
             }
             let (_, metallic, id) = unpack_material(word);
-            let albedo = albedo_of(gb.albedo.pixels()[i as usize]);
-            let c = albedo * (1.0 - metallic) * (ambient + diffuse.pixels()[i as usize])
-                + specular.pixels()[i as usize]
+            let albedo = albedo_of(gb.albedo.pixels()[i]);
+            let (ind_d, ind_s) = indirect.map_or((Vec3::ZERO, Vec3::ZERO), |(d, s)| {
+                (rgb(d.pixels()[i]), rgb(s.pixels()[i]))
+            });
+            let c = albedo * (1.0 - metallic) * (ambient + (diffuse.pixels()[i] + ind_d))
+                + (specular.pixels()[i] + ind_s)
                 + emissive.get(id as usize).copied().unwrap_or(Vec3::ZERO);
             [c.x, c.y, c.z, 1.0]
         })
@@ -169,9 +176,23 @@ pub fn render(
     height: u32,
     ambient: Vec3,
 ) -> Result<Rendered, RenderError> {
+    render_indirect(scene, camera, lights, width, height, ambient, None).map(|(r, _)| r)
+}
+
+/// [`render`] plus the indirect light of `indirect`'s VPLs (BS → SNSM → BG → DB → B, timed
+/// per stage), added in the composition. Returns the frame and every indirect stage's image.
+pub fn render_indirect(
+    scene: &Scene,
+    camera: &Camera,
+    lights: &[Light],
+    width: u32,
+    height: u32,
+    ambient: Vec3,
+    indirect: Option<(&IndirectConfig, &VplSet)>,
+) -> Result<(Rendered, Option<IndirectStages>), RenderError> {
     crate::validate_lights(lights)?;
     let mut timings = Vec::new();
-    let mut timed = |name: &str, t: Instant| {
+    let timed = |timings: &mut Vec<PassTiming>, name: &str, t: Instant| {
         timings.push(PassTiming {
             name: name.into(),
             ms: t.elapsed().as_secs_f64() * 1e3,
@@ -179,15 +200,27 @@ pub fn render(
     };
     let t = Instant::now();
     let gb = gbuffer::cpu::rasterize(scene, camera, width, height)?.gbuffer;
-    timed("gbuffer", t);
+    timed(&mut timings, "gbuffer", t);
     let frame = Frame::new(camera, width, height);
     let gpu_lights: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
     let t = Instant::now();
-    let (diffuse, specular) = light_accumulation(&gb, &frame, &gpu_lights);
-    timed("light accumulation", t);
+    let direct = light_accumulation(&gb, &frame, &gpu_lights);
+    timed(&mut timings, "light accumulation", t);
+    let stages = indirect
+        .map(|(config, set)| crate::indirect::cpu::indirect(&gb, &frame, set, config))
+        .transpose()?;
+    if let Some(stages) = &stages {
+        timings.extend(stages.timings.iter().cloned());
+    }
     let emissive: Vec<Vec3> = scene.materials.iter().map(|m| m.emissive).collect();
     let t = Instant::now();
-    let image = composition(&gb, &diffuse, &specular, &emissive, ambient);
-    timed("composition", t);
-    Ok(Rendered { image, timings })
+    let image = composition(
+        &gb,
+        (&direct.0, &direct.1),
+        stages.as_ref().map(IndirectStages::result),
+        &emissive,
+        ambient,
+    );
+    timed(&mut timings, "composition", t);
+    Ok((Rendered { image, timings }, stages))
 }

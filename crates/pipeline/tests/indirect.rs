@@ -97,6 +97,7 @@ fn vpls(scene: &Scene, count: usize, subsets: u32, seed: u64) -> VplSet {
             count,
             subsets,
             seed,
+            emissive: scene.lights.is_empty(),
         },
     )
     .expect("vpls")
@@ -254,6 +255,7 @@ fn bad_vpl_requests_are_errors() {
                 count,
                 subsets,
                 seed: 0,
+                emissive: true,
             },
         )
     };
@@ -273,6 +275,7 @@ fn bad_vpl_requests_are_errors() {
             count: 64,
             subsets: 1,
             seed: 0,
+            emissive: true,
         },
     );
     assert_eq!(r, Err(VplError::NoEmitter));
@@ -294,6 +297,7 @@ fn bad_vpl_requests_are_errors() {
             count: 64,
             subsets: 1,
             seed: 0,
+            emissive: true,
         },
     );
     assert!(

@@ -1,18 +1,27 @@
 //! `deferred`: renders a scene with classic deferred shading (G-buffer → light accumulation
-//! → composition) on the GPU, or on the CPU when asked or when no GPU adapter exists, writes
-//! `render.png` and `render.exr`, and prints the milliseconds of each pass.
+//! → composition), optionally with one-bounce indirect light from VPLs shaded with
+//! interleaved sampling (Segovia 2006: BS → SNSM → BG → DB → B), on the GPU, or on the CPU
+//! when asked or when no GPU adapter exists; writes `render.png` and `render.exr` and prints
+//! the milliseconds of each pass (per million fragments too, like the paper's Table 3).
 
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use glam::Vec3;
-use pipeline::{DEFAULT_AMBIENT, Rendered};
+use interleave::{Block, Blur, BlurVariant, Pattern, SplitVariant};
+use pipeline::{
+    DEFAULT_AMBIENT, PassTiming, Rendered,
+    indirect::{IndirectConfig, IndirectStages, Interleaving, vpl},
+};
 use scene::{Light, Scene};
 
-/// Classic deferred shading of point, spot and directional lights.
+/// Deferred shading of point, spot, hemispherical and directional lights, with optional
+/// instant-radiosity indirect light shaded by interleaved sampling.
 ///
 /// With no arguments, renders the built-in Cornell box to out/render.png and out/render.exr.
+/// A scene without punctual lights is lit by its emissive meshes (as hemispherical lights),
+/// or else by a default sun.
 #[derive(Parser, Debug)]
 #[command(version, about, long_about = None)]
 struct Args {
@@ -28,7 +37,7 @@ struct Args {
     /// Replace the scene's lights with N point lights scattered through its bounds (seeded).
     #[arg(long)]
     lights: Option<usize>,
-    /// Add a light: point:X,Y,Z,RADIUS[,R,G,B,I] | spot:X,Y,Z,DX,DY,DZ,RADIUS,INNER°,OUTER°[,R,G,B,I] | dir:DX,DY,DZ[,R,G,B,I].
+    /// Add a light: point:X,Y,Z,RADIUS[,R,G,B,I] | spot:X,Y,Z,DX,DY,DZ,RADIUS,INNER°,OUTER°[,R,G,B,I] | hemi:X,Y,Z,DX,DY,DZ,RADIUS[,R,G,B,I] | dir:DX,DY,DZ[,R,G,B,I].
     #[arg(long = "light")]
     extra_lights: Vec<Light>,
     /// Output folder for render.png and render.exr.
@@ -46,9 +55,95 @@ struct Args {
     /// Vertical field of view in degrees.
     #[arg(long)]
     fov: Option<f32>,
-    /// Ambient light R,G,B (linear).
+    /// Ambient light R,G,B (linear); default 0.03, or 0 with --vpls.
     #[arg(long, value_parser = parse_vec3)]
     ambient: Option<Vec3>,
+    /// Add one-bounce indirect light from about N VPLs (instant radiosity), rounded to a
+    /// multiple of the sub-buffer count.
+    #[arg(long)]
+    vpls: Option<usize>,
+    /// Interleaved sampling pattern NxM: one VPL subset per sub-buffer.
+    #[arg(long, default_value = "4x4")]
+    pattern: Pattern,
+    /// Edge-aware blur kernel size (odd, 5 to 17); 0 turns the blur off.
+    #[arg(long, default_value_t = 5)]
+    blur: u32,
+    /// Use the plain blur (one fetch per tap) instead of the fast bilinear one.
+    #[arg(long)]
+    plain_blur: bool,
+    /// How the shading is interleaved: fused (no split/gather passes), tiled, one-pass or
+    /// two-pass (the paper's split → shade → gather).
+    #[arg(long, default_value = "fused")]
+    interleaving: String,
+    /// Shade every VPL at every pixel (the non-interleaved reference).
+    #[arg(long)]
+    no_interleave: bool,
+    /// Render only the indirect light (no direct light, no ambient).
+    #[arg(long)]
+    indirect_only: bool,
+    /// Write every stage: G-buffer channels, the split buffer, irradiance before and after
+    /// the blur, the discontinuity buffer, the final image.
+    #[arg(long)]
+    dump_stages: bool,
+    /// Seed of the VPL sampling.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Distance under which a VPL's 1/d² is clamped (default: 2 % of the scene diagonal).
+    #[arg(long)]
+    vpl_clamp: Option<f32>,
+}
+
+fn indirect_config(args: &Args, scene: &Scene) -> Result<IndirectConfig> {
+    let interleaving = if args.no_interleave {
+        Interleaving::Reference
+    } else {
+        match args.interleaving.as_str() {
+            "fused" => Interleaving::Fused,
+            "tiled" => Interleaving::Split(SplitVariant::Tiled),
+            "one-pass" => Interleaving::Split(SplitVariant::OnePass),
+            "two-pass" => {
+                Interleaving::Split(SplitVariant::TwoPass(Block::fitted(32, 32, args.pattern)))
+            }
+            other => bail!("unknown interleaving {other:?} (fused, tiled, one-pass, two-pass)"),
+        }
+    };
+    let blur = match args.blur {
+        0 => None,
+        k => Some(Blur::new(
+            k,
+            if args.plain_blur {
+                BlurVariant::Plain
+            } else {
+                BlurVariant::Fast
+            },
+        )?),
+    };
+    let defaults = IndirectConfig::new(scene.bounds());
+    Ok(IndirectConfig {
+        pattern: args.pattern,
+        interleaving,
+        blur,
+        clamp_distance: args.vpl_clamp.unwrap_or(defaults.clamp_distance),
+        ..defaults
+    })
+}
+
+/// The direct lights and whether photons must also leave the emissive triangles: the scene's
+/// punctual lights; else hemispherical stand-ins for its emissive meshes; else a sun.
+fn primary_lights(scene: &Scene) -> (Vec<Light>, bool, &'static str) {
+    if !scene.lights.is_empty() {
+        return (scene.lights.clone(), false, "the scene's lights");
+    }
+    let area = vpl::area_lights(scene);
+    if !area.is_empty() {
+        return (area, true, "the emissive meshes (as hemispherical lights)");
+    }
+    let sun = Light::Directional {
+        direction: Vec3::new(0.3, -1.0, 0.25).normalize(),
+        color: Vec3::new(1.0, 0.95, 0.85),
+        intensity: 3.0,
+    };
+    (vec![sun], false, "a default sun (the scene has no lights)")
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -127,12 +222,52 @@ fn main() -> Result<()> {
     if args.eye.is_some() || args.target.is_some() {
         camera.fit_planes(scene.bounds());
     }
-    let mut lights = match args.lights {
-        Some(n) => scene::scatter_point_lights(scene.bounds(), n, 1),
-        None => scene.lights.clone(),
+    let (mut lights, emissive_photons, lit_by) = match args.lights {
+        Some(n) => (
+            scene::scatter_point_lights(scene.bounds(), n, 1),
+            false,
+            "scattered point lights",
+        ),
+        None => primary_lights(&scene),
     };
     lights.extend(args.extra_lights.iter().copied());
-    let ambient = args.ambient.unwrap_or(DEFAULT_AMBIENT);
+    let indirect = match args.vpls {
+        Some(count) => {
+            let config = indirect_config(&args, &scene)?;
+            let subsets = config.subsets();
+            let count = vpl::per_subset(count, subsets) as usize * subsets as usize;
+            let bvh = scene::Bvh::build(&scene);
+            let set = vpl::generate(
+                &scene,
+                &bvh,
+                &lights,
+                &vpl::VplConfig {
+                    count,
+                    subsets,
+                    seed: args.seed,
+                    emissive: emissive_photons,
+                },
+            )?;
+            Some((config, set))
+        }
+        None => None,
+    };
+    let default_ambient = if indirect.is_some() {
+        Vec3::ZERO
+    } else {
+        DEFAULT_AMBIENT
+    };
+    let mut ambient = args.ambient.unwrap_or(default_ambient);
+    let direct_lights = if args.indirect_only {
+        if indirect.is_none() {
+            bail!("--indirect-only needs --vpls N");
+        }
+        ambient = Vec3::ZERO;
+        Vec::new()
+    } else {
+        lights.clone()
+    };
+    let indirect_ref = indirect.as_ref().map(|(c, s)| (c, s));
 
     let gpu = if args.cpu {
         None
@@ -145,21 +280,49 @@ fn main() -> Result<()> {
             }
         }
     };
-    let (device, rendered): (String, Rendered) = match &gpu {
-        Some(gpu) => {
-            let mut renderer =
-                pipeline::gpu::GpuRenderer::new(gpu, &scene, &lights, width, height)?;
-            renderer.render(gpu, &camera, ambient)?; // warm-up: first use of pipelines and caches
-            (
-                format!("GPU {}", gpu.describe()),
-                renderer.render(gpu, &camera, ambient)?,
-            )
-        }
-        None => (
-            "CPU (reference path, rayon)".into(),
-            pipeline::cpu::render(&scene, &camera, &lights, width, height, ambient)?,
-        ),
-    };
+    let (device, rendered, stages, gbuffer): (String, Rendered, Option<IndirectStages>, _) =
+        match &gpu {
+            Some(gpu) => {
+                let mut renderer =
+                    pipeline::gpu::GpuRenderer::new(gpu, &scene, &direct_lights, width, height)?;
+                if let Some((config, set)) = indirect_ref {
+                    renderer.set_indirect(gpu, config, set)?;
+                }
+                renderer.render(gpu, &camera, ambient)?; // warm-up: first use of pipelines and caches
+                let rendered = renderer.render(gpu, &camera, ambient)?;
+                let (stages, gbuffer) = if args.dump_stages {
+                    (
+                        renderer.indirect().map(|s| s.read(gpu)).transpose()?,
+                        Some(renderer.targets().read(&gpu.device, &gpu.queue)?),
+                    )
+                } else {
+                    (None, None)
+                };
+                (format!("GPU {}", gpu.describe()), rendered, stages, gbuffer)
+            }
+            None => {
+                let (rendered, stages) = pipeline::cpu::render_indirect(
+                    &scene,
+                    &camera,
+                    &direct_lights,
+                    width,
+                    height,
+                    ambient,
+                    indirect_ref,
+                )?;
+                let gbuffer = args
+                    .dump_stages
+                    .then(|| gbuffer::cpu::rasterize(&scene, &camera, width, height))
+                    .transpose()?
+                    .map(|r| r.gbuffer);
+                (
+                    "CPU (reference path, rayon)".into(),
+                    rendered,
+                    stages,
+                    gbuffer,
+                )
+            }
+        };
 
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
@@ -167,27 +330,133 @@ fn main() -> Result<()> {
     let exr = args.out.join("render.exr");
     rendered.image.write_png(&png)?;
     rendered.image.write_exr(&exr)?;
+    if let Some(gb) = &gbuffer {
+        dump_stages(&args.out, gb, stages.as_ref())?;
+    }
 
     println!("device:  {device}");
     println!(
-        "scene:   {} triangles, {} lights, {width}x{height}",
+        "scene:   {} triangles, {} direct lights ({lit_by}), {width}x{height}",
         scene.triangle_count(),
-        lights.len()
+        direct_lights.len(),
     );
+    if let Some((config, set)) = &indirect {
+        println!(
+            "indirect: {} VPLs in {} subsets of {} ({}), blur {}",
+            set.vpls.len(),
+            set.subsets,
+            set.per_subset,
+            match config.interleaving {
+                Interleaving::Reference => "no interleaving: every pixel shades every VPL".into(),
+                Interleaving::Fused => format!("{}x{} fused", config.pattern.n, config.pattern.m),
+                Interleaving::Split(v) => format!(
+                    "{}x{} split {}",
+                    config.pattern.n,
+                    config.pattern.m,
+                    v.name()
+                ),
+            },
+            config.applied_blur().map_or("off".into(), |b| format!(
+                "{0}x{0} {1:?}",
+                b.kernel, b.variant
+            )),
+        );
+    }
     println!("wrote:   {} and {}", png.display(), exr.display());
     println!();
-    println!("{:<20} {:>10}", "pass", "ms");
-    for t in &rendered.timings {
-        println!("{:<20} {:>10.3}", t.name, t.ms);
-    }
+    print_table(&rendered.timings, f64::from(width) * f64::from(height));
     if rendered.timings.is_empty() {
         println!("(this GPU has no timestamp queries: no pass times)");
-    } else {
-        println!(
-            "{:<20} {:>10.3}",
-            "total",
-            rendered.timings.iter().map(|t| t.ms).sum::<f64>()
-        );
+    }
+    Ok(())
+}
+
+/// Per-pass milliseconds summed by name, in first-seen order, and per million fragments.
+fn print_table(timings: &[PassTiming], fragments: f64) {
+    let mut rows: Vec<(String, f64)> = Vec::new();
+    for t in timings {
+        match rows.iter_mut().find(|(n, _)| *n == t.name) {
+            Some(row) => row.1 += t.ms,
+            None => rows.push((t.name.clone(), t.ms)),
+        }
+    }
+    println!("{:<22} {:>10} {:>14}", "pass", "ms", "ms/Mfragment");
+    let per = |ms: f64| ms / (fragments / 1e6);
+    for (name, ms) in &rows {
+        println!("{name:<22} {ms:>10.3} {:>14.3}", per(*ms));
+    }
+    if !rows.is_empty() {
+        let total: f64 = rows.iter().map(|r| r.1).sum();
+        println!("{:<22} {total:>10.3} {:>14.3}", "total", per(total));
+    }
+}
+
+/// Writes the G-buffer channels and every indirect stage as PNGs (irradiance also as EXR).
+fn dump_stages(
+    out: &std::path::Path,
+    gb: &gbuffer::GBuffer,
+    stages: Option<&IndirectStages>,
+) -> Result<()> {
+    use gbuffer::Image;
+    let dir = out.join("stages");
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let normals = |img: &Image<u32>| {
+        img.map(|w| {
+            let n = gbuffer::normal::unpack_octahedral(w);
+            [n.x * 0.5 + 0.5, n.y * 0.5 + 0.5, n.z * 0.5 + 0.5, 1.0]
+        })
+    };
+    let max_depth = gb
+        .linear_depth
+        .pixels()
+        .iter()
+        .copied()
+        .fold(0.0f32, f32::max);
+    let depth = gb.linear_depth.map(|d| {
+        let v = if d > 0.0 {
+            1.0 - d / max_depth.max(1e-6)
+        } else {
+            0.0
+        };
+        [v, v, v, 1.0]
+    });
+    let albedo = gb
+        .albedo
+        .map(|a| [0, 1, 2, 3].map(|c| gbuffer::srgb_to_linear(f32::from(a[c]) / 255.0)));
+    let material = gb.material.map(|w| {
+        let (r, m, _) = gbuffer::unpack_material(w);
+        if w == gbuffer::NO_MATERIAL {
+            [0.0; 4]
+        } else {
+            [r, m, 0.0, 1.0]
+        }
+    });
+    depth.write_png(&dir.join("gbuffer-depth.png"))?;
+    normals(&gb.normal).write_png(&dir.join("gbuffer-normal.png"))?;
+    albedo.write_png(&dir.join("gbuffer-albedo.png"))?;
+    material.write_png(&dir.join("gbuffer-roughness-metallic.png"))?;
+    let Some(s) = stages else {
+        return Ok(());
+    };
+    let opaque = |img: &Image<[f32; 4]>| img.map(|p| [p[0], p[1], p[2], 1.0]);
+    let irradiance = |name: &str, img: &Image<[f32; 4]>| -> Result<()> {
+        opaque(img).write_png(&dir.join(format!("{name}.png")))?;
+        opaque(img).write_exr(&dir.join(format!("{name}.exr")))?;
+        Ok(())
+    };
+    if let Some(split) = &s.split_normal {
+        normals(split).write_png(&dir.join("split-normal.png"))?;
+        irradiance("split-indirect-diffuse", &s.shaded_diffuse)?;
+    }
+    irradiance("indirect-diffuse", &s.diffuse)?;
+    irradiance("indirect-specular", &s.specular)?;
+    if let Some(db) = &s.discontinuities {
+        db.map(|p| [0, 1, 2, 3].map(|c| f32::from(p[c]) / 255.0))
+            .write_png(&dir.join("discontinuities.png"))?;
+    }
+    if let Some([d, sp]) = &s.blurred {
+        irradiance("indirect-diffuse-blurred", d)?;
+        irradiance("indirect-specular-blurred", sp)?;
     }
     Ok(())
 }

@@ -2,6 +2,7 @@
 //! and the `interleave` kernels it composes.
 
 use std::f32::consts::FRAC_1_PI;
+use std::time::Instant;
 
 use gbuffer::{Frame, GBuffer, Image, normal::unpack_octahedral, position, unpack_material};
 use glam::Vec3;
@@ -9,7 +10,7 @@ use interleave::{SplitLayout, SplitVariant};
 use rayon::prelude::*;
 
 use super::{IndirectConfig, IndirectStages, Interleaving, vpl::GpuVpl, vpl::VplSet};
-use crate::{RenderError, cpu::reflect_light};
+use crate::{PassTiming, RenderError, cpu::reflect_light};
 
 /// The clamped intensity of `vpl` towards `p` and the direction to it (`vpl_intensity`):
 /// `Φ/π · max(−n_q·l, 0) / max(d², clamp²)`.
@@ -132,21 +133,38 @@ pub fn indirect(
         scale: config.scale(set),
         clamp_squared: config.clamp_distance * config.clamp_distance,
     };
+    let mut timings = Vec::new();
+    let mut clock = Instant::now();
+    let mut lap = |name: &str| {
+        timings.push(PassTiming {
+            name: name.into(),
+            ms: clock.elapsed().as_secs_f64() * 1e3,
+        });
+        clock = Instant::now();
+    };
     let (split_normal, shaded_diffuse, diffuse, specular) = match config.interleaving {
         Interleaving::Split(variant) => {
             let split = split_gbuffer(gb, &layout, variant)?;
+            lap("BS");
             let (sd, ss) = shade_vpls(&split, &inputs);
+            lap("SNSM");
             let diffuse = interleave::cpu::gather(&sd, &layout, variant)?;
             let specular = interleave::cpu::gather(&ss, &layout, variant)?;
+            lap("BG");
             (Some(split.normal), sd, diffuse, specular)
         }
-        // Fused shading computes the same texel values in place; the reference is the 1×1
-        // layout, whose split is the image itself.
+        // Fused shading computes the same texel values in place (timed as one SNSM pass);
+        // the reference is the 1×1 layout, whose split is the image itself.
         Interleaving::Fused | Interleaving::Reference => {
             let split = split_gbuffer(gb, &layout, SplitVariant::OnePass)?;
             let (sd, ss) = shade_vpls(&split, &inputs);
             let diffuse = interleave::cpu::gather(&sd, &layout, SplitVariant::OnePass)?;
             let specular = interleave::cpu::gather(&ss, &layout, SplitVariant::OnePass)?;
+            lap(if config.interleaving == Interleaving::Fused {
+                "SNSM"
+            } else {
+                "shading (reference)"
+            });
             (None, diffuse.clone(), diffuse, specular)
         }
     };
@@ -154,9 +172,11 @@ pub fn indirect(
         Some(blur) => {
             let db =
                 interleave::cpu::discontinuity(&gb.linear_depth, &gb.normal, &config.thresholds)?;
+            lap("DB");
             let d = interleave::cpu::blur(&diffuse, &db, &blur)?;
             let s = interleave::cpu::blur(&specular, &db, &blur)?;
-            (Some(db), Some((d, s)))
+            lap("B");
+            (Some(db), Some([d, s]))
         }
         None => (None, None),
     };
@@ -167,5 +187,6 @@ pub fn indirect(
         specular,
         discontinuities,
         blurred,
+        timings,
     })
 }

@@ -14,6 +14,7 @@
 //!     count: 1024,
 //!     subsets: config.subsets(),
 //!     seed: 1,
+//!     emissive: false,
 //! })?;
 //! let stages = run(&gpu, &gb, &frame, &set, &config)?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -313,9 +314,10 @@ impl IndirectStage {
                 .map(|t| download_image(gpu, t))
                 .transpose()?,
             blurred: match &self.blurred {
-                Some([d, s]) => Some((irr(d)?, irr(s)?)),
+                Some([d, s]) => Some([irr(d)?, irr(s)?]),
                 None => None,
             },
+            timings: Vec::new(),
         })
     }
 }

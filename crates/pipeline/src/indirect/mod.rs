@@ -16,6 +16,7 @@
 //!     count: 256,
 //!     subsets: config.subsets(),
 //!     seed: 1,
+//!     emissive: false,
 //! })?;
 //! let stages = pipeline::indirect::cpu::indirect(&gb, &frame, &set, &config)?;
 //! let (diffuse, _specular) = stages.result();
@@ -163,14 +164,17 @@ pub struct IndirectStages {
     /// The discontinuity buffer (DB; `None` without blur).
     pub discontinuities: Option<Image<[u8; 4]>>,
     /// Diffuse and specular after the blur (B; `None` without blur).
-    pub blurred: Option<(Image<[f32; 4]>, Image<[f32; 4]>)>,
+    pub blurred: Option<[Image<[f32; 4]>; 2]>,
+    /// Wall-clock time of each stage on the CPU path (empty when read back from the GPU,
+    /// whose renderer times the passes with timestamps).
+    pub timings: Vec<crate::PassTiming>,
 }
 
 impl IndirectStages {
     /// The diffuse and specular indirect light that the composition uses.
     pub fn result(&self) -> (&Image<[f32; 4]>, &Image<[f32; 4]>) {
         match &self.blurred {
-            Some((d, s)) => (d, s),
+            Some([d, s]) => (d, s),
             None => (&self.diffuse, &self.specular),
         }
     }

@@ -13,13 +13,11 @@
 //! flux and one group, scaled by `subsets`, estimates it too.
 //!
 //! ```
+//! use pipeline::indirect::vpl::{VplConfig, generate};
 //! let scene = scene::cornell_box();
 //! let bvh = scene::Bvh::build(&scene);
-//! let set = pipeline::indirect::vpl::generate(&scene, &bvh, &scene.lights, &pipeline::indirect::vpl::VplConfig {
-//!     count: 256,
-//!     subsets: 16,
-//!     seed: 7,
-//! })?;
+//! let config = VplConfig { count: 256, subsets: 16, seed: 7, emissive: false };
+//! let set = generate(&scene, &bvh, &scene.lights, &config)?;
 //! assert_eq!(set.vpls.len(), 256);
 //! assert_eq!(set.per_subset, 16);
 //! # Ok::<(), pipeline::indirect::vpl::VplError>(())
@@ -87,6 +85,10 @@ pub struct VplConfig {
     pub subsets: u32,
     /// Seed of the Cranley–Patterson rotations: the same seed gives the same VPLs.
     pub seed: u64,
+    /// Also shoot photons from the scene's emissive triangles (Lambertian area lights). Leave
+    /// it off when `lights` already stand for them (see [`area_lights`]'s stand-ins, or a
+    /// point light placed under a lamp).
+    pub emissive: bool,
 }
 
 /// Generated VPLs, subset-major: subset `s` is `vpls[s·per_subset .. (s+1)·per_subset]`.
@@ -385,10 +387,11 @@ fn area_emitters(scene: &Scene) -> Vec<Emitter> {
     out
 }
 
-/// Hemispherical point lights standing in for the scene's emissive meshes in direct shading:
+/// Hemispherical point lights standing in for the scene's emissive meshes in direct shading
+/// (photons are then shot from the triangles themselves with [`VplConfig::emissive`]):
 /// one per mesh at its area-weighted centroid, along its mean normal, with intensity
 /// `radiance × area` (a small Lambertian emitter's intensity along its normal), reaching
-/// twice the scene diagonal. Photons are still shot from the triangles themselves.
+/// twice the scene diagonal.
 pub fn area_lights(scene: &Scene) -> Vec<Light> {
     let radius = 2.0 * scene.bounds().diagonal().max(1e-3);
     let mut lights = Vec::new();
@@ -489,7 +492,9 @@ pub fn generate(
     })?;
     let bounds = scene.bounds();
     let mut emitters: Vec<Emitter> = lights.iter().copied().map(Emitter::Light).collect();
-    emitters.extend(area_emitters(scene));
+    if config.emissive {
+        emitters.extend(area_emitters(scene));
+    }
     let power: Vec<f32> = emitters
         .iter()
         .map(|e| e.flux(&bounds).element_sum() / 3.0)
