@@ -180,6 +180,25 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
     }
 }
 
+/// The view `fixtures/views.json` gives for a scene file without a camera (e.g. inside the
+/// Sponza atrium rather than the framing view from outside).
+fn preset_view(path: &std::path::Path, scene: &Scene) -> Option<scene::Camera> {
+    #[derive(serde::Deserialize)]
+    struct View {
+        eye: [f32; 3],
+        target: [f32; 3],
+        fov_deg: f32,
+    }
+    let views: std::collections::HashMap<String, serde_json::Value> =
+        serde_json::from_str(include_str!("../../../../fixtures/views.json")).ok()?;
+    let name = path.file_name()?.to_str()?;
+    let view: View = serde_json::from_value(views.get(name)?.clone()).ok()?;
+    let mut camera = scene::Camera::look_at(Vec3::from(view.eye), Vec3::from(view.target));
+    camera.fov_y = view.fov_deg.to_radians();
+    camera.fit_planes(scene.bounds());
+    Some(camera)
+}
+
 fn load_scene(args: &Args) -> Result<Scene> {
     let Some(path) = &args.scene else {
         return Ok(match args.builtin.as_str() {
@@ -209,7 +228,10 @@ fn main() -> Result<()> {
     let scene = load_scene(&args)?;
     let (width, height) = args.size;
 
-    let mut camera = scene.camera_or_framed();
+    let mut camera = match (&scene.camera, &args.scene) {
+        (None, Some(path)) => preset_view(path, &scene).unwrap_or_else(|| scene.camera_or_framed()),
+        _ => scene.camera_or_framed(),
+    };
     if let Some(eye) = args.eye {
         camera.eye = eye;
     }
