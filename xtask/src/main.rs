@@ -3,8 +3,8 @@
 //! - `cargo xtask test [ARGS]`: makes sure a Vulkan driver exists (installs Mesa's software
 //!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found), then runs the
 //!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`).
-//! - `cargo xtask bench [ARGS]`: runs the GPU benchmarks (`deferred-bench [ARGS]` and
-//!   `interleave-bench [ARGS]`, reports
+//! - `cargo xtask bench [ARGS]`: runs the GPU benchmarks (`deferred-bench [ARGS]`,
+//!   `interleave-bench [ARGS]` and `indirect-bench [ARGS]`, reports
 //!   under docs/bench/) and the CPU criterion benches.
 
 use std::{
@@ -129,6 +129,17 @@ fn main() -> Result<()> {
                     "interleave",
                     "--bin",
                     "interleave-bench",
+                    "--",
+                ])
+                .args(&rest))?;
+            run(cargo()
+                .args([
+                    "run",
+                    "--release",
+                    "-p",
+                    "pipeline",
+                    "--bin",
+                    "indirect-bench",
                     "--",
                 ])
                 .args(&rest))?;

@@ -149,7 +149,11 @@ impl GpuRenderer {
             "ambient",
             bytemuck::bytes_of(&crate::DEFAULT_AMBIENT.extend(0.0)),
         );
-        let gpu_lights: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
+        let mut gpu_lights: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
+        if gpu_lights.is_empty() {
+            // A binding needs one element; the light count (0) keeps it unused.
+            gpu_lights.push(bytemuck::Zeroable::zeroed());
+        }
         let lights_buffer = transfer::buffer_init(
             device,
             "lights",
@@ -312,14 +316,14 @@ impl GpuRenderer {
         self.timer.resolve(encoder);
     }
 
-    /// Renders a frame from `camera` with `ambient`, reads the radiance back and reports
-    /// the GPU time of each pass.
-    pub fn render(
+    /// Renders a frame from `camera` with `ambient` and reports the GPU time of each pass,
+    /// reading nothing else back (for benchmarks).
+    pub fn time_frame(
         &mut self,
         gpu: &Gpu,
         camera: &Camera,
         ambient: Vec3,
-    ) -> Result<Rendered, RenderError> {
+    ) -> Result<Vec<PassTiming>, RenderError> {
         let (w, h) = (self.targets.width, self.targets.height);
         gbuffer::validate_camera(camera)?;
         let frame = Frame::new(camera, w, h);
@@ -329,7 +333,7 @@ impl GpuRenderer {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         self.encode(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
-        let timings = self
+        Ok(self
             .timer
             .read(gpu)?
             .into_iter()
@@ -337,7 +341,19 @@ impl GpuRenderer {
                 name: t.name,
                 ms: t.ms,
             })
-            .collect();
+            .collect())
+    }
+
+    /// Renders a frame from `camera` with `ambient`, reads the radiance back and reports
+    /// the GPU time of each pass.
+    pub fn render(
+        &mut self,
+        gpu: &Gpu,
+        camera: &Camera,
+        ambient: Vec3,
+    ) -> Result<Rendered, RenderError> {
+        let timings = self.time_frame(gpu, camera, ambient)?;
+        let (w, h) = (self.targets.width, self.targets.height);
         let bytes = transfer::read_texture(
             &gpu.device,
             &gpu.queue,

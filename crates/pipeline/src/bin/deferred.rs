@@ -128,24 +128,6 @@ fn indirect_config(args: &Args, scene: &Scene) -> Result<IndirectConfig> {
     })
 }
 
-/// The direct lights and whether photons must also leave the emissive triangles: the scene's
-/// punctual lights; else hemispherical stand-ins for its emissive meshes; else a sun.
-fn primary_lights(scene: &Scene) -> (Vec<Light>, bool, &'static str) {
-    if !scene.lights.is_empty() {
-        return (scene.lights.clone(), false, "the scene's lights");
-    }
-    let area = vpl::area_lights(scene);
-    if !area.is_empty() {
-        return (area, true, "the emissive meshes (as hemispherical lights)");
-    }
-    let sun = Light::Directional {
-        direction: Vec3::new(0.3, -1.0, 0.25).normalize(),
-        color: Vec3::new(1.0, 0.95, 0.85),
-        intensity: 3.0,
-    };
-    (vec![sun], false, "a default sun (the scene has no lights)")
-}
-
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
@@ -180,25 +162,6 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
     }
 }
 
-/// The view `fixtures/views.json` gives for a scene file without a camera (e.g. inside the
-/// Sponza atrium rather than the framing view from outside).
-fn preset_view(path: &std::path::Path, scene: &Scene) -> Option<scene::Camera> {
-    #[derive(serde::Deserialize)]
-    struct View {
-        eye: [f32; 3],
-        target: [f32; 3],
-        fov_deg: f32,
-    }
-    let views: std::collections::HashMap<String, serde_json::Value> =
-        serde_json::from_str(include_str!("../../../../fixtures/views.json")).ok()?;
-    let name = path.file_name()?.to_str()?;
-    let view: View = serde_json::from_value(views.get(name)?.clone()).ok()?;
-    let mut camera = scene::Camera::look_at(Vec3::from(view.eye), Vec3::from(view.target));
-    camera.fov_y = view.fov_deg.to_radians();
-    camera.fit_planes(scene.bounds());
-    Some(camera)
-}
-
 fn load_scene(args: &Args) -> Result<Scene> {
     let Some(path) = &args.scene else {
         return Ok(match args.builtin.as_str() {
@@ -229,7 +192,9 @@ fn main() -> Result<()> {
     let (width, height) = args.size;
 
     let mut camera = match (&scene.camera, &args.scene) {
-        (None, Some(path)) => preset_view(path, &scene).unwrap_or_else(|| scene.camera_or_framed()),
+        (None, Some(path)) => {
+            pipeline::preset_view(path, &scene).unwrap_or_else(|| scene.camera_or_framed())
+        }
         _ => scene.camera_or_framed(),
     };
     if let Some(eye) = args.eye {
@@ -250,7 +215,7 @@ fn main() -> Result<()> {
             false,
             "scattered point lights",
         ),
-        None => primary_lights(&scene),
+        None => vpl::primary_lights(&scene),
     };
     lights.extend(args.extra_lights.iter().copied());
     let indirect = match args.vpls {

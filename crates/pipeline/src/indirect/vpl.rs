@@ -571,3 +571,22 @@ pub fn generate(
     }
     Ok(set)
 }
+
+/// The primary lights of a scene, whether photons must also leave its emissive triangles
+/// ([`VplConfig::emissive`]) and a description: the scene's punctual lights; else
+/// hemispherical stand-ins for its emissive meshes ([`area_lights`]); else a default sun.
+pub fn primary_lights(scene: &Scene) -> (Vec<Light>, bool, &'static str) {
+    if !scene.lights.is_empty() {
+        return (scene.lights.clone(), false, "the scene's lights");
+    }
+    let area = area_lights(scene);
+    if !area.is_empty() {
+        return (area, true, "the emissive meshes (as hemispherical lights)");
+    }
+    let sun = Light::Directional {
+        direction: Vec3::new(0.3, -1.0, 0.25).normalize(),
+        color: Vec3::new(1.0, 0.95, 0.85),
+        intensity: 3.0,
+    };
+    (vec![sun], false, "a default sun (the scene has no lights)")
+}

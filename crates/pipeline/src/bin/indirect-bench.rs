@@ -1,0 +1,379 @@
+//! `indirect-bench`: instant radiosity with interleaved deferred shading on Sponza (Segovia
+//! 2006 Tables 3 and 4): for each size, VPL count and pattern, the GPU time of every pass of
+//! the indirect-only frame (BC → BS → SNSM → BG → DB → B → composition), the reference frame
+//! where every pixel shades every VPL measured in the same run, the speed-up of the indirect
+//! passes over the reference shading, and the quality of the interleaved image against the
+//! reference (RMSE, PSNR, FLIP mean; blur on and off). Writes `indirect-<adapter>-<date>.md`
+//! and `.json` under `--out`.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use clap::Parser;
+use glam::Vec3;
+use gpu::{Gpu, bench::Stat};
+use interleave::{Blur, BlurVariant, Pattern, SplitVariant};
+use pipeline::{
+    PassTiming, Quality,
+    gpu::GpuRenderer,
+    indirect::{IndirectConfig, Interleaving, vpl},
+    quality,
+};
+use scene::{Bvh, Camera, Scene};
+use serde::Serialize;
+
+/// Benchmarks the interleaved indirect pipeline against the non-interleaved reference.
+#[derive(Parser, Debug)]
+struct Args {
+    /// Scene (default: ../shared/fixtures/sponza/dabrovic/sponza.gltf).
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Report folder.
+    #[arg(long, default_value = "docs/bench")]
+    out: PathBuf,
+    /// Timed frames per configuration (after 10 warm-up frames).
+    #[arg(long, default_value_t = 10)]
+    frames: u32,
+    /// Run on a software adapter too (its timings are not GPU performance).
+    #[arg(long)]
+    allow_software: bool,
+    /// Only the first size, VPL count and pattern (a smoke test).
+    #[arg(long)]
+    quick: bool,
+}
+
+const SIZES: [(u32, u32); 3] = [(1024, 768), (1920, 1080), (3840, 2160)];
+const VPLS: [usize; 4] = [256, 480, 1024, 4096];
+const PATTERNS: [(u32, u32); 3] = [(4, 4), (8, 6), (8, 8)];
+/// The passes of the indirect stage whose sum the targets compare with the reference shading.
+const INDIRECT: [&str; 5] = ["BS", "SNSM", "BG", "DB", "B"];
+
+#[derive(Serialize)]
+struct Row {
+    width: u32,
+    height: u32,
+    vpls: usize,
+    pattern: String,
+    interleaving: String,
+    /// Median ms per pass name (passes of one name summed per frame).
+    passes: Vec<(String, Stat)>,
+    /// Median of the per-frame sum of BS+SNSM+BG+DB+B.
+    indirect: Stat,
+    /// Median of the reference frame's shading pass (same VPLs, same run).
+    reference_shading: Stat,
+    speedup: f64,
+    /// n·m: the speed-up of the shading alone if nothing else cost anything.
+    ideal: u32,
+}
+
+#[derive(Serialize)]
+struct QualityRow {
+    width: u32,
+    height: u32,
+    vpls: usize,
+    pattern: String,
+    blurred: Quality,
+    unfiltered: Quality,
+}
+
+#[derive(Serialize)]
+struct Report {
+    header: gpu::bench::Header,
+    frames: u32,
+    scene: String,
+    camera: String,
+    rows: Vec<Row>,
+    quality: Vec<QualityRow>,
+}
+
+fn config(
+    bounds: scene::Aabb,
+    pattern: Pattern,
+    interleaving: Interleaving,
+    blur: bool,
+) -> IndirectConfig {
+    IndirectConfig {
+        pattern,
+        interleaving,
+        blur: blur.then_some(Blur {
+            kernel: 5,
+            variant: BlurVariant::Fast,
+        }),
+        ..IndirectConfig::new(bounds)
+    }
+}
+
+/// Per pass name, the per-frame sums over `frames` frames.
+fn time(
+    gpu: &Gpu,
+    renderer: &mut GpuRenderer,
+    camera: &Camera,
+    frames: u32,
+) -> Result<Vec<(String, Vec<f64>)>> {
+    for _ in 0..10 {
+        renderer.time_frame(gpu, camera, Vec3::ZERO)?;
+    }
+    let mut by_name: Vec<(String, Vec<f64>)> = Vec::new();
+    for f in 0..frames as usize {
+        let timings: Vec<PassTiming> = renderer.time_frame(gpu, camera, Vec3::ZERO)?;
+        for t in timings {
+            match by_name.iter_mut().find(|(n, _)| *n == t.name) {
+                Some((_, v)) if v.len() > f => v[f] += t.ms,
+                Some((_, v)) => v.push(t.ms),
+                None => by_name.push((t.name, vec![t.ms])),
+            }
+        }
+    }
+    Ok(by_name)
+}
+
+fn per_frame_sum(by_name: &[(String, Vec<f64>)], names: &[&str]) -> Vec<f64> {
+    let frames = by_name.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
+    (0..frames)
+        .map(|f| {
+            by_name
+                .iter()
+                .filter(|(n, _)| names.contains(&n.as_str()))
+                .map(|(_, v)| v.get(f).copied().unwrap_or(0.0))
+                .sum()
+        })
+        .collect()
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    let gpu = Gpu::from_env()?;
+    println!("adapter: {}", gpu.describe());
+    gpu::bench::require_hardware(&gpu, args.allow_software)?;
+    let path = match &args.scene {
+        Some(p) => p.clone(),
+        None => scene::shared_fixtures()
+            .context("../shared/fixtures not found; pass --scene")?
+            .join("sponza/dabrovic/sponza.gltf"),
+    };
+    let scene = Scene::load(&path)?;
+    let camera = pipeline::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
+    let (lights, emissive, lit_by) = vpl::primary_lights(&scene);
+    println!(
+        "scene: {} ({} triangles), VPLs from {lit_by}",
+        path.display(),
+        scene.triangle_count()
+    );
+    let bvh = Bvh::build(&scene);
+    let bounds = scene.bounds();
+
+    let (sizes, counts, patterns) = if args.quick {
+        (&SIZES[..1], &VPLS[..1], &PATTERNS[..1])
+    } else {
+        (&SIZES[..], &VPLS[..], &PATTERNS[..])
+    };
+    let mut rows = Vec::new();
+    let mut qualities = Vec::new();
+    for &(w, h) in sizes {
+        // Indirect light only: no direct lights, no ambient (the direct sun would hide errors).
+        let mut renderer = GpuRenderer::new(&gpu, &scene, &[], w, h)?;
+        for &count in counts {
+            let mut reference_ms: Option<Vec<f64>> = None;
+            for &(n, m) in patterns {
+                let pattern = Pattern::new(n, m)?;
+                let subsets = pattern.count();
+                let total = vpl::per_subset(count, subsets) as usize * subsets as usize;
+                let set = vpl::generate(
+                    &scene,
+                    &bvh,
+                    &lights,
+                    &vpl::VplConfig {
+                        count: total,
+                        subsets,
+                        seed: 1,
+                        emissive,
+                    },
+                )?;
+                let reference = config(bounds, pattern, Interleaving::Reference, false);
+                renderer.set_indirect(&gpu, &reference, &set)?;
+                let reference_image = renderer.render(&gpu, &camera, Vec3::ZERO)?.image;
+                // The reference cost depends on the VPL count only: time it once per count.
+                let reference_ms = match &reference_ms {
+                    Some(v) => v.clone(),
+                    None => {
+                        let t = time(&gpu, &mut renderer, &camera, args.frames)?;
+                        let v = per_frame_sum(&t, &["shading (reference)"]);
+                        reference_ms = Some(v.clone());
+                        v
+                    }
+                };
+                let mut images = Vec::new();
+                for blur in [true, false] {
+                    let c = config(bounds, pattern, Interleaving::Fused, blur);
+                    renderer.set_indirect(&gpu, &c, &set)?;
+                    images.push(renderer.render(&gpu, &camera, Vec3::ZERO)?.image);
+                }
+                let q = QualityRow {
+                    width: w,
+                    height: h,
+                    vpls: total,
+                    pattern: pattern.to_string(),
+                    blurred: quality(&reference_image, &images[0]),
+                    unfiltered: quality(&reference_image, &images[1]),
+                };
+                println!(
+                    "{w}x{h} {total:>5} VPLs {pattern}: FLIP {:.4} (unfiltered {:.4}), PSNR {:.1} dB",
+                    q.blurred.flip_mean, q.unfiltered.flip_mean, q.blurred.psnr
+                );
+                qualities.push(q);
+                for interleaving in [
+                    Interleaving::Fused,
+                    Interleaving::Split(SplitVariant::Tiled),
+                ] {
+                    let c = config(bounds, pattern, interleaving, true);
+                    renderer.set_indirect(&gpu, &c, &set)?;
+                    let t = time(&gpu, &mut renderer, &camera, args.frames)?;
+                    let indirect = Stat::of(per_frame_sum(&t, &INDIRECT));
+                    let reference_shading = Stat::of(reference_ms.clone());
+                    let speedup = reference_shading.median_ms / indirect.median_ms;
+                    let name = match interleaving {
+                        Interleaving::Fused => "fused".to_string(),
+                        Interleaving::Split(v) => format!("split {}", v.name()),
+                        Interleaving::Reference => "reference".into(),
+                    };
+                    println!(
+                        "{w}x{h} {total:>5} VPLs {pattern} {name:<12}: indirect {:.3} ms, reference {:.3} ms, ×{speedup:.1} of ×{subsets}",
+                        indirect.median_ms, reference_shading.median_ms
+                    );
+                    rows.push(Row {
+                        width: w,
+                        height: h,
+                        vpls: total,
+                        pattern: pattern.to_string(),
+                        interleaving: name,
+                        passes: t.into_iter().map(|(n, v)| (n, Stat::of(v))).collect(),
+                        indirect,
+                        reference_shading,
+                        speedup,
+                        ideal: subsets,
+                    });
+                }
+            }
+        }
+    }
+    let report = Report {
+        header: gpu::bench::Header::new(&gpu),
+        frames: args.frames,
+        scene: path
+            .file_name()
+            .map_or("?".into(), |f| f.to_string_lossy().into_owned()),
+        camera: format!(
+            "eye {} target {} fov {:.0}°",
+            camera.eye,
+            camera.target,
+            camera.fov_y.to_degrees()
+        ),
+        rows,
+        quality: qualities,
+    };
+    std::fs::create_dir_all(&args.out)?;
+    let stem = report.header.file_stem("indirect-");
+    let json = args.out.join(format!("{stem}.json"));
+    std::fs::write(&json, serde_json::to_string_pretty(&report)?)?;
+    let md = args.out.join(format!("{stem}.md"));
+    std::fs::write(&md, markdown(&report))?;
+    println!("wrote {} and {}", md.display(), json.display());
+    Ok(())
+}
+
+fn markdown(r: &Report) -> String {
+    use std::fmt::Write;
+    let mut s = r.header.markdown(
+        "Instant radiosity with interleaved deferred shading (Segovia 2006)",
+        r.frames,
+    );
+    let _ = writeln!(
+        s,
+        "\nScene `{}`, {}; primary light: the default sun; indirect light only (no direct \
+         light, no ambient), one bounce, no VPL visibility (SNSM). Blur 5×5 fast unless said. \
+         Times are medians of GPU timestamps; the reference (every pixel shades every VPL) is \
+         measured in the same run.\n",
+        r.scene, r.camera
+    );
+    let _ = writeln!(
+        s,
+        "## Table 3: ms per pass and per million fragments (4×4)\n"
+    );
+    let _ = writeln!(
+        s,
+        "| size | VPLs | interleaving | BC | BS | SNSM | BG | DB | B | composition |\n|---|---|---|---|---|---|---|---|---|---|"
+    );
+    for row in r.rows.iter().filter(|x| x.pattern == "4x4") {
+        let mfrag = f64::from(row.width) * f64::from(row.height) / 1e6;
+        let get = |names: &[&str]| -> f64 {
+            row.passes
+                .iter()
+                .filter(|(n, _)| names.contains(&n.as_str()))
+                .map(|(_, st)| st.median_ms)
+                .sum()
+        };
+        let cell = |names: &[&str]| {
+            let ms = get(names);
+            if ms == 0.0 {
+                "—".to_string()
+            } else {
+                format!("{ms:.3} ({:.3})", ms / mfrag)
+            }
+        };
+        let _ = writeln!(
+            s,
+            "| {}×{} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            row.width,
+            row.height,
+            row.vpls,
+            row.interleaving,
+            cell(&["z-prepass", "gbuffer"]),
+            cell(&["BS"]),
+            cell(&["SNSM"]),
+            cell(&["BG"]),
+            cell(&["DB"]),
+            cell(&["B"]),
+            cell(&["composition"]),
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nCells: ms (ms per million fragments). BC = z-prepass + G-buffer (raster).\n\n## Speed-up of the indirect passes over the reference shading\n\nIndirect = BS + SNSM + BG + DB + B (fused: SNSM + DB + B). Ideal = n·m.\n\n| size | VPLs | pattern | interleaving | indirect ms | reference ms | speed-up | ideal | % of ideal |\n|---|---|---|---|---|---|---|---|---|"
+    );
+    for row in &r.rows {
+        let _ = writeln!(
+            s,
+            "| {}×{} | {} | {} | {} | {:.3} | {:.3} | ×{:.1} | ×{} | {:.0} % |",
+            row.width,
+            row.height,
+            row.vpls,
+            row.pattern,
+            row.interleaving,
+            row.indirect.median_ms,
+            row.reference_shading.median_ms,
+            row.speedup,
+            row.ideal,
+            100.0 * row.speedup / f64::from(row.ideal)
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n## Quality against the reference (indirect-only image, sRGB)\n\n| size | VPLs | pattern | FLIP mean | PSNR dB | RMSE | FLIP unfiltered | PSNR unfiltered |\n|---|---|---|---|---|---|---|---|"
+    );
+    for q in &r.quality {
+        let _ = writeln!(
+            s,
+            "| {}×{} | {} | {} | {:.4} | {:.1} | {:.4} | {:.4} | {:.1} |",
+            q.width,
+            q.height,
+            q.vpls,
+            q.pattern,
+            q.blurred.flip_mean,
+            q.blurred.psnr,
+            q.blurred.rmse,
+            q.unfiltered.flip_mean,
+            q.unfiltered.psnr
+        );
+    }
+    s
+}
