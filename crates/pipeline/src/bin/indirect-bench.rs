@@ -31,7 +31,7 @@ struct Args {
     /// Report folder.
     #[arg(long, default_value = "docs/bench")]
     out: PathBuf,
-    /// Timed frames per configuration (after 10 warm-up frames).
+    /// Timed frames per configuration (after ≥ 10 warm-up frames and ≥ 300 ms of work).
     #[arg(long, default_value_t = 10)]
     frames: u32,
     /// Run on a software adapter too (its timings are not GPU performance).
@@ -110,8 +110,13 @@ fn time(
     camera: &Camera,
     frames: u32,
 ) -> Result<Vec<(String, Vec<f64>)>> {
-    for _ in 0..10 {
+    // Warm up for at least 10 frames and 300 ms of back-to-back work, so that the GPU leaves
+    // the idle clocks it drops to while the CPU generates VPLs and computes FLIP.
+    let start = std::time::Instant::now();
+    let mut warm = 0;
+    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
         renderer.time_frame(gpu, camera, Vec3::ZERO)?;
+        warm += 1;
     }
     let mut by_name: Vec<(String, Vec<f64>)> = Vec::new();
     for f in 0..frames as usize {
