@@ -135,12 +135,15 @@ pub fn light_accumulation(
     (image(d), image(s))
 }
 
+/// Diffuse and specular indirect light images (see [`IndirectStages::result`]).
+pub type IndirectLight<'a> = (&'a Image<[f32; 4]>, &'a Image<[f32; 4]>);
+
 /// Composition: `albedo · (1 − metallic) · (ambient + diffuse + indirect diffuse) + specular
 /// + indirect specular + emissive`.
 pub fn composition(
     gb: &GBuffer,
     (diffuse, specular): (&Image<Vec3>, &Image<Vec3>),
-    indirect: Option<(&Image<[f32; 4]>, &Image<[f32; 4]>)>,
+    indirect: Option<IndirectLight<'_>>,
     emissive: &[Vec3],
     ambient: Vec3,
 ) -> Image<[f32; 4]> {

@@ -393,8 +393,8 @@ fn each_pixel_sums_its_own_subset() {
             let l = to / d2.sqrt();
             let g = (-v.normal.as_dvec3().dot(l)).max(0.0) * nrm.dot(l).max(0.0)
                 / d2.max(clamp * clamp);
-            for c in 0..3 {
-                e[c] += f64::from(v.flux[c]) / PI * g / PI * f64::from(n * m);
+            for (e, flux) in e.iter_mut().zip(v.flux.to_array()) {
+                *e += f64::from(flux) / PI * g / PI * f64::from(n * m);
             }
         }
         e
