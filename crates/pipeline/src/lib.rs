@@ -197,6 +197,17 @@ pub fn validate_lights(lights: &[Light]) -> Result<(), RenderError> {
     Ok(())
 }
 
+/// The scene a benchmark runs on: `path`, or else the shared fixtures' Dabrovic Sponza.
+pub fn bench_scene_path(path: Option<&std::path::Path>) -> anyhow::Result<std::path::PathBuf> {
+    use anyhow::Context;
+    Ok(match path {
+        Some(p) => p.to_path_buf(),
+        None => scene::shared_fixtures()
+            .context("../shared/fixtures not found; pass --scene")?
+            .join("sponza/dabrovic/sponza.gltf"),
+    })
+}
+
 /// The view `fixtures/views.json` gives for a scene file without a camera, by file name
 /// (e.g. inside the Sponza atrium rather than the framing view from outside).
 pub fn preset_view(path: &std::path::Path, scene: &scene::Scene) -> Option<scene::Camera> {

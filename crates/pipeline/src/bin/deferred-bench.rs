@@ -156,12 +156,7 @@ fn main() -> Result<()> {
     let gpu = Gpu::from_env()?;
     println!("adapter: {}", gpu.describe());
     gpu::bench::require_hardware(&gpu, args.allow_software)?;
-    let path = match &args.scene {
-        Some(p) => p.clone(),
-        None => scene::shared_fixtures()
-            .context("../shared/fixtures not found; pass --scene")?
-            .join("sponza/dabrovic/sponza.gltf"),
-    };
+    let path = pipeline::bench_scene_path(args.scene.as_deref())?;
     let scene = Scene::load(&path)?;
     // Inside the atrium, along its long axis, looking at the far arcades.
     let camera = Camera {

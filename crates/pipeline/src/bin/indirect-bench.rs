@@ -8,7 +8,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Parser;
 use glam::Vec3;
 use gpu::{Gpu, bench::Stat};
@@ -150,12 +150,7 @@ fn main() -> Result<()> {
     let gpu = Gpu::from_env()?;
     println!("adapter: {}", gpu.describe());
     gpu::bench::require_hardware(&gpu, args.allow_software)?;
-    let path = match &args.scene {
-        Some(p) => p.clone(),
-        None => scene::shared_fixtures()
-            .context("../shared/fixtures not found; pass --scene")?
-            .join("sponza/dabrovic/sponza.gltf"),
-    };
+    let path = pipeline::bench_scene_path(args.scene.as_deref())?;
     let scene = Scene::load(&path)?;
     let camera = pipeline::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
     let (lights, emissive, lit_by) = vpl::primary_lights(&scene);
