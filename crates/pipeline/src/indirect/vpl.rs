@@ -359,17 +359,20 @@ impl Emitter {
     }
 }
 
+/// The meshes whose material emits (finite, non-zero emissive radiance).
+fn emissive_meshes(scene: &Scene) -> impl Iterator<Item = (&scene::Mesh, &scene::Material)> {
+    scene.meshes.iter().filter_map(|mesh| {
+        let material = scene.materials.get(mesh.material as usize)?;
+        (material.emissive.max_element() > 0.0 && material.emissive.is_finite())
+            .then_some((mesh, material))
+    })
+}
+
 /// The emissive triangles of `scene` (materials with non-zero emissive radiance) as
 /// Lambertian area lights emitting on the side their winding faces.
 fn area_emitters(scene: &Scene) -> Vec<Emitter> {
     let mut out = Vec::new();
-    for mesh in &scene.meshes {
-        let Some(material) = scene.materials.get(mesh.material as usize) else {
-            continue;
-        };
-        if material.emissive.max_element() <= 0.0 || !material.emissive.is_finite() {
-            continue;
-        }
+    for (mesh, material) in emissive_meshes(scene) {
         for t in mesh.indices.chunks_exact(3) {
             let v = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
             let cross = (v[1] - v[0]).cross(v[2] - v[0]);
@@ -395,13 +398,7 @@ fn area_emitters(scene: &Scene) -> Vec<Emitter> {
 pub fn area_lights(scene: &Scene) -> Vec<Light> {
     let radius = 2.0 * scene.bounds().diagonal().max(1e-3);
     let mut lights = Vec::new();
-    for mesh in &scene.meshes {
-        let Some(material) = scene.materials.get(mesh.material as usize) else {
-            continue;
-        };
-        if material.emissive.max_element() <= 0.0 || !material.emissive.is_finite() {
-            continue;
-        }
+    for (mesh, material) in emissive_meshes(scene) {
         let (mut area, mut centroid, mut normal) = (0.0, Vec3::ZERO, Vec3::ZERO);
         for t in mesh.indices.chunks_exact(3) {
             let v = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
