@@ -1,6 +1,6 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
-// #import pipeline/lighting.wgsl
+// #import tiled-shading/lighting.wgsl
 // SNSM — shading with no shadow map (Segovia 2006 §4.3, §6.2): each pixel sums the diffuse and
 // glossy light reflected from the hemispherical VPLs of its subset, visibility ignored. Twin of
 // `pipeline::indirect::cpu::shade_vpls`.

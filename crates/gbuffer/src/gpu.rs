@@ -129,6 +129,87 @@ impl GBufferTargets {
     }
 }
 
+/// The G-buffer textures a screen-space pass reads (linear depth, normal, albedo, material),
+/// borrowed from [`GBufferTargets`] or from an [`UploadedGBuffer`].
+#[derive(Clone, Copy)]
+pub struct GBufferTextures<'a> {
+    /// `R32Float` view depth (0 where no surface).
+    pub linear_depth: &'a wgpu::Texture,
+    /// `R32Uint` octahedral normals.
+    pub normal: &'a wgpu::Texture,
+    /// `Rgba8Unorm` albedo.
+    pub albedo: &'a wgpu::Texture,
+    /// `R32Uint` material words.
+    pub material: &'a wgpu::Texture,
+}
+
+impl<'a> From<&'a GBufferTargets> for GBufferTextures<'a> {
+    fn from(t: &'a GBufferTargets) -> Self {
+        Self {
+            linear_depth: &t.linear_depth,
+            normal: &t.normal,
+            albedo: &t.albedo,
+            material: &t.material,
+        }
+    }
+}
+
+/// A CPU [`GBuffer`]'s screen-space textures uploaded as they are (for running a pass on the
+/// same input as its CPU twin).
+pub struct UploadedGBuffer {
+    /// View depth.
+    pub linear_depth: wgpu::Texture,
+    /// Octahedral normal words.
+    pub normal: wgpu::Texture,
+    /// Albedo.
+    pub albedo: wgpu::Texture,
+    /// Material words.
+    pub material: wgpu::Texture,
+}
+
+impl UploadedGBuffer {
+    /// Uploads `gb`'s linear depth, normal, albedo and material images (sampled and copied).
+    pub fn new(gpu: &Gpu, gb: &GBuffer) -> Result<Self, GpuError> {
+        let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
+        let upload = |label: &str, format, bytes: &[u8]| {
+            transfer::texture_init(
+                &gpu.device,
+                &gpu.queue,
+                label,
+                gb.width(),
+                gb.height(),
+                format,
+                usage,
+                bytes,
+            )
+        };
+        Ok(Self {
+            linear_depth: upload(
+                "linear depth",
+                LINEAR_DEPTH_FORMAT,
+                bytemuck::cast_slice(gb.linear_depth.pixels()),
+            )?,
+            normal: upload("normal", NORMAL_FORMAT, bytemuck::cast_slice(gb.normal.pixels()))?,
+            albedo: upload("albedo", ALBEDO_FORMAT, bytemuck::cast_slice(gb.albedo.pixels()))?,
+            material: upload(
+                "material",
+                MATERIAL_FORMAT,
+                bytemuck::cast_slice(gb.material.pixels()),
+            )?,
+        })
+    }
+
+    /// The textures to bind.
+    pub fn textures(&self) -> GBufferTextures<'_> {
+        GBufferTextures {
+            linear_depth: &self.linear_depth,
+            normal: &self.normal,
+            albedo: &self.albedo,
+            material: &self.material,
+        }
+    }
+}
+
 struct Draw {
     first_index: u32,
     index_count: u32,

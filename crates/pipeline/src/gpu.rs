@@ -1,5 +1,5 @@
-//! GPU deferred renderer: the G-buffer render pass, then the light accumulation and
-//! composition compute passes. Pipelines and bind groups are built once; nothing is read
+//! GPU deferred renderer: the G-buffer render pass, then the light accumulation
+//! ([`tiled_shading::gpu::LightShading`]) and composition compute passes. Pipelines and bind groups are built once; nothing is read
 //! back between passes.
 
 use ::gpu::{Gpu, PassTimer, transfer};
@@ -12,22 +12,8 @@ use scene::{Camera, Light, Scene};
 use wgpu::util::DeviceExt;
 
 use crate::indirect::{IndirectConfig, gpu::IndirectStage, vpl::VplSet};
-use crate::{GpuLight, PassTiming, RenderError, Rendered};
-
-const ACCUM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-
-fn storage_texture(device: &wgpu::Device, label: &str, width: u32, height: u32) -> wgpu::Texture {
-    transfer::texture_2d(
-        device,
-        label,
-        width,
-        height,
-        ACCUM_FORMAT,
-        wgpu::TextureUsages::STORAGE_BINDING
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
-    )
-}
+use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
+use tiled_shading::gpu::{ACCUMULATION_FORMAT, LightShading};
 
 fn tv(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
@@ -105,18 +91,18 @@ pub struct GpuRenderer {
     scene: GpuScene,
     targets: GBufferTargets,
     radiance: wgpu::Texture,
-    accumulation: wgpu::ComputePipeline,
-    accumulation_group: wgpu::BindGroup,
+    lights: Vec<GpuLight>,
+    shading: LightShading,
     composition: wgpu::ComputePipeline,
     composition_group: wgpu::BindGroup,
-    direct: [wgpu::Texture; 2],
     ambient: wgpu::Buffer,
     indirect: Option<IndirectStage>,
     timer: PassTimer,
 }
 
 impl GpuRenderer {
-    /// Uploads `scene` and `lights` and builds pipelines and targets for `width × height`.
+    /// Uploads `scene` and `lights` and builds pipelines and targets for `width × height`,
+    /// with the default (tiled) light accumulation.
     pub fn new(
         gpu: &Gpu,
         scene: &Scene,
@@ -124,82 +110,28 @@ impl GpuRenderer {
         width: u32,
         height: u32,
     ) -> Result<Self, RenderError> {
-        crate::validate_lights(lights)?;
+        let gpu_lights = crate::validate_lights(lights)?;
         let device = &gpu.device;
         transfer::check_texture_size(device, "frame", width, height)?;
         let gbuffer_pass = GBufferPass::new(device)?;
         let gpu_scene = GpuScene::upload(device, &gpu.queue, scene, &gbuffer_pass)?;
         let targets = GBufferTargets::new(device, width, height)?;
-        let diffuse = storage_texture(device, "diffuse accumulation", width, height);
-        let specular = storage_texture(device, "specular accumulation", width, height);
-        let radiance = storage_texture(device, "radiance", width, height);
-
-        let uniform = |label: &str, bytes: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            })
-        };
-        let params = uniform(
-            "light params",
-            bytemuck::bytes_of(&[lights.len() as u32, 0, 0, 0]),
-        );
-        let ambient = uniform(
-            "ambient",
-            bytemuck::bytes_of(&crate::DEFAULT_AMBIENT.extend(0.0)),
-        );
-        let mut gpu_lights: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
-        if gpu_lights.is_empty() {
-            // A binding needs one element; the light count (0) keeps it unused.
-            gpu_lights.push(bytemuck::Zeroable::zeroed());
-        }
-        let lights_buffer = transfer::buffer_init(
+        let radiance = transfer::texture_2d(
             device,
-            "lights",
-            bytemuck::cast_slice(&gpu_lights),
-            wgpu::BufferUsages::STORAGE,
-        )?;
-
-        let accumulation = compute_pipeline(
-            device,
-            "pipeline/light_accumulation.wgsl",
-            "light_accumulation",
-        )?;
-        let depth_view = targets.depth.create_view(&wgpu::TextureViewDescriptor {
-            aspect: wgpu::TextureAspect::DepthOnly,
-            ..Default::default()
-        });
-        let (normal, albedo, material) = (
-            view(&targets.normal),
-            view(&targets.albedo),
-            view(&targets.material),
+            "radiance",
+            width,
+            height,
+            ACCUMULATION_FORMAT,
+            wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
         );
-        let (diffuse_view, specular_view) = (view(&diffuse), view(&specular));
-        let accumulation_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("light accumulation"),
-            layout: &accumulation.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: gbuffer_pass.frame_buffer().as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: params.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: lights_buffer.as_entire_binding(),
-                },
-                tv(3, &depth_view),
-                tv(4, &normal),
-                tv(5, &albedo),
-                tv(6, &material),
-                tv(7, &diffuse_view),
-                tv(8, &specular_view),
-            ],
+        let ambient = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ambient"),
+            contents: bytemuck::bytes_of(&crate::DEFAULT_AMBIENT.extend(0.0)),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
+        let shading = Self::light_shading(gpu, &gbuffer_pass, &targets, &ShadingConfig::default(), &gpu_lights)?;
         let composition =
             compute_pipeline(device, "pipeline/composition.wgsl", "composition_main")?;
         let none = [
@@ -212,7 +144,7 @@ impl GpuRenderer {
             &ambient,
             &gpu_scene.materials,
             &targets,
-            [&diffuse, &specular],
+            shading.output(),
             &radiance,
             [&none[0], &none[1]],
         );
@@ -221,15 +153,69 @@ impl GpuRenderer {
             scene: gpu_scene,
             targets,
             radiance,
-            accumulation,
-            accumulation_group,
+            lights: gpu_lights,
+            shading,
             composition,
             composition_group,
-            direct: [diffuse, specular],
             ambient,
             indirect: None,
             timer: PassTimer::new(device, 32),
         })
+    }
+
+    fn light_shading(
+        gpu: &Gpu,
+        gbuffer_pass: &GBufferPass,
+        targets: &GBufferTargets,
+        config: &ShadingConfig,
+        lights: &[GpuLight],
+    ) -> Result<LightShading, RenderError> {
+        let mut shading = LightShading::new(
+            &gpu.device,
+            gbuffer_pass.frame_buffer(),
+            targets.into(),
+            config,
+            lights.len(),
+            false,
+        )?;
+        shading.set_lights(&gpu.queue, lights)?;
+        Ok(shading)
+    }
+
+    /// Switches the light accumulation to `config` (brute force, tiled, tiled with normal
+    /// cones, clustered; tile size).
+    pub fn set_shading(&mut self, gpu: &Gpu, config: &ShadingConfig) -> Result<(), RenderError> {
+        let shading = Self::light_shading(gpu, &self.gbuffer_pass, &self.targets, config, &self.lights)?;
+        let indirect = self.indirect.as_ref().map(IndirectStage::output);
+        let none;
+        let indirect = match indirect {
+            Some(textures) => textures,
+            None => {
+                let (w, h) = (self.targets.width, self.targets.height);
+                none = [
+                    indirect_texture(&gpu.device, "no indirect diffuse", w, h),
+                    indirect_texture(&gpu.device, "no indirect specular", w, h),
+                ];
+                [&none[0], &none[1]]
+            }
+        };
+        self.composition_group = composition_group(
+            &gpu.device,
+            &self.composition,
+            &self.ambient,
+            &self.scene.materials,
+            &self.targets,
+            shading.output(),
+            &self.radiance,
+            indirect,
+        );
+        self.shading = shading;
+        Ok(())
+    }
+
+    /// The light accumulation stage.
+    pub fn shading(&self) -> &LightShading {
+        &self.shading
     }
 
     /// Adds one-bounce indirect light from `set`'s VPLs as `config` says (the stage reads this
@@ -254,7 +240,7 @@ impl GpuRenderer {
             &self.ambient,
             &self.scene.materials,
             &self.targets,
-            [&self.direct[0], &self.direct[1]],
+            self.shading.output(),
             &self.radiance,
             stage.output(),
         );
@@ -298,12 +284,7 @@ impl GpuRenderer {
             pass.set_bind_group(0, group, &[]);
             pass.dispatch_workgroups(groups.0, groups.1, 1);
         };
-        dispatch(
-            encoder,
-            "light accumulation",
-            &self.accumulation,
-            &self.accumulation_group,
-        );
+        self.shading.encode(encoder, Some(&self.timer));
         if let Some(stage) = &self.indirect {
             stage.encode(encoder, Some(&self.timer));
         }
@@ -330,6 +311,7 @@ impl GpuRenderer {
         gpu.queue
             .write_buffer(&self.ambient, 0, bytemuck::bytes_of(&ambient.extend(0.0)));
         self.gbuffer_pass.write_frame(&gpu.queue, &frame);
+        self.shading.set_camera(&gpu.queue, camera);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         self.encode(&mut encoder);
         gpu.queue.submit([encoder.finish()]);

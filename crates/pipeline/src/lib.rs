@@ -2,7 +2,7 @@
 //! §1.3), on the GPU ([`gpu::GpuRenderer`]) and on the CPU ([`cpu::render`]), and the
 //! `deferred` command-line program.
 //!
-//! BRDF (`shaders/pipeline/lighting.wgsl`): Lambert diffuse plus GGX / height-correlated
+//! BRDF (`shaders/tiled-shading/lighting.wgsl`, light accumulation by `tiled_shading`): Lambert diffuse plus GGX / height-correlated
 //! Smith / Schlick specular, metallic-roughness parameterization. Light accumulation keeps
 //! diffuse and specular apart, as the thesis's light accumulation buffer does, so the
 //! composition multiplies the albedo once:
@@ -29,97 +29,7 @@ use scene::Light;
 /// Ambient term `A` of the composition (linear RGB).
 pub const DEFAULT_AMBIENT: Vec3 = Vec3::splat(0.03);
 
-/// A light as the shaders see it (WGSL `Light` in `pipeline/lighting.wgsl`).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuLight {
-    /// Position (point, spot).
-    pub position: [f32; 3],
-    /// Influence radius (point, spot).
-    pub radius: f32,
-    /// Colour × intensity.
-    pub color: [f32; 3],
-    /// 0 point, 1 spot, 2 directional, 3 hemispherical.
-    pub kind: u32,
-    /// Direction the light travels (spot, directional); the emitter's normal (hemispherical).
-    pub direction: [f32; 3],
-    /// Cosine of the outer cone angle (spot).
-    pub cos_outer: f32,
-    /// Cosine of the inner cone angle (spot).
-    pub cos_inner: f32,
-    /// Padding to 64 bytes.
-    pub _pad: [u32; 3],
-}
-
-impl From<&Light> for GpuLight {
-    fn from(light: &Light) -> Self {
-        let base = Self {
-            position: [0.0; 3],
-            radius: 1.0,
-            color: [0.0; 3],
-            kind: 0,
-            direction: [0.0, -1.0, 0.0],
-            cos_outer: 0.0,
-            cos_inner: 1.0,
-            _pad: [0; 3],
-        };
-        match *light {
-            Light::Point {
-                position,
-                color,
-                intensity,
-                radius,
-            } => Self {
-                position: position.to_array(),
-                radius,
-                color: (color * intensity).to_array(),
-                ..base
-            },
-            Light::Spot {
-                position,
-                direction,
-                color,
-                intensity,
-                radius,
-                inner_angle,
-                outer_angle,
-            } => Self {
-                position: position.to_array(),
-                radius,
-                color: (color * intensity).to_array(),
-                kind: 1,
-                direction: direction.to_array(),
-                cos_outer: outer_angle.cos(),
-                cos_inner: inner_angle.cos().max(outer_angle.cos() + 1e-4),
-                ..base
-            },
-            Light::Hemispherical {
-                position,
-                direction,
-                color,
-                intensity,
-                radius,
-            } => Self {
-                position: position.to_array(),
-                radius,
-                color: (color * intensity).to_array(),
-                kind: 3,
-                direction: direction.to_array(),
-                ..base
-            },
-            Light::Directional {
-                direction,
-                color,
-                intensity,
-            } => Self {
-                color: (color * intensity).to_array(),
-                kind: 2,
-                direction: direction.to_array(),
-                ..base
-            },
-        }
-    }
-}
+pub use tiled_shading::{GpuLight, Method as ShadingMethod, ShadingConfig};
 
 /// Time one pass of a frame took.
 #[derive(Clone, Debug, PartialEq)]
@@ -164,6 +74,9 @@ pub enum RenderError {
     /// The VPL clamp distance is negative or not finite.
     #[error("the VPL clamp distance must be finite and >= 0, got {0}")]
     Clamp(f32),
+    /// The light accumulation failed (tile size, light buffer, GPU).
+    #[error(transparent)]
+    Shading(tiled_shading::ShadingError),
     /// A light has non-finite or negative parameters.
     #[error("light {index} is invalid: {light:?}")]
     InvalidLight {
@@ -174,27 +87,21 @@ pub enum RenderError {
     },
 }
 
-/// Rejects lights with NaN/infinite values or non-positive radii.
-pub fn validate_lights(lights: &[Light]) -> Result<(), RenderError> {
-    for (index, light) in lights.iter().enumerate() {
-        let g = GpuLight::from(light);
-        let finite = g
-            .position
-            .iter()
-            .chain(&g.color)
-            .chain(&g.direction)
-            .all(|v| v.is_finite())
-            && g.radius.is_finite()
-            && g.cos_inner.is_finite()
-            && g.cos_outer.is_finite();
-        if !finite || g.radius <= 0.0 || g.color.iter().any(|&c| c < 0.0) {
-            return Err(RenderError::InvalidLight {
-                index,
-                light: *light,
-            });
+/// Rejects lights with NaN/infinite values or non-positive radii
+/// ([`tiled_shading::gpu_lights`]) and returns their shader form.
+pub fn validate_lights(lights: &[Light]) -> Result<Vec<GpuLight>, RenderError> {
+    Ok(tiled_shading::gpu_lights(lights)?)
+}
+
+impl From<tiled_shading::ShadingError> for RenderError {
+    fn from(e: tiled_shading::ShadingError) -> Self {
+        match e {
+            tiled_shading::ShadingError::InvalidLight { index, light } => {
+                RenderError::InvalidLight { index, light }
+            }
+            other => RenderError::Shading(other),
         }
     }
-    Ok(())
 }
 
 /// The scene a benchmark runs on: `path`, or else the shared fixtures' Dabrovic Sponza.
@@ -285,14 +192,6 @@ pub fn psnr(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn gpu_light_matches_wgsl_layout() {
-        assert_eq!(size_of::<GpuLight>(), 64);
-        assert_eq!(std::mem::offset_of!(GpuLight, color), 16);
-        assert_eq!(std::mem::offset_of!(GpuLight, direction), 32);
-        assert_eq!(std::mem::offset_of!(GpuLight, cos_inner), 48);
-    }
 
     #[test]
     fn invalid_lights_are_rejected() {

@@ -1,4 +1,5 @@
-//! Built-in scenes: the Cornell box, many spheres on a plane, and a textured checkerboard.
+//! Built-in scenes: the Cornell box, many spheres on a plane, a textured checkerboard, and the
+//! light-culling scenes of Ishmukhametov 2013 (walls with lights behind them).
 
 use std::f32::consts::{PI, TAU};
 
@@ -268,6 +269,116 @@ pub fn spheres_on_plane(n: u32) -> Scene {
         Vec3::ZERO,
     );
     cam.fit_planes(bounds);
+    b.scene.camera = Some(cam);
+    b.scene
+}
+
+/// A point light of `radius` and `color` whose intensity `radius²/4` gives about unit
+/// illuminance at half the radius (as [`crate::scatter_point_lights`]).
+fn bounded_light(position: Vec3, color: Vec3, radius: f32) -> Light {
+    Light::Point {
+        position,
+        color,
+        intensity: radius * radius * 0.25,
+        radius,
+    }
+}
+
+/// Uniform (seeded) point in the box `min..max`.
+fn point_in(rng: &mut SplitMix, min: Vec3, max: Vec3) -> Vec3 {
+    min + (max - min) * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32())
+}
+
+/// Radius of the point lights of [`thesis_walls`].
+pub const THESIS_LIGHT_RADIUS: f32 = 6.0;
+/// Lights of [`thesis_walls`] inside the view in front of the walls.
+pub const THESIS_VISIBLE_LIGHTS: u32 = 55;
+/// Lights of [`thesis_walls`] outside the view frustum (behind the camera).
+pub const THESIS_HIDDEN_LIGHTS: u32 = 1445;
+
+/// The test scene of Ishmukhametov 2013 §4.2, rebuilt: a large courtyard (floor 200 m × 160 m,
+/// a back wall 120 m × 30 m facing the camera 50 m away, side walls, a row of pillars), seen
+/// from eye height with a 60° field of view. Point lights of radius 6 m: 55 in front of the
+/// back wall inside the view, 1445 outside the view frustum behind the camera (what CPU
+/// frustum culling removes), and `behind` just behind the back wall (0.3–0.9 radii deep,
+/// inside the view's frustum and reaching the wall's depth): they face the back of the wall,
+/// so normal-cone culling can reject them where the wall fills a tile. The thesis's tests 1–4
+/// are `behind` = 0, 100, 500, 1000 (1500, 1600, 2000, 2500 lights).
+pub fn thesis_walls(behind: u32) -> Scene {
+    let mut b = Builder::new();
+    let floor_m = b.material("floor", Vec3::splat(0.5), 0.8, 0.0);
+    let wall_m = b.material("walls", Vec3::new(0.7, 0.65, 0.6), 0.6, 0.0);
+    let pillar_m = b.material("pillars", Vec3::new(0.55, 0.6, 0.7), 0.4, 0.0);
+    let v = Vec3::new;
+    let floor = b.mesh("floor", floor_m);
+    Builder::quad(
+        floor,
+        [v(-100.0, 0.0, -100.0), v(100.0, 0.0, -100.0), v(100.0, 0.0, 60.0), v(-100.0, 0.0, 60.0)],
+        Vec3::Y * 10.0,
+        40.0,
+    );
+    let walls = b.mesh("walls", wall_m);
+    // The back wall, 1 m thick: a front face towards the camera and a back face.
+    Builder::quad(walls, [v(-60.0, 0.0, -40.0), v(60.0, 0.0, -40.0), v(60.0, 30.0, -40.0), v(-60.0, 30.0, -40.0)], v(0.0, 10.0, 0.0), 12.0);
+    Builder::quad(walls, [v(-60.0, 0.0, -41.0), v(60.0, 0.0, -41.0), v(60.0, 30.0, -41.0), v(-60.0, 30.0, -41.0)], v(0.0, 10.0, -80.0), 12.0);
+    for x in [-30.0f32, 30.0] {
+        Builder::quad(walls, [v(x, 0.0, -40.0), v(x, 0.0, 0.0), v(x, 12.0, 0.0), v(x, 12.0, -40.0)], v(0.0, 5.0, -20.0), 4.0);
+    }
+    let pillars = b.mesh("pillars", pillar_m);
+    for i in 0..6 {
+        let x = -20.0 + 8.0 * i as f32;
+        let z = -25.0;
+        Builder::block(pillars, [v(x - 0.8, 8.0, z - 0.8), v(x + 0.8, 8.0, z - 0.8), v(x + 0.8, 8.0, z + 0.8), v(x - 0.8, 8.0, z + 0.8)]);
+    }
+    let r = THESIS_LIGHT_RADIUS;
+    let mut rng = SplitMix(1500);
+    let color = |rng: &mut SplitMix| v(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.7 + 0.3;
+    let mut lights = Vec::new();
+    for _ in 0..THESIS_VISIBLE_LIGHTS {
+        let c = color(&mut rng);
+        lights.push(bounded_light(point_in(&mut rng, v(-25.0, 0.5, -38.0), v(25.0, 12.0, -5.0)), c, r));
+    }
+    for _ in 0..THESIS_HIDDEN_LIGHTS {
+        let c = color(&mut rng);
+        lights.push(bounded_light(point_in(&mut rng, v(-100.0, 0.5, 20.0), v(100.0, 20.0, 60.0)), c, r));
+    }
+    for _ in 0..behind {
+        let c = color(&mut rng);
+        lights.push(bounded_light(point_in(&mut rng, v(-25.0, 1.0, -40.0 - 0.9 * r), v(25.0, 16.0, -40.0 - 0.3 * r)), c, r));
+    }
+    b.scene.lights = lights;
+    let mut cam = Camera::look_at(v(0.0, 6.0, 10.0), v(0.0, 6.0, -40.0));
+    cam.fov_y = 60f32.to_radians();
+    cam.near = 0.5;
+    cam.far = 250.0;
+    b.scene.camera = Some(cam);
+    b.scene
+}
+
+/// A wall (100 m square at z = −10, facing +Z) filling the view of a camera at the origin
+/// looking down −Z, with `front` point lights of radius 3 m between the camera and the wall
+/// and `behind` lights behind it (0.4–0.9 radii deep, within reach of the wall's depth): the
+/// normal-cone culling test must remove exactly the lights behind. Lights are listed front
+/// first.
+pub fn wall(front: u32, behind: u32) -> Scene {
+    let mut b = Builder::new();
+    let m = b.material("wall", Vec3::splat(0.7), 0.5, 0.0);
+    let mesh = b.mesh("wall", m);
+    let v = Vec3::new;
+    Builder::quad(mesh, [v(-50.0, -50.0, -10.0), v(50.0, -50.0, -10.0), v(50.0, 50.0, -10.0), v(-50.0, 50.0, -10.0)], Vec3::ZERO, 10.0);
+    let r = 3.0;
+    let mut rng = SplitMix(10);
+    let mut lights = Vec::new();
+    for _ in 0..front {
+        lights.push(bounded_light(point_in(&mut rng, v(-4.0, -3.0, -9.5), v(4.0, 3.0, -6.0)), Vec3::ONE, r));
+    }
+    for _ in 0..behind {
+        lights.push(bounded_light(point_in(&mut rng, v(-4.0, -3.0, -10.0 - 0.9 * r), v(4.0, 3.0, -10.0 - 0.4 * r)), Vec3::ONE, r));
+    }
+    b.scene.lights = lights;
+    let mut cam = Camera::look_at(Vec3::ZERO, v(0.0, 0.0, -10.0));
+    cam.near = 0.5;
+    cam.far = 50.0;
     b.scene.camera = Some(cam);
     b.scene
 }

@@ -19,7 +19,10 @@ mod load;
 
 use std::path::{Path, PathBuf};
 
-pub use builtin::{checkerboard, cornell_box, spheres_on_plane};
+pub use builtin::{
+    THESIS_HIDDEN_LIGHTS, THESIS_LIGHT_RADIUS, THESIS_VISIBLE_LIGHTS, checkerboard, cornell_box,
+    spheres_on_plane, thesis_walls, wall,
+};
 pub use bvh::{Bvh, Hit};
 pub use camera::Camera;
 pub use glam;

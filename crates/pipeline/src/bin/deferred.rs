@@ -1,5 +1,5 @@
-//! `deferred`: renders a scene with classic deferred shading (G-buffer → light accumulation
-//! → composition), optionally with one-bounce indirect light from VPLs shaded with
+//! `deferred`: renders a scene with deferred shading (G-buffer → light accumulation: brute
+//! force, tiled, tiled with normal cones or clustered → composition), optionally with one-bounce indirect light from VPLs shaded with
 //! interleaved sampling (Segovia 2006: BS → SNSM → BG → DB → B), on the GPU, or on the CPU
 //! when asked or when no GPU adapter exists; writes `render.png` and `render.exr` and prints
 //! the milliseconds of each pass (per million fragments too, like the paper's Table 3).
@@ -28,7 +28,8 @@ struct Args {
     /// Scene file (.gltf, .glb, .obj, .ply); default: the built-in scene named by --builtin.
     #[arg(long)]
     scene: Option<PathBuf>,
-    /// Built-in scene when no --scene is given: cornell, spheres or checkerboard.
+    /// Built-in scene when no --scene is given: cornell, spheres, checkerboard, or the
+    /// light-culling scenes of Ishmukhametov 2013 §4.2: walls-test1 .. walls-test4.
     #[arg(long, default_value = "cornell")]
     builtin: String,
     /// Image size as WIDTHxHEIGHT.
@@ -37,6 +38,20 @@ struct Args {
     /// Replace the scene's lights with N point lights scattered through its bounds (seeded).
     #[arg(long)]
     lights: Option<usize>,
+    /// Light accumulation: brute, tiled, tiled-cones (tiled with normal-cone back-face
+    /// culling) or clustered.
+    #[arg(long, default_value = "tiled")]
+    shading: pipeline::ShadingMethod,
+    /// Tile side in pixels for the tiled and clustered light accumulation: 8, 16 or 32.
+    #[arg(long, default_value_t = 16)]
+    tile: u32,
+    /// Cull lights against the view frustum on the CPU before the light accumulation
+    /// (Ishmukhametov 2013 §4.1).
+    #[arg(long)]
+    frustum_cull: bool,
+    /// Write the per-tile light counts as heatmap.png (tiled and clustered shading).
+    #[arg(long)]
+    heatmap: bool,
     /// Add a light: point:X,Y,Z,RADIUS[,R,G,B,I] | spot:X,Y,Z,DX,DY,DZ,RADIUS,INNER°,OUTER°[,R,G,B,I] | hemi:X,Y,Z,DX,DY,DZ,RADIUS[,R,G,B,I] | dir:DX,DY,DZ[,R,G,B,I].
     #[arg(long = "light")]
     extra_lights: Vec<Light>,
@@ -168,7 +183,13 @@ fn load_scene(args: &Args) -> Result<Scene> {
             "cornell" => scene::cornell_box(),
             "spheres" => scene::spheres_on_plane(8),
             "checkerboard" => scene::checkerboard(),
-            other => bail!("unknown built-in scene {other:?} (cornell, spheres, checkerboard)"),
+            "walls-test1" => scene::thesis_walls(0),
+            "walls-test2" => scene::thesis_walls(100),
+            "walls-test3" => scene::thesis_walls(500),
+            "walls-test4" => scene::thesis_walls(1000),
+            other => bail!(
+                "unknown built-in scene {other:?} (cornell, spheres, checkerboard, walls-test1 .. walls-test4)"
+            ),
         });
     };
     let bar = indicatif::ProgressBar::new(1).with_message(format!("loading {}", path.display()));
@@ -218,6 +239,11 @@ fn main() -> Result<()> {
         None => vpl::primary_lights(&scene),
     };
     lights.extend(args.extra_lights.iter().copied());
+    let shading = pipeline::ShadingConfig {
+        method: args.shading,
+        tile_size: args.tile,
+    };
+    shading.validate()?;
     let indirect = match args.vpls {
         Some(count) => {
             let config = indirect_config(&args, &scene)?;
@@ -255,6 +281,14 @@ fn main() -> Result<()> {
         lights.clone()
     };
     let indirect_ref = indirect.as_ref().map(|(c, s)| (c, s));
+    let all_direct = direct_lights.len();
+    let direct_lights: Vec<Light> = if args.frustum_cull {
+        let aspect = width as f32 / height as f32;
+        let kept = tiled_shading::frustum_cull(&camera, aspect, &pipeline::validate_lights(&direct_lights)?);
+        kept.iter().map(|&i| direct_lights[i as usize]).collect()
+    } else {
+        direct_lights
+    };
 
     let gpu = if args.cpu {
         None
@@ -272,11 +306,18 @@ fn main() -> Result<()> {
             Some(gpu) => {
                 let mut renderer =
                     pipeline::gpu::GpuRenderer::new(gpu, &scene, &direct_lights, width, height)?;
+                renderer.set_shading(gpu, &shading)?;
                 if let Some((config, set)) = indirect_ref {
                     renderer.set_indirect(gpu, config, set)?;
                 }
                 renderer.render(gpu, &camera, ambient)?; // warm-up: first use of pipelines and caches
                 let rendered = renderer.render(gpu, &camera, ambient)?;
+                if args.heatmap {
+                    match renderer.shading().read_counts(gpu)? {
+                        Some(counts) => write_heatmap(&args.out, &shading, width, height, &counts)?,
+                        None => eprintln!("no heatmap: brute force keeps no per-tile lists"),
+                    }
+                }
                 let (stages, gbuffer) = if args.dump_stages {
                     (
                         renderer.indirect().map(|s| s.read(gpu)).transpose()?,
@@ -295,8 +336,16 @@ fn main() -> Result<()> {
                     width,
                     height,
                     ambient,
+                    &shading,
                     indirect_ref,
                 )?;
+                if args.heatmap {
+                    let gb = gbuffer::cpu::rasterize(&scene, &camera, width, height)?.gbuffer;
+                    let frame = gbuffer::Frame::new(&camera, width, height);
+                    let lights = pipeline::validate_lights(&direct_lights)?;
+                    let shaded = tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &shading)?;
+                    write_heatmap(&args.out, &shading, width, height, &shaded.counts)?;
+                }
                 let gbuffer = args
                     .dump_stages
                     .then(|| gbuffer::cpu::rasterize(&scene, &camera, width, height))
@@ -325,7 +374,21 @@ fn main() -> Result<()> {
     println!(
         "scene:   {} triangles, {} direct lights ({lit_by}), {width}x{height}",
         scene.triangle_count(),
-        direct_lights.len(),
+        all_direct,
+    );
+    println!(
+        "shading: {}{}{}",
+        shading.method,
+        if shading.method == pipeline::ShadingMethod::BruteForce {
+            String::new()
+        } else {
+            format!(", {0}x{0} tiles", shading.tile_size)
+        },
+        if args.frustum_cull {
+            format!(", CPU frustum culling kept {} lights", direct_lights.len())
+        } else {
+            String::new()
+        },
     );
     if let Some((config, set)) = &indirect {
         println!(
@@ -358,6 +421,22 @@ fn main() -> Result<()> {
     Ok(())
 }
 
+/// Writes the per-tile light counts as `heatmap.png` (the thesis's light-count figures).
+fn write_heatmap(
+    out: &std::path::Path,
+    shading: &pipeline::ShadingConfig,
+    width: u32,
+    height: u32,
+    counts: &[u32],
+) -> Result<()> {
+    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    let max = counts.iter().copied().max().unwrap_or(0);
+    let path = out.join("heatmap.png");
+    tiled_shading::heatmap(counts, shading, width, height, max.max(1)).write_png(&path)?;
+    println!("heatmap: {} (black 0 → white {max} lights per tile)", path.display());
+    Ok(())
+}
+
 /// Per-pass milliseconds summed by name, in first-seen order, and per million fragments.
 fn print_table(timings: &[PassTiming], fragments: f64) {
     let mut rows: Vec<(String, f64)> = Vec::new();
@@ -367,14 +446,14 @@ fn print_table(timings: &[PassTiming], fragments: f64) {
             None => rows.push((t.name.clone(), t.ms)),
         }
     }
-    println!("{:<22} {:>10} {:>14}", "pass", "ms", "ms/Mfragment");
+    println!("{:<32} {:>10} {:>14}", "pass", "ms", "ms/Mfragment");
     let per = |ms: f64| ms / (fragments / 1e6);
     for (name, ms) in &rows {
-        println!("{name:<22} {ms:>10.3} {:>14.3}", per(*ms));
+        println!("{name:<32} {ms:>10.3} {:>14.3}", per(*ms));
     }
     if !rows.is_empty() {
         let total: f64 = rows.iter().map(|r| r.1).sum();
-        println!("{:<22} {total:>10.3} {:>14.3}", "total", per(total));
+        println!("{:<32} {total:>10.3} {:>14.3}", "total", per(total));
     }
 }
 

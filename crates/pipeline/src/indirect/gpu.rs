@@ -21,43 +21,21 @@
 //! ```
 
 use ::gpu::{Gpu, PassTimer, shader, transfer, wgpu};
-use gbuffer::{Frame, GBuffer, Image, gpu::GBufferTargets};
+use gbuffer::{
+    Frame, GBuffer, Image,
+    gpu::{GBufferTextures, UploadedGBuffer},
+};
 use half::f16;
 use interleave::{
     SplitLayout,
     gpu::{
         BlurPass, DISCONTINUITY_FORMAT, DiscontinuityPass, IRRADIANCE_FORMAT, Passes, Splitter,
-        download_image, upload_image,
+        download_image,
     },
 };
 
 use super::{IndirectConfig, IndirectStages, Interleaving, vpl::VplSet};
 use crate::RenderError;
-
-/// The G-buffer textures the stage reads (linear depth, normal, albedo, material formats of
-/// `gbuffer`).
-#[derive(Clone, Copy)]
-pub struct GBufferTextures<'a> {
-    /// `R32Float` view depth (0 where no surface).
-    pub linear_depth: &'a wgpu::Texture,
-    /// `R32Uint` octahedral normals.
-    pub normal: &'a wgpu::Texture,
-    /// `Rgba8Unorm` albedo.
-    pub albedo: &'a wgpu::Texture,
-    /// `R32Uint` material words.
-    pub material: &'a wgpu::Texture,
-}
-
-impl<'a> From<&'a GBufferTargets> for GBufferTextures<'a> {
-    fn from(t: &'a GBufferTargets) -> Self {
-        Self {
-            linear_depth: &t.linear_depth,
-            normal: &t.normal,
-            albedo: &t.albedo,
-            material: &t.material,
-        }
-    }
-}
 
 /// Uniform block of `vpl_shading.wgsl`.
 #[repr(C)]
@@ -331,15 +309,7 @@ pub fn run(
     set: &VplSet,
     config: &IndirectConfig,
 ) -> Result<IndirectStages, RenderError> {
-    let linear_depth = upload_image(
-        gpu,
-        "linear depth",
-        &gb.linear_depth,
-        gbuffer::LINEAR_DEPTH_FORMAT,
-    )?;
-    let normal = upload_image(gpu, "normal", &gb.normal, gbuffer::NORMAL_FORMAT)?;
-    let albedo = upload_image(gpu, "albedo", &gb.albedo, gbuffer::ALBEDO_FORMAT)?;
-    let material = upload_image(gpu, "material", &gb.material, gbuffer::MATERIAL_FORMAT)?;
+    let uploaded = UploadedGBuffer::new(gpu, gb)?;
     let frame = transfer::buffer_init(
         &gpu.device,
         "frame",
@@ -349,12 +319,7 @@ pub fn run(
     let stage = IndirectStage::new(
         &gpu.device,
         &frame,
-        GBufferTextures {
-            linear_depth: &linear_depth,
-            normal: &normal,
-            albedo: &albedo,
-            material: &material,
-        },
+        uploaded.textures(),
         config,
         set,
     )?;

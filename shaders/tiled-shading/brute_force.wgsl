@@ -1,8 +1,9 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
-// #import pipeline/lighting.wgsl
-// Light accumulation (Ishmukhametov 2013 §1.3 step 3) for every pixel and every light:
-// diffuse and specular into two accumulation buffers. Twin of `pipeline::cpu::light_accumulation`.
+// #import tiled-shading/lighting.wgsl
+// Brute force: light accumulation (Ishmukhametov 2013 §1.3 step 3) of every light at every
+// pixel, diffuse and specular into two accumulation buffers — the baseline of the tiled
+// methods. Twin of `tiled_shading::cpu::shade` with `Method::BruteForce`.
 
 struct Params {
     light_count: u32,
@@ -14,7 +15,7 @@ struct Params {
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<uniform> params: Params;
 @group(0) @binding(2) var<storage, read> lights: array<Light>;
-@group(0) @binding(3) var depth_texture: texture_depth_2d;
+@group(0) @binding(3) var linear_depth_texture: texture_2d<f32>;
 @group(0) @binding(4) var normal_texture: texture_2d<u32>;
 @group(0) @binding(5) var albedo_texture: texture_2d<f32>;
 @group(0) @binding(6) var material_texture: texture_2d<u32>;
@@ -22,15 +23,15 @@ struct Params {
 @group(0) @binding(8) var specular_out: texture_storage_2d<rgba32float, write>;
 
 @compute @workgroup_size(8, 8)
-fn light_accumulation(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = textureDimensions(depth_texture);
+fn brute_force(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(linear_depth_texture);
     if id.x >= size.x || id.y >= size.y { return; }
     let pixel = id.xy;
-    let depth = textureLoad(depth_texture, pixel, 0);
+    let depth = textureLoad(linear_depth_texture, pixel, 0).x;
     var diffuse = vec3<f32>(0.0);
     var specular = vec3<f32>(0.0);
-    if depth < 1.0 {
-        let p = position_from_depth(frame, pixel, depth);
+    if depth > 0.0 {
+        let p = position_from_view_ray(frame, pixel, depth);
         let n = decode_octahedral_snorm(unpack2x16snorm(textureLoad(normal_texture, pixel, 0).x));
         let v = normalize(frame.eye.xyz - p);
         let albedo = textureLoad(albedo_texture, pixel, 0).rgb;

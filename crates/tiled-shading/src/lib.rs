@@ -1,0 +1,439 @@
+//! Light accumulation for deferred shading (Ishmukhametov 2013): every light at every pixel
+//! (brute force), tile-based deferred shading with per-tile depth bounds (§2.4.1, after
+//! Andersson 2009 and Lauritzen 2010), the same with normal-cone back-face culling of lights
+//! (chapter 4, steps 1–7), and a clustered variant with exponential depth slices (§2.5, after
+//! Olsson et al. 2012). CPU reference in [`cpu`], one compute pass per method in [`gpu`].
+//!
+//! All methods produce the same two images — the diffuse and specular sums of
+//! [`lighting::shade_light`] over the lights — because every light has a finite radius at
+//! which its attenuation is exactly zero and every culling test is conservative: a light is
+//! only dropped from a tile when it cannot reach any of its pixels (outside the tile's
+//! depth-bounded frustum) or reaches them all from behind (normal cone).
+//!
+//! ```no_run
+//! use tiled_shading::{Method, ShadingConfig};
+//! let scene = scene::spheres_on_plane(4);
+//! let camera = scene.camera_or_framed();
+//! let gb = gbuffer::cpu::rasterize(&scene, &camera, 320, 240)?.gbuffer;
+//! let frame = gbuffer::Frame::new(&camera, 320, 240);
+//! let lights = scene::scatter_point_lights(scene.bounds(), 256, 7);
+//! let config = ShadingConfig { method: Method::TiledCones, ..Default::default() };
+//! let out = tiled_shading::cpu::shade(&gb, &frame, &camera, &tiled_shading::gpu_lights(&lights)?, &config)?;
+//! println!("{} light evaluations", out.counts.iter().map(|&c| u64::from(c)).sum::<u64>());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+pub mod cpu;
+pub mod gpu;
+pub mod lighting;
+
+use std::fmt;
+use std::str::FromStr;
+
+use glam::{Vec3, Vec4Swizzles};
+use scene::{Camera, Light};
+
+/// A light as the shaders see it (WGSL `Light` in `tiled-shading/lighting.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuLight {
+    /// Position (point, spot, hemispherical).
+    pub position: [f32; 3],
+    /// Influence radius (point, spot, hemispherical).
+    pub radius: f32,
+    /// Colour × intensity.
+    pub color: [f32; 3],
+    /// 0 point, 1 spot, 2 directional, 3 hemispherical.
+    pub kind: u32,
+    /// Direction the light travels (spot, directional); the emitter's normal (hemispherical).
+    pub direction: [f32; 3],
+    /// Cosine of the outer cone angle (spot).
+    pub cos_outer: f32,
+    /// Cosine of the inner cone angle (spot).
+    pub cos_inner: f32,
+    /// Padding to 64 bytes.
+    pub _pad: [u32; 3],
+}
+
+/// `GpuLight::kind` of a directional light (no position, no radius: never culled).
+pub const LIGHT_DIRECTIONAL: u32 = 2;
+
+impl From<&Light> for GpuLight {
+    fn from(light: &Light) -> Self {
+        let base = Self {
+            position: [0.0; 3],
+            radius: 1.0,
+            color: [0.0; 3],
+            kind: 0,
+            direction: [0.0, -1.0, 0.0],
+            cos_outer: 0.0,
+            cos_inner: 1.0,
+            _pad: [0; 3],
+        };
+        match *light {
+            Light::Point {
+                position,
+                color,
+                intensity,
+                radius,
+            } => Self {
+                position: position.to_array(),
+                radius,
+                color: (color * intensity).to_array(),
+                ..base
+            },
+            Light::Spot {
+                position,
+                direction,
+                color,
+                intensity,
+                radius,
+                inner_angle,
+                outer_angle,
+            } => Self {
+                position: position.to_array(),
+                radius,
+                color: (color * intensity).to_array(),
+                kind: 1,
+                direction: direction.to_array(),
+                cos_outer: outer_angle.cos(),
+                cos_inner: inner_angle.cos().max(outer_angle.cos() + 1e-4),
+                ..base
+            },
+            Light::Hemispherical {
+                position,
+                direction,
+                color,
+                intensity,
+                radius,
+            } => Self {
+                position: position.to_array(),
+                radius,
+                color: (color * intensity).to_array(),
+                kind: 3,
+                direction: direction.to_array(),
+                ..base
+            },
+            Light::Directional {
+                direction,
+                color,
+                intensity,
+            } => Self {
+                color: (color * intensity).to_array(),
+                kind: LIGHT_DIRECTIONAL,
+                direction: direction.to_array(),
+                ..base
+            },
+        }
+    }
+}
+
+/// How lights are assigned to pixels.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Every light at every pixel (thesis §4.1 "traditional deferred shading" as one compute
+    /// pass): the baseline and the reference.
+    BruteForce,
+    /// Tile-based deferred shading (§2.4.1): per-tile depth bounds and a sphere–frustum test.
+    #[default]
+    Tiled,
+    /// [`Method::Tiled`] plus normal-cone back-face culling of lights (chapter 4, steps 1–7).
+    TiledCones,
+    /// Clusters of a tile and an exponential depth slice (§2.5): a light is evaluated at a
+    /// pixel only when it overlaps the pixel's cluster.
+    Clustered,
+}
+
+impl Method {
+    /// Every method, baseline first.
+    pub const ALL: [Method; 4] = [
+        Method::BruteForce,
+        Method::Tiled,
+        Method::TiledCones,
+        Method::Clustered,
+    ];
+
+    /// The command-line name (`brute`, `tiled`, `tiled-cones`, `clustered`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::BruteForce => "brute",
+            Method::Tiled => "tiled",
+            Method::TiledCones => "tiled-cones",
+            Method::Clustered => "clustered",
+        }
+    }
+}
+
+impl fmt::Display for Method {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Method {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| format!("unknown shading method {s:?} (brute, tiled, tiled-cones, clustered)"))
+    }
+}
+
+/// Depth slices of [`Method::Clustered`]: a 32-bit mask holds a tile's occupied slices.
+pub const CLUSTER_SLICES: u32 = 32;
+
+/// What the light accumulation does.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingConfig {
+    /// Culling method.
+    pub method: Method,
+    /// Tile side in pixels: 8, 16 (default, as the thesis) or 32.
+    pub tile_size: u32,
+}
+
+impl Default for ShadingConfig {
+    fn default() -> Self {
+        Self {
+            method: Method::Tiled,
+            tile_size: 16,
+        }
+    }
+}
+
+impl ShadingConfig {
+    /// Checks the tile size.
+    pub fn validate(&self) -> Result<(), ShadingError> {
+        if ![8, 16, 32].contains(&self.tile_size) {
+            return Err(ShadingError::TileSize(self.tile_size));
+        }
+        Ok(())
+    }
+
+    /// Tiles across and down a `width × height` image (partial tiles at the right and bottom).
+    pub fn tiles(&self, width: u32, height: u32) -> (u32, u32) {
+        (width.div_ceil(self.tile_size), height.div_ceil(self.tile_size))
+    }
+}
+
+/// Exponential depth slicing of the view between the camera's near and far planes
+/// (Olsson et al. 2012 as the thesis summarises it in §2.5): slice `k` spans view depths
+/// `near · (far/near)^(k/S)` to `near · (far/near)^((k+1)/S)`, S = [`CLUSTER_SLICES`], so every
+/// slice has the same ratio of depth extent to distance (self-similar clusters).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Slicing {
+    /// Near plane distance.
+    pub near: f32,
+    /// `S / ln(far / near)`: slice index per unit of `ln(depth / near)`.
+    pub scale: f32,
+}
+
+impl Slicing {
+    /// The slicing for `camera`'s near and far planes.
+    pub fn new(camera: &Camera) -> Self {
+        let near = camera.near.max(1e-6);
+        let ratio = (camera.far / near).max(1.0 + 1e-6);
+        Self {
+            near,
+            scale: CLUSTER_SLICES as f32 / ratio.ln(),
+        }
+    }
+
+    /// The slice of a view depth (clamped to `0..S`).
+    pub fn slice(&self, depth: f32) -> u32 {
+        let k = ((depth / self.near).max(1.0).ln() * self.scale).floor();
+        (k.max(0.0) as u32).min(CLUSTER_SLICES - 1)
+    }
+
+    /// View depth at which slice `k` begins (`k = S` gives the far plane).
+    pub fn start(&self, k: u32) -> f32 {
+        self.near * (k as f32 / self.scale).exp()
+    }
+}
+
+/// Errors of light accumulation.
+#[derive(Debug, thiserror::Error)]
+pub enum ShadingError {
+    /// Tile sides other than 8, 16, 32.
+    #[error("tile size must be 8, 16 or 32 pixels, got {0}")]
+    TileSize(u32),
+    /// A light has non-finite or negative parameters or a non-positive radius.
+    #[error("light {index} is invalid: {light:?}")]
+    InvalidLight {
+        /// Index in the light list.
+        index: usize,
+        /// The light.
+        light: Light,
+    },
+    /// More lights than the buffer made at creation holds.
+    #[error("{count} lights do not fit the light buffer made for {capacity}")]
+    TooManyLights {
+        /// Lights given.
+        count: usize,
+        /// Lights the buffer holds.
+        capacity: usize,
+    },
+    /// A GPU resource could not be created or read.
+    #[error(transparent)]
+    Gpu(#[from] ::gpu::GpuError),
+}
+
+/// Converts lights to their shader form, rejecting NaN/infinite values, negative colours and
+/// non-positive radii.
+pub fn gpu_lights(lights: &[Light]) -> Result<Vec<GpuLight>, ShadingError> {
+    lights
+        .iter()
+        .enumerate()
+        .map(|(index, light)| {
+            let g = GpuLight::from(light);
+            let finite = g
+                .position
+                .iter()
+                .chain(&g.color)
+                .chain(&g.direction)
+                .all(|v| v.is_finite())
+                && g.radius.is_finite()
+                && g.cos_inner.is_finite()
+                && g.cos_outer.is_finite();
+            if finite && g.radius > 0.0 && g.color.iter().all(|&c| c >= 0.0) {
+                Ok(g)
+            } else {
+                Err(ShadingError::InvalidLight {
+                    index,
+                    light: *light,
+                })
+            }
+        })
+        .collect()
+}
+
+/// CPU view-frustum culling of lights (thesis §4.1): the indices of the lights whose
+/// influence sphere meets the camera's view frustum (six planes; directional lights always).
+/// Only these need to be sent to the light accumulation.
+pub fn frustum_cull(camera: &Camera, aspect: f32, lights: &[GpuLight]) -> Vec<u32> {
+    let m = camera.view_projection(aspect);
+    let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
+    // Clip-space planes (wgpu depth 0..1): left, right, bottom, top, near, far.
+    let planes = [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2]
+        .map(|p| p / p.xyz().length().max(f32::MIN_POSITIVE));
+    lights
+        .iter()
+        .enumerate()
+        .filter(|(_, l)| {
+            l.kind == LIGHT_DIRECTIONAL
+                || planes
+                    .iter()
+                    .all(|p| p.xyz().dot(Vec3::from(l.position)) + p.w >= -l.radius)
+        })
+        .map(|(i, _)| i as u32)
+        .collect()
+}
+
+/// Colour of `t` ∈ \[0, 1\] on the heatmap ramp black → blue → green → yellow → red → white.
+pub fn heat_color(t: f32) -> [f32; 4] {
+    const RAMP: [[f32; 3]; 6] = [
+        [0.0, 0.0, 0.0],
+        [0.0, 0.1, 0.9],
+        [0.0, 0.8, 0.2],
+        [1.0, 0.9, 0.0],
+        [1.0, 0.1, 0.0],
+        [1.0, 1.0, 1.0],
+    ];
+    let x = t.clamp(0.0, 1.0) * (RAMP.len() - 1) as f32;
+    let i = (x.floor() as usize).min(RAMP.len() - 2);
+    let f = x - i as f32;
+    let c = |k: usize| RAMP[i][k] + (RAMP[i + 1][k] - RAMP[i][k]) * f;
+    [c(0), c(1), c(2), 1.0]
+}
+
+/// The light-count heatmap of a `width × height` frame (like the thesis's figures in §4.2):
+/// each tile filled with [`heat_color`] of its count / `max` (black: no lights, white: `max`
+/// or more), with a one-pixel darker grid between tiles.
+pub fn heatmap(counts: &[u32], config: &ShadingConfig, width: u32, height: u32, max: u32) -> gbuffer::Image<[f32; 4]> {
+    let (tiles_x, _) = config.tiles(width, height);
+    let t = config.tile_size;
+    let pixels = (0..width * height)
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let count = counts.get(((y / t) * tiles_x + x / t) as usize).copied().unwrap_or(0);
+            let c = heat_color(count as f32 / max.max(1) as f32);
+            let edge = if x % t == 0 || y % t == 0 { 0.7 } else { 1.0 };
+            [c[0] * edge, c[1] * edge, c[2] * edge, 1.0]
+        })
+        .collect();
+    gbuffer::Image::from_vec(width, height, pixels).expect("w × h pixels")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gpu_light_matches_wgsl_layout() {
+        assert_eq!(size_of::<GpuLight>(), 64);
+        assert_eq!(std::mem::offset_of!(GpuLight, color), 16);
+        assert_eq!(std::mem::offset_of!(GpuLight, direction), 32);
+        assert_eq!(std::mem::offset_of!(GpuLight, cos_inner), 48);
+    }
+
+    #[test]
+    fn invalid_lights_are_rejected() {
+        for (position, radius) in [(Vec3::NAN, 1.0), (Vec3::ZERO, 0.0), (Vec3::ZERO, f32::INFINITY)] {
+            let bad = Light::Point {
+                position,
+                color: Vec3::ONE,
+                intensity: 1.0,
+                radius,
+            };
+            assert!(matches!(
+                gpu_lights(&[bad]),
+                Err(ShadingError::InvalidLight { index: 0, .. })
+            ));
+        }
+    }
+
+    #[test]
+    fn methods_parse_by_name() {
+        for m in Method::ALL {
+            assert_eq!(m.name().parse::<Method>(), Ok(m));
+        }
+        assert!("tiles".parse::<Method>().is_err());
+    }
+
+    #[test]
+    fn slices_are_exponential_and_cover_near_to_far() {
+        let mut camera = Camera::look_at(Vec3::ZERO, Vec3::NEG_Z);
+        (camera.near, camera.far) = (0.5, 500.0);
+        let s = Slicing::new(&camera);
+        assert!((s.start(0) - 0.5).abs() < 1e-6);
+        assert!((s.start(CLUSTER_SLICES) - 500.0).abs() < 1e-2);
+        let ratio = s.start(1) / s.start(0);
+        for k in 0..CLUSTER_SLICES {
+            assert!((s.start(k + 1) / s.start(k) - ratio).abs() < 1e-4);
+            let mid = (s.start(k) * s.start(k + 1)).sqrt();
+            assert_eq!(s.slice(mid), k);
+        }
+        assert_eq!(s.slice(0.01), 0);
+        assert_eq!(s.slice(1e6), CLUSTER_SLICES - 1);
+    }
+
+    #[test]
+    fn frustum_culling_keeps_lights_that_reach_the_view() {
+        let mut camera = Camera::look_at(Vec3::ZERO, Vec3::NEG_Z);
+        (camera.near, camera.far) = (0.1, 100.0);
+        let light = |x: f32, z: f32, r: f32| GpuLight {
+            position: [x, 0.0, z],
+            radius: r,
+            ..bytemuck::Zeroable::zeroed()
+        };
+        let lights = [
+            light(0.0, -10.0, 1.0),  // in view
+            light(0.0, 10.0, 1.0),   // behind the eye
+            light(0.0, 1.0, 1.5),    // behind, but its sphere crosses the near plane
+            light(50.0, -10.0, 1.0), // far to the right
+            light(0.0, -200.0, 50.0), // beyond the far plane
+        ];
+        assert_eq!(frustum_cull(&camera, 1.0, &lights), vec![0, 2]);
+    }
+}

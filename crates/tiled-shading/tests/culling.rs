@@ -1,0 +1,303 @@
+//! The invariants of tiled light culling (Ishmukhametov 2013 §2.4.1, chapter 4): every
+//! culled method gives the brute-force image, on the CPU and on the GPU; CPU and GPU tile
+//! lists are the same sets; normal cones never change the image and, in front of a wall,
+//! remove exactly the lights behind it.
+
+use std::collections::BTreeSet;
+
+use gbuffer::{Frame, GBuffer, Image};
+use glam::Vec3;
+use scene::{Camera, Light, Scene};
+use tiled_shading::{
+    GpuLight, Method, ShadingConfig, ShadingError,
+    cpu::{self, Shaded},
+    gpu,
+};
+
+/// Tolerance of images that sum the same non-zero terms in the same order up to lights that
+/// contribute exactly zero (CPU culled vs CPU brute force), relative to the image's maximum.
+const SAME_TERMS: f32 = 1e-6;
+/// Tolerance of GPU vs CPU images (another summation order, fused multiply-adds, GPU
+/// transcendental functions; GGX peaks of smooth spheres are the most sensitive: 4e-4 seen on
+/// llvmpipe), relative per pixel, plus 1e-5 of the image's maximum.
+const GPU_RELATIVE: f32 = 2e-3;
+
+struct Case {
+    gb: GBuffer,
+    frame: Frame,
+    camera: Camera,
+    lights: Vec<GpuLight>,
+}
+
+fn case(scene: &Scene, camera: Camera, lights: &[Light], width: u32, height: u32) -> Case {
+    Case {
+        gb: gbuffer::cpu::rasterize(scene, &camera, width, height)
+            .expect("rasterize")
+            .gbuffer,
+        frame: Frame::new(&camera, width, height),
+        camera,
+        lights: tiled_shading::gpu_lights(lights).expect("valid lights"),
+    }
+}
+
+/// Spheres on a plane under scattered point lights plus a spot, a hemispherical and a
+/// directional light.
+fn spheres(width: u32, height: u32, count: usize) -> Case {
+    let scene = scene::spheres_on_plane(5);
+    let mut lights = scene::scatter_point_lights(scene.bounds(), count, 5);
+    lights.extend([
+        "spot:0,3,0,0,-1,0,6,20,35".parse::<Light>().expect("spot"),
+        "hemi:1,0.5,1,0,1,0,3".parse().expect("hemi"),
+        "dir:0.3,-1,0.2,1,1,1,0.5".parse().expect("dir"),
+    ]);
+    case(&scene, scene.camera_or_framed(), &lights, width, height)
+}
+
+fn walls(behind: u32, width: u32, height: u32) -> Case {
+    let scene = scene::thesis_walls(behind);
+    let camera = scene.camera.expect("camera");
+    case(&scene, camera, &scene.lights, width, height)
+}
+
+fn config(method: Method, tile_size: u32) -> ShadingConfig {
+    ShadingConfig { method, tile_size }
+}
+
+fn shade_cpu(c: &Case, config: &ShadingConfig) -> Shaded {
+    cpu::shade(&c.gb, &c.frame, &c.camera, &c.lights, config).expect("cpu shade")
+}
+
+fn max_abs(img: &Image<Vec3>) -> f32 {
+    img.pixels().iter().map(|p| p.max_element()).fold(0.0, f32::max)
+}
+
+/// Largest per-pixel error of `test` against `reference` beyond `rel·|ref| + abs·max(ref)`.
+fn compare(what: &str, reference: &Shaded, test: &Shaded, rel: f32, abs: f32) {
+    for (name, r, t) in [
+        ("diffuse", &reference.diffuse, &test.diffuse),
+        ("specular", &reference.specular, &test.specular),
+    ] {
+        let floor = abs * max_abs(r);
+        let mut worst = (0.0f32, 0u32, 0u32);
+        for y in 0..r.height() {
+            for x in 0..r.width() {
+                let (a, b) = (r.get(x, y), t.get(x, y));
+                let excess = ((a - b).abs() - (a.abs() * rel + floor)).max_element();
+                if excess > worst.0 {
+                    worst = (excess, x, y);
+                }
+            }
+        }
+        assert!(
+            worst.0 == 0.0,
+            "{what} {name}: pixel ({}, {}) differs: {} vs {}",
+            worst.1,
+            worst.2,
+            r.get(worst.1, worst.2),
+            t.get(worst.1, worst.2)
+        );
+    }
+}
+
+fn sets(lists: &[Vec<(u32, u32)>]) -> Vec<BTreeSet<(u32, u32)>> {
+    lists.iter().map(|l| l.iter().copied().collect()).collect()
+}
+
+#[test]
+fn culled_images_equal_brute_force_on_the_cpu() {
+    for c in [spheres(96, 64, 300), walls(500, 128, 72)] {
+        let brute = shade_cpu(&c, &config(Method::BruteForce, 16));
+        assert!(max_abs(&brute.diffuse) > 0.0, "the scene is lit");
+        for method in [Method::Tiled, Method::TiledCones, Method::Clustered] {
+            for tile in [8, 16, 32] {
+                let culled = shade_cpu(&c, &config(method, tile));
+                compare(&format!("cpu {method} {tile}"), &brute, &culled, 0.0, SAME_TERMS);
+                let evaluated: u32 = culled.counts.iter().sum();
+                assert!(evaluated < brute.counts.iter().sum(), "{method} culls nothing");
+            }
+        }
+    }
+}
+
+#[test]
+fn tile_bounds_hold_every_pixel() {
+    let c = walls(100, 128, 72);
+    let slicing = tiled_shading::Slicing::new(&c.camera);
+    let tile = 16;
+    let (tx, ty) = config(Method::Tiled, tile).tiles(128, 72);
+    for t in 0..tx * ty {
+        let rect = cpu::tile_pixels(tile, 128, 72, t % tx, t / tx);
+        let samples: Vec<cpu::Sample> = (rect[2]..rect[3])
+            .flat_map(|y| (rect[0]..rect[1]).map(move |x| (x, y)))
+            .filter_map(|(x, y)| cpu::sample(&c.gb, &c.frame, x, y))
+            .collect();
+        let b = cpu::tile_bounds(&samples, &slicing);
+        assert_eq!(b.is_empty(), samples.is_empty());
+        let (axis, alpha) = b.cone();
+        let frustum = cpu::tile_frustum(&c.frame, rect, b.min_depth, b.max_depth);
+        for s in &samples {
+            assert!((b.min_depth..=b.max_depth).contains(&s.depth));
+            assert!(axis.dot(s.normal) >= alpha.cos() - 1e-6, "normal outside the cone");
+            assert!(b.slices >> slicing.slice(s.depth) & 1 == 1);
+            let view = (c.frame.view * s.position.extend(1.0)).truncate();
+            assert!(
+                cpu::sphere_meets(&frustum.planes, view, 1e-3 * s.depth),
+                "pixel outside its tile frustum"
+            );
+        }
+    }
+}
+
+#[test]
+fn normal_cones_remove_exactly_the_lights_behind_a_wall() {
+    let (front, behind) = (40, 60);
+    let scene = scene::wall(front, behind);
+    let c = case(&scene, scene.camera.expect("camera"), &scene.lights, 160, 120);
+    let tiled = shade_cpu(&c, &config(Method::Tiled, 16));
+    let cones = shade_cpu(&c, &config(Method::TiledCones, 16));
+    let mut removed_total = 0;
+    for (t, c) in tiled.lists.iter().zip(&cones.lists) {
+        let t: BTreeSet<u32> = t.iter().map(|e| e.0).collect();
+        let c: BTreeSet<u32> = c.iter().map(|e| e.0).collect();
+        let removed: BTreeSet<u32> = t.difference(&c).copied().collect();
+        let behind_in_tile: BTreeSet<u32> = t.iter().copied().filter(|&i| i >= front).collect();
+        assert!(c.is_subset(&t));
+        assert_eq!(removed, behind_in_tile, "cones must remove exactly the lights behind");
+        removed_total += removed.len();
+    }
+    assert!(removed_total > 100, "the lights behind reach the wall's tiles ({removed_total})");
+    compare("cones vs tiled", &tiled, &cones, 0.0, 0.0);
+    let Some(g) = ::gpu::test_gpu() else { return };
+    let gpu_cones = gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &config(Method::TiledCones, 16))
+        .expect("gpu run");
+    assert_eq!(sets(&gpu_cones.lists), sets(&cones.lists));
+}
+
+#[test]
+fn normal_cones_never_change_the_image() {
+    for c in [walls(1000, 160, 90), spheres(96, 64, 200)] {
+        let tiled = shade_cpu(&c, &config(Method::Tiled, 16));
+        let cones = shade_cpu(&c, &config(Method::TiledCones, 16));
+        compare("cpu cones vs tiled", &tiled, &cones, 0.0, SAME_TERMS);
+        let Some(g) = ::gpu::test_gpu() else { continue };
+        let run = |m| gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &config(m, 16)).expect("gpu run");
+        compare("gpu cones vs tiled", &run(Method::Tiled), &run(Method::TiledCones), GPU_RELATIVE, 1e-5);
+    }
+}
+
+#[test]
+fn gpu_matches_cpu_images_and_lists() {
+    let Some(g) = ::gpu::test_gpu() else { return };
+    for c in [spheres(100, 70, 300), walls(500, 128, 72)] {
+        let brute = shade_cpu(&c, &config(Method::BruteForce, 16));
+        for method in Method::ALL {
+            for tile in [8, 16, 32] {
+                if method == Method::BruteForce && tile != 16 {
+                    continue;
+                }
+                let cfg = config(method, tile);
+                let gpu_out = gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &cfg).expect("gpu run");
+                compare(&format!("gpu {method} {tile} vs brute"), &brute, &gpu_out, GPU_RELATIVE, 1e-5);
+                if method != Method::BruteForce {
+                    let cpu_out = shade_cpu(&c, &cfg);
+                    assert_eq!(sets(&gpu_out.lists), sets(&cpu_out.lists), "{method} {tile}: lists");
+                    assert_eq!(gpu_out.counts, cpu_out.counts);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn lists_longer_than_workgroup_memory_are_shaded_in_flushes() {
+    // 2500 lights that all reach every pixel: each tile's list (2500) exceeds the 1024
+    // entries of workgroup memory, so the kernel must shade and restart the list.
+    let scene = scene::spheres_on_plane(3);
+    let mut c = case(&scene, scene.camera_or_framed(), &[], 48, 40);
+    let center = scene.bounds().center();
+    let lights: Vec<Light> = (0..2500)
+        .map(|i| Light::Point {
+            position: center + Vec3::new((i % 50) as f32 * 0.01, 2.0, (i / 50) as f32 * 0.01),
+            color: Vec3::ONE,
+            intensity: 0.01,
+            radius: 100.0,
+        })
+        .collect();
+    c.lights = tiled_shading::gpu_lights(&lights).expect("valid");
+    let brute = shade_cpu(&c, &config(Method::BruteForce, 16));
+    let Some(g) = ::gpu::test_gpu() else { return };
+    for method in [Method::Tiled, Method::TiledCones, Method::Clustered] {
+        let out = gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &config(method, 16)).expect("gpu run");
+        let lit: Vec<u32> = out.counts.iter().copied().filter(|&n| n > 0).collect();
+        assert!(!lit.is_empty());
+        assert!(lit.iter().all(|&n| n == 2500), "{method}: every light in every list");
+        compare(&format!("gpu {method} with flushes"), &brute, &out, 5e-4, 1e-5);
+    }
+}
+
+#[test]
+fn frustum_culling_keeps_every_light_that_lights_the_view() {
+    let c = walls(100, 128, 72);
+    let kept = tiled_shading::frustum_cull(&c.camera, 128.0 / 72.0, &c.lights);
+    let expected = (scene::THESIS_VISIBLE_LIGHTS + 100) as usize;
+    assert!(kept.len() >= expected && kept.len() < c.lights.len() / 2, "kept {}", kept.len());
+    let all = shade_cpu(&c, &config(Method::BruteForce, 16));
+    let culled = Case {
+        lights: kept.iter().map(|&i| c.lights[i as usize]).collect(),
+        ..c
+    };
+    compare("frustum culled", &all, &shade_cpu(&culled, &config(Method::BruteForce, 16)), 1e-5, 1e-6);
+}
+
+#[test]
+fn clustered_masks_hold_only_occupied_slices() {
+    let (w, h) = (128, 72);
+    let c = walls(500, w, h);
+    let out = shade_cpu(&c, &config(Method::Clustered, 16));
+    let slicing = tiled_shading::Slicing::new(&c.camera);
+    let mut slices_used = 0u32;
+    for (t, list) in out.lists.iter().enumerate() {
+        let rect = cpu::tile_pixels(16, w, h, t as u32 % out.tiles.0, t as u32 / out.tiles.0);
+        let samples: Vec<cpu::Sample> = (rect[2]..rect[3])
+            .flat_map(|y| (rect[0]..rect[1]).map(move |x| (x, y)))
+            .filter_map(|(x, y)| cpu::sample(&c.gb, &c.frame, x, y))
+            .collect();
+        let occupied = cpu::tile_bounds(&samples, &slicing).slices;
+        for &(_, mask) in list {
+            assert_ne!(mask, 0, "an entry for no cluster");
+            assert_eq!(mask & !occupied, 0, "an entry for an empty cluster");
+            slices_used |= mask;
+        }
+    }
+    assert!(slices_used.count_ones() > 2, "the view spans several depth slices");
+}
+
+#[test]
+fn bad_input_is_an_error() {
+    let c = spheres(32, 32, 4);
+    assert!(matches!(
+        cpu::shade(&c.gb, &c.frame, &c.camera, &c.lights, &config(Method::Tiled, 12)),
+        Err(ShadingError::TileSize(12))
+    ));
+    let bad = Light::Point {
+        position: Vec3::ZERO,
+        color: Vec3::ONE,
+        intensity: 1.0,
+        radius: -1.0,
+    };
+    assert!(matches!(
+        tiled_shading::gpu_lights(&[bad]),
+        Err(ShadingError::InvalidLight { index: 0, .. })
+    ));
+    let Some(g) = ::gpu::test_gpu() else { return };
+    let uploaded = gbuffer::gpu::UploadedGBuffer::new(g, &c.gb).expect("upload");
+    let frame = ::gpu::transfer::buffer_init(&g.device, "frame", bytemuck::bytes_of(&c.frame), wgpu::BufferUsages::UNIFORM)
+        .expect("frame");
+    let mut stage = gpu::LightShading::new(&g.device, &frame, uploaded.textures(), &config(Method::Tiled, 16), 2, false)
+        .expect("stage");
+    assert!(matches!(
+        stage.set_lights(&g.queue, &c.lights),
+        Err(ShadingError::TooManyLights { count: 7, capacity: 2 })
+    ));
+    assert!(gpu::LightShading::new(&g.device, &frame, uploaded.textures(), &config(Method::Tiled, 64), 2, false).is_err());
+}

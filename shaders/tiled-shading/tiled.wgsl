@@ -1,0 +1,352 @@
+// #import gbuffer/frame.wgsl
+// #import gbuffer/normal_encoding.wgsl
+// #import tiled-shading/lighting.wgsl
+// Tile-based deferred shading in one compute pass (Ishmukhametov 2013 §2.4.1 after Andersson
+// 2009): one workgroup per screen tile loads its G-buffer pixels, reduces their depth bounds
+// (and normal cone, chapter 4 steps 2–3; and occupied cluster slices, §2.5), then switches to
+// lights: every invocation tests one light of a batch against the tile frustum and appends it
+// to the tile's list in workgroup memory; whenever the list could overflow with the next batch,
+// and after the last one, the invocations switch back to pixels and shade from the list.
+// Twin of `tiled_shading::cpu` (same names). gpu.rs rewrites METHOD, TILE and WG.
+
+const METHOD: u32 = 1u;
+const TILE: u32 = 16u;
+// Invocations per tile side, min(TILE, 16); each shades PER_SIDE² pixels.
+const WG: u32 = 16u;
+const PER_SIDE: u32 = TILE / WG;
+const PIXELS: u32 = PER_SIDE * PER_SIDE;
+const THREADS: u32 = WG * WG;
+const CAPACITY: u32 = 1024u;
+
+const METHOD_TILED: u32 = 1u;
+const METHOD_CONES: u32 = 2u;
+const METHOD_CLUSTERED: u32 = 3u;
+const SLICES: u32 = 32u;
+const ALL_SLICES: u32 = 0xffffffffu;
+const NORMAL_QUANTUM: f32 = 32768.0;
+const COSINE_QUANTUM: f32 = 1048576.0;
+const CONE_EPSILON: f32 = 1e-3;
+const SLICE_EPSILON: f32 = 1e-5;
+const HALF_PI: f32 = 1.5707963267948966;
+
+struct Params {
+    light_count: u32,
+    tiles_x: u32,
+    // 1: write every tile's list to `lists` (tests); 0: only the counts.
+    record_lists: u32,
+    // Entries per tile in `lists`.
+    list_stride: u32,
+    // Exponential cluster slicing (`Slicing`).
+    slice_near: f32,
+    slice_scale: f32,
+    _pad0: u32,
+    _pad1: u32,
+};
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<uniform> params: Params;
+@group(0) @binding(2) var<storage, read> lights: array<Light>;
+@group(0) @binding(3) var linear_depth_texture: texture_2d<f32>;
+@group(0) @binding(4) var normal_texture: texture_2d<u32>;
+@group(0) @binding(5) var albedo_texture: texture_2d<f32>;
+@group(0) @binding(6) var material_texture: texture_2d<u32>;
+@group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(8) var specular_out: texture_storage_2d<rgba32float, write>;
+// Per tile: the number of lights in its list (the light-count heatmap).
+@group(0) @binding(9) var<storage, read_write> counts: array<u32>;
+// Per tile: (light index, slice mask) × list_stride, when params.record_lists is 1.
+@group(0) @binding(10) var<storage, read_write> lists: array<vec2<u32>>;
+
+var<workgroup> depth_min: atomic<u32>;
+var<workgroup> depth_max: atomic<u32>;
+var<workgroup> normal_sum: array<atomic<i32>, 3>;
+var<workgroup> min_cosine: atomic<i32>;
+var<workgroup> slice_mask: atomic<u32>;
+var<workgroup> list_count: atomic<u32>;
+var<workgroup> list_size: u32;
+var<workgroup> tile_empty: u32;
+var<workgroup> list_light: array<u32, CAPACITY>;
+var<workgroup> list_mask: array<u32, CAPACITY>;
+
+struct Sample {
+    position: vec3<f32>,
+    depth: f32,
+    normal: vec3<f32>,
+    present: bool,
+};
+
+fn slice_of(depth: f32) -> u32 {
+    let k = floor(log(max(depth / params.slice_near, 1.0)) * params.slice_scale);
+    return min(u32(max(k, 0.0)), SLICES - 1u);
+}
+
+fn slice_start(k: u32) -> f32 {
+    return params.slice_near * exp(f32(k) / params.slice_scale);
+}
+
+fn make_plane(n: vec3<f32>, w: f32) -> vec4<f32> {
+    let len = length(n);
+    return vec4<f32>(n / len, w / len);
+}
+
+struct Tile {
+    planes: array<vec4<f32>, 6>,
+    corners: array<vec3<f32>, 8>,
+    normal_axis: vec3<f32>,
+    alpha: f32,
+    slices: u32,
+};
+
+// `tile_frustum`: inward planes (left, right, top, bottom, near, far) in view space and the
+// 8 corners in world space (chapter 4 step 4).
+fn tile_frustum(rect: vec4<u32>, near: f32, far: f32) -> Tile {
+    let ndc_x0 = f32(rect.x) * frame.viewport.z * 2.0 - 1.0;
+    let ndc_x1 = f32(rect.y) * frame.viewport.z * 2.0 - 1.0;
+    let ndc_y0 = 1.0 - f32(rect.z) * frame.viewport.w * 2.0;
+    let ndc_y1 = 1.0 - f32(rect.w) * frame.viewport.w * 2.0;
+    let l = ndc_x0 * frame.tan_half_fov.x;
+    let r = ndc_x1 * frame.tan_half_fov.x;
+    let t = ndc_y0 * frame.tan_half_fov.y;
+    let b = ndc_y1 * frame.tan_half_fov.y;
+    var tile: Tile;
+    tile.planes[0] = make_plane(vec3<f32>(1.0, 0.0, l), 0.0);
+    tile.planes[1] = make_plane(vec3<f32>(-1.0, 0.0, -r), 0.0);
+    tile.planes[2] = make_plane(vec3<f32>(0.0, -1.0, -t), 0.0);
+    tile.planes[3] = make_plane(vec3<f32>(0.0, 1.0, b), 0.0);
+    tile.planes[4] = vec4<f32>(0.0, 0.0, -1.0, -near);
+    tile.planes[5] = vec4<f32>(0.0, 0.0, 1.0, far);
+    for (var i = 0u; i < 8u; i++) {
+        let z = select(far, near, i < 4u);
+        let sx = select(r, l, (i & 1u) == 0u);
+        let sy = select(b, t, (i & 2u) == 0u);
+        tile.corners[i] = (frame.inv_view * vec4<f32>(sx * z, sy * z, -z, 1.0)).xyz;
+    }
+    return tile;
+}
+
+// `sphere_meets` over the planes first..last-1 (the test of thesis §4.1, `Intersects`).
+fn sphere_meets(tile: Tile, first: u32, last: u32, c: vec3<f32>, radius: f32) -> bool {
+    var inside = true;
+    for (var i = first; i < last; i++) {
+        inside = inside && dot(tile.planes[i].xyz, c) + tile.planes[i].w >= -radius;
+    }
+    return inside;
+}
+
+// `light_cone` (steps 5–6): axis from the corners' centre to the light, half-angle δ;
+// w < 0 when δ ≥ π/2 (no useful bound).
+fn light_cone(tile: Tile, light: vec3<f32>) -> vec4<f32> {
+    var center = vec3<f32>(0.0);
+    for (var i = 0u; i < 8u; i++) {
+        center += tile.corners[i];
+    }
+    center /= 8.0;
+    let axis = normalize_or_zero(light - center);
+    var min_cos = 1.0;
+    for (var i = 0u; i < 8u; i++) {
+        min_cos = min(min_cos, dot(axis, normalize_or_zero(light - tile.corners[i])));
+    }
+    if min_cos <= 0.0 || all(axis == vec3<f32>(0.0)) {
+        return vec4<f32>(axis, -1.0);
+    }
+    return vec4<f32>(axis, acos(min(min_cos, 1.0)));
+}
+
+fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
+    let len2 = dot(v, v);
+    if len2 > 0.0 {
+        return v * inverseSqrt(len2);
+    }
+    return vec3<f32>(0.0);
+}
+
+// `faces_away` (step 7): ω > π/2 + α + δ.
+fn faces_away(tile: Tile, light_axis: vec3<f32>, delta: f32) -> bool {
+    let omega = acos(clamp(dot(light_axis, tile.normal_axis), -1.0, 1.0));
+    return omega > HALF_PI + tile.alpha + delta + CONE_EPSILON;
+}
+
+// `cull_light`: 0 = culled, else the slice mask of the list entry.
+fn cull_light(tile: Tile, light: Light) -> u32 {
+    if light.kind == LIGHT_DIRECTIONAL {
+        if METHOD == METHOD_CONES && faces_away(tile, -light.direction, 0.0) {
+            return 0u;
+        }
+        return ALL_SLICES;
+    }
+    let c = (frame.view * vec4<f32>(light.position, 1.0)).xyz;
+    if METHOD == METHOD_CLUSTERED {
+        if !sphere_meets(tile, 0u, 4u, c, light.radius) {
+            return 0u;
+        }
+        let near = -c.z - light.radius;
+        let far = -c.z + light.radius;
+        var mask = 0u;
+        for (var k = 0u; k < SLICES; k++) {
+            let z0 = slice_start(k);
+            let z1 = slice_start(k + 1u);
+            if far >= z0 * (1.0 - SLICE_EPSILON) && near <= z1 * (1.0 + SLICE_EPSILON) {
+                mask |= 1u << k;
+            }
+        }
+        return mask & tile.slices;
+    }
+    if !sphere_meets(tile, 0u, 6u, c, light.radius) {
+        return 0u;
+    }
+    if METHOD == METHOD_CONES {
+        let cone = light_cone(tile, light.position);
+        if cone.w >= 0.0 && faces_away(tile, cone.xyz, cone.w) {
+            return 0u;
+        }
+    }
+    return ALL_SLICES;
+}
+
+fn load_sample(pixel: vec2<u32>, size: vec2<u32>) -> Sample {
+    var s: Sample;
+    s.present = false;
+    if pixel.x >= size.x || pixel.y >= size.y {
+        return s;
+    }
+    let depth = textureLoad(linear_depth_texture, pixel, 0).x;
+    if depth <= 0.0 {
+        return s;
+    }
+    s.present = true;
+    s.position = position_from_view_ray(frame, pixel, depth);
+    s.depth = depth;
+    s.normal = decode_octahedral_snorm(unpack2x16snorm(textureLoad(normal_texture, pixel, 0).x));
+    return s;
+}
+
+@compute @workgroup_size(16, 16)
+fn shade_tiles(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(local_invocation_id) local: vec3<u32>,
+    @builtin(local_invocation_index) index: u32,
+) {
+    let size = textureDimensions(linear_depth_texture);
+    if index == 0u {
+        atomicStore(&depth_min, 0x7f800000u);
+        atomicStore(&depth_max, 0u);
+        atomicStore(&normal_sum[0], 0);
+        atomicStore(&normal_sum[1], 0);
+        atomicStore(&normal_sum[2], 0);
+        atomicStore(&min_cosine, 0x7fffffff);
+        atomicStore(&slice_mask, 0u);
+        atomicStore(&list_count, 0u);
+    }
+    workgroupBarrier();
+
+    // Pixels: depth bounds (positive view depths order like their bits), normal sum, slices.
+    var samples: array<Sample, PIXELS>;
+    var pixels: array<vec2<u32>, PIXELS>;
+    for (var i = 0u; i < PIXELS; i++) {
+        pixels[i] = group.xy * TILE + local.xy + WG * vec2<u32>(i % PER_SIDE, i / PER_SIDE);
+        samples[i] = load_sample(pixels[i], size);
+        if samples[i].present {
+            atomicMin(&depth_min, bitcast<u32>(samples[i].depth));
+            atomicMax(&depth_max, bitcast<u32>(samples[i].depth));
+            let q = vec3<i32>(round(samples[i].normal * NORMAL_QUANTUM));
+            atomicAdd(&normal_sum[0], q.x);
+            atomicAdd(&normal_sum[1], q.y);
+            atomicAdd(&normal_sum[2], q.z);
+            atomicOr(&slice_mask, 1u << slice_of(samples[i].depth));
+        }
+    }
+    workgroupBarrier();
+    let sum = vec3<f32>(
+        f32(atomicLoad(&normal_sum[0])),
+        f32(atomicLoad(&normal_sum[1])),
+        f32(atomicLoad(&normal_sum[2])),
+    );
+    let axis = normalize_or_zero(sum);
+    for (var i = 0u; i < PIXELS; i++) {
+        if samples[i].present {
+            atomicMin(&min_cosine, i32(floor(dot(axis, samples[i].normal) * COSINE_QUANTUM)) - 1);
+        }
+    }
+    workgroupBarrier();
+    let near = bitcast<f32>(atomicLoad(&depth_min));
+    let far = bitcast<f32>(atomicLoad(&depth_max));
+    if index == 0u {
+        tile_empty = select(0u, 1u, near > far);
+    }
+    let empty = workgroupUniformLoad(&tile_empty);
+
+    let origin = group.xy * TILE;
+    let rect = vec4<u32>(origin.x, min(origin.x + TILE, size.x), origin.y, min(origin.y + TILE, size.y));
+    var tile = tile_frustum(rect, near, far);
+    tile.normal_axis = axis;
+    tile.alpha = PI;
+    if dot(sum, sum) >= 1.0 {
+        tile.alpha = acos(clamp(f32(atomicLoad(&min_cosine)) / COSINE_QUANTUM, -1.0, 1.0));
+    }
+    tile.slices = atomicLoad(&slice_mask);
+    let tile_index = group.y * params.tiles_x + group.x;
+
+    var diffuse: array<vec3<f32>, PIXELS>;
+    var specular: array<vec3<f32>, PIXELS>;
+    var total = 0u;
+    if empty == 0u {
+        // Lights in batches of THREADS; shade whenever the next batch could overflow the list.
+        let batches = (params.light_count + THREADS - 1u) / THREADS;
+        for (var b = 0u; b < batches; b++) {
+            let i = b * THREADS + index;
+            if i < params.light_count {
+                let mask = cull_light(tile, lights[i]);
+                if mask != 0u {
+                    let slot = atomicAdd(&list_count, 1u);
+                    list_light[slot] = i;
+                    list_mask[slot] = mask;
+                }
+            }
+            workgroupBarrier();
+            if index == 0u {
+                list_size = atomicLoad(&list_count);
+            }
+            let n = workgroupUniformLoad(&list_size);
+            if n + THREADS > CAPACITY || b + 1u == batches {
+                if params.record_lists != 0u {
+                    for (var j = index; j < n; j += THREADS) {
+                        lists[tile_index * params.list_stride + total + j] = vec2<u32>(list_light[j], list_mask[j]);
+                    }
+                }
+                for (var p = 0u; p < PIXELS; p++) {
+                    if samples[p].present {
+                        let s = samples[p];
+                        let v = normalize(frame.eye.xyz - s.position);
+                        let albedo = textureLoad(albedo_texture, pixels[p], 0).rgb;
+                        let word = textureLoad(material_texture, pixels[p], 0).x;
+                        let roughness = f32(word & 0xffu) / 255.0;
+                        let metallic = f32((word >> 8u) & 0xffu) / 255.0;
+                        let slice = slice_of(s.depth);
+                        for (var j = 0u; j < n; j++) {
+                            if ((list_mask[j] >> slice) & 1u) == 1u {
+                                let c = shade_light(lights[list_light[j]], s.position, s.normal, v, albedo, roughness, metallic);
+                                diffuse[p] += c.diffuse;
+                                specular[p] += c.specular;
+                            }
+                        }
+                    }
+                }
+                total += n;
+                workgroupBarrier();
+                if index == 0u {
+                    atomicStore(&list_count, 0u);
+                }
+                workgroupBarrier();
+            }
+        }
+    }
+    for (var p = 0u; p < PIXELS; p++) {
+        if pixels[p].x < size.x && pixels[p].y < size.y {
+            textureStore(diffuse_out, pixels[p], vec4<f32>(diffuse[p], 0.0));
+            textureStore(specular_out, pixels[p], vec4<f32>(specular[p], 0.0));
+        }
+    }
+    if index == 0u {
+        counts[tile_index] = total;
+    }
+}
