@@ -135,6 +135,7 @@ fn cornell_box_with_indirect_light_gpu_matches_cpu() {
         w,
         h,
         Vec3::ZERO,
+        &pipeline::ShadingConfig::default(),
         Some((&config, &set)),
     )
     .expect("cpu");
