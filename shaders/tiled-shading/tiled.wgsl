@@ -248,11 +248,15 @@ fn shade_tiles(
         if samples[i].present {
             atomicMin(&depth_min, bitcast<u32>(samples[i].depth));
             atomicMax(&depth_max, bitcast<u32>(samples[i].depth));
-            let q = vec3<i32>(round(samples[i].normal * NORMAL_QUANTUM));
-            atomicAdd(&normal_sum[0], q.x);
-            atomicAdd(&normal_sum[1], q.y);
-            atomicAdd(&normal_sum[2], q.z);
-            atomicOr(&slice_mask, 1u << slice_of(samples[i].depth));
+            if METHOD == METHOD_CONES {
+                let q = vec3<i32>(round(samples[i].normal * NORMAL_QUANTUM));
+                atomicAdd(&normal_sum[0], q.x);
+                atomicAdd(&normal_sum[1], q.y);
+                atomicAdd(&normal_sum[2], q.z);
+            }
+            if METHOD == METHOD_CLUSTERED {
+                atomicOr(&slice_mask, 1u << slice_of(samples[i].depth));
+            }
         }
     }
     workgroupBarrier();
@@ -262,12 +266,15 @@ fn shade_tiles(
         f32(atomicLoad(&normal_sum[2])),
     );
     let axis = normalize_or_zero(sum);
-    for (var i = 0u; i < PIXELS; i++) {
-        if samples[i].present {
-            atomicMin(&min_cosine, i32(floor(dot(axis, samples[i].normal) * COSINE_QUANTUM)) - 1);
+    if METHOD == METHOD_CONES {
+        // Step 3: the cone angle from the least cosine to the axis (a second reduction).
+        for (var i = 0u; i < PIXELS; i++) {
+            if samples[i].present {
+                atomicMin(&min_cosine, i32(floor(dot(axis, samples[i].normal) * COSINE_QUANTUM)) - 1);
+            }
         }
+        workgroupBarrier();
     }
-    workgroupBarrier();
     let near = bitcast<f32>(atomicLoad(&depth_min));
     let far = bitcast<f32>(atomicLoad(&depth_max));
     if index == 0u {

@@ -4,7 +4,7 @@
 //!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found), then runs the
 //!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`).
 //! - `cargo xtask bench [ARGS]`: runs the GPU benchmarks (`deferred-bench [ARGS]`,
-//!   `interleave-bench [ARGS]` and `indirect-bench [ARGS]`, reports
+//!   `interleave-bench [ARGS]`, `indirect-bench [ARGS]` and `tiled-bench [ARGS]`, reports
 //!   under docs/bench/) and the CPU criterion benches.
 
 use std::{
@@ -140,6 +140,17 @@ fn main() -> Result<()> {
                     "pipeline",
                     "--bin",
                     "indirect-bench",
+                    "--",
+                ])
+                .args(&rest))?;
+            run(cargo()
+                .args([
+                    "run",
+                    "--release",
+                    "-p",
+                    "pipeline",
+                    "--bin",
+                    "tiled-bench",
                     "--",
                 ])
                 .args(&rest))?;

@@ -213,6 +213,13 @@ impl GpuRenderer {
         Ok(())
     }
 
+    /// Replaces the direct lights (the light accumulation is rebuilt for their count).
+    pub fn set_lights(&mut self, gpu: &Gpu, lights: &[Light]) -> Result<(), RenderError> {
+        self.lights = crate::validate_lights(lights)?;
+        let config = *self.shading.config();
+        self.set_shading(gpu, &config)
+    }
+
     /// The light accumulation stage.
     pub fn shading(&self) -> &LightShading {
         &self.shading

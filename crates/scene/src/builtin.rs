@@ -297,8 +297,8 @@ pub const THESIS_VISIBLE_LIGHTS: u32 = 55;
 pub const THESIS_HIDDEN_LIGHTS: u32 = 1445;
 
 /// The test scene of Ishmukhametov 2013 §4.2, rebuilt: a large courtyard (floor 200 m × 160 m,
-/// a back wall 120 m × 30 m facing the camera 50 m away, side walls, a row of pillars), seen
-/// from eye height with a 60° field of view. Point lights of radius 6 m: 55 in front of the
+/// a back wall 120 m × 30 m facing the camera 32 m away and filling most of its 60° view, side
+/// walls, a row of pillars). Point lights of radius 6 m: 55 in front of the
 /// back wall inside the view, 1445 outside the view frustum behind the camera (what CPU
 /// frustum culling removes), and `behind` just behind the back wall (0.3–0.9 radii deep,
 /// inside the view's frustum and reaching the wall's depth): they face the back of the wall,
@@ -336,7 +336,7 @@ pub fn thesis_walls(behind: u32) -> Scene {
     let mut lights = Vec::new();
     for _ in 0..THESIS_VISIBLE_LIGHTS {
         let c = color(&mut rng);
-        lights.push(bounded_light(point_in(&mut rng, v(-25.0, 0.5, -38.0), v(25.0, 12.0, -5.0)), c, r));
+        lights.push(bounded_light(point_in(&mut rng, v(-25.0, 0.5, -38.0), v(25.0, 16.0, -14.0)), c, r));
     }
     for _ in 0..THESIS_HIDDEN_LIGHTS {
         let c = color(&mut rng);
@@ -347,7 +347,7 @@ pub fn thesis_walls(behind: u32) -> Scene {
         lights.push(bounded_light(point_in(&mut rng, v(-25.0, 1.0, -40.0 - 0.9 * r), v(25.0, 16.0, -40.0 - 0.3 * r)), c, r));
     }
     b.scene.lights = lights;
-    let mut cam = Camera::look_at(v(0.0, 6.0, 10.0), v(0.0, 6.0, -40.0));
+    let mut cam = Camera::look_at(v(0.0, 10.0, -8.0), v(0.0, 10.0, -40.0));
     cam.fov_y = 60f32.to_radians();
     cam.near = 0.5;
     cam.far = 250.0;

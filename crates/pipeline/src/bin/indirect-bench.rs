@@ -14,12 +14,13 @@ use glam::Vec3;
 use gpu::{Gpu, bench::Stat};
 use interleave::{Blur, BlurVariant, Pattern, SplitVariant};
 use pipeline::{
-    PassTiming, Quality,
+    Quality,
+    bench::{per_frame_sum, time_passes},
     gpu::GpuRenderer,
     indirect::{IndirectConfig, Interleaving, vpl},
     quality,
 };
-use scene::{Bvh, Camera, Scene};
+use scene::{Bvh, Scene};
 use serde::Serialize;
 
 /// Benchmarks the interleaved indirect pipeline against the non-interleaved reference.
@@ -103,48 +104,6 @@ fn config(
     }
 }
 
-/// Per pass name, the per-frame sums over `frames` frames.
-fn time(
-    gpu: &Gpu,
-    renderer: &mut GpuRenderer,
-    camera: &Camera,
-    frames: u32,
-) -> Result<Vec<(String, Vec<f64>)>> {
-    // Warm up for at least 10 frames and 300 ms of back-to-back work, so that the GPU leaves
-    // the idle clocks it drops to while the CPU generates VPLs and computes FLIP.
-    let start = std::time::Instant::now();
-    let mut warm = 0;
-    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
-        renderer.time_frame(gpu, camera, Vec3::ZERO)?;
-        warm += 1;
-    }
-    let mut by_name: Vec<(String, Vec<f64>)> = Vec::new();
-    for f in 0..frames as usize {
-        let timings: Vec<PassTiming> = renderer.time_frame(gpu, camera, Vec3::ZERO)?;
-        for t in timings {
-            match by_name.iter_mut().find(|(n, _)| *n == t.name) {
-                Some((_, v)) if v.len() > f => v[f] += t.ms,
-                Some((_, v)) => v.push(t.ms),
-                None => by_name.push((t.name, vec![t.ms])),
-            }
-        }
-    }
-    Ok(by_name)
-}
-
-fn per_frame_sum(by_name: &[(String, Vec<f64>)], names: &[&str]) -> Vec<f64> {
-    let frames = by_name.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
-    (0..frames)
-        .map(|f| {
-            by_name
-                .iter()
-                .filter(|(n, _)| names.contains(&n.as_str()))
-                .map(|(_, v)| v.get(f).copied().unwrap_or(0.0))
-                .sum()
-        })
-        .collect()
-}
-
 fn main() -> Result<()> {
     let args = Args::parse();
     let gpu = Gpu::from_env()?;
@@ -196,7 +155,7 @@ fn main() -> Result<()> {
                 let reference_ms = match &reference_ms {
                     Some(v) => v.clone(),
                     None => {
-                        let t = time(&gpu, &mut renderer, &camera, args.frames)?;
+                        let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, args.frames)?;
                         let v = per_frame_sum(&t, &["shading (reference)"]);
                         reference_ms = Some(v.clone());
                         v
@@ -227,7 +186,7 @@ fn main() -> Result<()> {
                 ] {
                     let c = config(bounds, pattern, interleaving, true);
                     renderer.set_indirect(&gpu, &c, &set)?;
-                    let t = time(&gpu, &mut renderer, &camera, args.frames)?;
+                    let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, args.frames)?;
                     let indirect = Stat::of(per_frame_sum(&t, &INDIRECT));
                     let reference_shading = Stat::of(reference_ms.clone());
                     let speedup = reference_shading.median_ms / indirect.median_ms;

@@ -1,0 +1,51 @@
+//! Frame timing shared by the benchmark programs.
+
+use glam::Vec3;
+use gpu::Gpu;
+use scene::Camera;
+
+use crate::{PassTiming, RenderError, gpu::GpuRenderer};
+
+/// Per pass name, the per-frame GPU milliseconds of `frames` frames (passes of one name summed
+/// within a frame), after a warm-up of at least 10 frames and 300 ms of back-to-back work, so
+/// that the GPU has left the idle clocks it drops to while the CPU prepares a configuration.
+pub fn time_passes(
+    gpu: &Gpu,
+    renderer: &mut GpuRenderer,
+    camera: &Camera,
+    ambient: Vec3,
+    frames: u32,
+) -> Result<Vec<(String, Vec<f64>)>, RenderError> {
+    let start = std::time::Instant::now();
+    let mut warm = 0;
+    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
+        renderer.time_frame(gpu, camera, ambient)?;
+        warm += 1;
+    }
+    let mut by_name: Vec<(String, Vec<f64>)> = Vec::new();
+    for f in 0..frames as usize {
+        let timings: Vec<PassTiming> = renderer.time_frame(gpu, camera, ambient)?;
+        for t in timings {
+            match by_name.iter_mut().find(|(n, _)| *n == t.name) {
+                Some((_, v)) if v.len() > f => v[f] += t.ms,
+                Some((_, v)) => v.push(t.ms),
+                None => by_name.push((t.name, vec![t.ms])),
+            }
+        }
+    }
+    Ok(by_name)
+}
+
+/// Per frame, the sum of the passes named in `names`.
+pub fn per_frame_sum(by_name: &[(String, Vec<f64>)], names: &[&str]) -> Vec<f64> {
+    let frames = by_name.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
+    (0..frames)
+        .map(|f| {
+            by_name
+                .iter()
+                .filter(|(n, _)| names.contains(&n.as_str()))
+                .map(|(_, v)| v.get(f).copied().unwrap_or(0.0))
+                .sum()
+        })
+        .collect()
+}
