@@ -16,7 +16,7 @@ const WG: u32 = 16u;
 const PER_SIDE: u32 = TILE / WG;
 const PIXELS: u32 = PER_SIDE * PER_SIDE;
 const THREADS: u32 = WG * WG;
-const CAPACITY: u32 = 1024u;
+const CAPACITY: u32 = 768u;
 
 const METHOD_TILED: u32 = 1u;
 const METHOD_CONES: u32 = 2u;
@@ -57,14 +57,13 @@ struct Params {
 // Per tile: (light index, slice mask) × list_stride, when params.record_lists is 1.
 @group(0) @binding(10) var<storage, read_write> lists: array<vec2<u32>>;
 
-var<workgroup> depth_min: atomic<u32>;
-var<workgroup> depth_max: atomic<u32>;
-var<workgroup> normal_sum: array<atomic<i32>, 3>;
-var<workgroup> min_cosine: atomic<i32>;
-var<workgroup> slice_mask: atomic<u32>;
+// Tree reductions over the invocations: (min depth bits, max depth bits, slice mask, _) and
+// (quantized normal sum xyz, least quantized cosine) — one step per halving, no same-address
+// atomics.
+var<workgroup> reduce_u: array<vec4<u32>, THREADS>;
+var<workgroup> reduce_i: array<vec4<i32>, THREADS>;
 var<workgroup> list_count: atomic<u32>;
 var<workgroup> list_size: u32;
-var<workgroup> tile_empty: u32;
 var<workgroup> list_light: array<u32, CAPACITY>;
 var<workgroup> list_mask: array<u32, CAPACITY>;
 
@@ -84,64 +83,75 @@ fn slice_start(k: u32) -> f32 {
     return params.slice_near * exp(f32(k) / params.slice_scale);
 }
 
-fn make_plane(n: vec3<f32>, w: f32) -> vec4<f32> {
-    let len = length(n);
-    return vec4<f32>(n / len, w / len);
+fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
+    let len2 = dot(v, v);
+    if len2 > 0.0 {
+        return v * inverseSqrt(len2);
+    }
+    return vec3<f32>(0.0);
+}
+
+// A view-space plane (unit normal n, offset w) in world space: n·(R p + t) + w = (Rᵀn)·p + n·t + w.
+fn world_plane(n: vec3<f32>, w: f32) -> vec4<f32> {
+    let unit = n / length(n);
+    return vec4<f32>((vec4<f32>(unit, 0.0) * frame.view).xyz, dot(unit, frame.view[3].xyz) + w / length(n));
 }
 
 struct Tile {
-    planes: array<vec4<f32>, 6>,
+    // World-space inward planes: left, right, top, bottom, near, far (fields, not an array,
+    // so they stay in registers).
+    left: vec4<f32>,
+    right: vec4<f32>,
+    top: vec4<f32>,
+    bottom: vec4<f32>,
+    near: vec4<f32>,
+    far: vec4<f32>,
     corners: array<vec3<f32>, 8>,
+    center: vec3<f32>,
     normal_axis: vec3<f32>,
     alpha: f32,
     slices: u32,
 };
 
-// `tile_frustum`: inward planes (left, right, top, bottom, near, far) in view space and the
-// 8 corners in world space (chapter 4 step 4).
+// `tile_frustum`: the tile's planes at its depth bounds and its 8 corners (chapter 4 step 4).
 fn tile_frustum(rect: vec4<u32>, near: f32, far: f32) -> Tile {
-    let ndc_x0 = f32(rect.x) * frame.viewport.z * 2.0 - 1.0;
-    let ndc_x1 = f32(rect.y) * frame.viewport.z * 2.0 - 1.0;
-    let ndc_y0 = 1.0 - f32(rect.z) * frame.viewport.w * 2.0;
-    let ndc_y1 = 1.0 - f32(rect.w) * frame.viewport.w * 2.0;
-    let l = ndc_x0 * frame.tan_half_fov.x;
-    let r = ndc_x1 * frame.tan_half_fov.x;
-    let t = ndc_y0 * frame.tan_half_fov.y;
-    let b = ndc_y1 * frame.tan_half_fov.y;
+    let l = (f32(rect.x) * frame.viewport.z * 2.0 - 1.0) * frame.tan_half_fov.x;
+    let r = (f32(rect.y) * frame.viewport.z * 2.0 - 1.0) * frame.tan_half_fov.x;
+    let t = (1.0 - f32(rect.z) * frame.viewport.w * 2.0) * frame.tan_half_fov.y;
+    let b = (1.0 - f32(rect.w) * frame.viewport.w * 2.0) * frame.tan_half_fov.y;
     var tile: Tile;
-    tile.planes[0] = make_plane(vec3<f32>(1.0, 0.0, l), 0.0);
-    tile.planes[1] = make_plane(vec3<f32>(-1.0, 0.0, -r), 0.0);
-    tile.planes[2] = make_plane(vec3<f32>(0.0, -1.0, -t), 0.0);
-    tile.planes[3] = make_plane(vec3<f32>(0.0, 1.0, b), 0.0);
-    tile.planes[4] = vec4<f32>(0.0, 0.0, -1.0, -near);
-    tile.planes[5] = vec4<f32>(0.0, 0.0, 1.0, far);
+    tile.left = world_plane(vec3<f32>(1.0, 0.0, l), 0.0);
+    tile.right = world_plane(vec3<f32>(-1.0, 0.0, -r), 0.0);
+    tile.top = world_plane(vec3<f32>(0.0, -1.0, -t), 0.0);
+    tile.bottom = world_plane(vec3<f32>(0.0, 1.0, b), 0.0);
+    tile.near = world_plane(vec3<f32>(0.0, 0.0, -1.0), -near);
+    tile.far = world_plane(vec3<f32>(0.0, 0.0, 1.0), far);
+    tile.center = vec3<f32>(0.0);
     for (var i = 0u; i < 8u; i++) {
         let z = select(far, near, i < 4u);
         let sx = select(r, l, (i & 1u) == 0u);
         let sy = select(b, t, (i & 2u) == 0u);
         tile.corners[i] = (frame.inv_view * vec4<f32>(sx * z, sy * z, -z, 1.0)).xyz;
+        tile.center += tile.corners[i];
     }
+    tile.center /= 8.0;
     return tile;
 }
 
-// `sphere_meets` over the planes first..last-1 (the test of thesis §4.1, `Intersects`).
-fn sphere_meets(tile: Tile, first: u32, last: u32, c: vec3<f32>, radius: f32) -> bool {
-    var inside = true;
-    for (var i = first; i < last; i++) {
-        inside = inside && dot(tile.planes[i].xyz, c) + tile.planes[i].w >= -radius;
-    }
-    return inside;
+fn above(plane: vec4<f32>, c: vec3<f32>, radius: f32) -> bool {
+    return dot(plane.xyz, c) + plane.w >= -radius;
+}
+
+// `sphere_meets` against the four side planes (the test of thesis §4.1, `Intersects`).
+fn sphere_meets_sides(tile: Tile, c: vec3<f32>, radius: f32) -> bool {
+    return above(tile.left, c, radius) && above(tile.right, c, radius)
+        && above(tile.top, c, radius) && above(tile.bottom, c, radius);
 }
 
 // `light_cone` (steps 5–6): axis from the corners' centre to the light, half-angle δ;
 // w < 0 when δ ≥ π/2 (no useful bound).
 fn light_cone(tile: Tile, light: vec3<f32>) -> vec4<f32> {
-    var center = vec3<f32>(0.0);
-    for (var i = 0u; i < 8u; i++) {
-        center += tile.corners[i];
-    }
-    center /= 8.0;
-    let axis = normalize_or_zero(light - center);
+    let axis = normalize_or_zero(light - tile.center);
     var min_cos = 1.0;
     for (var i = 0u; i < 8u; i++) {
         min_cos = min(min_cos, dot(axis, normalize_or_zero(light - tile.corners[i])));
@@ -150,14 +160,6 @@ fn light_cone(tile: Tile, light: vec3<f32>) -> vec4<f32> {
         return vec4<f32>(axis, -1.0);
     }
     return vec4<f32>(axis, acos(min(min_cos, 1.0)));
-}
-
-fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
-    let len2 = dot(v, v);
-    if len2 > 0.0 {
-        return v * inverseSqrt(len2);
-    }
-    return vec3<f32>(0.0);
 }
 
 // `faces_away` (step 7): ω > π/2 + α + δ.
@@ -174,13 +176,14 @@ fn cull_light(tile: Tile, light: Light) -> u32 {
         }
         return ALL_SLICES;
     }
-    let c = (frame.view * vec4<f32>(light.position, 1.0)).xyz;
+    let c = light.position;
+    if !sphere_meets_sides(tile, c, light.radius) {
+        return 0u;
+    }
     if METHOD == METHOD_CLUSTERED {
-        if !sphere_meets(tile, 0u, 4u, c, light.radius) {
-            return 0u;
-        }
-        let near = -c.z - light.radius;
-        let far = -c.z + light.radius;
+        let depth = -dot(vec4<f32>(frame.view[0].z, frame.view[1].z, frame.view[2].z, frame.view[3].z), vec4<f32>(c, 1.0));
+        let near = depth - light.radius;
+        let far = depth + light.radius;
         var mask = 0u;
         for (var k = 0u; k < SLICES; k++) {
             let z0 = slice_start(k);
@@ -191,11 +194,11 @@ fn cull_light(tile: Tile, light: Light) -> u32 {
         }
         return mask & tile.slices;
     }
-    if !sphere_meets(tile, 0u, 6u, c, light.radius) {
+    if !(above(tile.near, c, light.radius) && above(tile.far, c, light.radius)) {
         return 0u;
     }
     if METHOD == METHOD_CONES {
-        let cone = light_cone(tile, light.position);
+        let cone = light_cone(tile, c);
         if cone.w >= 0.0 && faces_away(tile, cone.xyz, cone.w) {
             return 0u;
         }
@@ -228,75 +231,83 @@ fn shade_tiles(
 ) {
     let size = textureDimensions(linear_depth_texture);
     if index == 0u {
-        atomicStore(&depth_min, 0x7f800000u);
-        atomicStore(&depth_max, 0u);
-        atomicStore(&normal_sum[0], 0);
-        atomicStore(&normal_sum[1], 0);
-        atomicStore(&normal_sum[2], 0);
-        atomicStore(&min_cosine, 0x7fffffff);
-        atomicStore(&slice_mask, 0u);
         atomicStore(&list_count, 0u);
     }
-    workgroupBarrier();
 
     // Pixels: depth bounds (positive view depths order like their bits), normal sum, slices.
     var samples: array<Sample, PIXELS>;
     var pixels: array<vec2<u32>, PIXELS>;
+    var bounds = vec4<u32>(0x7f800000u, 0u, 0u, 0u);
+    var normals = vec4<i32>(0);
     for (var i = 0u; i < PIXELS; i++) {
         pixels[i] = group.xy * TILE + local.xy + WG * vec2<u32>(i % PER_SIDE, i / PER_SIDE);
         samples[i] = load_sample(pixels[i], size);
         if samples[i].present {
-            atomicMin(&depth_min, bitcast<u32>(samples[i].depth));
-            atomicMax(&depth_max, bitcast<u32>(samples[i].depth));
+            let bits = bitcast<u32>(samples[i].depth);
+            bounds = vec4<u32>(min(bounds.x, bits), max(bounds.y, bits), bounds.z, 0u);
             if METHOD == METHOD_CONES {
-                let q = vec3<i32>(round(samples[i].normal * NORMAL_QUANTUM));
-                atomicAdd(&normal_sum[0], q.x);
-                atomicAdd(&normal_sum[1], q.y);
-                atomicAdd(&normal_sum[2], q.z);
+                normals += vec4<i32>(vec3<i32>(round(samples[i].normal * NORMAL_QUANTUM)), 0);
             }
             if METHOD == METHOD_CLUSTERED {
-                atomicOr(&slice_mask, 1u << slice_of(samples[i].depth));
+                bounds.z |= 1u << slice_of(samples[i].depth);
             }
         }
     }
+    reduce_u[index] = bounds;
+    reduce_i[index] = normals;
     workgroupBarrier();
-    let sum = vec3<f32>(
-        f32(atomicLoad(&normal_sum[0])),
-        f32(atomicLoad(&normal_sum[1])),
-        f32(atomicLoad(&normal_sum[2])),
-    );
-    let axis = normalize_or_zero(sum);
-    if METHOD == METHOD_CONES {
-        // Step 3: the cone angle from the least cosine to the axis (a second reduction).
-        for (var i = 0u; i < PIXELS; i++) {
-            if samples[i].present {
-                atomicMin(&min_cosine, i32(floor(dot(axis, samples[i].normal) * COSINE_QUANTUM)) - 1);
+    for (var stride = THREADS / 2u; stride > 0u; stride >>= 1u) {
+        if index < stride {
+            let a = reduce_u[index];
+            let b = reduce_u[index + stride];
+            reduce_u[index] = vec4<u32>(min(a.x, b.x), max(a.y, b.y), a.z | b.z, 0u);
+            if METHOD == METHOD_CONES {
+                reduce_i[index] += reduce_i[index + stride];
             }
         }
         workgroupBarrier();
     }
-    let near = bitcast<f32>(atomicLoad(&depth_min));
-    let far = bitcast<f32>(atomicLoad(&depth_max));
-    if index == 0u {
-        tile_empty = select(0u, 1u, near > far);
+    let tile_bounds = workgroupUniformLoad(&reduce_u[0]);
+    let sum = vec3<f32>(reduce_i[0].xyz);
+    let axis = normalize_or_zero(sum);
+    var alpha = PI;
+    if METHOD == METHOD_CONES {
+        // Step 3: the cone angle from the least cosine to the axis (a second reduction).
+        var least = 0x7fffffff;
+        for (var i = 0u; i < PIXELS; i++) {
+            if samples[i].present {
+                least = min(least, i32(floor(dot(axis, samples[i].normal) * COSINE_QUANTUM)) - 1);
+            }
+        }
+        workgroupBarrier();
+        reduce_i[index].w = least;
+        workgroupBarrier();
+        for (var stride = THREADS / 2u; stride > 0u; stride >>= 1u) {
+            if index < stride {
+                reduce_i[index].w = min(reduce_i[index].w, reduce_i[index + stride].w);
+            }
+            workgroupBarrier();
+        }
+        if dot(sum, sum) >= 1.0 {
+            alpha = acos(clamp(f32(reduce_i[0].w) / COSINE_QUANTUM, -1.0, 1.0));
+        }
     }
-    let empty = workgroupUniformLoad(&tile_empty);
+    let near = bitcast<f32>(tile_bounds.x);
+    let far = bitcast<f32>(tile_bounds.y);
+    let empty = tile_bounds.x > tile_bounds.y;
 
     let origin = group.xy * TILE;
     let rect = vec4<u32>(origin.x, min(origin.x + TILE, size.x), origin.y, min(origin.y + TILE, size.y));
     var tile = tile_frustum(rect, near, far);
     tile.normal_axis = axis;
-    tile.alpha = PI;
-    if dot(sum, sum) >= 1.0 {
-        tile.alpha = acos(clamp(f32(atomicLoad(&min_cosine)) / COSINE_QUANTUM, -1.0, 1.0));
-    }
-    tile.slices = atomicLoad(&slice_mask);
+    tile.alpha = alpha;
+    tile.slices = tile_bounds.z;
     let tile_index = group.y * params.tiles_x + group.x;
 
     var diffuse: array<vec3<f32>, PIXELS>;
     var specular: array<vec3<f32>, PIXELS>;
     var total = 0u;
-    if empty == 0u {
+    if !empty {
         // Lights in batches of THREADS; shade whenever the next batch could overflow the list.
         let batches = (params.light_count + THREADS - 1u) / THREADS;
         for (var b = 0u; b < batches; b++) {

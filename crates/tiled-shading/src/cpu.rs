@@ -116,12 +116,13 @@ pub fn tile_bounds(samples: &[Sample], slicing: &Slicing) -> TileBounds {
     b
 }
 
-/// A tile's frustum in view space: inward planes (left, right, top, bottom, near, far) with
-/// unit normals, `dot(n, p) + w ≥ 0` inside, and the 8 corners in world space (thesis
-/// chapter 4 step 4), at the tile's depth bounds.
+/// A tile's frustum: inward planes (left, right, top, bottom, near, far) with unit normals,
+/// `dot(n, p) + w ≥ 0` inside, built in view space and moved to world space (so lights are
+/// tested where they are, without a transform per light), and the 8 corners in world space
+/// (thesis chapter 4 step 4), at the tile's depth bounds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TileFrustum {
-    /// Side planes, then near (`min_depth`) and far (`max_depth`).
+    /// World-space side planes, then near (`min_depth`) and far (`max_depth`).
     pub planes: [Vec4; 6],
     /// World-space corners (near four, then far four).
     pub corners: [Vec3; 8],
@@ -135,21 +136,24 @@ fn edge_slopes(frame: &Frame, [x0, x1, y0, y1]: [u32; 4]) -> [f32; 4] {
     [ndc_x(x0) * tx, ndc_x(x1) * tx, ndc_y(y0) * ty, ndc_y(y1) * ty]
 }
 
-fn plane(n: Vec3, w: f32) -> Vec4 {
-    let len = n.length();
-    (n / len).extend(w / len)
+/// The view-space plane `n·p + w ≥ 0` in world space: `(Rᵀn̂)·p + n̂·t + w/|n|` for the view
+/// transform `p ↦ R p + t` (`world_plane`).
+fn world_plane(frame: &Frame, n: Vec3, w: f32) -> Vec4 {
+    let unit = n / n.length();
+    let normal = (frame.view.transpose() * unit.extend(0.0)).xyz();
+    normal.extend(unit.dot(frame.view.w_axis.xyz()) + w / n.length())
 }
 
 /// The frustum of the tile with pixel rectangle `rect` between view depths `near` and `far`.
 pub fn tile_frustum(frame: &Frame, rect: [u32; 4], near: f32, far: f32) -> TileFrustum {
     let [l, r, t, b] = edge_slopes(frame, rect);
     let planes = [
-        plane(Vec3::new(1.0, 0.0, l), 0.0),
-        plane(Vec3::new(-1.0, 0.0, -r), 0.0),
-        plane(Vec3::new(0.0, -1.0, -t), 0.0),
-        plane(Vec3::new(0.0, 1.0, b), 0.0),
-        Vec4::new(0.0, 0.0, -1.0, -near),
-        Vec4::new(0.0, 0.0, 1.0, far),
+        world_plane(frame, Vec3::new(1.0, 0.0, l), 0.0),
+        world_plane(frame, Vec3::new(-1.0, 0.0, -r), 0.0),
+        world_plane(frame, Vec3::new(0.0, -1.0, -t), 0.0),
+        world_plane(frame, Vec3::new(0.0, 1.0, b), 0.0),
+        world_plane(frame, Vec3::NEG_Z, -near),
+        world_plane(frame, Vec3::Z, far),
     ];
     let mut corners = [Vec3::ZERO; 8];
     for (i, c) in corners.iter_mut().enumerate() {
@@ -161,8 +165,8 @@ pub fn tile_frustum(frame: &Frame, rect: [u32; 4], near: f32, far: f32) -> TileF
     TileFrustum { planes, corners }
 }
 
-/// True when the sphere (view-space centre `c`, radius `r`) is not entirely outside any of
-/// `planes` (the test of thesis §4.1, `Intersects`).
+/// True when the sphere (centre `c`, radius `r`, in the planes' space) is not entirely outside
+/// any of `planes` (the test of thesis §4.1, `Intersects`).
 pub fn sphere_meets(planes: &[Vec4], c: Vec3, r: f32) -> bool {
     planes.iter().all(|p| p.xyz().dot(c) + p.w >= -r)
 }
@@ -216,24 +220,24 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
             && faces_away(tile.bounds.cone(), (-Vec3::from(light.direction), 0.0));
         return if away { 0 } else { ALL_SLICES };
     }
-    let c = (frame.view * world.extend(1.0)).xyz();
     let planes = &tile.frustum.planes;
     match method {
         Method::BruteForce => ALL_SLICES,
         Method::Tiled => {
-            if sphere_meets(planes, c, light.radius) { ALL_SLICES } else { 0 }
+            if sphere_meets(planes, world, light.radius) { ALL_SLICES } else { 0 }
         }
         Method::TiledCones => {
-            let keep = sphere_meets(planes, c, light.radius)
+            let keep = sphere_meets(planes, world, light.radius)
                 && !light_cone(&tile.frustum.corners, world)
                     .is_some_and(|cone| faces_away(tile.bounds.cone(), cone));
             if keep { ALL_SLICES } else { 0 }
         }
         Method::Clustered => {
-            if !sphere_meets(&planes[..4], c, light.radius) {
+            if !sphere_meets(&planes[..4], world, light.radius) {
                 return 0;
             }
-            let (near, far) = (-c.z - light.radius, -c.z + light.radius);
+            let depth = -frame.view.row(2).dot(world.extend(1.0));
+            let (near, far) = (depth - light.radius, depth + light.radius);
             let mut mask = 0;
             for k in 0..CLUSTER_SLICES {
                 let (z0, z1) = (tile.slicing.start(k), tile.slicing.start(k + 1));
