@@ -27,7 +27,6 @@ const NORMAL_QUANTUM: f32 = 32768.0;
 const COSINE_QUANTUM: f32 = 1048576.0;
 const CONE_EPSILON: f32 = 1e-3;
 const SLICE_EPSILON: f32 = 1e-5;
-const HALF_PI: f32 = 1.5707963267948966;
 
 struct Params {
     light_count: u32,
@@ -91,99 +90,101 @@ fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
 
-// A view-space plane (unit normal n, offset w) in world space: n·(R p + t) + w = (Rᵀn)·p + n·t + w.
+// A view-space plane (normal n, offset w) in world space: n·(R p + t) + w = (Rᵀn)·p + n·t + w.
 fn world_plane(n: vec3<f32>, w: f32) -> vec4<f32> {
     let unit = n / length(n);
     return vec4<f32>((vec4<f32>(unit, 0.0) * frame.view).xyz, dot(unit, frame.view[3].xyz) + w / length(n));
 }
 
-struct Tile {
-    // World-space inward planes: left, right, top, bottom, near, far (fields, not an array,
-    // so they stay in registers).
-    left: vec4<f32>,
-    right: vec4<f32>,
-    top: vec4<f32>,
-    bottom: vec4<f32>,
-    near: vec4<f32>,
-    far: vec4<f32>,
-    corners: array<vec3<f32>, 8>,
-    center: vec3<f32>,
-    normal_axis: vec3<f32>,
-    alpha: f32,
-    slices: u32,
-};
+// The tile's culling data, computed once by invocation 0 and read by all (broadcast reads
+// keep it out of every invocation's registers): world-space inward planes left, right, top,
+// bottom, near, far; the 8 corners and their centre; the normal cone (axis, cos α); the
+// occupied slices.
+var<workgroup> tile_planes: array<vec4<f32>, 6>;
+var<workgroup> tile_corners: array<vec3<f32>, 8>;
+var<workgroup> tile_center: vec3<f32>;
+var<workgroup> tile_cone: vec4<f32>;
+var<workgroup> tile_slices: u32;
 
 // `tile_frustum`: the tile's planes at its depth bounds and its 8 corners (chapter 4 step 4).
-fn tile_frustum(rect: vec4<u32>, near: f32, far: f32) -> Tile {
+fn tile_frustum(rect: vec4<u32>, near: f32, far: f32) {
     let l = (f32(rect.x) * frame.viewport.z * 2.0 - 1.0) * frame.tan_half_fov.x;
     let r = (f32(rect.y) * frame.viewport.z * 2.0 - 1.0) * frame.tan_half_fov.x;
     let t = (1.0 - f32(rect.z) * frame.viewport.w * 2.0) * frame.tan_half_fov.y;
     let b = (1.0 - f32(rect.w) * frame.viewport.w * 2.0) * frame.tan_half_fov.y;
-    var tile: Tile;
-    tile.left = world_plane(vec3<f32>(1.0, 0.0, l), 0.0);
-    tile.right = world_plane(vec3<f32>(-1.0, 0.0, -r), 0.0);
-    tile.top = world_plane(vec3<f32>(0.0, -1.0, -t), 0.0);
-    tile.bottom = world_plane(vec3<f32>(0.0, 1.0, b), 0.0);
-    tile.near = world_plane(vec3<f32>(0.0, 0.0, -1.0), -near);
-    tile.far = world_plane(vec3<f32>(0.0, 0.0, 1.0), far);
-    tile.center = vec3<f32>(0.0);
+    tile_planes[0] = world_plane(vec3<f32>(1.0, 0.0, l), 0.0);
+    tile_planes[1] = world_plane(vec3<f32>(-1.0, 0.0, -r), 0.0);
+    tile_planes[2] = world_plane(vec3<f32>(0.0, -1.0, -t), 0.0);
+    tile_planes[3] = world_plane(vec3<f32>(0.0, 1.0, b), 0.0);
+    tile_planes[4] = world_plane(vec3<f32>(0.0, 0.0, -1.0), -near);
+    tile_planes[5] = world_plane(vec3<f32>(0.0, 0.0, 1.0), far);
+    var center = vec3<f32>(0.0);
     for (var i = 0u; i < 8u; i++) {
         let z = select(far, near, i < 4u);
         let sx = select(r, l, (i & 1u) == 0u);
         let sy = select(b, t, (i & 2u) == 0u);
-        tile.corners[i] = (frame.inv_view * vec4<f32>(sx * z, sy * z, -z, 1.0)).xyz;
-        tile.center += tile.corners[i];
+        let corner = (frame.inv_view * vec4<f32>(sx * z, sy * z, -z, 1.0)).xyz;
+        tile_corners[i] = corner;
+        center += corner;
     }
-    tile.center /= 8.0;
-    return tile;
+    tile_center = center / 8.0;
 }
 
-fn above(plane: vec4<f32>, c: vec3<f32>, radius: f32) -> bool {
+fn above(i: u32, c: vec3<f32>, radius: f32) -> bool {
+    let plane = tile_planes[i];
     return dot(plane.xyz, c) + plane.w >= -radius;
 }
 
-// `sphere_meets` against the four side planes (the test of thesis §4.1, `Intersects`).
-fn sphere_meets_sides(tile: Tile, c: vec3<f32>, radius: f32) -> bool {
-    return above(tile.left, c, radius) && above(tile.right, c, radius)
-        && above(tile.top, c, radius) && above(tile.bottom, c, radius);
-}
-
-// `light_cone` (steps 5–6): axis from the corners' centre to the light, half-angle δ;
-// w < 0 when δ ≥ π/2 (no useful bound).
-fn light_cone(tile: Tile, light: vec3<f32>) -> vec4<f32> {
-    let axis = normalize_or_zero(light - tile.center);
+// `light_cone` (steps 5–6): axis from the corners' centre to the light and cos δ;
+// w ≤ 0 when δ ≥ π/2 (no useful bound).
+fn light_cone(light: vec3<f32>) -> vec4<f32> {
+    let axis = normalize_or_zero(light - tile_center);
     var min_cos = 1.0;
     for (var i = 0u; i < 8u; i++) {
-        min_cos = min(min_cos, dot(axis, normalize_or_zero(light - tile.corners[i])));
+        min_cos = min(min_cos, dot(axis, normalize_or_zero(light - tile_corners[i])));
     }
-    if min_cos <= 0.0 || all(axis == vec3<f32>(0.0)) {
-        return vec4<f32>(axis, -1.0);
+    if all(axis == vec3<f32>(0.0)) {
+        return vec4<f32>(axis, 0.0);
     }
-    return vec4<f32>(axis, acos(min(min_cos, 1.0)));
+    return vec4<f32>(axis, min(min_cos, 1.0));
 }
 
-// `faces_away` (step 7): ω > π/2 + α + δ.
-fn faces_away(tile: Tile, light_axis: vec3<f32>, delta: f32) -> bool {
-    let omega = acos(clamp(dot(light_axis, tile.normal_axis), -1.0, 1.0));
-    return omega > HALF_PI + tile.alpha + delta + CONE_EPSILON;
+fn sine(c: f32) -> f32 {
+    return sqrt(max(1.0 - c * c, 0.0));
+}
+
+// `faces_away` (step 7): ω > π/2 + θ with θ = α + δ + ε, on cosines: θ < π/2 and
+// cos ω < −sin θ.
+fn faces_away(light_axis: vec3<f32>, cos_delta: f32) -> bool {
+    let cos_alpha = tile_cone.w;
+    let cos_e = cos(CONE_EPSILON);
+    let sin_e = sin(CONE_EPSILON);
+    let sin_alpha = sine(cos_alpha);
+    let sin_delta = sine(cos_delta);
+    let cos_beta = cos_delta * cos_e - sin_delta * sin_e;
+    let sin_beta = sin_delta * cos_e + cos_delta * sin_e;
+    let cos_theta = cos_alpha * cos_beta - sin_alpha * sin_beta;
+    let sin_theta = sin_alpha * cos_beta + cos_alpha * sin_beta;
+    return cos_theta > 0.0 && sin_theta >= 0.0 && dot(light_axis, tile_cone.xyz) < -sin_theta;
 }
 
 // `cull_light`: 0 = culled, else the slice mask of the list entry.
-fn cull_light(tile: Tile, light: Light) -> u32 {
+fn cull_light(light: Light) -> u32 {
     if light.kind == LIGHT_DIRECTIONAL {
-        if METHOD == METHOD_CONES && faces_away(tile, -light.direction, 0.0) {
+        if METHOD == METHOD_CONES && faces_away(-light.direction, 1.0) {
             return 0u;
         }
         return ALL_SLICES;
     }
     let c = light.position;
-    if !sphere_meets_sides(tile, c, light.radius) {
+    let r = light.radius;
+    if !(above(0u, c, r) && above(1u, c, r) && above(2u, c, r) && above(3u, c, r)) {
         return 0u;
     }
     if METHOD == METHOD_CLUSTERED {
         let depth = -dot(vec4<f32>(frame.view[0].z, frame.view[1].z, frame.view[2].z, frame.view[3].z), vec4<f32>(c, 1.0));
-        let near = depth - light.radius;
-        let far = depth + light.radius;
+        let near = depth - r;
+        let far = depth + r;
         var mask = 0u;
         for (var k = 0u; k < SLICES; k++) {
             let z0 = slice_start(k);
@@ -192,14 +193,14 @@ fn cull_light(tile: Tile, light: Light) -> u32 {
                 mask |= 1u << k;
             }
         }
-        return mask & tile.slices;
+        return mask & tile_slices;
     }
-    if !(above(tile.near, c, light.radius) && above(tile.far, c, light.radius)) {
+    if !(above(4u, c, r) && above(5u, c, r)) {
         return 0u;
     }
     if METHOD == METHOD_CONES {
-        let cone = light_cone(tile, c);
-        if cone.w >= 0.0 && faces_away(tile, cone.xyz, cone.w) {
+        let cone = light_cone(c);
+        if cone.w > 0.0 && faces_away(cone.xyz, cone.w) {
             return 0u;
         }
     }
@@ -270,7 +271,7 @@ fn shade_tiles(
     let tile_bounds = workgroupUniformLoad(&reduce_u[0]);
     let sum = vec3<f32>(reduce_i[0].xyz);
     let axis = normalize_or_zero(sum);
-    var alpha = PI;
+    var cos_alpha = -1.0;
     if METHOD == METHOD_CONES {
         // Step 3: the cone angle from the least cosine to the axis (a second reduction).
         var least = 0x7fffffff;
@@ -289,19 +290,18 @@ fn shade_tiles(
             workgroupBarrier();
         }
         if dot(sum, sum) >= 1.0 {
-            alpha = acos(clamp(f32(reduce_i[0].w) / COSINE_QUANTUM, -1.0, 1.0));
+            cos_alpha = clamp(f32(reduce_i[0].w) / COSINE_QUANTUM, -1.0, 1.0);
         }
     }
-    let near = bitcast<f32>(tile_bounds.x);
-    let far = bitcast<f32>(tile_bounds.y);
     let empty = tile_bounds.x > tile_bounds.y;
-
     let origin = group.xy * TILE;
-    let rect = vec4<u32>(origin.x, min(origin.x + TILE, size.x), origin.y, min(origin.y + TILE, size.y));
-    var tile = tile_frustum(rect, near, far);
-    tile.normal_axis = axis;
-    tile.alpha = alpha;
-    tile.slices = tile_bounds.z;
+    if index == 0u {
+        let rect = vec4<u32>(origin.x, min(origin.x + TILE, size.x), origin.y, min(origin.y + TILE, size.y));
+        tile_frustum(rect, bitcast<f32>(tile_bounds.x), bitcast<f32>(tile_bounds.y));
+        tile_cone = vec4<f32>(axis, cos_alpha);
+        tile_slices = tile_bounds.z;
+    }
+    workgroupBarrier();
     let tile_index = group.y * params.tiles_x + group.x;
 
     var diffuse: array<vec3<f32>, PIXELS>;
@@ -313,7 +313,7 @@ fn shade_tiles(
         for (var b = 0u; b < batches; b++) {
             let i = b * THREADS + index;
             if i < params.light_count {
-                let mask = cull_light(tile, lights[i]);
+                let mask = cull_light(lights[i]);
                 if mask != 0u {
                     let slot = atomicAdd(&list_count, 1u);
                     list_light[slot] = i;

@@ -70,14 +70,14 @@ impl TileBounds {
         self.min_depth > self.max_depth
     }
 
-    /// The normal cone: unit axis and half-angle α (π when the normals cancel out).
+    /// The normal cone: unit axis and `cos α` (−1, i.e. α = π, when the normals cancel out).
     pub fn cone(&self) -> (Vec3, f32) {
         let sum = self.normal_sum.as_vec3();
         if sum.length_squared() < 1.0 {
-            return (Vec3::Z, std::f32::consts::PI);
+            return (Vec3::Z, -1.0);
         }
         let cos = (self.min_cosine as f32 / COSINE_QUANTUM).clamp(-1.0, 1.0);
-        (sum.normalize(), cos.acos())
+        (sum.normalize(), cos)
     }
 }
 
@@ -172,9 +172,9 @@ pub fn sphere_meets(planes: &[Vec4], c: Vec3, r: f32) -> bool {
 }
 
 /// The light cone of thesis chapter 4 steps 5–6: the axis from the centre of the tile's 8
-/// corners to the light (world position) and the half-angle δ, the largest angle between the
-/// axis and the directions from the corners to the light. `None` when δ ≥ π/2 (the light is
-/// inside or beside the corners' hull): the cone bounds nothing useful and the light is kept.
+/// corners to the light (world position) and `cos δ`, δ the largest angle between the axis and
+/// the directions from the corners to the light. `None` when δ ≥ π/2 (the light is inside or
+/// beside the corners' hull): the cone bounds nothing useful and the light is kept.
 pub fn light_cone(corners: &[Vec3; 8], light: Vec3) -> Option<(Vec3, f32)> {
     let center = corners.iter().copied().sum::<Vec3>() / 8.0;
     let axis = (light - center).normalize_or_zero();
@@ -182,17 +182,26 @@ pub fn light_cone(corners: &[Vec3; 8], light: Vec3) -> Option<(Vec3, f32)> {
     for c in corners {
         min_cos = min_cos.min(axis.dot((light - *c).normalize_or_zero()));
     }
-    (min_cos > 0.0 && axis != Vec3::ZERO).then(|| (axis, min_cos.min(1.0).acos()))
+    (min_cos > 0.0 && axis != Vec3::ZERO).then_some((axis, min_cos.min(1.0)))
 }
 
 /// Step 7: the light faces the back of every surface of the tile when the angle ω between
-/// the light cone's and the normal cone's axes exceeds `π/2 + α + δ` (+ [`CONE_EPSILON`]).
+/// the light cone's and the normal cone's axes exceeds `π/2 + θ`, θ = α + δ + [`CONE_EPSILON`].
 /// Conservative: every pixel's normal is within α of the normal axis and its direction to the
 /// light within δ of the light axis (all of the cone lies within 90° of its axis), so
-/// `N·L < 0` at every pixel.
-pub fn faces_away((normal_axis, alpha): (Vec3, f32), (light_axis, delta): (Vec3, f32)) -> bool {
-    let omega = light_axis.dot(normal_axis).clamp(-1.0, 1.0).acos();
-    omega > std::f32::consts::FRAC_PI_2 + alpha + delta + CONE_EPSILON
+/// `N·L < 0` at every pixel. Evaluated on cosines, without `acos`: when θ < π/2 the test is
+/// `cos ω < cos(π/2 + θ) = −sin θ`, with `sin θ` and `cos θ` from the angle-sum formulas; when
+/// θ ≥ π/2 no light can be rejected.
+pub fn faces_away((normal_axis, cos_alpha): (Vec3, f32), (light_axis, cos_delta): (Vec3, f32)) -> bool {
+    let sin = |c: f32| (1.0 - c * c).max(0.0).sqrt();
+    let (cos_e, sin_e) = (CONE_EPSILON.cos(), CONE_EPSILON.sin());
+    let (sin_alpha, sin_delta) = (sin(cos_alpha), sin(cos_delta));
+    // β = δ + ε, θ = α + β.
+    let cos_beta = cos_delta * cos_e - sin_delta * sin_e;
+    let sin_beta = sin_delta * cos_e + cos_delta * sin_e;
+    let cos_theta = cos_alpha * cos_beta - sin_alpha * sin_beta;
+    let sin_theta = sin_alpha * cos_beta + cos_alpha * sin_beta;
+    cos_theta > 0.0 && sin_theta >= 0.0 && light_axis.dot(normal_axis) < -sin_theta
 }
 
 /// Everything a tile needs to cull lights: its bounds, its frustum and the cluster slicing.
@@ -217,7 +226,7 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
     if light.kind == LIGHT_DIRECTIONAL {
         // Light from one direction: a light cone of half-angle 0.
         let away = method == Method::TiledCones
-            && faces_away(tile.bounds.cone(), (-Vec3::from(light.direction), 0.0));
+            && faces_away(tile.bounds.cone(), (-Vec3::from(light.direction), 1.0));
         return if away { 0 } else { ALL_SLICES };
     }
     let planes = &tile.frustum.planes;

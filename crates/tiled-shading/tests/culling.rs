@@ -131,10 +131,13 @@ fn decision_margin(c: &Case, config: &ShadingConfig, t: usize, light: u32) -> f3
         .map(|q| (q.truncate().dot(p) + q.w + l.radius).abs() / l.radius)
         .fold(f32::INFINITY, f32::min);
     if config.method == Method::TiledCones {
-        if let Some((axis, delta)) = cpu::light_cone(&frustum.corners, p) {
-            let (normal_axis, alpha) = bounds.cone();
+        if let Some((axis, cos_delta)) = cpu::light_cone(&frustum.corners, p) {
+            let (normal_axis, cos_alpha) = bounds.cone();
             let omega = axis.dot(normal_axis).clamp(-1.0, 1.0).acos();
-            let threshold = std::f32::consts::FRAC_PI_2 + alpha + delta + cpu::CONE_EPSILON;
+            let threshold = std::f32::consts::FRAC_PI_2
+                + cos_alpha.acos()
+                + cos_delta.acos()
+                + cpu::CONE_EPSILON;
             margin = margin.min((omega - threshold).abs());
         }
     }
@@ -192,11 +195,11 @@ fn tile_bounds_hold_every_pixel() {
             .collect();
         let b = cpu::tile_bounds(&samples, &slicing);
         assert_eq!(b.is_empty(), samples.is_empty());
-        let (axis, alpha) = b.cone();
+        let (axis, cos_alpha) = b.cone();
         let frustum = cpu::tile_frustum(&c.frame, rect, b.min_depth, b.max_depth);
         for s in &samples {
             assert!((b.min_depth..=b.max_depth).contains(&s.depth));
-            assert!(axis.dot(s.normal) >= alpha.cos() - 1e-6, "normal outside the cone");
+            assert!(axis.dot(s.normal) >= cos_alpha - 1e-6, "normal outside the cone");
             assert!(b.slices >> slicing.slice(s.depth) & 1 == 1);
             assert!(
                 cpu::sphere_meets(&frustum.planes, s.position, 1e-3 * s.depth),
