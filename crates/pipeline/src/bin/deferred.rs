@@ -52,6 +52,9 @@ struct Args {
     /// Write the per-tile light counts as heatmap.png (tiled and clustered shading).
     #[arg(long)]
     heatmap: bool,
+    /// Light count shown white in the heatmap (default: the frame's largest count).
+    #[arg(long)]
+    heatmap_max: Option<u32>,
     /// Add a light: point:X,Y,Z,RADIUS[,R,G,B,I] | spot:X,Y,Z,DX,DY,DZ,RADIUS,INNER°,OUTER°[,R,G,B,I] | hemi:X,Y,Z,DX,DY,DZ,RADIUS[,R,G,B,I] | dir:DX,DY,DZ[,R,G,B,I].
     #[arg(long = "light")]
     extra_lights: Vec<Light>,
@@ -314,7 +317,9 @@ fn main() -> Result<()> {
                 let rendered = renderer.render(gpu, &camera, ambient)?;
                 if args.heatmap {
                     match renderer.shading().read_counts(gpu)? {
-                        Some(counts) => write_heatmap(&args.out, &shading, width, height, &counts)?,
+                        Some(counts) => {
+                            write_heatmap(&args, &shading, width, height, &counts)?;
+                        }
                         None => eprintln!("no heatmap: brute force keeps no per-tile lists"),
                     }
                 }
@@ -344,7 +349,7 @@ fn main() -> Result<()> {
                     let frame = gbuffer::Frame::new(&camera, width, height);
                     let lights = pipeline::validate_lights(&direct_lights)?;
                     let shaded = tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &shading)?;
-                    write_heatmap(&args.out, &shading, width, height, &shaded.counts)?;
+                    write_heatmap(&args, &shading, width, height, &shaded.counts)?;
                 }
                 let gbuffer = args
                     .dump_stages
@@ -423,14 +428,17 @@ fn main() -> Result<()> {
 
 /// Writes the per-tile light counts as `heatmap.png` (the thesis's light-count figures).
 fn write_heatmap(
-    out: &std::path::Path,
+    args: &Args,
     shading: &pipeline::ShadingConfig,
     width: u32,
     height: u32,
     counts: &[u32],
 ) -> Result<()> {
+    let out = &args.out;
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
-    let max = counts.iter().copied().max().unwrap_or(0);
+    let max = args
+        .heatmap_max
+        .unwrap_or_else(|| counts.iter().copied().max().unwrap_or(0));
     let path = out.join("heatmap.png");
     tiled_shading::heatmap(counts, shading, width, height, max.max(1)).write_png(&path)?;
     println!("heatmap: {} (black 0 → white {max} lights per tile)", path.display());
