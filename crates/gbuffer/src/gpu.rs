@@ -189,8 +189,16 @@ impl UploadedGBuffer {
                 LINEAR_DEPTH_FORMAT,
                 bytemuck::cast_slice(gb.linear_depth.pixels()),
             )?,
-            normal: upload("normal", NORMAL_FORMAT, bytemuck::cast_slice(gb.normal.pixels()))?,
-            albedo: upload("albedo", ALBEDO_FORMAT, bytemuck::cast_slice(gb.albedo.pixels()))?,
+            normal: upload(
+                "normal",
+                NORMAL_FORMAT,
+                bytemuck::cast_slice(gb.normal.pixels()),
+            )?,
+            albedo: upload(
+                "albedo",
+                ALBEDO_FORMAT,
+                bytemuck::cast_slice(gb.albedo.pixels()),
+            )?,
             material: upload(
                 "material",
                 MATERIAL_FORMAT,

@@ -105,7 +105,11 @@ pub fn render_indirect(
     let frame = Frame::new(camera, width, height);
     let t = Instant::now();
     let direct = tiled_shading::cpu::shade(&gb, &frame, camera, &gpu_lights, shading)?;
-    timed(&mut timings, &format!("light accumulation ({})", shading.method), t);
+    timed(
+        &mut timings,
+        &format!("light accumulation ({})", shading.method),
+        t,
+    );
     let stages = indirect
         .map(|(config, set)| crate::indirect::cpu::indirect(&gb, &frame, set, config))
         .transpose()?;

@@ -131,7 +131,13 @@ impl GpuRenderer {
             contents: bytemuck::bytes_of(&crate::DEFAULT_AMBIENT.extend(0.0)),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
-        let shading = Self::light_shading(gpu, &gbuffer_pass, &targets, &ShadingConfig::default(), &gpu_lights)?;
+        let shading = Self::light_shading(
+            gpu,
+            &gbuffer_pass,
+            &targets,
+            &ShadingConfig::default(),
+            &gpu_lights,
+        )?;
         let composition =
             compute_pipeline(device, "pipeline/composition.wgsl", "composition_main")?;
         let none = [
@@ -185,7 +191,8 @@ impl GpuRenderer {
     /// Switches the light accumulation to `config` (brute force, tiled, tiled with normal
     /// cones, clustered; tile size).
     pub fn set_shading(&mut self, gpu: &Gpu, config: &ShadingConfig) -> Result<(), RenderError> {
-        let shading = Self::light_shading(gpu, &self.gbuffer_pass, &self.targets, config, &self.lights)?;
+        let shading =
+            Self::light_shading(gpu, &self.gbuffer_pass, &self.targets, config, &self.lights)?;
         let indirect = self.indirect.as_ref().map(IndirectStage::output);
         let none;
         let indirect = match indirect {

@@ -313,22 +313,65 @@ pub fn thesis_walls(behind: u32) -> Scene {
     let floor = b.mesh("floor", floor_m);
     Builder::quad(
         floor,
-        [v(-100.0, 0.0, -100.0), v(100.0, 0.0, -100.0), v(100.0, 0.0, 60.0), v(-100.0, 0.0, 60.0)],
+        [
+            v(-100.0, 0.0, -100.0),
+            v(100.0, 0.0, -100.0),
+            v(100.0, 0.0, 60.0),
+            v(-100.0, 0.0, 60.0),
+        ],
         Vec3::Y * 10.0,
         40.0,
     );
     let walls = b.mesh("walls", wall_m);
     // The back wall, 1 m thick: a front face towards the camera and a back face.
-    Builder::quad(walls, [v(-60.0, 0.0, -40.0), v(60.0, 0.0, -40.0), v(60.0, 30.0, -40.0), v(-60.0, 30.0, -40.0)], v(0.0, 10.0, 0.0), 12.0);
-    Builder::quad(walls, [v(-60.0, 0.0, -41.0), v(60.0, 0.0, -41.0), v(60.0, 30.0, -41.0), v(-60.0, 30.0, -41.0)], v(0.0, 10.0, -80.0), 12.0);
+    Builder::quad(
+        walls,
+        [
+            v(-60.0, 0.0, -40.0),
+            v(60.0, 0.0, -40.0),
+            v(60.0, 30.0, -40.0),
+            v(-60.0, 30.0, -40.0),
+        ],
+        v(0.0, 10.0, 0.0),
+        12.0,
+    );
+    Builder::quad(
+        walls,
+        [
+            v(-60.0, 0.0, -41.0),
+            v(60.0, 0.0, -41.0),
+            v(60.0, 30.0, -41.0),
+            v(-60.0, 30.0, -41.0),
+        ],
+        v(0.0, 10.0, -80.0),
+        12.0,
+    );
     for x in [-30.0f32, 30.0] {
-        Builder::quad(walls, [v(x, 0.0, -40.0), v(x, 0.0, 0.0), v(x, 12.0, 0.0), v(x, 12.0, -40.0)], v(0.0, 5.0, -20.0), 4.0);
+        Builder::quad(
+            walls,
+            [
+                v(x, 0.0, -40.0),
+                v(x, 0.0, 0.0),
+                v(x, 12.0, 0.0),
+                v(x, 12.0, -40.0),
+            ],
+            v(0.0, 5.0, -20.0),
+            4.0,
+        );
     }
     let pillars = b.mesh("pillars", pillar_m);
     for i in 0..6 {
         let x = -20.0 + 8.0 * i as f32;
         let z = -25.0;
-        Builder::block(pillars, [v(x - 0.8, 8.0, z - 0.8), v(x + 0.8, 8.0, z - 0.8), v(x + 0.8, 8.0, z + 0.8), v(x - 0.8, 8.0, z + 0.8)]);
+        Builder::block(
+            pillars,
+            [
+                v(x - 0.8, 8.0, z - 0.8),
+                v(x + 0.8, 8.0, z - 0.8),
+                v(x + 0.8, 8.0, z + 0.8),
+                v(x - 0.8, 8.0, z + 0.8),
+            ],
+        );
     }
     let r = THESIS_LIGHT_RADIUS;
     let mut rng = SplitMix(1500);
@@ -336,15 +379,31 @@ pub fn thesis_walls(behind: u32) -> Scene {
     let mut lights = Vec::new();
     for _ in 0..THESIS_VISIBLE_LIGHTS {
         let c = color(&mut rng);
-        lights.push(bounded_light(point_in(&mut rng, v(-25.0, 0.5, -38.0), v(25.0, 16.0, -14.0)), c, r));
+        lights.push(bounded_light(
+            point_in(&mut rng, v(-25.0, 0.5, -38.0), v(25.0, 16.0, -14.0)),
+            c,
+            r,
+        ));
     }
     for _ in 0..THESIS_HIDDEN_LIGHTS {
         let c = color(&mut rng);
-        lights.push(bounded_light(point_in(&mut rng, v(-100.0, 0.5, 20.0), v(100.0, 20.0, 60.0)), c, r));
+        lights.push(bounded_light(
+            point_in(&mut rng, v(-100.0, 0.5, 20.0), v(100.0, 20.0, 60.0)),
+            c,
+            r,
+        ));
     }
     for _ in 0..behind {
         let c = color(&mut rng);
-        lights.push(bounded_light(point_in(&mut rng, v(-25.0, 1.0, -40.0 - 0.9 * r), v(25.0, 16.0, -40.0 - 0.3 * r)), c, r));
+        lights.push(bounded_light(
+            point_in(
+                &mut rng,
+                v(-25.0, 1.0, -40.0 - 0.9 * r),
+                v(25.0, 16.0, -40.0 - 0.3 * r),
+            ),
+            c,
+            r,
+        ));
     }
     b.scene.lights = lights;
     let mut cam = Camera::look_at(v(0.0, 10.0, -8.0), v(0.0, 10.0, -40.0));
@@ -365,15 +424,37 @@ pub fn wall(front: u32, behind: u32) -> Scene {
     let m = b.material("wall", Vec3::splat(0.7), 0.5, 0.0);
     let mesh = b.mesh("wall", m);
     let v = Vec3::new;
-    Builder::quad(mesh, [v(-50.0, -50.0, -10.0), v(50.0, -50.0, -10.0), v(50.0, 50.0, -10.0), v(-50.0, 50.0, -10.0)], Vec3::ZERO, 10.0);
+    Builder::quad(
+        mesh,
+        [
+            v(-50.0, -50.0, -10.0),
+            v(50.0, -50.0, -10.0),
+            v(50.0, 50.0, -10.0),
+            v(-50.0, 50.0, -10.0),
+        ],
+        Vec3::ZERO,
+        10.0,
+    );
     let r = 3.0;
     let mut rng = SplitMix(10);
     let mut lights = Vec::new();
     for _ in 0..front {
-        lights.push(bounded_light(point_in(&mut rng, v(-4.0, -3.0, -9.5), v(4.0, 3.0, -6.0)), Vec3::ONE, r));
+        lights.push(bounded_light(
+            point_in(&mut rng, v(-4.0, -3.0, -9.5), v(4.0, 3.0, -6.0)),
+            Vec3::ONE,
+            r,
+        ));
     }
     for _ in 0..behind {
-        lights.push(bounded_light(point_in(&mut rng, v(-4.0, -3.0, -10.0 - 0.9 * r), v(4.0, 3.0, -10.0 - 0.4 * r)), Vec3::ONE, r));
+        lights.push(bounded_light(
+            point_in(
+                &mut rng,
+                v(-4.0, -3.0, -10.0 - 0.9 * r),
+                v(4.0, 3.0, -10.0 - 0.4 * r),
+            ),
+            Vec3::ONE,
+            r,
+        ));
     }
     b.scene.lights = lights;
     let mut cam = Camera::look_at(Vec3::ZERO, v(0.0, 0.0, -10.0));

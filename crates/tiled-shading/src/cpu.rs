@@ -9,7 +9,9 @@ use rayon::prelude::*;
 use scene::Camera;
 
 use crate::lighting::shade_light;
-use crate::{CLUSTER_SLICES, GpuLight, LIGHT_DIRECTIONAL, Method, ShadingConfig, ShadingError, Slicing};
+use crate::{
+    CLUSTER_SLICES, GpuLight, LIGHT_DIRECTIONAL, Method, ShadingConfig, ShadingError, Slicing,
+};
 
 /// Scale of the quantized normals summed for a tile's cone axis (exact integer sums, so the
 /// axis does not depend on the order of summation; thesis §4.1 sums ×256 with atomics).
@@ -84,11 +86,19 @@ impl TileBounds {
 /// Pixel coordinates of tile `(tx, ty)`: `x0..x1 × y0..y1`.
 pub fn tile_pixels(tile_size: u32, width: u32, height: u32, tx: u32, ty: u32) -> [u32; 4] {
     let (x0, y0) = (tx * tile_size, ty * tile_size);
-    [x0, (x0 + tile_size).min(width), y0, (y0 + tile_size).min(height)]
+    [
+        x0,
+        (x0 + tile_size).min(width),
+        y0,
+        (y0 + tile_size).min(height),
+    ]
 }
 
 fn quantize_normal(n: Vec3) -> IVec3 {
-    (n * NORMAL_QUANTUM).to_array().map(|c| c.round_ties_even() as i32).into()
+    (n * NORMAL_QUANTUM)
+        .to_array()
+        .map(|c| c.round_ties_even() as i32)
+        .into()
 }
 
 /// Depth bounds, normal cone and occupied slices of the tile whose pixels are `samples`.
@@ -133,7 +143,12 @@ fn edge_slopes(frame: &Frame, [x0, x1, y0, y1]: [u32; 4]) -> [f32; 4] {
     let ndc_x = |x: u32| x as f32 * frame.viewport.z * 2.0 - 1.0;
     let ndc_y = |y: u32| 1.0 - y as f32 * frame.viewport.w * 2.0;
     let (tx, ty) = (frame.tan_half_fov.x, frame.tan_half_fov.y);
-    [ndc_x(x0) * tx, ndc_x(x1) * tx, ndc_y(y0) * ty, ndc_y(y1) * ty]
+    [
+        ndc_x(x0) * tx,
+        ndc_x(x1) * tx,
+        ndc_y(y0) * ty,
+        ndc_y(y1) * ty,
+    ]
 }
 
 /// The view-space plane `n·p + w ≥ 0` in world space: `(Rᵀn̂)·p + n̂·t + w/|n|` for the view
@@ -192,7 +207,10 @@ pub fn light_cone(corners: &[Vec3; 8], light: Vec3) -> Option<(Vec3, f32)> {
 /// `N·L < 0` at every pixel. Evaluated on cosines, without `acos`: when θ < π/2 the test is
 /// `cos ω < cos(π/2 + θ) = −sin θ`, with `sin θ` and `cos θ` from the angle-sum formulas; when
 /// θ ≥ π/2 no light can be rejected.
-pub fn faces_away((normal_axis, cos_alpha): (Vec3, f32), (light_axis, cos_delta): (Vec3, f32)) -> bool {
+pub fn faces_away(
+    (normal_axis, cos_alpha): (Vec3, f32),
+    (light_axis, cos_delta): (Vec3, f32),
+) -> bool {
     let sin = |c: f32| (1.0 - c * c).max(0.0).sqrt();
     let (cos_e, sin_e) = (CONE_EPSILON.cos(), CONE_EPSILON.sin());
     let (sin_alpha, sin_delta) = (sin(cos_alpha), sin(cos_delta));
@@ -233,7 +251,11 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
     match method {
         Method::BruteForce => ALL_SLICES,
         Method::Tiled => {
-            if sphere_meets(planes, world, light.radius) { ALL_SLICES } else { 0 }
+            if sphere_meets(planes, world, light.radius) {
+                ALL_SLICES
+            } else {
+                0
+            }
         }
         Method::TiledCones => {
             let keep = sphere_meets(planes, world, light.radius)
@@ -300,8 +322,10 @@ pub fn shade(
             let coords: Vec<(u32, u32)> = (rect[2]..rect[3])
                 .flat_map(|y| (rect[0]..rect[1]).map(move |x| (x, y)))
                 .collect();
-            let samples: Vec<Option<Sample>> =
-                coords.iter().map(|&(x, y)| sample(gb, frame, x, y)).collect();
+            let samples: Vec<Option<Sample>> = coords
+                .iter()
+                .map(|&(x, y)| sample(gb, frame, x, y))
+                .collect();
             let present: Vec<Sample> = samples.iter().flatten().copied().collect();
             let bounds = tile_bounds(&present, &slicing);
             let tile = Tile {
@@ -363,12 +387,21 @@ fn shade_pixel(
     let p = gb.albedo.get(x, y);
     let albedo = Vec3::new(f32::from(p[0]), f32::from(p[1]), f32::from(p[2])) / 255.0;
     let (roughness, metallic, _) = unpack_material(gb.material.get(x, y));
-    list.iter()
-        .filter(|(_, mask)| mask >> slice & 1 == 1)
-        .fold((Vec3::ZERO, Vec3::ZERO), |(d, sp), &(i, _)| {
-            let (dl, sl) = shade_light(&lights[i as usize], s.position, s.normal, v, albedo, roughness, metallic);
+    list.iter().filter(|(_, mask)| mask >> slice & 1 == 1).fold(
+        (Vec3::ZERO, Vec3::ZERO),
+        |(d, sp), &(i, _)| {
+            let (dl, sl) = shade_light(
+                &lights[i as usize],
+                s.position,
+                s.normal,
+                v,
+                albedo,
+                roughness,
+                metallic,
+            );
             (d + dl, sp + sl)
-        })
+        },
+    )
 }
 
 /// Per pixel, how many lights contribute (non-zero attenuation and `N·L > 0`): what an ideal

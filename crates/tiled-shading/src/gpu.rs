@@ -64,7 +64,10 @@ pub struct LightShading {
     size: (u32, u32),
 }
 
-fn tiled_module(device: &wgpu::Device, config: &ShadingConfig) -> Result<wgpu::ShaderModule, GpuError> {
+fn tiled_module(
+    device: &wgpu::Device,
+    config: &ShadingConfig,
+) -> Result<wgpu::ShaderModule, GpuError> {
     let name = "tiled-shading/tiled.wgsl";
     let method = match config.method {
         Method::TiledCones => 2,
@@ -74,10 +77,22 @@ fn tiled_module(device: &wgpu::Device, config: &ShadingConfig) -> Result<wgpu::S
     let wg = config.tile_size.min(16);
     let mut src = shader::source(name)?;
     for (from, to) in [
-        ("const METHOD: u32 = 1u;".to_string(), format!("const METHOD: u32 = {method}u;")),
-        ("const TILE: u32 = 16u;".to_string(), format!("const TILE: u32 = {}u;", config.tile_size)),
-        ("const WG: u32 = 16u;".to_string(), format!("const WG: u32 = {wg}u;")),
-        ("@workgroup_size(16, 16)".to_string(), format!("@workgroup_size({wg}, {wg})")),
+        (
+            "const METHOD: u32 = 1u;".to_string(),
+            format!("const METHOD: u32 = {method}u;"),
+        ),
+        (
+            "const TILE: u32 = 16u;".to_string(),
+            format!("const TILE: u32 = {}u;", config.tile_size),
+        ),
+        (
+            "const WG: u32 = 16u;".to_string(),
+            format!("const WG: u32 = {wg}u;"),
+        ),
+        (
+            "@workgroup_size(16, 16)".to_string(),
+            format!("@workgroup_size({wg}, {wg})"),
+        ),
     ] {
         if !src.contains(&from) {
             return Err(GpuError::Shader {
@@ -151,7 +166,10 @@ impl LightShading {
             )
         });
         let (module, entry) = if config.method == Method::BruteForce {
-            (shader::module(device, "tiled-shading/brute_force.wgsl")?, "brute_force")
+            (
+                shader::module(device, "tiled-shading/brute_force.wgsl")?,
+                "brute_force",
+            )
         } else {
             (tiled_module(device, config)?, "shade_tiles")
         };
@@ -219,7 +237,11 @@ impl LightShading {
     }
 
     /// Replaces the lights (at most the capacity given at creation).
-    pub fn set_lights(&mut self, queue: &wgpu::Queue, lights: &[GpuLight]) -> Result<(), ShadingError> {
+    pub fn set_lights(
+        &mut self,
+        queue: &wgpu::Queue,
+        lights: &[GpuLight],
+    ) -> Result<(), ShadingError> {
         if lights.len() > self.capacity {
             return Err(ShadingError::TooManyLights {
                 count: lights.len(),
@@ -274,7 +296,9 @@ impl LightShading {
         }
         let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.counts)?;
         let (tx, ty) = self.config.tiles(self.size.0, self.size.1);
-        Ok(Some(bytemuck::cast_slice::<u8, u32>(&bytes)[..(tx * ty) as usize].to_vec()))
+        Ok(Some(
+            bytemuck::cast_slice::<u8, u32>(&bytes)[..(tx * ty) as usize].to_vec(),
+        ))
     }
 
     /// Reads back every tile's list of (light index, slice mask), sorted by light index;
@@ -308,8 +332,12 @@ impl LightShading {
     /// Reads back the diffuse and specular sums.
     pub fn read_output(&self, gpu: &Gpu) -> Result<[Image<Vec3>; 2], ShadingError> {
         let read = |t: &wgpu::Texture| -> Result<Image<Vec3>, ShadingError> {
-            let bytes = transfer::read_texture(&gpu.device, &gpu.queue, t, wgpu::TextureAspect::All)?;
-            let pixels = bytemuck::cast_slice::<u8, Vec4>(&bytes).iter().map(|v| v.truncate()).collect();
+            let bytes =
+                transfer::read_texture(&gpu.device, &gpu.queue, t, wgpu::TextureAspect::All)?;
+            let pixels = bytemuck::cast_slice::<u8, Vec4>(&bytes)
+                .iter()
+                .map(|v| v.truncate())
+                .collect();
             Image::from_vec(self.size.0, self.size.1, pixels)
                 .map_err(|e| GpuError::Readback(e.to_string()).into())
         };
@@ -336,7 +364,14 @@ pub fn run(
         bytemuck::bytes_of(frame),
         wgpu::BufferUsages::UNIFORM,
     )?;
-    let mut stage = LightShading::new(&gpu.device, &frame, uploaded.textures(), config, lights.len(), true)?;
+    let mut stage = LightShading::new(
+        &gpu.device,
+        &frame,
+        uploaded.textures(),
+        config,
+        lights.len(),
+        true,
+    )?;
     stage.set_lights(&gpu.queue, lights)?;
     stage.set_camera(&gpu.queue, camera);
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -348,11 +383,19 @@ pub fn run(
         Some(lists) => lists,
         None => (0..tiles.0 * tiles.1)
             .map(|t| {
-                let rect = crate::cpu::tile_pixels(config.tile_size, gb.width(), gb.height(), t % tiles.0, t / tiles.0);
+                let rect = crate::cpu::tile_pixels(
+                    config.tile_size,
+                    gb.width(),
+                    gb.height(),
+                    t % tiles.0,
+                    t / tiles.0,
+                );
                 let surface = (rect[2]..rect[3])
                     .any(|y| (rect[0]..rect[1]).any(|x| gb.linear_depth.get(x, y) > 0.0));
                 if surface {
-                    (0..lights.len() as u32).map(|i| (i, crate::cpu::ALL_SLICES)).collect()
+                    (0..lights.len() as u32)
+                        .map(|i| (i, crate::cpu::ALL_SLICES))
+                        .collect()
                 } else {
                     Vec::new()
                 }

@@ -177,7 +177,9 @@ impl FromStr for Method {
         Method::ALL
             .into_iter()
             .find(|m| m.name() == s)
-            .ok_or_else(|| format!("unknown shading method {s:?} (brute, tiled, tiled-cones, clustered)"))
+            .ok_or_else(|| {
+                format!("unknown shading method {s:?} (brute, tiled, tiled-cones, clustered)")
+            })
     }
 }
 
@@ -213,7 +215,10 @@ impl ShadingConfig {
 
     /// Tiles across and down a `width × height` image (partial tiles at the right and bottom).
     pub fn tiles(&self, width: u32, height: u32) -> (u32, u32) {
-        (width.div_ceil(self.tile_size), height.div_ceil(self.tile_size))
+        (
+            width.div_ceil(self.tile_size),
+            height.div_ceil(self.tile_size),
+        )
     }
 }
 
@@ -350,13 +355,22 @@ pub fn heat_color(t: f32) -> [f32; 4] {
 /// The light-count heatmap of a `width × height` frame (like the thesis's figures in §4.2):
 /// each tile filled with [`heat_color`] of its count / `max` (black: no lights, white: `max`
 /// or more), with a one-pixel darker grid between tiles.
-pub fn heatmap(counts: &[u32], config: &ShadingConfig, width: u32, height: u32, max: u32) -> gbuffer::Image<[f32; 4]> {
+pub fn heatmap(
+    counts: &[u32],
+    config: &ShadingConfig,
+    width: u32,
+    height: u32,
+    max: u32,
+) -> gbuffer::Image<[f32; 4]> {
     let (tiles_x, _) = config.tiles(width, height);
     let t = config.tile_size;
     let pixels = (0..width * height)
         .map(|i| {
             let (x, y) = (i % width, i / width);
-            let count = counts.get(((y / t) * tiles_x + x / t) as usize).copied().unwrap_or(0);
+            let count = counts
+                .get(((y / t) * tiles_x + x / t) as usize)
+                .copied()
+                .unwrap_or(0);
             let c = heat_color(count as f32 / max.max(1) as f32);
             let edge = if x % t == 0 || y % t == 0 { 0.7 } else { 1.0 };
             [c[0] * edge, c[1] * edge, c[2] * edge, 1.0]
@@ -379,7 +393,11 @@ mod tests {
 
     #[test]
     fn invalid_lights_are_rejected() {
-        for (position, radius) in [(Vec3::NAN, 1.0), (Vec3::ZERO, 0.0), (Vec3::ZERO, f32::INFINITY)] {
+        for (position, radius) in [
+            (Vec3::NAN, 1.0),
+            (Vec3::ZERO, 0.0),
+            (Vec3::ZERO, f32::INFINITY),
+        ] {
             let bad = Light::Point {
                 position,
                 color: Vec3::ONE,
@@ -428,10 +446,10 @@ mod tests {
             ..bytemuck::Zeroable::zeroed()
         };
         let lights = [
-            light(0.0, -10.0, 1.0),  // in view
-            light(0.0, 10.0, 1.0),   // behind the eye
-            light(0.0, 1.0, 1.5),    // behind, but its sphere crosses the near plane
-            light(50.0, -10.0, 1.0), // far to the right
+            light(0.0, -10.0, 1.0),   // in view
+            light(0.0, 10.0, 1.0),    // behind the eye
+            light(0.0, 1.0, 1.5),     // behind, but its sphere crosses the near plane
+            light(50.0, -10.0, 1.0),  // far to the right
             light(0.0, -200.0, 50.0), // beyond the far plane
         ];
         assert_eq!(frustum_cull(&camera, 1.0, &lights), vec![0, 2]);

@@ -68,7 +68,10 @@ fn shade_cpu(c: &Case, config: &ShadingConfig) -> Shaded {
 }
 
 fn max_abs(img: &Image<Vec3>) -> f32 {
-    img.pixels().iter().map(|p| p.max_element()).fold(0.0, f32::max)
+    img.pixels()
+        .iter()
+        .map(|p| p.max_element())
+        .fold(0.0, f32::max)
 }
 
 /// Largest per-pixel error of `test` against `reference` beyond `rel·|ref| + abs·max(ref)`.
@@ -155,7 +158,11 @@ fn same_lists(what: &str, c: &Case, config: &ShadingConfig, gpu: &Shaded, cpu: &
             assert!(
                 margin <= DECISION_MARGIN,
                 "{what}: tile {t}: light {light} is {} on the GPU only (its tests are {margin} from their thresholds)",
-                if g.iter().any(|e| e.0 == light) { "listed" } else { "culled" }
+                if g.iter().any(|e| e.0 == light) {
+                    "listed"
+                } else {
+                    "culled"
+                }
             );
             marginal += 1;
         }
@@ -173,9 +180,18 @@ fn culled_images_equal_brute_force_on_the_cpu() {
         for method in [Method::Tiled, Method::TiledCones, Method::Clustered] {
             for tile in [8, 16, 32] {
                 let culled = shade_cpu(&c, &config(method, tile));
-                compare(&format!("cpu {method} {tile}"), &brute, &culled, 0.0, SAME_TERMS);
+                compare(
+                    &format!("cpu {method} {tile}"),
+                    &brute,
+                    &culled,
+                    0.0,
+                    SAME_TERMS,
+                );
                 let evaluated: u32 = culled.counts.iter().sum();
-                assert!(evaluated < brute.counts.iter().sum(), "{method} culls nothing");
+                assert!(
+                    evaluated < brute.counts.iter().sum(),
+                    "{method} culls nothing"
+                );
             }
         }
     }
@@ -199,7 +215,10 @@ fn tile_bounds_hold_every_pixel() {
         let frustum = cpu::tile_frustum(&c.frame, rect, b.min_depth, b.max_depth);
         for s in &samples {
             assert!((b.min_depth..=b.max_depth).contains(&s.depth));
-            assert!(axis.dot(s.normal) >= cos_alpha - 1e-6, "normal outside the cone");
+            assert!(
+                axis.dot(s.normal) >= cos_alpha - 1e-6,
+                "normal outside the cone"
+            );
             assert!(b.slices >> slicing.slice(s.depth) & 1 == 1);
             assert!(
                 cpu::sphere_meets(&frustum.planes, s.position, 1e-3 * s.depth),
@@ -213,7 +232,13 @@ fn tile_bounds_hold_every_pixel() {
 fn normal_cones_remove_exactly_the_lights_behind_a_wall() {
     let (front, behind) = (40, 60);
     let scene = scene::wall(front, behind);
-    let c = case(&scene, scene.camera.expect("camera"), &scene.lights, 160, 120);
+    let c = case(
+        &scene,
+        scene.camera.expect("camera"),
+        &scene.lights,
+        160,
+        120,
+    );
     let tiled = shade_cpu(&c, &config(Method::Tiled, 16));
     let cones = shade_cpu(&c, &config(Method::TiledCones, 16));
     let mut removed_total = 0;
@@ -223,10 +248,16 @@ fn normal_cones_remove_exactly_the_lights_behind_a_wall() {
         let removed: BTreeSet<u32> = t.difference(&c).copied().collect();
         let behind_in_tile: BTreeSet<u32> = t.iter().copied().filter(|&i| i >= front).collect();
         assert!(c.is_subset(&t));
-        assert_eq!(removed, behind_in_tile, "cones must remove exactly the lights behind");
+        assert_eq!(
+            removed, behind_in_tile,
+            "cones must remove exactly the lights behind"
+        );
         removed_total += removed.len();
     }
-    assert!(removed_total > 100, "the lights behind reach the wall's tiles ({removed_total})");
+    assert!(
+        removed_total > 100,
+        "the lights behind reach the wall's tiles ({removed_total})"
+    );
     compare("cones vs tiled", &tiled, &cones, 0.0, 0.0);
     let Some(g) = ::gpu::test_gpu() else { return };
     let cfg = config(Method::TiledCones, 16);
@@ -241,8 +272,16 @@ fn normal_cones_never_change_the_image() {
         let cones = shade_cpu(&c, &config(Method::TiledCones, 16));
         compare("cpu cones vs tiled", &tiled, &cones, 0.0, SAME_TERMS);
         let Some(g) = ::gpu::test_gpu() else { continue };
-        let run = |m| gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &config(m, 16)).expect("gpu run");
-        compare("gpu cones vs tiled", &run(Method::Tiled), &run(Method::TiledCones), GPU_RELATIVE, 1e-5);
+        let run = |m| {
+            gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &config(m, 16)).expect("gpu run")
+        };
+        compare(
+            "gpu cones vs tiled",
+            &run(Method::Tiled),
+            &run(Method::TiledCones),
+            GPU_RELATIVE,
+            1e-5,
+        );
     }
 }
 
@@ -257,8 +296,15 @@ fn gpu_matches_cpu_images_and_lists() {
                     continue;
                 }
                 let cfg = config(method, tile);
-                let gpu_out = gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &cfg).expect("gpu run");
-                compare(&format!("gpu {method} {tile} vs brute"), &brute, &gpu_out, GPU_RELATIVE, 1e-5);
+                let gpu_out =
+                    gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &cfg).expect("gpu run");
+                compare(
+                    &format!("gpu {method} {tile} vs brute"),
+                    &brute,
+                    &gpu_out,
+                    GPU_RELATIVE,
+                    1e-5,
+                );
                 if method != Method::BruteForce {
                     let cpu_out = shade_cpu(&c, &cfg);
                     same_lists(&format!("{method} {tile}"), &c, &cfg, &gpu_out, &cpu_out);
@@ -287,11 +333,28 @@ fn lists_longer_than_workgroup_memory_are_shaded_in_flushes() {
     let brute = shade_cpu(&c, &config(Method::BruteForce, 16));
     let Some(g) = ::gpu::test_gpu() else { return };
     for method in [Method::Tiled, Method::TiledCones, Method::Clustered] {
-        let out = gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &config(method, 16)).expect("gpu run");
+        let out = gpu::run(
+            g,
+            &c.gb,
+            &c.frame,
+            &c.camera,
+            &c.lights,
+            &config(method, 16),
+        )
+        .expect("gpu run");
         let lit: Vec<u32> = out.counts.iter().copied().filter(|&n| n > 0).collect();
         assert!(!lit.is_empty());
-        assert!(lit.iter().all(|&n| n == 2500), "{method}: every light in every list");
-        compare(&format!("gpu {method} with flushes"), &brute, &out, 5e-4, 1e-5);
+        assert!(
+            lit.iter().all(|&n| n == 2500),
+            "{method}: every light in every list"
+        );
+        compare(
+            &format!("gpu {method} with flushes"),
+            &brute,
+            &out,
+            5e-4,
+            1e-5,
+        );
     }
 }
 
@@ -300,13 +363,23 @@ fn frustum_culling_keeps_every_light_that_lights_the_view() {
     let c = walls(100, 128, 72);
     let kept = tiled_shading::frustum_cull(&c.camera, 128.0 / 72.0, &c.lights);
     let expected = (scene::THESIS_VISIBLE_LIGHTS + 100) as usize;
-    assert!(kept.len() >= 100 && kept.len() <= expected, "kept {}", kept.len());
+    assert!(
+        kept.len() >= 100 && kept.len() <= expected,
+        "kept {}",
+        kept.len()
+    );
     let all = shade_cpu(&c, &config(Method::BruteForce, 16));
     let culled = Case {
         lights: kept.iter().map(|&i| c.lights[i as usize]).collect(),
         ..c
     };
-    compare("frustum culled", &all, &shade_cpu(&culled, &config(Method::BruteForce, 16)), 1e-5, 1e-6);
+    compare(
+        "frustum culled",
+        &all,
+        &shade_cpu(&culled, &config(Method::BruteForce, 16)),
+        1e-5,
+        1e-6,
+    );
 }
 
 #[test]
@@ -329,14 +402,23 @@ fn clustered_masks_hold_only_occupied_slices() {
             slices_used |= mask;
         }
     }
-    assert!(slices_used.count_ones() > 2, "the view spans several depth slices");
+    assert!(
+        slices_used.count_ones() > 2,
+        "the view spans several depth slices"
+    );
 }
 
 #[test]
 fn bad_input_is_an_error() {
     let c = spheres(32, 32, 4);
     assert!(matches!(
-        cpu::shade(&c.gb, &c.frame, &c.camera, &c.lights, &config(Method::Tiled, 12)),
+        cpu::shade(
+            &c.gb,
+            &c.frame,
+            &c.camera,
+            &c.lights,
+            &config(Method::Tiled, 12)
+        ),
         Err(ShadingError::TileSize(12))
     ));
     let bad = Light::Point {
@@ -351,13 +433,38 @@ fn bad_input_is_an_error() {
     ));
     let Some(g) = ::gpu::test_gpu() else { return };
     let uploaded = gbuffer::gpu::UploadedGBuffer::new(g, &c.gb).expect("upload");
-    let frame = ::gpu::transfer::buffer_init(&g.device, "frame", bytemuck::bytes_of(&c.frame), wgpu::BufferUsages::UNIFORM)
-        .expect("frame");
-    let mut stage = gpu::LightShading::new(&g.device, &frame, uploaded.textures(), &config(Method::Tiled, 16), 2, false)
-        .expect("stage");
+    let frame = ::gpu::transfer::buffer_init(
+        &g.device,
+        "frame",
+        bytemuck::bytes_of(&c.frame),
+        wgpu::BufferUsages::UNIFORM,
+    )
+    .expect("frame");
+    let mut stage = gpu::LightShading::new(
+        &g.device,
+        &frame,
+        uploaded.textures(),
+        &config(Method::Tiled, 16),
+        2,
+        false,
+    )
+    .expect("stage");
     assert!(matches!(
         stage.set_lights(&g.queue, &c.lights),
-        Err(ShadingError::TooManyLights { count: 7, capacity: 2 })
+        Err(ShadingError::TooManyLights {
+            count: 7,
+            capacity: 2
+        })
     ));
-    assert!(gpu::LightShading::new(&g.device, &frame, uploaded.textures(), &config(Method::Tiled, 64), 2, false).is_err());
+    assert!(
+        gpu::LightShading::new(
+            &g.device,
+            &frame,
+            uploaded.textures(),
+            &config(Method::Tiled, 64),
+            2,
+            false
+        )
+        .is_err()
+    );
 }

@@ -287,7 +287,11 @@ fn main() -> Result<()> {
     let all_direct = direct_lights.len();
     let direct_lights: Vec<Light> = if args.frustum_cull {
         let aspect = width as f32 / height as f32;
-        let kept = tiled_shading::frustum_cull(&camera, aspect, &pipeline::validate_lights(&direct_lights)?);
+        let kept = tiled_shading::frustum_cull(
+            &camera,
+            aspect,
+            &pipeline::validate_lights(&direct_lights)?,
+        );
         kept.iter().map(|&i| direct_lights[i as usize]).collect()
     } else {
         direct_lights
@@ -348,7 +352,8 @@ fn main() -> Result<()> {
                     let gb = gbuffer::cpu::rasterize(&scene, &camera, width, height)?.gbuffer;
                     let frame = gbuffer::Frame::new(&camera, width, height);
                     let lights = pipeline::validate_lights(&direct_lights)?;
-                    let shaded = tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &shading)?;
+                    let shaded =
+                        tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &shading)?;
                     write_heatmap(&args, &shading, width, height, &shaded.counts)?;
                 }
                 let gbuffer = args
@@ -441,7 +446,10 @@ fn write_heatmap(
         .unwrap_or_else(|| counts.iter().copied().max().unwrap_or(0));
     let path = out.join("heatmap.png");
     tiled_shading::heatmap(counts, shading, width, height, max.max(1)).write_png(&path)?;
-    println!("heatmap: {} (black 0 → white {max} lights per tile)", path.display());
+    println!(
+        "heatmap: {} (black 0 → white {max} lights per tile)",
+        path.display()
+    );
     Ok(())
 }
 

@@ -88,7 +88,13 @@ fn measure(
     method: ShadingMethod,
     frames: u32,
 ) -> Result<(Stat, Option<f64>)> {
-    renderer.set_shading(gpu, &ShadingConfig { method, tile_size: 16 })?;
+    renderer.set_shading(
+        gpu,
+        &ShadingConfig {
+            method,
+            tile_size: 16,
+        },
+    )?;
     let name = renderer.shading().pass_name();
     let t = time_passes(gpu, renderer, camera, DEFAULT_AMBIENT, frames)?;
     let ms = Stat::of(per_frame_sum(&t, &[name.as_str()]));
@@ -107,7 +113,11 @@ fn main() -> Result<()> {
     let path = pipeline::bench_scene_path(args.scene.as_deref())?;
     let scene = Scene::load(&path)?;
     let camera = pipeline::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
-    println!("scene: {} ({} triangles)", path.display(), scene.triangle_count());
+    println!(
+        "scene: {} ({} triangles)",
+        path.display(),
+        scene.triangle_count()
+    );
     let (sizes, counts, tests) = if args.quick {
         (&SIZES[..1], &LIGHTS[..1], &TESTS[..1])
     } else {
@@ -190,8 +200,15 @@ fn main() -> Result<()> {
     let report = Report {
         header: gpu::bench::Header::new(&gpu),
         frames: args.frames,
-        scene: path.file_name().map_or("?".into(), |f| f.to_string_lossy().into_owned()),
-        camera: format!("eye {} target {} fov {:.0}°", camera.eye, camera.target, camera.fov_y.to_degrees()),
+        scene: path
+            .file_name()
+            .map_or("?".into(), |f| f.to_string_lossy().into_owned()),
+        camera: format!(
+            "eye {} target {} fov {:.0}°",
+            camera.eye,
+            camera.target,
+            camera.fov_y.to_degrees()
+        ),
         sweep,
         tests: rows,
     };
@@ -207,7 +224,10 @@ fn main() -> Result<()> {
 
 fn markdown(r: &Report) -> String {
     use std::fmt::Write;
-    let mut s = r.header.markdown("Tiled deferred shading with normal-cone culling (Ishmukhametov 2013)", r.frames);
+    let mut s = r.header.markdown(
+        "Tiled deferred shading with normal-cone culling (Ishmukhametov 2013)",
+        r.frames,
+    );
     let _ = writeln!(
         s,
         "Every time is the GPU time of the light accumulation pass alone (the G-buffer, composition \
@@ -227,15 +247,31 @@ fn markdown(r: &Report) -> String {
         methods.join(" | "),
         "---|".repeat(methods.len())
     );
-    let mut keys: Vec<(u32, u32, usize)> = r.sweep.iter().map(|x| (x.width, x.height, x.lights)).collect();
+    let mut keys: Vec<(u32, u32, usize)> = r
+        .sweep
+        .iter()
+        .map(|x| (x.width, x.height, x.lights))
+        .collect();
     keys.dedup();
     for (w, h, n) in keys {
-        let row = |m: &str| r.sweep.iter().find(|x| (x.width, x.height, x.lights) == (w, h, n) && x.method == m);
+        let row = |m: &str| {
+            r.sweep
+                .iter()
+                .find(|x| (x.width, x.height, x.lights) == (w, h, n) && x.method == m)
+        };
         let cells: Vec<String> = methods
             .iter()
-            .map(|m| row(m).map_or("—".into(), |x| format!("{:.3} (×{:.1})", x.ms.median_ms, x.speedup_vs_brute)))
+            .map(|m| {
+                row(m).map_or("—".into(), |x| {
+                    format!("{:.3} (×{:.1})", x.ms.median_ms, x.speedup_vs_brute)
+                })
+            })
             .collect();
-        let list = |m: &str| row(m).and_then(|x| x.mean_list).map_or("—".into(), |l| format!("{l:.1}"));
+        let list = |m: &str| {
+            row(m)
+                .and_then(|x| x.mean_list)
+                .map_or("—".into(), |l| format!("{l:.1}"))
+        };
         let _ = writeln!(
             s,
             "| {w}×{h} | {n} | {} | {} | {} | {} |",
@@ -254,13 +290,25 @@ fn markdown(r: &Report) -> String {
          | test | size | lights | VFC | sent | brute | tiled | tiled-cones | clustered | cones vs tiled | tiled list | cones list |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|"
     );
-    let mut keys: Vec<(u32, u32, u32, bool)> = r.tests.iter().map(|x| (x.test, x.width, x.height, x.frustum_culling)).collect();
+    let mut keys: Vec<(u32, u32, u32, bool)> = r
+        .tests
+        .iter()
+        .map(|x| (x.test, x.width, x.height, x.frustum_culling))
+        .collect();
     keys.dedup();
     for key in keys {
-        let rows: Vec<&TestRow> = r.tests.iter().filter(|x| (x.test, x.width, x.height, x.frustum_culling) == key).collect();
+        let rows: Vec<&TestRow> = r
+            .tests
+            .iter()
+            .filter(|x| (x.test, x.width, x.height, x.frustum_culling) == key)
+            .collect();
         let get = |m: &str| rows.iter().find(|x| x.method == m);
         let ms = |m: &str| get(m).map_or(f64::NAN, |x| x.ms.median_ms);
-        let list = |m: &str| get(m).and_then(|x| x.mean_list).map_or("—".into(), |l| format!("{l:.1}"));
+        let list = |m: &str| {
+            get(m)
+                .and_then(|x| x.mean_list)
+                .map_or("—".into(), |l| format!("{l:.1}"))
+        };
         let first = rows[0];
         let _ = writeln!(
             s,

@@ -316,13 +316,7 @@ pub fn run(
         bytemuck::bytes_of(frame),
         wgpu::BufferUsages::UNIFORM,
     )?;
-    let stage = IndirectStage::new(
-        &gpu.device,
-        &frame,
-        uploaded.textures(),
-        config,
-        set,
-    )?;
+    let stage = IndirectStage::new(&gpu.device, &frame, uploaded.textures(), config, set)?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     stage.encode(&mut encoder, None);
     gpu.queue.submit([encoder.finish()]);
