@@ -57,8 +57,7 @@ struct Params {
 @group(0) @binding(10) var<storage, read_write> lists: array<vec2<u32>>;
 
 // Tree reductions over the invocations: (min depth bits, max depth bits, slice mask, _) and
-// (quantized normal sum xyz, least quantized cosine) — one step per halving, no same-address
-// atomics.
+// (quantized normal sum xyz, least quantized cosine) — four-way steps, no same-address atomics.
 var<workgroup> reduce_u: array<vec4<u32>, THREADS>;
 var<workgroup> reduce_i: array<vec4<i32>, THREADS>;
 var<workgroup> list_count: atomic<u32>;
@@ -257,13 +256,18 @@ fn shade_tiles(
     reduce_u[index] = bounds;
     reduce_i[index] = normals;
     workgroupBarrier();
-    for (var stride = THREADS / 2u; stride > 0u; stride >>= 1u) {
+    // Four-way steps (THREADS is 64 or 256, a power of 4): half the barriers of halving.
+    for (var stride = THREADS / 4u; stride > 0u; stride >>= 2u) {
         if index < stride {
-            let a = reduce_u[index];
-            let b = reduce_u[index + stride];
-            reduce_u[index] = vec4<u32>(min(a.x, b.x), max(a.y, b.y), a.z | b.z, 0u);
+            var a = reduce_u[index];
+            for (var k = 1u; k < 4u; k++) {
+                let b = reduce_u[index + k * stride];
+                a = vec4<u32>(min(a.x, b.x), max(a.y, b.y), a.z | b.z, 0u);
+            }
+            reduce_u[index] = a;
             if METHOD == METHOD_CONES {
-                reduce_i[index] += reduce_i[index + stride];
+                reduce_i[index] += reduce_i[index + stride] + reduce_i[index + 2u * stride]
+                    + reduce_i[index + 3u * stride];
             }
         }
         workgroupBarrier();
@@ -283,9 +287,12 @@ fn shade_tiles(
         workgroupBarrier();
         reduce_i[index].w = least;
         workgroupBarrier();
-        for (var stride = THREADS / 2u; stride > 0u; stride >>= 1u) {
+        for (var stride = THREADS / 4u; stride > 0u; stride >>= 2u) {
             if index < stride {
-                reduce_i[index].w = min(reduce_i[index].w, reduce_i[index + stride].w);
+                reduce_i[index].w = min(
+                    min(reduce_i[index].w, reduce_i[index + stride].w),
+                    min(reduce_i[index + 2u * stride].w, reduce_i[index + 3u * stride].w),
+                );
             }
             workgroupBarrier();
         }
