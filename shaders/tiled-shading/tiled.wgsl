@@ -197,7 +197,9 @@ fn cull_light(light: Light) -> u32 {
     if !(above(4u, c, r) && above(5u, c, r)) {
         return 0u;
     }
-    if METHOD == METHOD_CONES {
+    // A light on the front side of the plane through the corners' centre across the normal
+    // axis has ω ≤ π/2 and is never rejected: skip the light cone.
+    if METHOD == METHOD_CONES && dot(c - tile_center, tile_cone.xyz) < 0.0 {
         let cone = light_cone(c);
         if cone.w > 0.0 && faces_away(cone.xyz, cone.w) {
             return 0u;

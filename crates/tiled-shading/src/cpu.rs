@@ -222,6 +222,13 @@ pub fn faces_away(
     cos_theta > 0.0 && sin_theta >= 0.0 && light_axis.dot(normal_axis) < -sin_theta
 }
 
+/// True when `light` lies behind the plane through the centre of the tile's corners across
+/// the normal axis. Only such a light can face away (ω > π/2): the others skip the light cone.
+pub fn in_back_half_space(tile: &Tile, light: Vec3) -> bool {
+    let center = tile.frustum.corners.iter().copied().sum::<Vec3>() / 8.0;
+    (light - center).dot(tile.bounds.cone().0) < 0.0
+}
+
 /// Everything a tile needs to cull lights: its bounds, its frustum and the cluster slicing.
 #[derive(Clone, Copy, Debug)]
 pub struct Tile {
@@ -259,8 +266,9 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
         }
         Method::TiledCones => {
             let keep = sphere_meets(planes, world, light.radius)
-                && !light_cone(&tile.frustum.corners, world)
-                    .is_some_and(|cone| faces_away(tile.bounds.cone(), cone));
+                && !(in_back_half_space(tile, world)
+                    && light_cone(&tile.frustum.corners, world)
+                        .is_some_and(|cone| faces_away(tile.bounds.cone(), cone)));
             if keep { ALL_SLICES } else { 0 }
         }
         Method::Clustered => {
