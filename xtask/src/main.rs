@@ -160,6 +160,15 @@ fn main() -> Result<()> {
                 "gbuffer",
                 "-p",
                 "interleave",
+                "-p",
+                "tiled-shading",
+                // Only the criterion targets: the library test harnesses reject `--quick`.
+                "--bench",
+                "rasterize",
+                "--bench",
+                "split",
+                "--bench",
+                "shade",
                 "--",
                 "--quick",
             ]))
