@@ -104,6 +104,8 @@ var<workgroup> tile_corners: array<vec3<f32>, 8>;
 var<workgroup> tile_center: vec3<f32>;
 var<workgroup> tile_cone: vec4<f32>;
 var<workgroup> tile_slices: u32;
+// Set when a light of the current batch may face away: α is then computed (once per tile).
+var<workgroup> need_alpha: u32;
 
 // `tile_frustum`: the tile's planes at its depth bounds and its 8 corners (chapter 4 step 4).
 fn tile_frustum(rect: vec4<u32>, near: f32, far: f32) {
@@ -168,11 +170,9 @@ fn faces_away(light_axis: vec3<f32>, cos_delta: f32) -> bool {
 }
 
 // `cull_light`: 0 = culled, else the slice mask of the list entry.
+// The normal-cone part of `cull_light` is `cone_rejects`, run after α is known.
 fn cull_light(light: Light) -> u32 {
     if light.kind == LIGHT_DIRECTIONAL {
-        if METHOD == METHOD_CONES && faces_away(-light.direction, 1.0) {
-            return 0u;
-        }
         return ALL_SLICES;
     }
     let c = light.position;
@@ -197,15 +197,25 @@ fn cull_light(light: Light) -> u32 {
     if !(above(4u, c, r) && above(5u, c, r)) {
         return 0u;
     }
-    // A light on the front side of the plane through the corners' centre across the normal
-    // axis has ω ≤ π/2 and is never rejected: skip the light cone.
-    if METHOD == METHOD_CONES && dot(c - tile_center, tile_cone.xyz) < 0.0 {
-        let cone = light_cone(c);
-        if cone.w > 0.0 && faces_away(cone.xyz, cone.w) {
-            return 0u;
-        }
-    }
     return ALL_SLICES;
+}
+
+// `in_back_half_space`: only a light behind the plane through the corners' centre across the
+// normal axis can face away (ω > π/2); the others skip the light cone (and need no α).
+fn in_back_half_space(light: Light) -> bool {
+    if light.kind == LIGHT_DIRECTIONAL {
+        return dot(-light.direction, tile_cone.xyz) < 0.0;
+    }
+    return dot(light.position - tile_center, tile_cone.xyz) < 0.0;
+}
+
+// Steps 5–7 for a light that passed the frustum test and lies in the back half-space.
+fn cone_rejects(light: Light) -> bool {
+    if light.kind == LIGHT_DIRECTIONAL {
+        return faces_away(-light.direction, 1.0);
+    }
+    let cone = light_cone(light.position);
+    return cone.w > 0.0 && faces_away(cone.xyz, cone.w);
 }
 
 fn load_sample(pixel: vec2<u32>, size: vec2<u32>) -> Sample {
@@ -277,38 +287,15 @@ fn shade_tiles(
     let tile_bounds = workgroupUniformLoad(&reduce_u[0]);
     let sum = vec3<f32>(reduce_i[0].xyz);
     let axis = normalize_or_zero(sum);
-    var cos_alpha = -1.0;
-    if METHOD == METHOD_CONES {
-        // Step 3: the cone angle from the least cosine to the axis (a second reduction).
-        var least = 0x7fffffff;
-        for (var i = 0u; i < PIXELS; i++) {
-            if samples[i].present {
-                least = min(least, i32(floor(dot(axis, samples[i].normal) * COSINE_QUANTUM)) - 1);
-            }
-        }
-        workgroupBarrier();
-        reduce_i[index].w = least;
-        workgroupBarrier();
-        for (var stride = THREADS / 4u; stride > 0u; stride >>= 2u) {
-            if index < stride {
-                reduce_i[index].w = min(
-                    min(reduce_i[index].w, reduce_i[index + stride].w),
-                    min(reduce_i[index + 2u * stride].w, reduce_i[index + 3u * stride].w),
-                );
-            }
-            workgroupBarrier();
-        }
-        if dot(sum, sum) >= 1.0 {
-            cos_alpha = clamp(f32(reduce_i[0].w) / COSINE_QUANTUM, -1.0, 1.0);
-        }
-    }
     let empty = tile_bounds.x > tile_bounds.y;
     let origin = group.xy * TILE;
     if index == 0u {
         let rect = vec4<u32>(origin.x, min(origin.x + TILE, size.x), origin.y, min(origin.y + TILE, size.y));
         tile_frustum(rect, bitcast<f32>(tile_bounds.x), bitcast<f32>(tile_bounds.y));
-        tile_cone = vec4<f32>(axis, cos_alpha);
+        // cos α = −1 until step 3 runs (lazily, below).
+        tile_cone = vec4<f32>(axis, -1.0);
         tile_slices = tile_bounds.z;
+        need_alpha = 0u;
     }
     workgroupBarrier();
     let tile_index = group.y * params.tiles_x + group.x;
@@ -319,15 +306,53 @@ fn shade_tiles(
     if !empty {
         // Lights in batches of THREADS; shade whenever the next batch could overflow the list.
         let batches = (params.light_count + THREADS - 1u) / THREADS;
+        var alpha_ready = false;
         for (var b = 0u; b < batches; b++) {
             let i = b * THREADS + index;
+            var mask = 0u;
+            var pending = false;
             if i < params.light_count {
-                let mask = cull_light(lights[i]);
-                if mask != 0u {
-                    let slot = atomicAdd(&list_count, 1u);
-                    list_light[slot] = i;
-                    list_mask[slot] = mask;
+                mask = cull_light(lights[i]);
+                if METHOD == METHOD_CONES && mask != 0u && in_back_half_space(lights[i]) {
+                    pending = true;
+                    need_alpha = 1u;
                 }
+            }
+            if METHOD == METHOD_CONES {
+                // Step 3, the cone angle α from the least cosine between the axis and a normal
+                // (a second reduction), only once some light may face away.
+                if !alpha_ready && workgroupUniformLoad(&need_alpha) != 0u {
+                    var least = 0x7fffffff;
+                    for (var p = 0u; p < PIXELS; p++) {
+                        if samples[p].present {
+                            least = min(least, i32(floor(dot(axis, samples[p].normal) * COSINE_QUANTUM)) - 1);
+                        }
+                    }
+                    reduce_i[index].w = least;
+                    workgroupBarrier();
+                    for (var stride = THREADS / 4u; stride > 0u; stride >>= 2u) {
+                        if index < stride {
+                            reduce_i[index].w = min(
+                                min(reduce_i[index].w, reduce_i[index + stride].w),
+                                min(reduce_i[index + 2u * stride].w, reduce_i[index + 3u * stride].w),
+                            );
+                        }
+                        workgroupBarrier();
+                    }
+                    if index == 0u && dot(sum, sum) >= 1.0 {
+                        tile_cone.w = clamp(f32(reduce_i[0].w) / COSINE_QUANTUM, -1.0, 1.0);
+                    }
+                    workgroupBarrier();
+                    alpha_ready = true;
+                }
+                if pending && cone_rejects(lights[i]) {
+                    mask = 0u;
+                }
+            }
+            if mask != 0u {
+                let slot = atomicAdd(&list_count, 1u);
+                list_light[slot] = i;
+                list_mask[slot] = mask;
             }
             workgroupBarrier();
             if index == 0u {

@@ -223,7 +223,8 @@ pub fn faces_away(
 }
 
 /// True when `light` lies behind the plane through the centre of the tile's corners across
-/// the normal axis. Only such a light can face away (ω > π/2): the others skip the light cone.
+/// the normal axis. Only such a light can face away (ω > π/2): the others skip the light cone,
+/// and the GPU computes α (its second reduction) only once some light of the tile needs it.
 pub fn in_back_half_space(tile: &Tile, light: Vec3) -> bool {
     let center = tile.frustum.corners.iter().copied().sum::<Vec3>() / 8.0;
     (light - center).dot(tile.bounds.cone().0) < 0.0
