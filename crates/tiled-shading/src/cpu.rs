@@ -136,6 +136,8 @@ pub struct TileFrustum {
     pub planes: [Vec4; 6],
     /// World-space corners (near four, then far four).
     pub corners: [Vec3; 8],
+    /// The corners' centre, the origin of light cones.
+    pub center: Vec3,
 }
 
 /// View-space slopes (x/depth, y/depth) of the tile's pixel edges: left, right, top, bottom.
@@ -177,7 +179,11 @@ pub fn tile_frustum(frame: &Frame, rect: [u32; 4], near: f32, far: f32) -> TileF
         let sy = if i & 2 == 0 { t } else { b };
         *c = (frame.inv_view * Vec4::new(sx * z, sy * z, -z, 1.0)).xyz();
     }
-    TileFrustum { planes, corners }
+    TileFrustum {
+        planes,
+        corners,
+        center: corners.iter().copied().sum::<Vec3>() / 8.0,
+    }
 }
 
 /// True when the sphere (centre `c`, radius `r`, in the planes' space) is not entirely outside
@@ -190,11 +196,10 @@ pub fn sphere_meets(planes: &[Vec4], c: Vec3, r: f32) -> bool {
 /// corners to the light (world position) and `cos δ`, δ the largest angle between the axis and
 /// the directions from the corners to the light. `None` when δ ≥ π/2 (the light is inside or
 /// beside the corners' hull): the cone bounds nothing useful and the light is kept.
-pub fn light_cone(corners: &[Vec3; 8], light: Vec3) -> Option<(Vec3, f32)> {
-    let center = corners.iter().copied().sum::<Vec3>() / 8.0;
-    let axis = (light - center).normalize_or_zero();
+pub fn light_cone(frustum: &TileFrustum, light: Vec3) -> Option<(Vec3, f32)> {
+    let axis = (light - frustum.center).normalize_or_zero();
     let mut min_cos = 1.0f32;
-    for c in corners {
+    for c in &frustum.corners {
         min_cos = min_cos.min(axis.dot((light - *c).normalize_or_zero()));
     }
     (min_cos > 0.0 && axis != Vec3::ZERO).then_some((axis, min_cos.min(1.0)))
@@ -226,8 +231,7 @@ pub fn faces_away(
 /// the normal axis. Only such a light can face away (ω > π/2): the others skip the light cone,
 /// and the GPU computes α (its second reduction) only once some light of the tile needs it.
 pub fn in_back_half_space(tile: &Tile, light: Vec3) -> bool {
-    let center = tile.frustum.corners.iter().copied().sum::<Vec3>() / 8.0;
-    (light - center).dot(tile.bounds.cone().0) < 0.0
+    (light - tile.frustum.center).dot(tile.bounds.cone().0) < 0.0
 }
 
 /// Everything a tile needs to cull lights: its bounds, its frustum and the cluster slicing.
@@ -268,7 +272,7 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
         Method::TiledCones => {
             let keep = sphere_meets(planes, world, light.radius)
                 && !(in_back_half_space(tile, world)
-                    && light_cone(&tile.frustum.corners, world)
+                    && light_cone(&tile.frustum, world)
                         .is_some_and(|cone| faces_away(tile.bounds.cone(), cone)));
             if keep { ALL_SLICES } else { 0 }
         }

@@ -134,7 +134,7 @@ fn decision_margin(c: &Case, config: &ShadingConfig, t: usize, light: u32) -> f3
         .map(|q| (q.truncate().dot(p) + q.w + l.radius).abs() / l.radius)
         .fold(f32::INFINITY, f32::min);
     if config.method == Method::TiledCones {
-        if let Some((axis, cos_delta)) = cpu::light_cone(&frustum.corners, p) {
+        if let Some((axis, cos_delta)) = cpu::light_cone(&frustum, p) {
             let (normal_axis, cos_alpha) = bounds.cone();
             let omega = axis.dot(normal_axis).clamp(-1.0, 1.0).acos();
             let threshold = std::f32::consts::FRAC_PI_2
