@@ -110,50 +110,16 @@ fn main() -> Result<()> {
                 .args(&rest))
         }
         "bench" => {
-            run(cargo()
-                .args([
-                    "run",
-                    "--release",
-                    "-p",
-                    "pipeline",
-                    "--bin",
-                    "deferred-bench",
-                    "--",
-                ])
-                .args(&rest))?;
-            run(cargo()
-                .args([
-                    "run",
-                    "--release",
-                    "-p",
-                    "interleave",
-                    "--bin",
-                    "interleave-bench",
-                    "--",
-                ])
-                .args(&rest))?;
-            run(cargo()
-                .args([
-                    "run",
-                    "--release",
-                    "-p",
-                    "pipeline",
-                    "--bin",
-                    "indirect-bench",
-                    "--",
-                ])
-                .args(&rest))?;
-            run(cargo()
-                .args([
-                    "run",
-                    "--release",
-                    "-p",
-                    "pipeline",
-                    "--bin",
-                    "tiled-bench",
-                    "--",
-                ])
-                .args(&rest))?;
+            for (package, bin) in [
+                ("pipeline", "deferred-bench"),
+                ("interleave", "interleave-bench"),
+                ("pipeline", "indirect-bench"),
+                ("pipeline", "tiled-bench"),
+            ] {
+                run(cargo()
+                    .args(["run", "--release", "-p", package, "--bin", bin, "--"])
+                    .args(&rest))?;
+            }
             run(cargo().args([
                 "bench",
                 "-p",

@@ -154,9 +154,11 @@ impl<'a> From<&'a GBufferTargets> for GBufferTextures<'a> {
     }
 }
 
-/// A CPU [`GBuffer`]'s screen-space textures uploaded as they are (for running a pass on the
-/// same input as its CPU twin).
+/// A CPU [`GBuffer`]'s screen-space textures and its [`Frame`] uniform, uploaded as they are
+/// (for running a pass on the same input as its CPU twin).
 pub struct UploadedGBuffer {
+    /// The frame uniform (`gbuffer/frame.wgsl`).
+    pub frame: wgpu::Buffer,
     /// View depth.
     pub linear_depth: wgpu::Texture,
     /// Octahedral normal words.
@@ -168,8 +170,9 @@ pub struct UploadedGBuffer {
 }
 
 impl UploadedGBuffer {
-    /// Uploads `gb`'s linear depth, normal, albedo and material images (sampled and copied).
-    pub fn new(gpu: &Gpu, gb: &GBuffer) -> Result<Self, GpuError> {
+    /// Uploads `frame` and `gb`'s linear depth, normal, albedo and material images (sampled
+    /// and copied).
+    pub fn new(gpu: &Gpu, gb: &GBuffer, frame: &Frame) -> Result<Self, GpuError> {
         let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let upload = |label: &str, format, bytes: &[u8]| {
             transfer::texture_init(
@@ -184,6 +187,12 @@ impl UploadedGBuffer {
             )
         };
         Ok(Self {
+            frame: transfer::buffer_init(
+                &gpu.device,
+                "frame",
+                bytemuck::bytes_of(frame),
+                wgpu::BufferUsages::UNIFORM,
+            )?,
             linear_depth: upload(
                 "linear depth",
                 LINEAR_DEPTH_FORMAT,

@@ -1,4 +1,4 @@
-//! Frame timing shared by the benchmark programs.
+//! Frame timing and report writing shared by the benchmark programs.
 
 use glam::Vec3;
 use gpu::Gpu;
@@ -48,4 +48,34 @@ pub fn per_frame_sum(by_name: &[(String, Vec<f64>)], names: &[&str]) -> Vec<f64>
                 .sum()
         })
         .collect()
+}
+
+/// How a report names its scene file and camera: `(file name, "eye … target … fov …°")`.
+pub fn scene_labels(path: &std::path::Path, camera: &Camera) -> (String, String) {
+    (
+        path.file_name()
+            .map_or("?".into(), |f| f.to_string_lossy().into_owned()),
+        format!(
+            "eye {} target {} fov {:.0}°",
+            camera.eye,
+            camera.target,
+            camera.fov_y.to_degrees()
+        ),
+    )
+}
+
+/// Writes `<stem>.json` (the serialized report) and `<stem>.md` under `out` and says so.
+pub fn write_report(
+    out: &std::path::Path,
+    stem: &str,
+    report: &impl serde::Serialize,
+    markdown: &str,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(out)?;
+    let json = out.join(format!("{stem}.json"));
+    std::fs::write(&json, serde_json::to_string_pretty(report)?)?;
+    let md = out.join(format!("{stem}.md"));
+    std::fs::write(&md, markdown)?;
+    println!("wrote {} and {}", md.display(), json.display());
+    Ok(())
 }

@@ -357,16 +357,10 @@ pub fn run(
     lights: &[GpuLight],
     config: &ShadingConfig,
 ) -> Result<Shaded, ShadingError> {
-    let uploaded = UploadedGBuffer::new(gpu, gb)?;
-    let frame = transfer::buffer_init(
-        &gpu.device,
-        "frame",
-        bytemuck::bytes_of(frame),
-        wgpu::BufferUsages::UNIFORM,
-    )?;
+    let uploaded = UploadedGBuffer::new(gpu, gb, frame)?;
     let mut stage = LightShading::new(
         &gpu.device,
-        &frame,
+        &uploaded.frame,
         uploaded.textures(),
         config,
         lights.len(),

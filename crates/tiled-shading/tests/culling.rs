@@ -432,17 +432,10 @@ fn bad_input_is_an_error() {
         Err(ShadingError::InvalidLight { index: 0, .. })
     ));
     let Some(g) = ::gpu::test_gpu() else { return };
-    let uploaded = gbuffer::gpu::UploadedGBuffer::new(g, &c.gb).expect("upload");
-    let frame = ::gpu::transfer::buffer_init(
-        &g.device,
-        "frame",
-        bytemuck::bytes_of(&c.frame),
-        wgpu::BufferUsages::UNIFORM,
-    )
-    .expect("frame");
+    let uploaded = gbuffer::gpu::UploadedGBuffer::new(g, &c.gb, &c.frame).expect("upload");
     let mut stage = gpu::LightShading::new(
         &g.device,
-        &frame,
+        &uploaded.frame,
         uploaded.textures(),
         &config(Method::Tiled, 16),
         2,
@@ -459,7 +452,7 @@ fn bad_input_is_an_error() {
     assert!(
         gpu::LightShading::new(
             &g.device,
-            &frame,
+            &uploaded.frame,
             uploaded.textures(),
             &config(Method::Tiled, 64),
             2,

@@ -197,28 +197,17 @@ fn main() -> Result<()> {
         }
     }
 
+    let (scene, camera) = pipeline::bench::scene_labels(&path, &camera);
     let report = Report {
         header: gpu::bench::Header::new(&gpu),
         frames: args.frames,
-        scene: path
-            .file_name()
-            .map_or("?".into(), |f| f.to_string_lossy().into_owned()),
-        camera: format!(
-            "eye {} target {} fov {:.0}°",
-            camera.eye,
-            camera.target,
-            camera.fov_y.to_degrees()
-        ),
+        scene,
+        camera,
         sweep,
         tests: rows,
     };
-    std::fs::create_dir_all(&args.out)?;
     let stem = report.header.file_stem("tiled-shading-");
-    let json = args.out.join(format!("{stem}.json"));
-    std::fs::write(&json, serde_json::to_string_pretty(&report)?)?;
-    let md = args.out.join(format!("{stem}.md"));
-    std::fs::write(&md, markdown(&report))?;
-    println!("wrote {} and {}", md.display(), json.display());
+    pipeline::bench::write_report(&args.out, &stem, &report, &markdown(&report))?;
     Ok(())
 }
 

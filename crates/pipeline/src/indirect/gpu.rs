@@ -309,14 +309,14 @@ pub fn run(
     set: &VplSet,
     config: &IndirectConfig,
 ) -> Result<IndirectStages, RenderError> {
-    let uploaded = UploadedGBuffer::new(gpu, gb)?;
-    let frame = transfer::buffer_init(
+    let uploaded = UploadedGBuffer::new(gpu, gb, frame)?;
+    let stage = IndirectStage::new(
         &gpu.device,
-        "frame",
-        bytemuck::bytes_of(frame),
-        wgpu::BufferUsages::UNIFORM,
+        &uploaded.frame,
+        uploaded.textures(),
+        config,
+        set,
     )?;
-    let stage = IndirectStage::new(&gpu.device, &frame, uploaded.textures(), config, set)?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     stage.encode(&mut encoder, None);
     gpu.queue.submit([encoder.finish()]);
