@@ -1,8 +1,9 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
 // #import tiled-shading/lighting.wgsl
-// Tile-based deferred shading in one compute pass (Ishmukhametov 2013 §2.4.1 after Andersson
-// 2009): one workgroup per screen tile loads its G-buffer pixels, reduces their depth bounds
+// Light accumulation: brute force (`brute_force`, every light at every pixel) and tile-based
+// deferred shading in one compute pass (`shade_tiles`, Ishmukhametov 2013 §2.4.1 after
+// Andersson 2009): one workgroup per screen tile loads its G-buffer pixels, reduces their depth bounds
 // (and normal cone, chapter 4 steps 2–3; and occupied cluster slices, §2.5), then switches to
 // lights: every invocation tests one light of a batch against the tile frustum and appends it
 // to the tile's list in workgroup memory; whenever the list could overflow with the next batch,
@@ -235,6 +236,46 @@ fn load_sample(pixel: vec2<u32>, size: vec2<u32>) -> Sample {
     return s;
 }
 
+// Albedo, roughness and metallic of a pixel (`gbuffer::pack_material`'s word).
+struct SurfaceMaterial {
+    albedo: vec3<f32>,
+    roughness: f32,
+    metallic: f32,
+};
+
+fn load_material(pixel: vec2<u32>) -> SurfaceMaterial {
+    let word = textureLoad(material_texture, pixel, 0).x;
+    return SurfaceMaterial(
+        textureLoad(albedo_texture, pixel, 0).rgb,
+        f32(word & 0xffu) / 255.0,
+        f32((word >> 8u) & 0xffu) / 255.0,
+    );
+}
+
+// Brute force (`Method::BruteForce`): every light at every pixel, 8 × 8 invocations per
+// workgroup — the thesis's traditional light accumulation (§1.3 step 3) as one compute pass.
+@compute @workgroup_size(8, 8)
+fn brute_force(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(linear_depth_texture);
+    if id.x >= size.x || id.y >= size.y {
+        return;
+    }
+    let s = load_sample(id.xy, size);
+    var diffuse = vec3<f32>(0.0);
+    var specular = vec3<f32>(0.0);
+    if s.present {
+        let v = normalize(frame.eye.xyz - s.position);
+        let m = load_material(id.xy);
+        for (var i = 0u; i < params.light_count; i++) {
+            let c = shade_light(lights[i], s.position, s.normal, v, m.albedo, m.roughness, m.metallic);
+            diffuse += c.diffuse;
+            specular += c.specular;
+        }
+    }
+    textureStore(diffuse_out, id.xy, vec4<f32>(diffuse, 0.0));
+    textureStore(specular_out, id.xy, vec4<f32>(specular, 0.0));
+}
+
 @compute @workgroup_size(16, 16)
 fn shade_tiles(
     @builtin(workgroup_id) group: vec3<u32>,
@@ -369,14 +410,11 @@ fn shade_tiles(
                     if samples[p].present {
                         let s = samples[p];
                         let v = normalize(frame.eye.xyz - s.position);
-                        let albedo = textureLoad(albedo_texture, pixels[p], 0).rgb;
-                        let word = textureLoad(material_texture, pixels[p], 0).x;
-                        let roughness = f32(word & 0xffu) / 255.0;
-                        let metallic = f32((word >> 8u) & 0xffu) / 255.0;
+                        let m = load_material(pixels[p]);
                         let slice = slice_of(s.depth);
                         for (var j = 0u; j < n; j++) {
                             if ((list_mask[j] >> slice) & 1u) == 1u {
-                                let c = shade_light(lights[list_light[j]], s.position, s.normal, v, albedo, roughness, metallic);
+                                let c = shade_light(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic);
                                 diffuse[p] += c.diffuse;
                                 specular[p] += c.specular;
                             }

@@ -1,5 +1,5 @@
 //! CPU reference (rayon over tiles), mirroring `shaders/tiled-shading/tiled.wgsl` and
-//! `brute_force.wgsl` step for step: [`tile_bounds`] (depth bounds, normal cone, occupied
+//! its `brute_force` entry point step for step: [`tile_bounds`] (depth bounds, normal cone, occupied
 //! slices), [`tile_frustum`] (planes and the 8 corners), [`cull_light`] (sphere–frustum, [`light_cone`] and
 //! [`faces_away`]: the normal-cone test of thesis chapter 4, cluster slices), [`shade`] (lists, then shading).
 

@@ -1,6 +1,7 @@
-//! The light accumulation on the GPU: one compute pass per frame — `brute_force.wgsl` (8 × 8
-//! invocations per workgroup, every light per pixel) or `tiled.wgsl` (one workgroup per
-//! tile, [`Method::Tiled`], [`Method::TiledCones`] or [`Method::Clustered`]). Pipelines,
+//! The light accumulation on the GPU: one compute pass per frame of `tiled.wgsl` — its
+//! `brute_force` entry point (8 × 8 invocations per workgroup, every light per pixel) or
+//! `shade_tiles` (one workgroup per tile, [`Method::Tiled`], [`Method::TiledCones`] or
+//! [`Method::Clustered`]). Pipelines,
 //! buffers and bind groups are built once; [`LightShading::set_lights`] and
 //! [`LightShading::set_camera`] only write buffers.
 //!
@@ -167,7 +168,7 @@ impl LightShading {
         });
         let (module, entry) = if config.method == Method::BruteForce {
             (
-                shader::module(device, "tiled-shading/brute_force.wgsl")?,
+                shader::module(device, "tiled-shading/tiled.wgsl")?,
                 "brute_force",
             )
         } else {
