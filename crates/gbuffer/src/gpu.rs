@@ -385,6 +385,7 @@ pub struct GBufferPass {
     pipeline: wgpu::RenderPipeline,
     prepass: wgpu::RenderPipeline,
     after_prepass: wgpu::RenderPipeline,
+    frame_layout: wgpu::BindGroupLayout,
     material_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     frame: wgpu::Buffer,
@@ -465,7 +466,7 @@ impl GBufferPass {
         // One pipeline shape, three uses: single-pass G-buffer (depth Less, write), z-prepass
         // (depth only), and the G-buffer after a prepass (depth Equal, no write).
         let make = |label, compare, write, fragment: bool| {
-            let full = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
+            let full = Self::vertex_attributes();
             let attributes = if fragment { &full[..] } else { &full[..1] };
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -541,11 +542,36 @@ impl GBufferPass {
             pipeline,
             prepass,
             after_prepass,
+            frame_layout,
             material_layout,
             sampler,
             frame,
             frame_group,
         })
+    }
+
+    /// The bind group layouts of the frame uniform (group 0) and of a material (group 1), for
+    /// pipelines that draw the same [`GpuScene`] with another fragment stage
+    /// ([`GBufferPass::draw_scene`]).
+    pub fn layouts(&self) -> [&wgpu::BindGroupLayout; 2] {
+        [&self.frame_layout, &self.material_layout]
+    }
+
+    /// The vertex buffer layout of an uploaded [`GpuScene`] (`vs_main` inputs).
+    pub fn vertex_attributes() -> [wgpu::VertexAttribute; 3] {
+        wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2]
+    }
+
+    /// Draws `scene` with `pipeline` (built on [`GBufferPass::layouts`] and
+    /// [`GBufferPass::vertex_attributes`]) into an open render pass, binding this pass's frame
+    /// uniform and each draw's material.
+    pub fn draw_scene(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipeline: &wgpu::RenderPipeline,
+        scene: &GpuScene,
+    ) {
+        self.draw(pass, pipeline, scene, true);
     }
 
     /// The uniform buffer holding the [`Frame`]; later screen-space passes bind it too.

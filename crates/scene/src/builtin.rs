@@ -465,7 +465,8 @@ pub fn wall(front: u32, behind: u32) -> Scene {
 }
 
 /// A 256² texture of 8 × 8 black-and-white checks (sRGB 0.1 and 0.9).
-fn checker_texture() -> Texture {
+/// A 256 × 256 two-tone checker (32-texel squares, sRGB 230 and 26), the built-in texture.
+pub fn checker_texture() -> Texture {
     let size = 256u32;
     let rgba8 = (0..size * size)
         .flat_map(|i| {

@@ -20,8 +20,8 @@ mod load;
 use std::path::{Path, PathBuf};
 
 pub use builtin::{
-    THESIS_HIDDEN_LIGHTS, THESIS_LIGHT_RADIUS, THESIS_VISIBLE_LIGHTS, checkerboard, cornell_box,
-    spheres_on_plane, thesis_walls, wall,
+    THESIS_HIDDEN_LIGHTS, THESIS_LIGHT_RADIUS, THESIS_VISIBLE_LIGHTS, checker_texture,
+    checkerboard, cornell_box, spheres_on_plane, thesis_walls, wall,
 };
 pub use bvh::{Bvh, Hit};
 pub use camera::Camera;
