@@ -4,7 +4,7 @@
 //!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found), then runs the
 //!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`).
 //! - `cargo xtask bench [ARGS]`: runs the GPU benchmarks (`deferred-bench [ARGS]`,
-//!   `interleave-bench [ARGS]`, `indirect-bench [ARGS]` and `tiled-bench [ARGS]`, reports
+//!   `interleave-bench [ARGS]`, `indirect-bench [ARGS]`, `tiled-bench [ARGS]` and `ssaa-bench [ARGS]`, reports
 //!   under docs/bench/) and the CPU criterion benches.
 
 use std::{
@@ -115,6 +115,7 @@ fn main() -> Result<()> {
                 ("interleave", "interleave-bench"),
                 ("pipeline", "indirect-bench"),
                 ("pipeline", "tiled-bench"),
+                ("pipeline", "ssaa-bench"),
             ] {
                 run(cargo()
                     .args(["run", "--release", "-p", package, "--bin", bin, "--"])
@@ -128,6 +129,8 @@ fn main() -> Result<()> {
                 "interleave",
                 "-p",
                 "tiled-shading",
+                "-p",
+                "adaptive-ssaa",
                 // Only the criterion targets: the library test harnesses reject `--quick`.
                 "--bench",
                 "rasterize",
@@ -135,6 +138,8 @@ fn main() -> Result<()> {
                 "split",
                 "--bench",
                 "shade",
+                "--bench",
+                "adaptive",
                 "--",
                 "--quick",
             ]))

@@ -133,10 +133,10 @@ pub struct Constants {
 impl Default for Constants {
     fn default() -> Self {
         Self {
-            mm: 400.0,
-            nc: 24.0,
-            dv: 4.0e4,
-            nv: 8.0,
+            mm: 200.0,
+            nc: 12.0,
+            dv: 2.0e4,
+            nv: 4.0,
         }
     }
 }
@@ -157,7 +157,7 @@ pub struct ShadingMetric {
 impl Default for ShadingMetric {
     fn default() -> Self {
         Self {
-            c: 48.0,
+            c: 24.0,
             min_threshold: 0.0312,
             edge_threshold: 0.125,
         }

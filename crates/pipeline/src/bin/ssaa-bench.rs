@@ -1,0 +1,370 @@
+//! `ssaa-bench`: adaptive supersampling (Holländer 2013 §4.3) against full supersampling
+//! measured in the same run — the set-ups of Tables 4.1 and 4.2: Sponza (with the built-in
+//! checker texture on its untextured materials) and the textured DamagedHelmet, 1024×768 and
+//! 1920×1080, m = 2, 3, 4, every geometric metric alone and ND + shading metric (loop and
+//! sorted resolve), plus one sample per pixel and FXAA. Times are GPU times of the shading
+//! passes after the shared supersampled G-buffer (reported apart), with the light loop run once
+//! ("real-time") and 32 times per sample ("stalled"). MSE/PSNR (sRGB, [0, 1]) and FLIP are
+//! measured against full supersampling. Writes `adaptive-ssaa-<adapter>-<date>.{md,json}`.
+
+use std::path::{Path, PathBuf};
+
+use adaptive_ssaa::gpu::SsaaRenderer;
+use adaptive_ssaa::{GeometricMetric, Resolve, SsaaConfig};
+use anyhow::{Context, Result};
+use clap::Parser;
+use gbuffer::Image;
+use glam::Vec3;
+use gpu::{Gpu, PassTimer, bench::Stat};
+use scene::{Light, Scene};
+use serde::Serialize;
+
+/// Benchmarks adaptive supersampling against full supersampling, one sample and FXAA.
+#[derive(Parser, Debug)]
+struct Args {
+    /// Report folder.
+    #[arg(long, default_value = "docs/bench")]
+    out: PathBuf,
+    /// Timed frames per configuration (after ≥ 10 warm-up frames and ≥ 300 ms of work).
+    #[arg(long, default_value_t = 10)]
+    frames: u32,
+    /// Run on a software adapter too (its timings are not GPU performance).
+    #[arg(long)]
+    allow_software: bool,
+    /// Sponza at 1024×768, m = 4, no stall, ND + shading and the sweep only (a tuning run).
+    #[arg(long)]
+    quick: bool,
+    /// Scales of the ND + shading constants swept at 1024×768 (and in --quick), without stall.
+    #[arg(long, value_delimiter = ',', default_value = "0.25,0.5,2,4")]
+    sweep: Vec<f32>,
+    /// Also write the pictures of the docs (Sponza 1024×768, m = 4) into this folder.
+    #[arg(long)]
+    images: Option<PathBuf>,
+}
+
+/// Light loop repetitions of the "stalled" column.
+const STALL: u32 = 32;
+
+#[derive(Serialize, Clone)]
+struct Row {
+    scene: String,
+    width: u32,
+    height: u32,
+    m: u32,
+    method: String,
+    stall: u32,
+    ms: Stat,
+    /// Median full-supersampling ms / median ms (same stall).
+    speedup_vs_full: f64,
+    /// Samples as a fraction of m² per pixel.
+    samples: f64,
+    /// Shading evaluations as a fraction of full supersampling's.
+    shaded: f64,
+    mse: f64,
+    psnr: f64,
+    flip_mean: f64,
+}
+
+#[derive(Serialize)]
+struct Report {
+    header: gpu::bench::Header,
+    frames: u32,
+    stall: u32,
+    gbuffer: Vec<(String, u32, u32, u32, Stat)>,
+    rows: Vec<Row>,
+}
+
+/// The adapted scenes: Sponza with the checker on untextured materials, and DamagedHelmet.
+fn scenes(quick: bool) -> Result<Vec<(String, Scene, scene::Camera)>> {
+    let fixtures = scene::shared_fixtures().context("../shared/fixtures not found")?;
+    let sponza_path = fixtures.join("sponza/dabrovic/sponza.gltf");
+    let mut sponza = Scene::load(&sponza_path)?;
+    let checker = sponza.textures.len() as u32;
+    sponza.textures.push(scene::checker_texture());
+    for m in &mut sponza.materials {
+        m.base_color_texture.get_or_insert(checker);
+    }
+    let camera =
+        pipeline::preset_view(&sponza_path, &sponza).unwrap_or_else(|| sponza.camera_or_framed());
+    let mut out = vec![("sponza".to_string(), sponza, camera)];
+    if !quick {
+        let helmet = Scene::load(&fixtures.join("gltf/DamagedHelmet/DamagedHelmet.glb"))?;
+        let camera = helmet.camera_or_framed();
+        out.push(("damaged-helmet".to_string(), helmet, camera));
+    }
+    Ok(out)
+}
+
+/// A sun and 16 scattered bounded point lights (seeded).
+fn lights(scene: &Scene) -> Result<Vec<tiled_shading::GpuLight>> {
+    let mut lights = vec![Light::Directional {
+        direction: Vec3::new(-0.3, -1.0, -0.4).normalize(),
+        color: Vec3::new(1.0, 0.95, 0.85),
+        intensity: 2.5,
+    }];
+    lights.extend(scene::scatter_point_lights(scene.bounds(), 16, 11));
+    Ok(tiled_shading::gpu_lights(&lights)?)
+}
+
+/// Per-frame GPU ms of the passes `record` encodes (summed), after the warm-up.
+fn time(
+    gpu: &Gpu,
+    timer: &PassTimer,
+    frames: u32,
+    record: &dyn Fn(&mut wgpu::CommandEncoder, &PassTimer),
+) -> Result<Stat> {
+    let frame = || -> Result<f64> {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        record(&mut encoder, timer);
+        timer.resolve(&mut encoder);
+        gpu.queue.submit([encoder.finish()]);
+        Ok(timer.read(gpu)?.iter().map(|t| t.ms).sum())
+    };
+    let start = std::time::Instant::now();
+    let mut warm = 0;
+    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
+        frame()?;
+        warm += 1;
+    }
+    Ok(Stat::of(
+        (0..frames).map(|_| frame()).collect::<Result<Vec<_>>>()?,
+    ))
+}
+
+/// Heat colour of sample counts 1..=n.
+fn count_heatmap(counts: &Image<u32>, n: u32) -> Image<[f32; 4]> {
+    counts.map(|k| tiled_shading::heat_color((k.saturating_sub(1)) as f32 / (n - 1).max(1) as f32))
+}
+
+/// Heat colour of the absolute error (max over channels of sRGB values), full scale at `max`.
+fn error_heatmap(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>, max: f32) -> Result<Image<[f32; 4]>> {
+    let srgb = |v: f32| gbuffer::linear_to_srgb(v.clamp(0.0, 1.0));
+    let data = a
+        .pixels()
+        .iter()
+        .zip(b.pixels())
+        .map(|(p, q)| {
+            let e = (0..3)
+                .map(|c| (srgb(p[c]) - srgb(q[c])).abs())
+                .fold(0.0f32, f32::max);
+            tiled_shading::heat_color((e / max).min(1.0))
+        })
+        .collect();
+    Ok(Image::from_vec(a.width(), a.height(), data)?)
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    let gpu = Gpu::from_env()?;
+    if let Err(e) = gpu::bench::require_hardware(&gpu, args.allow_software) {
+        anyhow::bail!("{e}");
+    }
+    println!("adapter: {}", gpu.describe());
+    let timer = PassTimer::new(&gpu.device, 16);
+    let sizes: &[(u32, u32)] = if args.quick {
+        &[(1024, 768)]
+    } else {
+        &[(1024, 768), (1920, 1080)]
+    };
+    let ms_list: &[u32] = if args.quick { &[4] } else { &[2, 3, 4] };
+    let stalls: &[u32] = if args.quick { &[1] } else { &[1, STALL] };
+    let nd = Some(GeometricMetric::NormalDepth);
+    let mut methods: Vec<(String, Option<GeometricMetric>, bool, Resolve, f32)> =
+        vec![("ND+shading".into(), nd, true, Resolve::Loop, 1.0)];
+    if !args.quick {
+        methods.push(("ND+shading sorted".into(), nd, true, Resolve::Sorted, 1.0));
+        methods.extend(
+            GeometricMetric::ALL
+                .map(|g| (g.name().to_string(), Some(g), false, Resolve::Loop, 1.0)),
+        );
+        methods.push(("shading".into(), None, true, Resolve::Loop, 1.0));
+    }
+    methods.extend(
+        args.sweep
+            .iter()
+            .map(|&s| (format!("ND+shading c×{s}"), nd, true, Resolve::Loop, s)),
+    );
+    let mut rows = Vec::new();
+    let mut gbuffer_times = Vec::new();
+    for (name, scene, camera) in scenes(args.quick)? {
+        let lights = lights(&scene)?;
+        for &(w, h) in sizes {
+            for &m in ms_list {
+                let base = SsaaConfig {
+                    m,
+                    ..Default::default()
+                };
+                let mut r = SsaaRenderer::new(&gpu, &scene, &lights, w, h, &base)?;
+                r.set_camera(&gpu.queue, &camera)?;
+                let g = time(&gpu, &timer, args.frames, &|e, t| {
+                    r.encode_gbuffer(e, Some(t))
+                })?;
+                println!(
+                    "{name} {w}×{h} m={m}: supersampled G-buffer {:.3} ms",
+                    g.median_ms
+                );
+                gbuffer_times.push((name.clone(), w, h, m, g));
+                // The G-buffer stays; every configuration below shades it.
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                r.encode_gbuffer(&mut encoder, None);
+                gpu.queue.submit([encoder.finish()]);
+                for &stall in stalls {
+                    let config = SsaaConfig { stall, ..base };
+                    r.ssaa.set_config(&gpu.queue, &config)?;
+                    let full_ms = time(&gpu, &timer, args.frames, &|e, t| {
+                        r.ssaa.encode_full(e, Some(t))
+                    })?;
+                    let full = r.ssaa.read_output(&gpu)?;
+                    let mut row = |method: &str,
+                                   ms: Stat,
+                                   image: &Image<[f32; 4]>,
+                                   samples: f64,
+                                   shaded: f64| {
+                        let q = pipeline::quality(&full, image);
+                        let row = Row {
+                            scene: name.clone(),
+                            width: w,
+                            height: h,
+                            m,
+                            method: method.into(),
+                            stall,
+                            speedup_vs_full: full_ms.median_ms / ms.median_ms,
+                            ms,
+                            samples,
+                            shaded,
+                            mse: q.rmse * q.rmse,
+                            psnr: q.psnr,
+                            flip_mean: q.flip_mean,
+                        };
+                        println!(
+                            "{name} {w}×{h} m={m} stall {stall} {method:<18} {:>8.3} ms ×{:<5.2} samples {:>5.1} % MSE {:.2e} PSNR {:.1} FLIP {:.4}",
+                            row.ms.median_ms,
+                            row.speedup_vs_full,
+                            100.0 * samples,
+                            row.mse,
+                            row.psnr,
+                            row.flip_mean
+                        );
+                        rows.push(row);
+                    };
+                    row("full SSAA", full_ms, &full, 1.0, 1.0);
+                    let one = f64::from(m * m).recip();
+                    let first_ms = time(&gpu, &timer, args.frames, &|e, t| {
+                        r.ssaa.encode_first(e, Some(t))
+                    })?;
+                    let first = r.ssaa.read_first(&gpu)?;
+                    row("1 sample", first_ms, &first, one, one);
+                    let fxaa_ms = time(&gpu, &timer, args.frames, &|e, t| {
+                        r.ssaa.encode_first(e, Some(t));
+                        r.ssaa.encode_fxaa(e, Some(t));
+                    })?;
+                    row("FXAA", fxaa_ms, &r.ssaa.read_output(&gpu)?, one, one);
+                    for (label, metric, shading, resolve, scale) in &methods {
+                        let swept = *scale != 1.0;
+                        if swept && (stall != 1 || w != sizes[0].0) {
+                            continue;
+                        }
+                        let c = config.constants;
+                        let sm = adaptive_ssaa::ShadingMetric::default();
+                        let config = SsaaConfig {
+                            metric: *metric,
+                            constants: adaptive_ssaa::Constants {
+                                mm: c.mm * scale,
+                                nc: c.nc * scale,
+                                dv: c.dv * scale,
+                                nv: c.nv * scale,
+                            },
+                            shading: shading.then_some(adaptive_ssaa::ShadingMetric {
+                                c: sm.c * scale,
+                                ..sm
+                            }),
+                            resolve: *resolve,
+                            ..config
+                        };
+                        r.ssaa.set_config(&gpu.queue, &config)?;
+                        let ms =
+                            time(&gpu, &timer, args.frames, &|e, t| r.ssaa.encode(e, Some(t)))?;
+                        let out = adaptive_ssaa::cpu::Output {
+                            image: r.ssaa.read_output(&gpu)?,
+                            first: r.ssaa.read_first(&gpu)?,
+                            counts: r.ssaa.read_counts(&gpu)?,
+                        };
+                        row(label, ms, &out.image, out.sample_fraction(m), out.shaded(m));
+                        let pictures = (name == "sponza"
+                            && w == 1024
+                            && m == 4
+                            && stall == 1
+                            && label == "ND+shading")
+                            || (args.quick && label == "ND+shading");
+                        if let (Some(dir), true) = (&args.images, pictures) {
+                            write_pictures(dir, &name, m, &full, &out)?;
+                        }
+                    }
+                    r.ssaa.set_config(&gpu.queue, &base)?;
+                }
+            }
+        }
+    }
+    let header = gpu::bench::Header::new(&gpu);
+    let mut md = header.markdown("Adaptive supersampling (Holländer 2013 §4.3)", args.frames);
+    md.push_str(&format!(
+        "\nGPU time of the shading passes after the shared supersampled G-buffer (median of {} frames); \
+         'stalled' runs the light loop {STALL}× per sample. Speed-up, MSE/PSNR (sRGB in [0, 1]) and FLIP \
+         against full supersampling of the same run. Samples: Σk / (m²·pixels); shaded: shading \
+         evaluations / full SSAA's (S plus k for every pixel with k > 1).\n\n",
+        args.frames
+    ));
+    md.push_str("## Supersampled G-buffer\n\n| scene | size | m | ms |\n|---|---|---|---|\n");
+    for (s, w, h, m, g) in &gbuffer_times {
+        md.push_str(&format!("| {s} | {w}×{h} | {m} | {:.3} |\n", g.median_ms));
+    }
+    md.push_str("\n## Shading\n\n| scene | size | m | method | ms | ×full | stalled ms | ×full | MSE ×1e-4 | PSNR dB | FLIP | samples % | shaded % |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for r in rows.iter().filter(|r| r.stall == 1) {
+        let stalled = rows.iter().find(|s| {
+            s.stall != 1
+                && s.scene == r.scene
+                && s.width == r.width
+                && s.m == r.m
+                && s.method == r.method
+        });
+        let (sms, sx) = stalled.map_or(("–".into(), "–".into()), |s| {
+            (
+                format!("{:.3}", s.ms.median_ms),
+                format!("{:.2}", s.speedup_vs_full),
+            )
+        });
+        md.push_str(&format!(
+            "| {} | {}×{} | {} | {} | {:.3} | {:.2} | {sms} | {sx} | {:.2} | {:.1} | {:.4} | {:.1} | {:.1} |\n",
+            r.scene, r.width, r.height, r.m, r.method, r.ms.median_ms, r.speedup_vs_full,
+            r.mse * 1e4, r.psnr, r.flip_mean, 100.0 * r.samples, 100.0 * r.shaded
+        ));
+    }
+    let report = Report {
+        header,
+        frames: args.frames,
+        stall: STALL,
+        gbuffer: gbuffer_times,
+        rows,
+    };
+    let stem = report.header.file_stem("adaptive-ssaa-");
+    pipeline::bench::write_report(&args.out, &stem, &report, &md)
+}
+
+fn write_pictures(
+    dir: &Path,
+    name: &str,
+    m: u32,
+    full: &Image<[f32; 4]>,
+    out: &adaptive_ssaa::cpu::Output,
+) -> Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let p = |what: &str| dir.join(format!("ssaa-{name}-{what}.png"));
+    full.write_png(&p("full"))?;
+    out.image.write_png(&p("adaptive"))?;
+    out.first.write_png(&p("one-sample"))?;
+    count_heatmap(&out.counts, m * m).write_png(&p("samples"))?;
+    error_heatmap(&out.image, full, 0.25)?.write_png(&p("error-adaptive"))?;
+    error_heatmap(&out.first, full, 0.25)?.write_png(&p("error-one-sample"))?;
+    println!("wrote pictures to {}", dir.display());
+    Ok(())
+}
