@@ -124,6 +124,11 @@ fn in_image(p: vec2<u32>) -> bool {
     return p.x < params.width && p.y < params.height;
 }
 
+// Samples of pixel i from `evaluate`, clamped to 1..=n.
+fn pixel_samples(i: u32) -> u32 {
+    return clamp(counts[i], 1u, params.n);
+}
+
 // S: the first sample of every window, filtered over the whole pixel.
 @compute @workgroup_size(8, 8)
 fn shade_first(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -260,7 +265,7 @@ fn shade_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let i = pixel_index(p);
-    let k = clamp(counts[i], 1u, params.n);
+    let k = pixel_samples(i);
     if k == 1u {
         out_image[i] = first[i];
     } else {
@@ -286,7 +291,7 @@ fn sort_count(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let i = pixel_index(p);
-    let k = clamp(counts[i], 1u, params.n);
+    let k = pixel_samples(i);
     if k == 1u {
         out_image[i] = first[i];
     } else {
@@ -316,7 +321,7 @@ fn sort_scatter(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let i = pixel_index(p);
-    let k = clamp(counts[i], 1u, params.n);
+    let k = pixel_samples(i);
     if k > 1u {
         list[atomicAdd(&sort[CURSORS + k], 1u)] = i;
     }
@@ -330,7 +335,7 @@ fn shade_sorted(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let i = list[id.x];
     let p = vec2<u32>(i % params.width, i / params.width);
-    out_image[i] = average_samples(p, clamp(counts[i], 1u, params.n));
+    out_image[i] = average_samples(p, pixel_samples(i));
 }
 
 // Bilinear lookup of S at a continuous position (pixel centres at +0.5), clamped to the edges.

@@ -160,13 +160,17 @@ fn per_pixel<T: Copy + Send>(w: u32, h: u32, f: impl Fn(u32, u32) -> T + Sync) -
 
 /// The window's depths (view depth / far, 1 where no surface) and unit normals (the camera's
 /// backward axis where no surface: the background is treated as a surface on the far plane
-/// facing the viewer), in dither order.
-pub fn window(inp: &ShadingInputs, m: u32, p: [u32; 2]) -> (Vec<f32>, Vec<Vec3>) {
-    let order = dither_order(m);
+/// facing the viewer), in the order `order` ([`dither_order`]).
+pub fn window(
+    inp: &ShadingInputs,
+    m: u32,
+    order: &[[u32; 2]],
+    p: [u32; 2],
+) -> (Vec<f32>, Vec<Vec3>) {
     let back = inp.frame.inv_view.z_axis.xyz();
     (0..order.len())
         .map(|i| {
-            let q = window_sample(p, m, &order, i);
+            let q = window_sample(p, m, order, i);
             let depth = inp.gbuffer.linear_depth.get(q[0], q[1]);
             if depth > 0.0 {
                 (
@@ -271,8 +275,20 @@ pub fn pixel_metric(
     x: u32,
     y: u32,
 ) -> f32 {
+    metric_in_order(inp, config, &dither_order(config.m), s, x, y)
+}
+
+/// [`pixel_metric`] with the window's sample order computed once by the caller.
+fn metric_in_order(
+    inp: &ShadingInputs,
+    config: &SsaaConfig,
+    order: &[[u32; 2]],
+    s: &Image<[f32; 4]>,
+    x: u32,
+    y: u32,
+) -> f32 {
     let geometric = config.metric.map_or(0.0, |metric| {
-        let (d, n) = window(inp, config.m, [x, y]);
+        let (d, n) = window(inp, config.m, order, [x, y]);
         geometric_metric(config, metric, &d, &n)
     });
     geometric.max(shading_metric(config, s, x, y))
@@ -293,12 +309,10 @@ pub fn evaluate(
             s.height()
         )));
     }
+    let order = dither_order(config.m);
     Ok(per_pixel(w, h, |x, y| {
-        sample_count(
-            pixel_metric(inp, config, s, x, y),
-            config.min_samples,
-            config.samples(),
-        )
+        let k = metric_in_order(inp, config, &order, s, x, y);
+        sample_count(k, config.min_samples, config.samples())
     }))
 }
 
@@ -389,6 +403,11 @@ impl Output {
             .sum();
         total as f64 / (self.counts.pixels().len() as f64 * f64::from(m * m))
     }
+}
+
+/// Samples per pixel as heat colours: 1 black … `n` white (`tiled_shading::heat_color`).
+pub fn sample_heatmap(counts: &Image<u32>, n: u32) -> Image<[f32; 4]> {
+    counts.map(|k| tiled_shading::heat_color(k.saturating_sub(1) as f32 / (n - 1).max(1) as f32))
 }
 
 /// Listing 4.1 on the CPU: shade the first sample, evaluate the metrics, shade the rest.

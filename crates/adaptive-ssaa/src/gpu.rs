@@ -12,7 +12,7 @@ use gbuffer::{DEPTH_FORMAT, Frame, Image, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, 
 use scene::{Camera, Scene};
 use tiled_shading::GpuLight;
 
-use crate::cpu::SsGBuffer;
+use crate::cpu::{Output, SsGBuffer};
 use crate::{
     Resolve, SsaaConfig, SsaaError, SsaaMaterial, TextureArray, UV_FORMAT, UV_GRAD_FORMAT,
     dither_order,
@@ -936,24 +936,6 @@ impl SsaaRenderer {
     }
 }
 
-/// Results of [`run`], all from one G-buffer.
-pub struct GpuOutput {
-    /// The adaptive image.
-    pub image: Image<[f32; 4]>,
-    /// `S`.
-    pub first: Image<[f32; 4]>,
-    /// Samples per pixel.
-    pub counts: Image<u32>,
-}
-
-impl GpuOutput {
-    /// Samples as a fraction of `m²` per pixel.
-    pub fn sample_fraction(&self, m: u32) -> f64 {
-        let total: u64 = self.counts.pixels().iter().map(|&k| u64::from(k)).sum();
-        total as f64 / (self.counts.pixels().len() as f64 * f64::from(m * m))
-    }
-}
-
 /// Convenience for tests and examples: renders `scene` from `camera` with adaptive
 /// supersampling and reads the image, `S` and the sample counts back.
 pub fn run(
@@ -964,14 +946,14 @@ pub fn run(
     width: u32,
     height: u32,
     config: &SsaaConfig,
-) -> Result<GpuOutput, SsaaError> {
+) -> Result<Output, SsaaError> {
     let mut renderer = SsaaRenderer::new(gpu, scene, lights, width, height, config)?;
     renderer.set_camera(&gpu.queue, camera)?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     renderer.encode_gbuffer(&mut encoder, None);
     renderer.ssaa.encode(&mut encoder, None);
     gpu.queue.submit([encoder.finish()]);
-    Ok(GpuOutput {
+    Ok(Output {
         image: renderer.ssaa.read_output(gpu)?,
         first: renderer.ssaa.read_first(gpu)?,
         counts: renderer.ssaa.read_counts(gpu)?,

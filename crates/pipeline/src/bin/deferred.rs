@@ -168,8 +168,7 @@ fn render_ssaa(
     if args.adaptive {
         let counts = renderer.ssaa.read_counts(&gpu)?;
         let n = m * m;
-        counts
-            .map(|k| tiled_shading::heat_color((k - 1) as f32 / (n - 1) as f32))
+        adaptive_ssaa::cpu::sample_heatmap(&counts, n)
             .write_png(&args.out.join("ssaa-samples.png"))?;
         let total: u64 = counts.pixels().iter().map(|&k| u64::from(k)).sum();
         println!(

@@ -131,11 +131,6 @@ fn time(
     ))
 }
 
-/// Heat colour of sample counts 1..=n.
-fn count_heatmap(counts: &Image<u32>, n: u32) -> Image<[f32; 4]> {
-    counts.map(|k| tiled_shading::heat_color((k.saturating_sub(1)) as f32 / (n - 1).max(1) as f32))
-}
-
 /// Heat colour of the absolute error (max over channels of sRGB values), full scale at `max`.
 fn error_heatmap(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>, max: f32) -> Result<Image<[f32; 4]>> {
     let srgb = |v: f32| gbuffer::linear_to_srgb(v.clamp(0.0, 1.0));
@@ -362,7 +357,7 @@ fn write_pictures(
     full.write_png(&p("full"))?;
     out.image.write_png(&p("adaptive"))?;
     out.first.write_png(&p("one-sample"))?;
-    count_heatmap(&out.counts, m * m).write_png(&p("samples"))?;
+    adaptive_ssaa::cpu::sample_heatmap(&out.counts, m * m).write_png(&p("samples"))?;
     error_heatmap(&out.image, full, 0.25)?.write_png(&p("error-adaptive"))?;
     error_heatmap(&out.first, full, 0.25)?.write_png(&p("error-one-sample"))?;
     println!("wrote pictures to {}", dir.display());
