@@ -1,0 +1,1 @@
+//! Minimal OBJ reader for control meshes (to come).
