@@ -148,7 +148,11 @@ pub fn face_ring(top: &Topology, f: u32, r: u32) -> Vec<u32> {
         let closed = top.rotate_ccw(x) == h;
         // forward = [previous corner, across-vertex, others…, (closed: across-vertex of the
         // next edge, next corner)].
-        let end = if closed { forward.len() - 2 } else { forward.len() };
+        let end = if closed {
+            forward.len() - 2
+        } else {
+            forward.len()
+        };
         ring.extend(forward.iter().take(end).skip(2));
         if !closed {
             let mut backward = Vec::new();
@@ -266,13 +270,16 @@ pub fn build_table(key: Key, level: u32) -> Result<Table, SubdivError> {
         values[v * n + v] = 1.0;
     }
     // Grid coordinates (scale 2^ℓ) of the vertices inside the face; `patch` = its triangles.
-    let mut coords: HashMap<u32, (u32, u32)> = HashMap::from([(0, (0, 0)), (1, (1, 0)), (2, (0, 1))]);
+    let mut coords: HashMap<u32, (u32, u32)> =
+        HashMap::from([(0, (0, 0)), (1, (1, 0)), (2, (0, 1))]);
     let mut patch = vec![0u32];
     for _ in 0..level {
         let (triangles, stencils) = loop_step(&top);
         let nv = top.vertex_count() as u32;
-        let mut fine: HashMap<u32, (u32, u32)> =
-            coords.iter().map(|(&v, &(i, j))| (v, (2 * i, 2 * j))).collect();
+        let mut fine: HashMap<u32, (u32, u32)> = coords
+            .iter()
+            .map(|(&v, &(i, j))| (v, (2 * i, 2 * j)))
+            .collect();
         let mut children = Vec::with_capacity(patch.len() * 4);
         for &f in &patch {
             for k in 0..3 {
@@ -341,12 +348,18 @@ pub fn m1_configurations(max_valence: u8) -> Vec<Key> {
                 Corner::Boundary { before, after } => (before, after),
             };
             let ab = if before == 0 {
-                Corner::Boundary { before: 2, after: 0 }
+                Corner::Boundary {
+                    before: 2,
+                    after: 0,
+                }
             } else {
                 Corner::Interior(6)
             };
             let ca = if after == 0 {
-                Corner::Boundary { before: 0, after: 2 }
+                Corner::Boundary {
+                    before: 0,
+                    after: 2,
+                }
             } else {
                 Corner::Interior(6)
             };
@@ -356,7 +369,10 @@ pub fn m1_configurations(max_valence: u8) -> Vec<Key> {
     for mask in 0..8u32 {
         keys.push([0, 1, 2].map(|i| {
             if mask >> i & 1 == 1 {
-                Corner::Boundary { before: 1, after: 1 }
+                Corner::Boundary {
+                    before: 1,
+                    after: 1,
+                }
             } else {
                 Corner::Interior(6)
             }
@@ -474,7 +490,9 @@ impl BftSet {
         let level = r.u32()?;
         let count = r.u32()?;
         if !(1..=7).contains(&level) || count > 100_000 {
-            return Err(bad(format!("implausible level {level} or table count {count}")));
+            return Err(bad(format!(
+                "implausible level {level} or table count {count}"
+            )));
         }
         let grid = grid_count(1 << level);
         let mut tables = Vec::new();
@@ -507,7 +525,10 @@ impl BftSet {
             });
         }
         if r.at != bytes.len() {
-            return Err(bad(format!("{} bytes after the last table", bytes.len() - r.at)));
+            return Err(bad(format!(
+                "{} bytes after the last table",
+                bytes.len() - r.at
+            )));
         }
         Ok(Self::from_tables(level, tables))
     }
@@ -529,7 +550,8 @@ impl<'a> Reader<'a> {
     }
 
     fn u32(&mut self) -> Result<u32, SubdivError> {
-        self.take(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        self.take(4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     }
 }
 
@@ -548,7 +570,11 @@ mod tests {
     #[test]
     fn extraordinary_ring_sizes() {
         for n in 3..=18u8 {
-            let key = [Corner::Interior(n), Corner::Interior(6), Corner::Interior(6)];
+            let key = [
+                Corner::Interior(n),
+                Corner::Interior(6),
+                Corner::Interior(6),
+            ];
             let top = configuration_mesh(key).expect("interior configuration");
             let mut ring = face_ring(&top, 0, 0);
             // A valence-3 corner's two across-vertices are one vertex in two slots.

@@ -147,7 +147,10 @@ pub struct TriMesh {
 
 impl TriMesh {
     /// Validates `triangles` (see [`Topology::new`]) and the positions (finite).
-    pub fn new(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Result<Self, crate::SubdivError> {
+    pub fn new(
+        positions: Vec<DVec3>,
+        triangles: Vec<[u32; 3]>,
+    ) -> Result<Self, crate::SubdivError> {
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             return Err(crate::SubdivError::NonFinite { vertex: i });
         }
@@ -163,7 +166,11 @@ impl TriMesh {
             (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         );
-        if self.positions.is_empty() { 0.0 } else { (hi - lo).length() }
+        if self.positions.is_empty() {
+            0.0
+        } else {
+            (hi - lo).length()
+        }
     }
 
     /// One Loop step.
@@ -193,7 +200,13 @@ impl TriMesh {
     pub fn limit_normals(&self) -> Vec<DVec3> {
         (0..self.topology.vertex_count() as u32)
             .into_par_iter()
-            .map(|v| limit_normal(self.positions[v as usize], &self.topology.fan(v), &self.positions))
+            .map(|v| {
+                limit_normal(
+                    self.positions[v as usize],
+                    &self.topology.fan(v),
+                    &self.positions,
+                )
+            })
             .collect()
     }
 }
@@ -209,7 +222,11 @@ pub fn limit_stencils(top: &Topology) -> Stencils {
                 if n == 0 {
                     vec![(v, 1.0)]
                 } else if fan.boundary {
-                    vec![(v, 2.0 / 3.0), (fan.ring[0], 1.0 / 6.0), (fan.ring[n - 1], 1.0 / 6.0)]
+                    vec![
+                        (v, 2.0 / 3.0),
+                        (fan.ring[0], 1.0 / 6.0),
+                        (fan.ring[n - 1], 1.0 / 6.0),
+                    ]
                 } else {
                     let chi = 1.0 / (3.0 / (8.0 * loop_beta(n)) + n as f64);
                     let mut row = vec![(v, 1.0 - n as f64 * chi)];

@@ -155,8 +155,14 @@ impl TriMesh {
             });
         }
         Self::new(
-            positions.iter().map(|&p| Vec3::from(p).as_dvec3()).collect(),
-            indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+            positions
+                .iter()
+                .map(|&p| Vec3::from(p).as_dvec3())
+                .collect(),
+            indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]])
+                .collect(),
         )
     }
 
@@ -168,10 +174,11 @@ impl TriMesh {
         let remap: Vec<u32> = positions
             .iter()
             .map(|p| {
-                *map.entry(p.to_array().map(f32::to_bits)).or_insert_with(|| {
-                    unique.push(p.to_array());
-                    unique.len() as u32 - 1
-                })
+                *map.entry(p.to_array().map(f32::to_bits))
+                    .or_insert_with(|| {
+                        unique.push(p.to_array());
+                        unique.len() as u32 - 1
+                    })
             })
             .collect();
         let indices: Vec<u32> = indices
@@ -247,7 +254,10 @@ impl Subdivider {
     }
 
     /// M¹ positions and normals from M⁰ positions (the initial step, in f64).
-    pub fn initial_step(&self, m0_positions: &[DVec3]) -> Result<(Vec<DVec3>, Vec<DVec3>), SubdivError> {
+    pub fn initial_step(
+        &self,
+        m0_positions: &[DVec3],
+    ) -> Result<(Vec<DVec3>, Vec<DVec3>), SubdivError> {
         if m0_positions.len() != self.m0.vertex_count() {
             return Err(SubdivError::PositionCount {
                 given: m0_positions.len(),
@@ -265,7 +275,12 @@ impl Subdivider {
     }
 
     /// The whole pipeline on the CPU: initial step, then every patch at surface level `level`.
-    pub fn evaluate_cpu(&self, bft: &BftSet, m0_positions: &[Vec3], level: u32) -> Result<Refined, SubdivError> {
+    pub fn evaluate_cpu(
+        &self,
+        bft: &BftSet,
+        m0_positions: &[Vec3],
+        level: u32,
+    ) -> Result<Refined, SubdivError> {
         let s = self.segments(level)?;
         let p0: Vec<DVec3> = m0_positions.iter().map(|p| p.as_dvec3()).collect();
         let (p1, n1) = self.initial_step(&p0)?;

@@ -123,7 +123,9 @@ impl Topology {
             let v = origin(h) as usize;
             incident[v] += 1;
             if outgoing[v] == NONE || twin[h as usize] == NONE {
-                if twin[h as usize] == NONE && outgoing[v] != NONE && twin[outgoing[v] as usize] == NONE
+                if twin[h as usize] == NONE
+                    && outgoing[v] != NONE
+                    && twin[outgoing[v] as usize] == NONE
                 {
                     return Err(SubdivError::NonManifoldVertex { vertex: v as u32 });
                 }

@@ -110,7 +110,11 @@ impl Patches {
                         owned |= 1 << (3 + k);
                     }
                     edges[k] = m1.edge_of[hs[k] as usize]
-                        | if corners[k] > corners[(k + 1) % 3] { REVERSED } else { 0 };
+                        | if corners[k] > corners[(k + 1) % 3] {
+                            REVERSED
+                        } else {
+                            0
+                        };
                 }
                 let patch = GpuPatch {
                     ring_offset: 0,
@@ -151,7 +155,15 @@ impl Patches {
     /// Output vertex of grid vertex `(i, j)` of patch `p` at `s` segments, and whether `p`
     /// evaluates it.
     pub fn output_vertex(&self, p: usize, i: u32, j: u32, s: u32) -> (u32, bool) {
-        output_vertex(&self.patches[p], p as u32, i, j, s, self.vertex_count, self.edge_count)
+        output_vertex(
+            &self.patches[p],
+            p as u32,
+            i,
+            j,
+            s,
+            self.vertex_count,
+            self.edge_count,
+        )
     }
 
     /// Triangle list of the uniform tessellation at `s` segments per patch edge.
@@ -174,8 +186,34 @@ impl Patches {
             .collect()
     }
 
+    /// Position and normal of grid vertex `(i, j)` of patch `p` at `s` segments with that
+    /// patch's table (f32, the shader's order of operations), whether or not it owns it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn evaluate_at(
+        &self,
+        bft: &BftSet,
+        weights: &[f32],
+        p: usize,
+        (i, j, s): (u32, u32, u32),
+        m1_positions: &[Vec3],
+        m1_normals: &[Vec3],
+    ) -> (Vec3, Vec3) {
+        let patch = &self.patches[p];
+        let ring = &self.rings[patch.ring_offset as usize..][..patch.ring_size as usize];
+        let stride = patch.ring_size.div_ceil(4) as usize * 4;
+        let step = bft.segments() / s;
+        let g = grid_index(i * step, j * step, bft.segments());
+        let w = &weights[patch.table_offset as usize * 4 + g * stride..];
+        let (mut pos, mut nrm) = (Vec3::ZERO, Vec3::ZERO);
+        for (r, &v) in ring.iter().enumerate() {
+            pos += w[r] * m1_positions[v as usize];
+            nrm += w[r] * m1_normals[v as usize];
+        }
+        (pos, nrm.normalize_or_zero())
+    }
+
     /// CPU mirror of `evaluate.wgsl`: every output vertex at `s` segments from the M¹ positions
-    /// and normals with the tables (f32, the shader's order of operations).
+    /// and normals, each evaluated by its owner patch.
     pub fn evaluate(
         &self,
         bft: &BftSet,
@@ -184,29 +222,25 @@ impl Patches {
         m1_normals: &[Vec3],
     ) -> (Vec<Vec3>, Vec<Vec3>) {
         let (weights, _) = padded_weights(bft);
-        let step = bft.segments() / s;
         let n = self.output_vertex_count(s);
         let per_patch: Vec<Vec<(u32, Vec3, Vec3)>> = (0..self.patches.len())
             .into_par_iter()
             .map(|p| {
-                let patch = &self.patches[p];
-                let ring = &self.rings[patch.ring_offset as usize..][..patch.ring_size as usize];
-                let stride = patch.ring_size.div_ceil(4) as usize * 4;
                 let mut out = Vec::new();
                 for j in 0..=s {
                     for i in 0..=s - j {
                         let (o, owned) = self.output_vertex(p, i, j, s);
-                        if !owned {
-                            continue;
+                        if owned {
+                            let (pos, nrm) = self.evaluate_at(
+                                bft,
+                                &weights,
+                                p,
+                                (i, j, s),
+                                m1_positions,
+                                m1_normals,
+                            );
+                            out.push((o, pos, nrm));
                         }
-                        let g = grid_index(i * step, j * step, bft.segments());
-                        let w = &weights[patch.table_offset as usize * 4 + g * stride..];
-                        let (mut pos, mut nrm) = (Vec3::ZERO, Vec3::ZERO);
-                        for (r, &v) in ring.iter().enumerate() {
-                            pos += w[r] * m1_positions[v as usize];
-                            nrm += w[r] * m1_normals[v as usize];
-                        }
-                        out.push((o, pos, nrm.normalize_or_zero()));
                     }
                 }
                 out
@@ -224,7 +258,11 @@ impl Patches {
 
 /// Inner vertices of a patch at `s` segments.
 pub fn inner_count(s: u32) -> usize {
-    if s < 3 { 0 } else { ((s - 1) * (s - 2) / 2) as usize }
+    if s < 3 {
+        0
+    } else {
+        ((s - 1) * (s - 2) / 2) as usize
+    }
 }
 
 /// See [`Patches::output_vertex`]; mirrored by `output_vertex` in `evaluate.wgsl`.

@@ -18,7 +18,11 @@ fn bft_error(mesh: &TriMesh, level: u32) -> f64 {
     let rec = mesh.subdivide(level).expect("recursive");
     let limit = rec.limit_positions();
     assert_eq!(out.positions.len(), limit.len(), "vertex count");
-    assert_eq!(out.indices.len(), rec.topology.triangles.len() * 3, "triangle count");
+    assert_eq!(
+        out.indices.len(),
+        rec.topology.triangles.len() * 3,
+        "triangle count"
+    );
     let bft_points: Vec<DVec3> = out.positions.iter().map(|p| p.as_dvec3()).collect();
     max_nearest(&bft_points, &limit).max(max_nearest(&limit, &bft_points)) / mesh.diagonal()
 }
@@ -28,7 +32,10 @@ fn closed_valences_3_to_18() {
     for n in 3..=18 {
         for level in [1, 3, 5] {
             let e = bft_error(&bipyramid(n), level);
-            assert!(e <= 1e-5, "bipyramid valence {n} level {level}: error {e:e}");
+            assert!(
+                e <= 1e-5,
+                "bipyramid valence {n} level {level}: error {e:e}"
+            );
         }
     }
 }
@@ -44,7 +51,10 @@ fn boundaries_valences_3_to_18() {
     for faces in 1..=17 {
         for level in [2, 5] {
             let e = bft_error(&half_disk(faces), level);
-            assert!(e <= 1e-5, "half disk with {faces} faces level {level}: error {e:e}");
+            assert!(
+                e <= 1e-5,
+                "half disk with {faces} faces level {level}: error {e:e}"
+            );
         }
     }
 }

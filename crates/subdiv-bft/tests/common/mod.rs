@@ -51,7 +51,11 @@ pub fn half_disk(faces: u32) -> TriMesh {
     }
     for i in 0..=faces {
         let a = PI * f64::from(i) / f64::from(faces);
-        p.push(DVec3::new(2.0 * a.cos(), 2.0 * a.sin(), -0.1 * f64::from(i % 3)));
+        p.push(DVec3::new(
+            2.0 * a.cos(),
+            2.0 * a.sin(),
+            -0.1 * f64::from(i % 3),
+        ));
     }
     let mut t: Vec<[u32; 3]> = (0..faces).map(|i| [0, 1 + i, 2 + i]).collect();
     let outer = faces + 2;
@@ -66,9 +70,10 @@ pub fn half_disk(faces: u32) -> TriMesh {
 /// Nearest-neighbour distance from every point of `a` to the set `b`, maximum (brute force
 /// through a uniform grid).
 pub fn max_nearest(a: &[DVec3], b: &[DVec3]) -> f64 {
-    let (lo, hi) = b.iter().fold((DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)), |(l, h), &p| {
-        (l.min(p), h.max(p))
-    });
+    let (lo, hi) = b.iter().fold(
+        (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)),
+        |(l, h), &p| (l.min(p), h.max(p)),
+    );
     let cell = ((hi - lo).max_element() / 64.0).max(1e-9);
     let key = |p: DVec3| ((p - lo) / cell).floor().as_ivec3();
     let mut grid: std::collections::HashMap<glam::IVec3, Vec<usize>> = Default::default();
