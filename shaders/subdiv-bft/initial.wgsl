@@ -54,18 +54,23 @@ fn normals_m1(@builtin(global_invocation_id) id: vec3<u32>) {
         let along = first - last;
         var across: vec3<f32>;
         if k == 1u {
-            across = 2.0 * p1[v].xyz - first - last;
-        } else if k == 2u {
-            across = first + last - 2.0 * p1[ring[start + 1u]].xyz;
+            across = first + last - 2.0 * p1[v].xyz;
         } else {
             let t = PI / f32(k);
+            let lambda = 0.375 + 0.25 * cos(t);
             var inner = vec3<f32>(0.0);
+            var sum = 0.0;
             for (var i = 1u; i < k; i++) {
-                inner += sin(f32(i) * t) * p1[ring[start + i]].xyz;
+                let w = sin(f32(i) * t);
+                inner += w * p1[ring[start + i]].xyz;
+                sum += w;
             }
-            across = sin(t) * (first + last) + (2.0 * cos(t) - 2.0) * inner;
+            let a = (0.375 * sum + (lambda - 0.75) * sin(t))
+                / (8.0 * (lambda - 0.75) * (lambda - 0.5) - 1.0);
+            let b = 8.0 * (lambda - 0.5) * a - sin(t);
+            across = inner + a * (first + last) + b * p1[v].xyz;
         }
-        normal = cross(across, along);
+        normal = cross(along, across);
     } else if n > 0u {
         var t1 = vec3<f32>(0.0);
         var t2 = vec3<f32>(0.0);

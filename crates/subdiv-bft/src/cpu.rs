@@ -240,11 +240,13 @@ pub fn limit_stencils(top: &Topology) -> Stencils {
 
 /// Unit limit normal of a vertex from Loop's tangent masks.
 ///
-/// Interior: t₁ = Σ cos(2πi/n)·pᵢ, t₂ = Σ sin(2πi/n)·pᵢ, n = t₁ × t₂. Boundary (Hoppe et al.
-/// 1994; ring p₀ … pₖ over k triangles, p₀ and pₖ on the boundary): along = p₀ − pₖ; across
-/// (pointing out of the surface's side) = sin θ·(p₀ + pₖ) + (2 cos θ − 2)·Σ sin(iθ)·pᵢ with
-/// θ = π/k for k ≥ 3, p₀ + p₂ − 2p₁ for k = 2, 2v − p₀ − p₁ for k = 1; n = across × along.
-/// Both follow the fan's counter-clockwise orientation. Zero for an unused or flat-degenerate vertex.
+/// Interior: t₁ = Σ cos(2πi/n)·pᵢ, t₂ = Σ sin(2πi/n)·pᵢ, n = t₁ × t₂. Boundary (ring p₀ … pₖ
+/// over k triangles, p₀ and pₖ on the boundary): along = p₀ − pₖ; across (into the surface)
+/// is the left eigenvector of the local subdivision matrix of the standard rules for
+/// λ = ⅜ + ¼·cos(π/k): Σ sin(iπ/k)·pᵢ + a·(p₀ + pₖ) + b·v with a, b solving its two boundary
+/// equations (k = 2 gives p₁ − v as in Hoppe et al. 1994; k = 1: p₀ + p₁ − 2v);
+/// n = along × across. Being eigenvectors, both masks give the same normal at every level.
+/// Zero for an unused or flat-degenerate vertex.
 pub fn limit_normal(v: DVec3, fan: &Fan, positions: &[DVec3]) -> DVec3 {
     let p = |i: usize| positions[fan.ring[i] as usize];
     let n = fan.valence();
@@ -253,16 +255,23 @@ pub fn limit_normal(v: DVec3, fan: &Fan, positions: &[DVec3]) -> DVec3 {
     } else if fan.boundary {
         let k = n - 1;
         let along = p(0) - p(k);
-        let across = match k {
-            1 => 2.0 * v - p(0) - p(1),
-            2 => p(0) + p(2) - 2.0 * p(1),
-            _ => {
-                let t = PI / k as f64;
-                let inner: DVec3 = (1..k).map(|i| (i as f64 * t).sin() * p(i)).sum();
-                t.sin() * (p(0) + p(k)) + (2.0 * t.cos() - 2.0) * inner
+        let across = if k == 1 {
+            p(0) + p(1) - 2.0 * v
+        } else {
+            let t = PI / k as f64;
+            let lambda = 0.375 + 0.25 * t.cos();
+            let (mut inner, mut sum) = (DVec3::ZERO, 0.0);
+            for i in 1..k {
+                let w = (i as f64 * t).sin();
+                inner += w * p(i);
+                sum += w;
             }
+            let a = (0.375 * sum + (lambda - 0.75) * t.sin())
+                / (8.0 * (lambda - 0.75) * (lambda - 0.5) - 1.0);
+            let b = 8.0 * (lambda - 0.5) * a - t.sin();
+            inner + a * (p(0) + p(k)) + b * v
         };
-        across.cross(along)
+        along.cross(across)
     } else {
         let (mut t1, mut t2) = (DVec3::ZERO, DVec3::ZERO);
         for i in 0..n {
