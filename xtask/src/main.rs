@@ -6,6 +6,10 @@
 //! - `cargo xtask bench [ARGS]`: runs the GPU benchmarks (`deferred-bench [ARGS]`,
 //!   `interleave-bench [ARGS]`, `indirect-bench [ARGS]`, `tiled-bench [ARGS]` and `ssaa-bench [ARGS]`, reports
 //!   under docs/bench/) and the CPU criterion benches.
+//! - `cargo xtask bft [--level L] [--max-valence N] [-o FILE]`: builds the Loop basis-function
+//!   tables and writes their versioned binary file (default `target/bft/loop-l5-v18.bft`).
+//! - `cargo xtask subdiv-fixtures`: regenerates `fixtures/subdiv/*.f32`, Loop subdivision of
+//!   the shared closed meshes by MeshLab, checked against trimesh (`xtask/loop_reference.py`).
 
 use std::{
     path::{Path, PathBuf},
@@ -144,8 +148,29 @@ fn main() -> Result<()> {
                 "--quick",
             ]))
         }
+        "bft" => run(cargo()
+            .args(["run", "--release", "-p", "subdiv-bft", "--bin", "bft", "--"])
+            .args(&rest)),
+        "subdiv-fixtures" => {
+            let shared = workspace_root().join("../shared/fixtures");
+            run(Command::new("python3").args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "numpy",
+                "scipy",
+                "trimesh",
+                "pymeshlab",
+            ]))?;
+            run(Command::new("python3")
+                .current_dir(workspace_root())
+                .arg("xtask/loop_reference.py")
+                .arg(shared)
+                .arg("fixtures/subdiv"))
+        }
         _ => bail!(
-            "usage: cargo xtask test [CARGO TEST ARGS] | cargo xtask bench [BENCH ARGS: --frames N, --out DIR, --allow-software]"
+            "usage: cargo xtask test [CARGO TEST ARGS] | cargo xtask bench [BENCH ARGS: --frames N, --out DIR, --allow-software] | cargo xtask bft [--level L] [--max-valence N] [-o FILE] | cargo xtask subdiv-fixtures"
         ),
     }
 }

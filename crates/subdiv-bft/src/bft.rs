@@ -421,6 +421,56 @@ impl BftSet {
         Ok(Self::from_tables(level, tables))
     }
 
+    /// Default cache file: `target/bft/loop-l{level}-v{max_valence}.bft` under the workspace,
+    /// or `$SUBDIV_BFT_DIR/loop-l{level}-v{max_valence}.bft`.
+    pub fn default_path(level: u32, max_valence: u8) -> std::path::PathBuf {
+        let dir = std::env::var_os("SUBDIV_BFT_DIR").map_or_else(
+            || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/bft"),
+            std::path::PathBuf::from,
+        );
+        dir.join(format!("loop-l{level}-v{max_valence}.bft"))
+    }
+
+    /// Reads the table file at `path` when it exists and holds this level and valence range;
+    /// otherwise builds the tables and writes them there (a failed write is only reported).
+    pub fn cached(
+        path: &std::path::Path,
+        level: u32,
+        max_valence: u8,
+    ) -> Result<Self, SubdivError> {
+        if let Ok(bytes) = std::fs::read(path) {
+            match Self::from_bytes(&bytes) {
+                Ok(set) if set.level == level && set.max_valence() == max_valence => {
+                    return Ok(set);
+                }
+                Ok(_) => {}
+                Err(e) => eprintln!("{}: {e}; rebuilding", path.display()),
+            }
+        }
+        let set = Self::build(level, max_valence)?;
+        let written = path
+            .parent()
+            .map_or(Ok(()), std::fs::create_dir_all)
+            .and_then(|()| std::fs::write(path, set.to_bytes()));
+        if let Err(e) = written {
+            eprintln!("could not cache the tables at {}: {e}", path.display());
+        }
+        Ok(set)
+    }
+
+    /// Largest interior valence with a table.
+    pub fn max_valence(&self) -> u8 {
+        self.tables
+            .iter()
+            .flat_map(|t| t.key)
+            .filter_map(|c| match c {
+                Corner::Interior(n) => Some(n),
+                Corner::Boundary { .. } => None,
+            })
+            .max()
+            .unwrap_or(0)
+    }
+
     fn from_tables(level: u32, tables: Vec<Table>) -> Self {
         let lookup = tables
             .iter()

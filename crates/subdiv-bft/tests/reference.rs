@@ -174,3 +174,48 @@ fn valence_beyond_tables_is_an_error() {
         e.err()
     );
 }
+
+/// MeshLab's Loop subdivision (checked against trimesh when generated; `cargo xtask
+/// subdiv-fixtures`) of the shared closed meshes equals ours as point sets.
+#[test]
+fn refined_positions_match_meshlab_on_larger_meshes() {
+    let Some(shared) = scene::shared_fixtures() else {
+        eprintln!("skipping: ../shared/fixtures not found");
+        return;
+    };
+    let ours_dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/subdiv");
+    for (name, file, level) in [
+        ("spot", "subdiv/spot/spot_triangulated.obj", 1),
+        ("spot", "subdiv/spot/spot_triangulated.obj", 2),
+        ("fandisk", "subdiv/fandisk.obj", 1),
+    ] {
+        let mesh = ObjMesh::read(&shared.join(file)).expect("mesh").into_mesh().expect("valid");
+        let bytes = std::fs::read(ours_dir.join(format!("{name}_loop{level}.f32"))).expect("expected file");
+        let expected: Vec<DVec3> = bytes
+            .chunks_exact(12)
+            .map(|c| {
+                let f = |k: usize| f64::from(f32::from_le_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]]));
+                DVec3::new(f(0), f(4), f(8))
+            })
+            .collect();
+        let ours = mesh.subdivide(level).expect("subdivide");
+        assert_eq!(ours.positions.len(), expected.len(), "{name} level {level}: vertex count");
+        let e = max_nearest(&ours.positions, &expected).max(max_nearest(&expected, &ours.positions));
+        // The expected positions are stored as f32.
+        assert!(e < 1e-6 * mesh.diagonal(), "{name} level {level}: point sets differ by {e:e}");
+    }
+}
+
+#[test]
+fn table_file_round_trip_and_errors() {
+    let set = subdiv_bft::BftSet::build(2, 7).expect("tables");
+    let bytes = set.to_bytes();
+    assert_eq!(subdiv_bft::BftSet::from_bytes(&bytes).expect("reads back"), set);
+    for cut in [0, 7, 20, bytes.len() - 1] {
+        assert!(subdiv_bft::BftSet::from_bytes(&bytes[..cut]).is_err(), "truncated at {cut}");
+    }
+    let mut wrong_version = bytes.clone();
+    wrong_version[8] = 9;
+    let e = subdiv_bft::BftSet::from_bytes(&wrong_version).expect_err("version");
+    assert!(e.to_string().contains("version"), "{e}");
+}
