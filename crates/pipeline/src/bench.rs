@@ -36,6 +36,40 @@ pub fn time_passes(
     Ok(by_name)
 }
 
+/// Per-frame GPU ms of the passes `record` encodes (summed over the frame's passes; with
+/// `span`, from the first pass's begin to the last one's end, which also counts commands
+/// recorded between passes such as buffer clears), after the same warm-up as [`time_passes`].
+pub fn time_encoded(
+    gpu: &Gpu,
+    timer: &gpu::PassTimer,
+    frames: u32,
+    span: bool,
+    record: &dyn Fn(&mut wgpu::CommandEncoder, &gpu::PassTimer),
+) -> Result<gpu::bench::Stat, gpu::GpuError> {
+    let frame = || -> Result<f64, gpu::GpuError> {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        record(&mut encoder, timer);
+        timer.resolve(&mut encoder);
+        gpu.queue.submit([encoder.finish()]);
+        let times = timer.read(gpu)?;
+        Ok(match (span, times.first(), times.last()) {
+            (true, Some(first), Some(last)) => last.end_ms() - first.start_ms,
+            _ => times.iter().map(|t| t.ms).sum(),
+        })
+    };
+    let start = std::time::Instant::now();
+    let mut warm = 0;
+    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
+        frame()?;
+        warm += 1;
+    }
+    Ok(gpu::bench::Stat::of(
+        (0..frames)
+            .map(|_| frame())
+            .collect::<Result<Vec<_>, _>>()?,
+    ))
+}
+
 /// Per frame, the sum of the passes named in `names`.
 pub fn per_frame_sum(by_name: &[(String, Vec<f64>)], names: &[&str]) -> Vec<f64> {
     let frames = by_name.iter().map(|(_, v)| v.len()).max().unwrap_or(0);

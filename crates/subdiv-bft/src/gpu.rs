@@ -275,8 +275,10 @@ impl GpuSubdivider {
                 "level {level}: {vertex_count} vertices, {index_count} indices exceed 32 bits"
             )));
         }
-        let out =
-            wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let out = wgpu::BufferUsages::VERTEX
+            | wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST;
         let positions = empty(device, "fine positions", vertex_count as u64 * 16, out)?;
         let normals = empty(device, "fine normals", vertex_count as u64 * 16, out)?;
         let indices = transfer::buffer_init(

@@ -189,20 +189,33 @@ fn refined_positions_match_meshlab_on_larger_meshes() {
         ("spot", "subdiv/spot/spot_triangulated.obj", 2),
         ("fandisk", "subdiv/fandisk.obj", 1),
     ] {
-        let mesh = ObjMesh::read(&shared.join(file)).expect("mesh").into_mesh().expect("valid");
-        let bytes = std::fs::read(ours_dir.join(format!("{name}_loop{level}.f32"))).expect("expected file");
+        let mesh = ObjMesh::read(&shared.join(file))
+            .expect("mesh")
+            .into_mesh()
+            .expect("valid");
+        let bytes =
+            std::fs::read(ours_dir.join(format!("{name}_loop{level}.f32"))).expect("expected file");
         let expected: Vec<DVec3> = bytes
             .chunks_exact(12)
             .map(|c| {
-                let f = |k: usize| f64::from(f32::from_le_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]]));
+                let f =
+                    |k: usize| f64::from(f32::from_le_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]]));
                 DVec3::new(f(0), f(4), f(8))
             })
             .collect();
         let ours = mesh.subdivide(level).expect("subdivide");
-        assert_eq!(ours.positions.len(), expected.len(), "{name} level {level}: vertex count");
-        let e = max_nearest(&ours.positions, &expected).max(max_nearest(&expected, &ours.positions));
+        assert_eq!(
+            ours.positions.len(),
+            expected.len(),
+            "{name} level {level}: vertex count"
+        );
+        let e =
+            max_nearest(&ours.positions, &expected).max(max_nearest(&expected, &ours.positions));
         // The expected positions are stored as f32.
-        assert!(e < 1e-6 * mesh.diagonal(), "{name} level {level}: point sets differ by {e:e}");
+        assert!(
+            e < 1e-6 * mesh.diagonal(),
+            "{name} level {level}: point sets differ by {e:e}"
+        );
     }
 }
 
@@ -210,9 +223,15 @@ fn refined_positions_match_meshlab_on_larger_meshes() {
 fn table_file_round_trip_and_errors() {
     let set = subdiv_bft::BftSet::build(2, 7).expect("tables");
     let bytes = set.to_bytes();
-    assert_eq!(subdiv_bft::BftSet::from_bytes(&bytes).expect("reads back"), set);
+    assert_eq!(
+        subdiv_bft::BftSet::from_bytes(&bytes).expect("reads back"),
+        set
+    );
     for cut in [0, 7, 20, bytes.len() - 1] {
-        assert!(subdiv_bft::BftSet::from_bytes(&bytes[..cut]).is_err(), "truncated at {cut}");
+        assert!(
+            subdiv_bft::BftSet::from_bytes(&bytes[..cut]).is_err(),
+            "truncated at {cut}"
+        );
     }
     let mut wrong_version = bytes.clone();
     wrong_version[8] = 9;

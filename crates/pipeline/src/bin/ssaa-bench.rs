@@ -106,29 +106,15 @@ fn lights(scene: &Scene) -> Result<Vec<tiled_shading::GpuLight>> {
     Ok(tiled_shading::gpu_lights(&lights)?)
 }
 
-/// Per-frame GPU ms of the passes `record` encodes (summed), after the warm-up.
 fn time(
     gpu: &Gpu,
     timer: &PassTimer,
     frames: u32,
     record: &dyn Fn(&mut wgpu::CommandEncoder, &PassTimer),
 ) -> Result<Stat> {
-    let frame = || -> Result<f64> {
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        record(&mut encoder, timer);
-        timer.resolve(&mut encoder);
-        gpu.queue.submit([encoder.finish()]);
-        Ok(timer.read(gpu)?.iter().map(|t| t.ms).sum())
-    };
-    let start = std::time::Instant::now();
-    let mut warm = 0;
-    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
-        frame()?;
-        warm += 1;
-    }
-    Ok(Stat::of(
-        (0..frames).map(|_| frame()).collect::<Result<Vec<_>>>()?,
-    ))
+    Ok(pipeline::bench::time_encoded(
+        gpu, timer, frames, false, record,
+    )?)
 }
 
 /// Heat colour of the absolute error (max over channels of sRGB values), full scale at `max`.
