@@ -23,8 +23,11 @@ use scene::{Light, Scene};
 /// A scene without punctual lights is lit by its emissive meshes (as hemispherical lights),
 /// or else by a default sun.
 #[derive(Parser, Debug)]
-#[command(version, about, long_about = None)]
+#[command(version, about, long_about = None, args_conflicts_with_subcommands = true)]
 struct Args {
+    /// A command other than rendering.
+    #[command(subcommand)]
+    command: Option<Command>,
     /// Scene file (.gltf, .glb, .obj, .ply); default: the built-in scene named by --builtin.
     #[arg(long)]
     scene: Option<PathBuf>,
@@ -123,6 +126,107 @@ struct Args {
     /// With --ssaa --adaptive: how the remaining samples are shaded, loop or sorted.
     #[arg(long, default_value = "loop", requires = "adaptive")]
     ssaa_resolve: adaptive_ssaa::Resolve,
+    /// Replace every mesh by its Loop subdivision surface at this level (1–6; Holländer 2013
+    /// ch. 2: computational entries, then basis-function tables, on the GPU unless --cpu),
+    /// with Subdivision Shading normals. Meshes are welded by position first.
+    #[arg(long, value_name = "LEVEL")]
+    subdiv: Option<u32>,
+}
+
+#[derive(clap::Subcommand, Debug)]
+enum Command {
+    /// Writes the Loop subdivision of a triangle OBJ: the refined mesh Mᵏ (recursive CPU
+    /// reference), or with --limit every vertex on the limit surface (basis-function tables on
+    /// the GPU; with --cpu, recursive subdivision + limit projection).
+    Subdivide {
+        /// Control mesh (.obj; polygons are fan-split; OpenSubdiv `t` tags honoured).
+        input: PathBuf,
+        /// Subdivision level k (4^k triangles per input triangle).
+        #[arg(long)]
+        level: u32,
+        /// Project to the limit surface (and write normals).
+        #[arg(long)]
+        limit: bool,
+        /// Use the CPU reference only.
+        #[arg(long)]
+        cpu: bool,
+        /// Output .obj.
+        #[arg(short = 'o', long)]
+        output: PathBuf,
+    },
+}
+
+/// The default basis-function tables (cached under target/bft).
+fn bft_tables() -> Result<subdiv_bft::BftSet> {
+    use subdiv_bft::{BftSet, DEFAULT_LEVEL, MAX_VALENCE};
+    Ok(BftSet::cached(
+        &BftSet::default_path(DEFAULT_LEVEL, MAX_VALENCE),
+        DEFAULT_LEVEL,
+        MAX_VALENCE,
+    )?)
+}
+
+/// `deferred subdivide`.
+fn subdivide_command(
+    input: &std::path::Path,
+    level: u32,
+    limit: bool,
+    cpu: bool,
+    output: &std::path::Path,
+) -> Result<()> {
+    use subdiv_bft::{Subdivider, obj::ObjMesh};
+    let mesh = ObjMesh::read(input)?
+        .into_mesh()
+        .with_context(|| format!("{}", input.display()))?;
+    let text = if limit && !cpu {
+        let bft = bft_tables()?;
+        let sub = Subdivider::new(&mesh.topology, &bft)?;
+        let gpu = gpu::Gpu::from_env().context("no GPU for --limit (use --cpu)")?;
+        let out = subdiv_bft::gpu::run(&gpu, &sub, &bft, &mesh.positions_f32(), level)?;
+        ObjMesh::write(&out.positions, Some(&out.normals), &out.indices)
+    } else {
+        let fine = mesh.subdivide(level)?;
+        let indices: Vec<u32> = fine.topology.triangles.iter().flatten().copied().collect();
+        if limit {
+            let p: Vec<Vec3> = fine.limit_positions().iter().map(|p| p.as_vec3()).collect();
+            let mut projected = fine.clone();
+            projected.positions = fine.limit_positions();
+            let n: Vec<Vec3> = projected
+                .limit_normals()
+                .iter()
+                .map(|n| n.as_vec3())
+                .collect();
+            ObjMesh::write(&p, Some(&n), &indices)
+        } else {
+            ObjMesh::write(&fine.positions_f32(), None, &indices)
+        }
+    };
+    std::fs::write(output, text).with_context(|| format!("{}", output.display()))?;
+    println!("wrote {}", output.display());
+    Ok(())
+}
+
+/// `--subdiv LEVEL`: every mesh replaced by its limit-surface tessellation (GPU, or the CPU
+/// mirror when `cpu` or no adapter), read back once at load.
+fn subdivide_scene(scene: &mut Scene, level: u32, cpu: bool) -> Result<()> {
+    use subdiv_bft::{Subdivider, TriMesh};
+    let bft = bft_tables()?;
+    let gpu = if cpu { None } else { gpu::Gpu::from_env().ok() };
+    for mesh in &mut scene.meshes {
+        let control = TriMesh::welded(&mesh.positions, &mesh.indices)
+            .with_context(|| format!("mesh {:?}", mesh.name))?;
+        let sub = Subdivider::new(&control.topology, &bft)
+            .with_context(|| format!("mesh {:?}", mesh.name))?;
+        let out = match &gpu {
+            Some(g) => subdiv_bft::gpu::run(g, &sub, &bft, &control.positions_f32(), level)?,
+            None => sub.evaluate_cpu(&bft, &control.positions_f32(), level)?,
+        };
+        mesh.uvs = vec![glam::Vec2::ZERO; out.positions.len()];
+        mesh.positions = out.positions;
+        mesh.normals = out.normals;
+        mesh.indices = out.indices;
+    }
+    Ok(())
 }
 
 /// `--ssaa M [--adaptive]`: the supersampled G-buffer and (adaptive) supersampling of the
@@ -285,7 +389,21 @@ fn load_scene(args: &Args) -> Result<Scene> {
 fn main() -> Result<()> {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let args = Args::parse();
-    let scene = load_scene(&args)?;
+    if let Some(Command::Subdivide {
+        input,
+        level,
+        limit,
+        cpu,
+        output,
+    }) = &args.command
+    {
+        return subdivide_command(input, *level, *limit, *cpu, output);
+    }
+    let mut scene = load_scene(&args)?;
+    if let Some(level) = args.subdiv {
+        subdivide_scene(&mut scene, level, args.cpu)?;
+    }
+    let scene = scene;
     let (width, height) = args.size;
 
     let mut camera = match (&scene.camera, &args.scene) {

@@ -41,16 +41,17 @@ pub fn disk(n: u32) -> TriMesh {
     TriMesh::new(p, t).expect("disk")
 }
 
-/// Half-disk: a boundary centre with `faces` triangles (valence faces + 1), plus a second row
-/// so the outer vertices are not all corners.
+/// Half-disk: a boundary centre with `faces` triangles (valence faces + 1) spanning 0.1π–0.9π
+/// (never a straight angle, so no triangle is flat), plus a second row so the outer vertices
+/// are not all corners.
 pub fn half_disk(faces: u32) -> TriMesh {
     let mut p = vec![DVec3::ZERO];
     for i in 0..=faces {
-        let a = PI * f64::from(i) / f64::from(faces);
+        let a = PI * (0.1 + 0.8 * f64::from(i) / f64::from(faces));
         p.push(DVec3::new(a.cos(), a.sin(), 0.15 * f64::from(i % 2)));
     }
     for i in 0..=faces {
-        let a = PI * f64::from(i) / f64::from(faces);
+        let a = PI * (0.1 + 0.8 * f64::from(i) / f64::from(faces));
         p.push(DVec3::new(
             2.0 * a.cos(),
             2.0 * a.sin(),
