@@ -136,6 +136,8 @@ fn main() -> Result<()> {
                 "tiled-shading",
                 "-p",
                 "adaptive-ssaa",
+                "-p",
+                "subdiv-bft",
                 // Only the criterion targets: the library test harnesses reject `--quick`.
                 "--bench",
                 "rasterize",
@@ -145,6 +147,8 @@ fn main() -> Result<()> {
                 "shade",
                 "--bench",
                 "adaptive",
+                "--bench",
+                "subdiv",
                 "--",
                 "--quick",
             ]))

@@ -48,7 +48,7 @@ pub fn next(h: u32) -> u32 {
 
 /// Previous half-edge in the same triangle.
 pub fn prev(h: u32) -> u32 {
-    if h % 3 == 0 { h + 2 } else { h - 1 }
+    if h.is_multiple_of(3) { h + 2 } else { h - 1 }
 }
 
 impl Topology {
