@@ -188,15 +188,14 @@ fn subdivide_command(
         let fine = mesh.subdivide(level)?;
         let indices: Vec<u32> = fine.topology.triangles.iter().flatten().copied().collect();
         if limit {
-            let p: Vec<Vec3> = fine.limit_positions().iter().map(|p| p.as_vec3()).collect();
-            let mut projected = fine.clone();
-            projected.positions = fine.limit_positions();
+            let mut projected = fine;
+            projected.positions = projected.limit_positions();
             let n: Vec<Vec3> = projected
                 .limit_normals()
                 .iter()
                 .map(|n| n.as_vec3())
                 .collect();
-            ObjMesh::write(&p, Some(&n), &indices)
+            ObjMesh::write(&projected.positions_f32(), Some(&n), &indices)
         } else {
             ObjMesh::write(&fine.positions_f32(), None, &indices)
         }
