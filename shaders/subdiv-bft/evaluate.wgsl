@@ -1,18 +1,21 @@
 // Main GPU subdivision step (Holländer 2013 §2.2.3, Listing 2.1): one workgroup per M¹ patch.
 // The patch's one-ring positions and normals go to workgroup memory; each thread evaluates grid
-// vertices (i, j) of the uniform tessellation with s segments that the patch owns, as the
-// weighted sum of the ring with the level-L table sampled at (i·step, j·step), the normal the
-// same sum over M¹ normals, normalised (Subdivision Shading). Mirrors
+// vertices (i, j) that the patch owns as the weighted sum of the ring with the level-L table
+// sampled at (i·step, j·step), the normal the same sum over M¹ normals, normalised
+// (Subdivision Shading).
+//
+// `evaluate`: uniform tessellation with s segments per patch; mirrors
 // `subdiv_bft::patch::{Patches::evaluate, output_vertex}`.
+// `evaluate_adaptive`: per-edge factors (§2.2.3 "Adaptive Refinement", Figs. 2.10/2.11), the
+// patch at the finest of its edges, coarser edges snapped, linear geomorph, triangles appended
+// to an indirect draw; mirrors `subdiv_bft::adaptive`.
 
 const MAX_RING: u32 = 24u;
 const REVERSED: u32 = 0x80000000u;
 
 struct Params {
-    // Segments per patch edge of this tessellation.
+    // Segments per patch edge of this tessellation (adaptive: of the vertex layout, s_max).
     s: u32,
-    // Table grid step: (table segments) / s.
-    step: u32,
     // Segments of the tables' grid.
     table_segments: u32,
     vertex_count: u32,
@@ -37,10 +40,17 @@ struct Patch {
 @group(0) @binding(3) var<storage, read> tables: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> p1: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> n1: array<vec4<f32>>;
-// Grid vertex g of the s-segment grid is (walk[g] & 0xffff, walk[g] >> 16).
+// Grid vertex g of the s-segment grid is (walk[g] & 0xffff, walk[g] >> 16); adaptive: the
+// walks of s = 1, 2, 4, … s_max one after the other.
 @group(0) @binding(6) var<storage, read> walk: array<u32>;
 @group(0) @binding(7) var<storage, read_write> out_positions: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> out_normals: array<vec4<f32>>;
+
+// Adaptive only: one factor per M¹ edge, the triangle list, DrawIndexedIndirect arguments
+// (index count first, cleared before the dispatch).
+@group(0) @binding(9) var<storage, read> factors: array<f32>;
+@group(0) @binding(10) var<storage, read_write> out_indices: array<u32>;
+@group(0) @binding(11) var<storage, read_write> draw: array<atomic<u32>>;
 
 var<workgroup> ring_p: array<vec3<f32>, MAX_RING>;
 var<workgroup> ring_n: array<vec3<f32>, MAX_RING>;
@@ -83,17 +93,8 @@ fn output_vertex(pt: Patch, p: u32, i: u32, j: u32) -> vec2<u32> {
     return vec2<u32>(base + row + i - 1u, 1u);
 }
 
-@compute @workgroup_size(64)
-fn evaluate(
-    @builtin(workgroup_id) wid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-    @builtin(local_invocation_index) lid: u32,
-) {
-    let p = wid.x + wid.y * groups.x;
-    if p >= params.patch_count {
-        return;
-    }
-    let pt = patches[p];
+// The patch's one-ring positions and normals into workgroup memory (thread lid loads entry lid).
+fn load_ring(pt: Patch, lid: u32) {
     if lid < MAX_RING {
         var q = vec3<f32>(0.0);
         var n = vec3<f32>(0.0);
@@ -105,8 +106,53 @@ fn evaluate(
         ring_p[lid] = q;
         ring_n[lid] = n;
     }
-    workgroupBarrier();
+}
+
+struct Vertex {
+    p: vec3<f32>,
+    n: vec3<f32>,
+};
+
+// Limit position and unit Subdivision Shading normal of grid vertex (i, j) of an s-segment grid.
+fn eval_grid(pt: Patch, i: u32, j: u32, s: u32) -> Vertex {
+    let step = params.table_segments / s;
     let stride = (pt.ring_size + 3u) / 4u;
+    let row = pt.table_offset + grid_index(i * step, j * step, params.table_segments) * stride;
+    var pos = vec3<f32>(0.0);
+    var nrm = vec3<f32>(0.0);
+    for (var c = 0u; c < stride; c++) {
+        let w = tables[row + c];
+        let r = 4u * c;
+        pos += w.x * ring_p[r];
+        nrm += w.x * ring_n[r];
+        pos += w.y * ring_p[r + 1u];
+        nrm += w.y * ring_n[r + 1u];
+        pos += w.z * ring_p[r + 2u];
+        nrm += w.z * ring_n[r + 2u];
+        pos += w.w * ring_p[r + 3u];
+        nrm += w.w * ring_n[r + 3u];
+    }
+    return Vertex(pos, unit(nrm));
+}
+
+fn unit(n: vec3<f32>) -> vec3<f32> {
+    let len = length(n);
+    return select(vec3<f32>(0.0), n / len, len > 0.0);
+}
+
+@compute @workgroup_size(64)
+fn evaluate(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let p = wid.x + wid.y * groups.x;
+    if p >= params.patch_count {
+        return;
+    }
+    let pt = patches[p];
+    load_ring(pt, lid);
+    workgroupBarrier();
     for (var g = lid; g < params.grid_count; g += 64u) {
         let ij = walk[g];
         let i = ij & 0xffffu;
@@ -115,24 +161,195 @@ fn evaluate(
         if out.y == 0u {
             continue;
         }
-        let row = pt.table_offset
-            + grid_index(i * params.step, j * params.step, params.table_segments) * stride;
-        var pos = vec3<f32>(0.0);
-        var nrm = vec3<f32>(0.0);
-        for (var c = 0u; c < stride; c++) {
-            let w = tables[row + c];
-            let r = 4u * c;
-            pos += w.x * ring_p[r];
-            nrm += w.x * ring_n[r];
-            pos += w.y * ring_p[r + 1u];
-            nrm += w.y * ring_n[r + 1u];
-            pos += w.z * ring_p[r + 2u];
-            nrm += w.z * ring_n[r + 2u];
-            pos += w.w * ring_p[r + 3u];
-            nrm += w.w * ring_n[r + 3u];
+        let v = eval_grid(pt, i, j, params.s);
+        out_positions[out.x] = vec4<f32>(v.p, 1.0);
+        out_normals[out.x] = vec4<f32>(v.n, 0.0);
+    }
+}
+
+// ---- Adaptive tessellation (mirrors `subdiv_bft::adaptive`) ----
+
+struct Levels {
+    // Patch segments (the finest edge's) and its geomorph weight.
+    s: u32,
+    alpha: f32,
+    // Segments and geomorph weight of edge k (corner k → k + 1).
+    edge_s: vec3<u32>,
+    edge_alpha: vec3<f32>,
+};
+
+// (2^ceil(f), f − (ceil(f) − 1)) with f clamped to [0, log2 s_max]; factor 0: (1, 1).
+fn split_factor(f: f32) -> vec2<f32> {
+    let fc = clamp(f, 0.0, f32(countTrailingZeros(params.s)));
+    let c = ceil(fc);
+    if c == 0.0 {
+        return vec2<f32>(1.0, 1.0);
+    }
+    return vec2<f32>(f32(1u << u32(c)), fc - (c - 1.0));
+}
+
+fn patch_levels(pt: Patch) -> Levels {
+    var l: Levels;
+    var fmax = 0.0;
+    for (var k = 0u; k < 3u; k++) {
+        let f = factors[pt.edges[k] & ~REVERSED];
+        let e = split_factor(f);
+        l.edge_s[k] = u32(e.x);
+        l.edge_alpha[k] = e.y;
+        fmax = max(fmax, f);
+    }
+    let m = split_factor(fmax);
+    l.s = u32(m.x);
+    l.alpha = m.y;
+    return l;
+}
+
+// Edge k and place t along it of grid vertex (i, j); k = 3 for inner vertices, 4 for corners.
+fn on_edge(l: Levels, i: u32, j: u32) -> vec2<u32> {
+    let s = l.s;
+    if (i == 0u && j == 0u) || (j == 0u && i == s) || (i == 0u && j == s) {
+        return vec2<u32>(4u, 0u);
+    } else if j == 0u {
+        return vec2<u32>(0u, i);
+    } else if i + j == s {
+        return vec2<u32>(1u, j);
+    } else if i == 0u {
+        return vec2<u32>(2u, s - j);
+    }
+    return vec2<u32>(3u, 0u);
+}
+
+fn edge_point(l: Levels, k: u32, t: u32) -> vec2<u32> {
+    if k == 0u {
+        return vec2<u32>(t, 0u);
+    } else if k == 1u {
+        return vec2<u32>(l.s - t, t);
+    }
+    return vec2<u32>(0u, l.s - t);
+}
+
+// Grid vertex snapped to the nearest vertex of a coarser edge (half up along the edge).
+fn snap(l: Levels, ij: vec2<u32>) -> vec2<u32> {
+    let e = on_edge(l, ij.x, ij.y);
+    if e.x >= 3u {
+        return ij;
+    }
+    let r = l.s / l.edge_s[e.x];
+    return edge_point(l, e.x, (e.y + r / 2u) / r * r);
+}
+
+// Output vertex (s_max layout) of snapped grid vertex ij of the patch's s-segment grid.
+fn adaptive_vertex(pt: Patch, p: u32, l: Levels, ij: vec2<u32>) -> u32 {
+    let m = params.s / l.s;
+    let v = snap(l, ij);
+    return output_vertex(pt, p, v.x * m, v.y * m).x;
+}
+
+var<workgroup> triangle_base: u32;
+
+@compute @workgroup_size(64)
+fn evaluate_adaptive(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lid: u32,
+) {
+    let p = wid.x + wid.y * groups.x;
+    if p >= params.patch_count {
+        return;
+    }
+    let pt = patches[p];
+    let l = patch_levels(pt);
+    let s = l.s;
+    let m = params.s / s;
+    if lid == 0u {
+        triangle_base = atomicAdd(&draw[0], 3u * s * s) / 3u;
+    }
+    load_ring(pt, lid);
+    workgroupBarrier();
+
+    // Vertices: the s-grid's walk starts after those of the coarser grids.
+    var walk_offset = 0u;
+    for (var c = 1u; c < s; c *= 2u) {
+        walk_offset += (c + 1u) * (c + 2u) / 2u;
+    }
+    let count = (s + 1u) * (s + 2u) / 2u;
+    for (var g = lid; g < count; g += 64u) {
+        let ij = walk[walk_offset + g];
+        let i = ij & 0xffffu;
+        let j = ij >> 16u;
+        let e = on_edge(l, i, j);
+        var r = 1u;
+        if e.x < 3u {
+            r = s / l.edge_s[e.x];
+            if e.y % r != 0u {
+                continue; // snapped away: not a vertex of this tessellation
+            }
         }
-        let len = length(nrm);
-        out_positions[out.x] = vec4<f32>(pos, 1.0);
-        out_normals[out.x] = vec4<f32>(select(vec3<f32>(0.0), nrm / len, len > 0.0), 0.0);
+        let out = output_vertex(pt, p, i * m, j * m);
+        if out.y == 0u {
+            continue;
+        }
+        var v = eval_grid(pt, i, j, s);
+        // Geomorph: a vertex new at this level moves from its parents' midpoint.
+        var morph = false;
+        var a = vec2<u32>(0u);
+        var b = vec2<u32>(0u);
+        var alpha = l.alpha;
+        if e.x < 3u {
+            if l.edge_s[e.x] > 1u && (e.y / r) % 2u == 1u {
+                morph = true;
+                a = edge_point(l, e.x, e.y - r);
+                b = edge_point(l, e.x, e.y + r);
+                alpha = l.edge_alpha[e.x];
+            }
+        } else if e.x == 3u && (i % 2u) + (j % 2u) > 0u {
+            morph = true;
+            if j % 2u == 0u {
+                a = vec2<u32>(i - 1u, j);
+                b = vec2<u32>(i + 1u, j);
+            } else if i % 2u == 0u {
+                a = vec2<u32>(i, j - 1u);
+                b = vec2<u32>(i, j + 1u);
+            } else {
+                a = vec2<u32>(i + 1u, j - 1u);
+                b = vec2<u32>(i - 1u, j + 1u);
+            }
+            a = snap(l, a);
+            b = snap(l, b);
+        }
+        if morph {
+            let va = eval_grid(pt, a.x, a.y, s);
+            let vb = eval_grid(pt, b.x, b.y, s);
+            let mp = 0.5 * (va.p + vb.p);
+            let mn = 0.5 * (va.n + vb.n);
+            v = Vertex(mp + alpha * (v.p - mp), unit(mn + alpha * (v.n - mn)));
+        }
+        out_positions[out.x] = vec4<f32>(v.p, 1.0);
+        out_normals[out.x] = vec4<f32>(v.n, 0.0);
+    }
+
+    // Triangles: row j holds 2(s − j) − 1, up (even) and down (odd) alternating.
+    for (var q = lid; q < s * s; q += 64u) {
+        var j = 0u;
+        var r = q;
+        while r >= 2u * (s - j) - 1u {
+            r -= 2u * (s - j) - 1u;
+            j += 1u;
+        }
+        let i = r / 2u;
+        var t: array<vec2<u32>, 3>;
+        if r % 2u == 0u {
+            t = array<vec2<u32>, 3>(vec2<u32>(i, j), vec2<u32>(i + 1u, j), vec2<u32>(i, j + 1u));
+        } else {
+            t = array<vec2<u32>, 3>(
+                vec2<u32>(i + 1u, j),
+                vec2<u32>(i + 1u, j + 1u),
+                vec2<u32>(i, j + 1u),
+            );
+        }
+        let o = 3u * (triangle_base + q);
+        for (var c = 0u; c < 3u; c++) {
+            out_indices[o + c] = adaptive_vertex(pt, p, l, t[c]);
+        }
     }
 }

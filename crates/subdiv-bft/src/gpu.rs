@@ -1,7 +1,12 @@
 //! The GPU pipeline of Figure 2.5: `initial.wgsl` (`refine_m1`, `normals_m1`: computational
-//! entries M⁰ → M¹) then `evaluate.wgsl` (`evaluate`: every patch with the tables). Static
+//! entries M⁰ → M¹) then `evaluate.wgsl` (`evaluate`: every patch with the tables, or
+//! `evaluate_adaptive` with per-edge factors, given or computed by `factors.wgsl`). Static
 //! data (entries, patches, tables) is uploaded once; an animated M⁰ only rewrites its position
 //! buffer ([`GpuSubdivider::set_positions`]). Nothing is read back between passes.
+
+mod adaptive;
+
+pub use adaptive::GpuAdaptive;
 
 use ::gpu::{Gpu, PassTimer, shader, transfer};
 use bytemuck::{Pod, Zeroable};
@@ -16,8 +21,6 @@ use crate::{BftSet, Refined, SubdivError, Subdivider, bft::grid_count};
 pub struct EvaluateParams {
     /// Segments per patch edge.
     pub s: u32,
-    /// Table grid step.
-    pub step: u32,
     /// Segments of the tables' grid.
     pub table_segments: u32,
     /// M¹ vertices.
@@ -108,6 +111,10 @@ pub struct GpuSubdivider {
     refine: wgpu::ComputePipeline,
     normals: wgpu::ComputePipeline,
     evaluate: wgpu::ComputePipeline,
+    evaluate_adaptive: wgpu::ComputePipeline,
+    edge_factors: wgpu::ComputePipeline,
+    /// End vertices of each M¹ edge (`factors.wgsl`).
+    edge_ends: wgpu::Buffer,
     /// M⁰ positions (`vec4<f32>`, `COPY_DST`): rewrite them to animate.
     pub m0_positions: wgpu::Buffer,
     /// M¹ positions.
@@ -140,6 +147,17 @@ impl GpuSubdivider {
         let refine = shader::compute_pipeline(device, &initial, "refine_m1", &[]);
         let normals = shader::compute_pipeline(device, &initial, "normals_m1", &[]);
         let evaluate = shader::compute_pipeline(device, &evaluate_module, "evaluate", &[]);
+        let evaluate_adaptive =
+            shader::compute_pipeline(device, &evaluate_module, "evaluate_adaptive", &[]);
+        let factors_module = shader::module(device, "subdiv-bft/factors.wgsl")?;
+        let edge_factors = shader::compute_pipeline(device, &factors_module, "edge_factors", &[]);
+        let ends: Vec<[u32; 2]> = sub
+            .m1
+            .edges
+            .iter()
+            .map(|&h| [sub.m1.origin(h), sub.m1.dest(h)])
+            .collect();
+        let edge_ends = storage(device, "M1 edge ends", bytemuck::cast_slice(&ends))?;
 
         let m0_count = sub.m0.vertex_count() as u32;
         let m1_count = sub.m1.vertex_count() as u32;
@@ -226,6 +244,9 @@ impl GpuSubdivider {
             refine,
             normals,
             evaluate,
+            evaluate_adaptive,
+            edge_factors,
+            edge_ends,
             m0_positions,
             m1_positions,
             m1_normals,
@@ -289,7 +310,6 @@ impl GpuSubdivider {
         )?;
         let params = EvaluateParams {
             s,
-            step: (1 << self.table_level) / s,
             table_segments: 1 << self.table_level,
             vertex_count: self.m1_count,
             edge_count: self.edge_count,

@@ -31,6 +31,7 @@
 //! # Ok::<(), subdiv_bft::SubdivError>(())
 //! ```
 
+pub mod adaptive;
 pub mod bft;
 pub mod cpu;
 pub mod gpu;
@@ -137,6 +138,9 @@ pub enum SubdivError {
         /// What is wrong.
         problem: String,
     },
+    /// Adaptive tessellation factors that do not fit the mesh.
+    #[error("tessellation factors: {0}")]
+    Factors(String),
     /// Too big for 32-bit indices or the device.
     #[error("too large: {0}")]
     TooLarge(String),
@@ -274,6 +278,17 @@ impl Subdivider {
         Ok((p1, n1))
     }
 
+    /// [`Subdivider::initial_step`] from and to f32 (what the main step reads).
+    pub fn initial_step_f32(
+        &self,
+        m0_positions: &[Vec3],
+    ) -> Result<(Vec<Vec3>, Vec<Vec3>), SubdivError> {
+        let p0: Vec<DVec3> = m0_positions.iter().map(|p| p.as_dvec3()).collect();
+        let (p1, n1) = self.initial_step(&p0)?;
+        let f32s = |v: Vec<DVec3>| v.iter().map(|p| p.as_vec3()).collect();
+        Ok((f32s(p1), f32s(n1)))
+    }
+
     /// The whole pipeline on the CPU: initial step, then every patch at surface level `level`.
     pub fn evaluate_cpu(
         &self,
@@ -282,10 +297,7 @@ impl Subdivider {
         level: u32,
     ) -> Result<Refined, SubdivError> {
         let s = self.segments(level)?;
-        let p0: Vec<DVec3> = m0_positions.iter().map(|p| p.as_dvec3()).collect();
-        let (p1, n1) = self.initial_step(&p0)?;
-        let p1: Vec<Vec3> = p1.iter().map(|p| p.as_vec3()).collect();
-        let n1: Vec<Vec3> = n1.iter().map(|p| p.as_vec3()).collect();
+        let (p1, n1) = self.initial_step_f32(m0_positions)?;
         let (positions, normals) = self.patches.evaluate(bft, s, &p1, &n1);
         Ok(Refined {
             positions,

@@ -52,7 +52,8 @@ pub struct Patches {
     pub edge_count: u32,
 }
 
-const REVERSED: u32 = 1 << 31;
+/// Bit of [`GpuPatch::edges`] set when the edge runs from the higher to the lower vertex.
+pub(crate) const REVERSED: u32 = 1 << 31;
 
 /// Table weights padded to vec4 per grid vertex, and each table's offset in vec4 units.
 pub fn padded_weights(bft: &BftSet) -> (Vec<f32>, Vec<u32>) {

@@ -1,0 +1,263 @@
+//! GPU adaptive tessellation ([`crate::adaptive`]): `factors.wgsl` (`edge_factors`, optional)
+//! then `evaluate.wgsl` (`evaluate_adaptive`), which appends every patch's `s²` triangles to an
+//! index buffer and their count to `DrawIndexedIndirect` arguments, so a frame's tessellation
+//! never goes through the CPU.
+
+use ::gpu::{Gpu, PassTimer, transfer};
+use bytemuck::{Pod, Zeroable};
+use glam::Mat4;
+
+use super::{
+    EvaluateParams, GpuSubdivider, MAX_GROUPS_X, WORKGROUP, bind, empty, read_vec3, storage,
+};
+use crate::{
+    Refined, SubdivError, Subdivider,
+    adaptive::check_factors,
+    bft::grid_count,
+    patch::{grid_walk, inner_count},
+};
+
+/// Uniform block of `factors.wgsl` (`FactorParams`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+struct FactorParams {
+    view_proj: [[f32; 4]; 4],
+    viewport: [f32; 2],
+    target_pixels: f32,
+    max_factor: f32,
+    edge_count: u32,
+    _pad: [u32; 3],
+}
+
+/// Output of the adaptive tessellation up to a maximum level: vertex buffers laid out for the
+/// maximum level's segments (the tessellation uses a subset), an index buffer with room for
+/// every patch at the maximum, and the indirect draw arguments the kernel fills.
+pub struct GpuAdaptive {
+    /// Finest surface level (from M⁰).
+    pub max_level: u32,
+    /// Segments per patch edge at the finest level (`s_max`).
+    pub max_segments: u32,
+    /// Per-M¹-edge factors (f32; `STORAGE | COPY_DST`): [`GpuAdaptive::set_factors`] or
+    /// [`GpuSubdivider::encode_screen_factors`].
+    pub factors: wgpu::Buffer,
+    /// Positions (xyz, 1); `VERTEX | STORAGE | COPY_SRC`.
+    pub positions: wgpu::Buffer,
+    /// Unit normals (xyz, 0); `VERTEX | STORAGE | COPY_SRC`.
+    pub normals: wgpu::Buffer,
+    /// Triangle list (u32; collapsed triangles included); `INDEX | STORAGE | COPY_SRC`.
+    pub indices: wgpu::Buffer,
+    /// `DrawIndexedIndirect` arguments (index count, 1, 0, 0, 0) for `draw_indexed_indirect`.
+    pub draw_args: wgpu::Buffer,
+    /// Slots in the vertex buffers.
+    pub vertex_capacity: u32,
+    edge_count: u32,
+    factor_params: wgpu::Buffer,
+    factor_bind: wgpu::BindGroup,
+    bind: wgpu::BindGroup,
+    groups: (u32, u32),
+}
+
+impl GpuAdaptive {
+    /// Uploads one factor per M¹ edge (validated: count, finite).
+    pub fn set_factors(&self, queue: &wgpu::Queue, factors: &[f32]) -> Result<(), SubdivError> {
+        check_factors(factors, self.edge_count)?;
+        queue.write_buffer(&self.factors, 0, bytemuck::cast_slice(factors));
+        Ok(())
+    }
+
+    /// Sets the view for [`GpuSubdivider::encode_screen_factors`]: fine edges of about
+    /// `target_pixels` on a `viewport` of pixels seen through `view_proj`.
+    pub fn set_view(
+        &self,
+        queue: &wgpu::Queue,
+        view_proj: Mat4,
+        viewport: (u32, u32),
+        target_pixels: f32,
+    ) -> Result<(), SubdivError> {
+        if !(target_pixels.is_finite() && target_pixels > 0.0) || !view_proj.is_finite() {
+            return Err(SubdivError::Factors(format!(
+                "the view needs a finite matrix and a positive target edge length, got {target_pixels}"
+            )));
+        }
+        let params = FactorParams {
+            view_proj: view_proj.to_cols_array_2d(),
+            viewport: [viewport.0 as f32, viewport.1 as f32],
+            target_pixels,
+            max_factor: self.max_segments.ilog2() as f32,
+            edge_count: self.edge_count,
+            _pad: [0; 3],
+        };
+        queue.write_buffer(&self.factor_params, 0, bytemuck::bytes_of(&params));
+        Ok(())
+    }
+}
+
+impl GpuSubdivider {
+    /// Output buffers for adaptive tessellation up to surface level `max_level`; factors start
+    /// at 0 (one segment per patch edge).
+    pub fn adaptive(
+        &self,
+        device: &wgpu::Device,
+        sub: &Subdivider,
+        max_level: u32,
+    ) -> Result<GpuAdaptive, SubdivError> {
+        let s = sub.segments(max_level)?;
+        let vertex_count = sub.patches.output_vertex_count(s);
+        let index_count = sub.patches.patches.len() as u64 * u64::from(s * s) * 3;
+        if vertex_count as u64 >= u64::from(u32::MAX) || index_count >= u64::from(u32::MAX) {
+            return Err(SubdivError::TooLarge(format!(
+                "adaptive up to level {max_level}: {vertex_count} vertices, {index_count} indices exceed 32 bits"
+            )));
+        }
+        let out =
+            wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let positions = empty(device, "adaptive positions", vertex_count as u64 * 16, out)?;
+        let normals = empty(device, "adaptive normals", vertex_count as u64 * 16, out)?;
+        let indices = empty(
+            device,
+            "adaptive indices",
+            index_count * 4,
+            wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        )?;
+        let draw_args = transfer::buffer_init(
+            device,
+            "adaptive draw arguments",
+            bytemuck::cast_slice(&[0u32, 1, 0, 0, 0]),
+            wgpu::BufferUsages::INDIRECT
+                | wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+        )?;
+        let factors = empty(
+            device,
+            "tessellation factors",
+            u64::from(self.edge_count) * 4,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+        )?;
+        let params = EvaluateParams {
+            s,
+            table_segments: 1 << self.table_level,
+            vertex_count: self.m1_count,
+            edge_count: self.edge_count,
+            patch_count: self.patch_count,
+            grid_count: grid_count(s) as u32,
+            inner_count: inner_count(s) as u32,
+        };
+        let params = transfer::buffer_init(
+            device,
+            "adaptive params",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let walks: Vec<u32> = (0..=s.ilog2()).flat_map(|l| grid_walk(1 << l)).collect();
+        let walk = storage(device, "grid walks", bytemuck::cast_slice(&walks))?;
+        let evaluate_bind = bind(
+            device,
+            &self.evaluate_adaptive,
+            &[
+                (0, &params),
+                (1, &self.patches),
+                (2, &self.rings),
+                (3, &self.tables),
+                (4, &self.m1_positions),
+                (5, &self.m1_normals),
+                (6, &walk),
+                (7, &positions),
+                (8, &normals),
+                (9, &factors),
+                (10, &indices),
+                (11, &draw_args),
+            ],
+        );
+        let factor_params = empty(
+            device,
+            "factor params",
+            size_of::<FactorParams>() as u64,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        )?;
+        let factor_bind = bind(
+            device,
+            &self.edge_factors,
+            &[
+                (0, &factor_params),
+                (1, &self.m1_positions),
+                (2, &self.edge_ends),
+                (3, &factors),
+            ],
+        );
+        let x = self.patch_count.clamp(1, MAX_GROUPS_X);
+        Ok(GpuAdaptive {
+            max_level,
+            max_segments: s,
+            factors,
+            positions,
+            normals,
+            indices,
+            draw_args,
+            vertex_capacity: vertex_count as u32,
+            edge_count: self.edge_count,
+            factor_params,
+            factor_bind,
+            bind: evaluate_bind,
+            groups: (x, self.patch_count.div_ceil(x).max(1)),
+        })
+    }
+
+    /// Records the screen-space metric (after [`GpuSubdivider::encode_initial`], with the view
+    /// of [`GpuAdaptive::set_view`]): the factors of every M¹ edge from the M¹ positions.
+    pub fn encode_screen_factors(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        adaptive: &GpuAdaptive,
+        timer: Option<&PassTimer>,
+    ) {
+        let name = "adaptive: edge factors";
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(name),
+            timestamp_writes: timer.and_then(|t| t.compute_pass(name)),
+        });
+        pass.set_pipeline(&self.edge_factors);
+        pass.set_bind_group(0, &adaptive.factor_bind, &[]);
+        pass.dispatch_workgroups(self.edge_count.div_ceil(WORKGROUP).max(1), 1, 1);
+    }
+
+    /// Records the adaptive main step (after [`GpuSubdivider::encode_initial`]): resets the
+    /// draw's index count, then tessellates every patch with the current factors.
+    pub fn encode_adaptive(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        adaptive: &GpuAdaptive,
+        timer: Option<&PassTimer>,
+    ) {
+        encoder.clear_buffer(&adaptive.draw_args, 0, Some(4));
+        let name = "main step: evaluate adaptive";
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(name),
+            timestamp_writes: timer.and_then(|t| t.compute_pass(name)),
+        });
+        pass.set_pipeline(&self.evaluate_adaptive);
+        pass.set_bind_group(0, &adaptive.bind, &[]);
+        pass.dispatch_workgroups(adaptive.groups.0, adaptive.groups.1, 1);
+    }
+
+    /// Reads back the factors (tests).
+    pub fn read_factors(&self, gpu: &Gpu, adaptive: &GpuAdaptive) -> Result<Vec<f32>, SubdivError> {
+        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &adaptive.factors)?;
+        Ok(bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)[..self.edge_count as usize].to_vec())
+    }
+
+    /// Reads back the adaptive mesh: the whole vertex layout (unused slots hold whatever was
+    /// there) and the triangles the kernel wrote, in the order the patches appended them.
+    pub fn read_adaptive(&self, gpu: &Gpu, adaptive: &GpuAdaptive) -> Result<Refined, SubdivError> {
+        let args = transfer::read_buffer(&gpu.device, &gpu.queue, &adaptive.draw_args)?;
+        let count = bytemuck::pod_collect_to_vec::<u8, u32>(&args)[0] as usize;
+        let indices = transfer::read_buffer(&gpu.device, &gpu.queue, &adaptive.indices)?;
+        Ok(Refined {
+            positions: read_vec3(gpu, &adaptive.positions, adaptive.vertex_capacity)?,
+            normals: read_vec3(gpu, &adaptive.normals, adaptive.vertex_capacity)?,
+            indices: bytemuck::pod_collect_to_vec::<u8, u32>(&indices)[..count].to_vec(),
+        })
+    }
+}
