@@ -183,51 +183,69 @@ pub fn check_factors(factors: &[f32], edge_count: u32) -> Result<(), SubdivError
     }
 }
 
-/// Screen-space factors (the view-dependent metric of §2.1.2): each M¹ edge gets enough
-/// segments that its fine edges are about `target_pixels` long on screen,
-/// `f = log₂(projected length / target_pixels)`, clamped to `[0, log₂ max_segments]`. Edges
-/// entirely behind the eye get 0, edges crossing the eye plane the maximum. Mirrored by
-/// `edge_factors` in `evaluate.wgsl`.
+/// The view the screen-space metric measures edges in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScreenView {
+    /// World → clip transform.
+    pub view_proj: Mat4,
+    /// Image size in pixels.
+    pub viewport: (u32, u32),
+    /// Wanted length of a fine edge in pixels (> 0).
+    pub target_pixels: f32,
+}
+
+impl ScreenView {
+    /// Checks the view: a finite matrix, a non-empty viewport, a positive finite target.
+    pub fn check(&self) -> Result<(), SubdivError> {
+        if !self.view_proj.is_finite()
+            || self.viewport.0 == 0
+            || self.viewport.1 == 0
+            || !(self.target_pixels.is_finite() && self.target_pixels > 0.0)
+        {
+            return Err(SubdivError::Factors(format!(
+                "the screen-space metric needs a finite matrix, a non-empty viewport and a positive \
+                 target edge length (got {:?} pixels, target {})",
+                self.viewport, self.target_pixels
+            )));
+        }
+        Ok(())
+    }
+
+    /// Factor of an edge (§2.1.2's view-dependent metric): enough segments that its fine edges
+    /// are about `target_pixels` long on screen, `f = log₂(projected length / target_pixels)`,
+    /// clamped to `[0, log₂ max_segments]`. Entirely behind the eye: 0; crossing the eye plane:
+    /// the maximum. Mirrored by `edge_factors` in `factors.wgsl`.
+    pub fn factor(&self, ends: [Vec3; 2], max_segments: u32) -> f32 {
+        let max = max_segments.ilog2() as f32;
+        let [a, b] = ends.map(|p| self.view_proj * p.extend(1.0));
+        if a.w <= 0.0 && b.w <= 0.0 {
+            return 0.0;
+        }
+        if a.w <= 0.0 || b.w <= 0.0 {
+            return max;
+        }
+        let half = glam::Vec2::new(self.viewport.0 as f32, self.viewport.1 as f32) * 0.5;
+        let d = (a.xy() / a.w - b.xy() / b.w) * half;
+        (d.length() / self.target_pixels).log2().clamp(0.0, max)
+    }
+}
+
+/// Screen-space factors of every M¹ edge ([`ScreenView::factor`]).
 pub fn screen_factors(
     m1: &Topology,
     m1_positions: &[Vec3],
-    view_proj: Mat4,
-    viewport: (u32, u32),
-    target_pixels: f32,
+    view: &ScreenView,
     max_segments: u32,
 ) -> Vec<f32> {
     m1.edges
         .par_iter()
         .map(|&h| {
-            screen_factor(
+            view.factor(
                 [m1.origin(h), m1.dest(h)].map(|v| m1_positions[v as usize]),
-                view_proj,
-                viewport,
-                target_pixels,
                 max_segments,
             )
         })
         .collect()
-}
-
-fn screen_factor(
-    ends: [Vec3; 2],
-    view_proj: Mat4,
-    (w, h): (u32, u32),
-    target_pixels: f32,
-    max_segments: u32,
-) -> f32 {
-    let max = max_segments.ilog2() as f32;
-    let [a, b] = ends.map(|p| view_proj * p.extend(1.0));
-    if a.w <= 0.0 && b.w <= 0.0 {
-        return 0.0;
-    }
-    if a.w <= 0.0 || b.w <= 0.0 {
-        return max;
-    }
-    let half = glam::Vec2::new(w as f32, h as f32) * 0.5;
-    let d = (a.xy() / a.w - b.xy() / b.w) * half;
-    (d.length() / target_pixels).log2().clamp(0.0, max)
 }
 
 impl Patches {

@@ -8,7 +8,7 @@ use common::*;
 use glam::{DVec3, Mat4, Vec3};
 use subdiv_bft::{
     Refined, Subdivider, TriMesh,
-    adaptive::{PatchLevels, screen_factors},
+    adaptive::{PatchLevels, ScreenView, screen_factors},
     gpu::GpuSubdivider,
 };
 
@@ -242,7 +242,12 @@ fn screen_factors_measure_pixels() {
     )
     .expect("triangle");
     let p = m.positions_f32();
-    let f = screen_factors(&m.topology, &p, Mat4::IDENTITY, (200, 100), 5.0, 32);
+    let view = |view_proj| ScreenView {
+        view_proj,
+        viewport: (200, 100),
+        target_pixels: 5.0,
+    };
+    let f = screen_factors(&m.topology, &p, &view(Mat4::IDENTITY), 32);
     let mut want: Vec<f32> = m
         .topology
         .edges
@@ -269,7 +274,7 @@ fn screen_factors_measure_pixels() {
     let behind = Mat4::from_cols_array(&[
         1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., -1., 0., 0., 0., 0.,
     ]);
-    let all_behind = screen_factors(&m.topology, &p, behind, (200, 100), 5.0, 32);
+    let all_behind = screen_factors(&m.topology, &p, &view(behind), 32);
     assert_eq!(all_behind, vec![0.0; 3], "w < 0 everywhere");
 }
 
@@ -337,21 +342,18 @@ fn adaptive_cpu_equals_gpu() {
         // The metric on the GPU.
         let view_proj = scene::Camera::look_at(Vec3::new(0.5, 0.8, 4.0), Vec3::ZERO)
             .view_projection(640.0 / 480.0);
-        a.set_view(&gpu.queue, view_proj, (640, 480), 4.0)
-            .expect("view");
+        let view = ScreenView {
+            view_proj,
+            viewport: (640, 480),
+            target_pixels: 4.0,
+        };
+        a.set_view(&gpu.queue, &view).expect("view");
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         g.encode_initial(&mut encoder, None);
         g.encode_screen_factors(&mut encoder, &a, None);
         gpu.queue.submit([encoder.finish()]);
         let (p1, _) = g.read_m1(gpu).expect("M1");
-        let want = screen_factors(
-            &sub.m1,
-            &p1,
-            view_proj,
-            (640, 480),
-            4.0,
-            1 << (max_level - 1),
-        );
+        let want = screen_factors(&sub.m1, &p1, &view, 1 << (max_level - 1));
         let got = g.read_factors(gpu, &a).expect("factors");
         assert!(
             want.iter().any(|&f| f > 0.5 && f < max_level as f32 - 1.0),

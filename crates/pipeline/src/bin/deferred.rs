@@ -131,6 +131,18 @@ struct Args {
     /// with Subdivision Shading normals. Meshes are welded by position first.
     #[arg(long, value_name = "LEVEL")]
     subdiv: Option<u32>,
+    /// With --subdiv: adaptive tessellation up to LEVEL, each control edge split so its fine
+    /// edges are about PIXELS long in this view (screen-space metric, crack-free transitions,
+    /// geomorph).
+    #[arg(long, value_name = "PIXELS", requires = "subdiv")]
+    subdiv_pixels: Option<f32>,
+    /// With --subdiv: shade with geometric (flat, per-triangle) normals instead of Subdivision
+    /// Shading.
+    #[arg(long, requires = "subdiv")]
+    subdiv_flat: bool,
+    /// With --subdiv-pixels: colour every triangle by its patch's level (1 blue … 6 red).
+    #[arg(long, requires = "subdiv_pixels")]
+    subdiv_show_levels: bool,
 }
 
 #[derive(clap::Subcommand, Debug)]
@@ -205,27 +217,140 @@ fn subdivide_command(
     Ok(())
 }
 
-/// `--subdiv LEVEL`: every mesh replaced by its limit-surface tessellation (GPU, or the CPU
-/// mirror when `cpu` or no adapter), read back once at load.
-fn subdivide_scene(scene: &mut Scene, level: u32, cpu: bool) -> Result<()> {
-    use subdiv_bft::{Subdivider, TriMesh};
+/// `--subdiv LEVEL [--subdiv-pixels PX] [--subdiv-flat] [--subdiv-show-levels]`: every mesh
+/// replaced by its limit-surface tessellation (GPU, or the CPU mirror when `--cpu` or no
+/// adapter), uniform or adaptive for `camera`, read back once at load.
+fn subdivide_scene(
+    scene: &mut Scene,
+    args: &Args,
+    level: u32,
+    camera: &scene::Camera,
+) -> Result<()> {
+    use subdiv_bft::{Subdivider, TriMesh, adaptive::ScreenView};
     let bft = bft_tables()?;
-    let gpu = if cpu { None } else { gpu::Gpu::from_env().ok() };
+    let gpu = if args.cpu {
+        None
+    } else {
+        gpu::Gpu::from_env().ok()
+    };
+    let view = args.subdiv_pixels.map(|target_pixels| ScreenView {
+        view_proj: camera.view_projection(args.size.0 as f32 / args.size.1 as f32),
+        viewport: args.size,
+        target_pixels,
+    });
+    if let Some(v) = &view {
+        v.check()?;
+    }
+    let mut level_meshes = Vec::new();
     for mesh in &mut scene.meshes {
         let control = TriMesh::welded(&mesh.positions, &mesh.indices)
             .with_context(|| format!("mesh {:?}", mesh.name))?;
         let sub = Subdivider::new(&control.topology, &bft)
             .with_context(|| format!("mesh {:?}", mesh.name))?;
-        let out = match &gpu {
-            Some(g) => subdiv_bft::gpu::run(g, &sub, &bft, &control.positions_f32(), level)?,
-            None => sub.evaluate_cpu(&bft, &control.positions_f32(), level)?,
+        let m0 = control.positions_f32();
+        let out = match (&gpu, &view) {
+            (Some(g), None) => subdiv_bft::gpu::run(g, &sub, &bft, &m0, level)?,
+            (None, None) => sub.evaluate_cpu(&bft, &m0, level)?,
+            (g, Some(v)) => {
+                let s_max = sub.segments(level)?;
+                let (mut out, factors) = match g {
+                    Some(g) => subdiv_bft::gpu::run_adaptive(g, &sub, &bft, &m0, level, v)?,
+                    None => {
+                        let (p1, _) = sub.initial_step_f32(&m0)?;
+                        let f = subdiv_bft::adaptive::screen_factors(&sub.m1, &p1, v, s_max);
+                        (sub.evaluate_adaptive_cpu(&bft, &m0, &f, level)?, f)
+                    }
+                };
+                if args.subdiv_show_levels {
+                    // The same triangles in patch order, s² per patch, to know their levels.
+                    out.indices = sub.patches.triangulate_adaptive(&factors, s_max);
+                    let levels: Vec<u32> = (0..sub.patches.patches.len())
+                        .flat_map(|p| {
+                            let s = sub.patches.patch_levels(p, &factors, s_max).segments;
+                            std::iter::repeat_n(s.ilog2() + 1, (s * s) as usize)
+                        })
+                        .collect();
+                    level_meshes.push((mesh.name.clone(), out.clone(), levels));
+                }
+                out.without_collapsed()
+            }
+        };
+        let out = if args.subdiv_flat {
+            flat_shaded(&out)
+        } else {
+            out
         };
         mesh.uvs = vec![glam::Vec2::ZERO; out.positions.len()];
         mesh.positions = out.positions;
         mesh.normals = out.normals;
         mesh.indices = out.indices;
     }
+    if args.subdiv_show_levels {
+        scene.meshes.clear();
+        for (name, out, levels) in level_meshes {
+            for l in 1..=level {
+                let mut part = subdiv_bft::Refined {
+                    indices: out
+                        .indices
+                        .chunks_exact(3)
+                        .zip(&levels)
+                        .filter(|&(_, &k)| k == l)
+                        .flat_map(|(t, _)| t.iter().copied())
+                        .collect(),
+                    ..out.clone()
+                }
+                .without_collapsed();
+                if part.indices.is_empty() {
+                    continue;
+                }
+                if args.subdiv_flat {
+                    part = flat_shaded(&part);
+                }
+                scene.materials.push(scene::Material {
+                    name: format!("level {l}"),
+                    base_color: level_colour(l).extend(1.0),
+                    ..Default::default()
+                });
+                scene.meshes.push(scene::Mesh {
+                    name: format!("{name} level {l}"),
+                    uvs: vec![glam::Vec2::ZERO; part.positions.len()],
+                    positions: part.positions,
+                    normals: part.normals,
+                    indices: part.indices,
+                    material: scene.materials.len() as u32 - 1,
+                });
+            }
+        }
+    }
     Ok(())
+}
+
+/// Colour of surface level `l` (1 blue … 6 red).
+fn level_colour(l: u32) -> Vec3 {
+    const RAMP: [[f32; 3]; 6] = [
+        [0.10, 0.25, 0.85],
+        [0.10, 0.65, 0.85],
+        [0.20, 0.75, 0.30],
+        [0.85, 0.80, 0.15],
+        [0.90, 0.45, 0.10],
+        [0.85, 0.10, 0.10],
+    ];
+    Vec3::from(RAMP[(l.clamp(1, 6) - 1) as usize])
+}
+
+/// Geometric normals: every triangle with its own three vertices and face normal.
+fn flat_shaded(mesh: &subdiv_bft::Refined) -> subdiv_bft::Refined {
+    let mut out = subdiv_bft::Refined::default();
+    for t in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+        let n = (b - a).cross(c - a).normalize_or_zero();
+        for p in [a, b, c] {
+            out.indices.push(out.positions.len() as u32);
+            out.positions.push(p);
+            out.normals.push(n);
+        }
+    }
+    out
 }
 
 /// `--ssaa M [--adaptive]`: the supersampled G-buffer and (adaptive) supersampling of the
@@ -399,10 +524,6 @@ fn main() -> Result<()> {
         return subdivide_command(input, *level, *limit, *cpu, output);
     }
     let mut scene = load_scene(&args)?;
-    if let Some(level) = args.subdiv {
-        subdivide_scene(&mut scene, level, args.cpu)?;
-    }
-    let scene = scene;
     let (width, height) = args.size;
 
     let mut camera = match (&scene.camera, &args.scene) {
@@ -423,6 +544,10 @@ fn main() -> Result<()> {
     if args.eye.is_some() || args.target.is_some() {
         camera.fit_planes(scene.bounds());
     }
+    if let Some(level) = args.subdiv {
+        subdivide_scene(&mut scene, &args, level, &camera)?;
+    }
+    let scene = scene;
     let (mut lights, emissive_photons, lit_by) = match args.lights {
         Some(n) => (
             scene::scatter_point_lights(scene.bounds(), n, 1),

@@ -3,7 +3,9 @@
 //! 2–5 (bunny 2–4): GPU time of the initial step (computational entries, M⁰ → M¹ positions and
 //! normals) and of the main step (every patch from the level-5 tables), fine vertices/s and
 //! triangles/s, against a baseline measured in the same run: clearing the same output bytes
-//! (the write bandwidth the evaluation cannot beat). Writes
+//! (the write bandwidth the evaluation cannot beat). Adaptive tessellation: screen-space factors
+//! for a camera framing the mesh at 1920×1080 (fine edges of 1–4 pixels, up to level 6), the
+//! metric and the adaptive main step, against the uniform level 6 in the same run. Writes
 //! `subdiv-bft-<adapter>-<date>.{md,json}`.
 
 use std::path::PathBuf;
@@ -49,6 +51,22 @@ struct Row {
 }
 
 #[derive(Serialize)]
+struct AdaptiveRow {
+    mesh: String,
+    /// Target fine edge length in pixels.
+    target_pixels: f32,
+    max_level: u32,
+    /// Triangles written (collapsed ones included) and drawn (without them).
+    triangles_written: usize,
+    triangles_drawn: usize,
+    factors: Stat,
+    evaluate: Stat,
+    /// The uniform main step at `max_level`, same run.
+    uniform_max: Stat,
+    uniform_max_triangles: usize,
+}
+
+#[derive(Serialize)]
 struct Report {
     header: gpu::bench::Header,
     frames: u32,
@@ -56,6 +74,7 @@ struct Report {
     table_megabytes: f64,
     tables: usize,
     rows: Vec<Row>,
+    adaptive: Vec<AdaptiveRow>,
 }
 
 fn main() -> Result<()> {
@@ -73,6 +92,7 @@ fn main() -> Result<()> {
     )?;
     let timer = PassTimer::new(&gpu.device, 8);
     let mut rows = Vec::new();
+    let mut adaptive = Vec::new();
     for (name, file, levels) in [
         ("fandisk", "subdiv/fandisk.obj", 2..=5),
         ("spot", "subdiv/spot/spot_triangulated.obj", 2..=5),
@@ -132,6 +152,17 @@ fn main() -> Result<()> {
                 clear_baseline,
             });
         }
+        if name != "bunny" {
+            adaptive.extend(bench_adaptive(
+                &gpu,
+                &timer,
+                args.frames,
+                name,
+                &mesh,
+                &sub,
+                &g,
+            )?);
+        }
     }
     let header = gpu::bench::Header::new(&gpu);
     let mut md = header.markdown(
@@ -172,6 +203,29 @@ fn main() -> Result<()> {
             r.triangles_per_s_total / 1e9
         ));
     }
+    md.push_str(
+        "\n## Adaptive tessellation\n\nScreen-space factors (each M¹ edge split so its fine edges \
+         are about the target length on a 1920×1080 image of a camera framing the mesh), up to \
+         level 6 (32 segments per M¹ edge); metric pass and adaptive main step (vertices with \
+         geomorph, triangles appended to an indirect draw), against the uniform level-6 main step \
+         measured in the same run.\n\n\
+         | mesh | target px | triangles drawn | written | metric ms | adaptive main ms | uniform level 6 ms (triangles) | adaptive ÷ uniform |\n\
+         |---|---|---|---|---|---|---|---|\n",
+    );
+    for r in &adaptive {
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {:.3} | {:.3} | {:.3} ({}) | {:.2} |\n",
+            r.mesh,
+            r.target_pixels,
+            r.triangles_drawn,
+            r.triangles_written,
+            r.factors.median_ms,
+            r.evaluate.median_ms,
+            r.uniform_max.median_ms,
+            r.uniform_max_triangles,
+            r.evaluate.median_ms / r.uniform_max.median_ms
+        ));
+    }
     let report = Report {
         header,
         frames: args.frames,
@@ -179,7 +233,68 @@ fn main() -> Result<()> {
         table_megabytes: bft.weight_bytes() as f64 / 1e6,
         tables: bft.tables.len(),
         rows,
+        adaptive,
     };
     let stem = report.header.file_stem("subdiv-bft-");
     pipeline::bench::write_report(&args.out, &stem, &report, &md)
+}
+
+/// Adaptive rows of one mesh: screen-space factors for 4, 2 and 1 pixel edges.
+fn bench_adaptive(
+    gpu: &Gpu,
+    timer: &PassTimer,
+    frames: u32,
+    name: &str,
+    mesh: &subdiv_bft::TriMesh,
+    sub: &Subdivider,
+    g: &GpuSubdivider,
+) -> Result<Vec<AdaptiveRow>> {
+    let max_level = 6;
+    let viewport = (1920, 1080);
+    let bounds = mesh
+        .positions_f32()
+        .iter()
+        .fold(scene::Aabb::EMPTY, |b, &p| b.grow(p));
+    let view_proj = scene::Camera::framing(bounds).view_projection(1920.0 / 1080.0);
+    let a = g.adaptive(&gpu.device, sub, max_level)?;
+    let uniform = g.level(&gpu.device, sub, max_level)?;
+    let uniform_max = pipeline::bench::time_encoded(gpu, timer, frames, false, &|e, t| {
+        g.encode_evaluate(e, &uniform, Some(t));
+    })?;
+    let mut rows = Vec::new();
+    for target_pixels in [4.0, 2.0, 1.0] {
+        a.set_view(
+            &gpu.queue,
+            &subdiv_bft::adaptive::ScreenView {
+                view_proj,
+                viewport,
+                target_pixels,
+            },
+        )?;
+        let factors = pipeline::bench::time_encoded(gpu, timer, frames, false, &|e, t| {
+            g.encode_screen_factors(e, &a, Some(t));
+        })?;
+        let evaluate = pipeline::bench::time_encoded(gpu, timer, frames, false, &|e, t| {
+            g.encode_adaptive(e, &a, Some(t));
+        })?;
+        let out = g.read_adaptive(gpu, &a)?;
+        let written = out.indices.len() / 3;
+        let drawn = out.without_collapsed().indices.len() / 3;
+        println!(
+            "{name} adaptive {target_pixels} px: {drawn} triangles, metric {:.3} ms, main {:.3} ms (uniform level {max_level}: {:.3} ms)",
+            factors.median_ms, evaluate.median_ms, uniform_max.median_ms
+        );
+        rows.push(AdaptiveRow {
+            mesh: name.into(),
+            target_pixels,
+            max_level,
+            triangles_written: written,
+            triangles_drawn: drawn,
+            factors,
+            evaluate,
+            uniform_max: uniform_max.clone(),
+            uniform_max_triangles: uniform.index_count as usize / 3,
+        });
+    }
+    Ok(rows)
 }

@@ -5,14 +5,13 @@
 
 use ::gpu::{Gpu, PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
-use glam::Mat4;
 
 use super::{
     EvaluateParams, GpuSubdivider, MAX_GROUPS_X, WORKGROUP, bind, empty, read_vec3, storage,
 };
 use crate::{
     Refined, SubdivError, Subdivider,
-    adaptive::check_factors,
+    adaptive::{ScreenView, check_factors},
     bft::grid_count,
     patch::{grid_walk, inner_count},
 };
@@ -65,24 +64,13 @@ impl GpuAdaptive {
         Ok(())
     }
 
-    /// Sets the view for [`GpuSubdivider::encode_screen_factors`]: fine edges of about
-    /// `target_pixels` on a `viewport` of pixels seen through `view_proj`.
-    pub fn set_view(
-        &self,
-        queue: &wgpu::Queue,
-        view_proj: Mat4,
-        viewport: (u32, u32),
-        target_pixels: f32,
-    ) -> Result<(), SubdivError> {
-        if !(target_pixels.is_finite() && target_pixels > 0.0) || !view_proj.is_finite() {
-            return Err(SubdivError::Factors(format!(
-                "the view needs a finite matrix and a positive target edge length, got {target_pixels}"
-            )));
-        }
+    /// Sets the view for [`GpuSubdivider::encode_screen_factors`].
+    pub fn set_view(&self, queue: &wgpu::Queue, view: &ScreenView) -> Result<(), SubdivError> {
+        view.check()?;
         let params = FactorParams {
-            view_proj: view_proj.to_cols_array_2d(),
-            viewport: [viewport.0 as f32, viewport.1 as f32],
-            target_pixels,
+            view_proj: view.view_proj.to_cols_array_2d(),
+            viewport: [view.viewport.0 as f32, view.viewport.1 as f32],
+            target_pixels: view.target_pixels,
             max_factor: self.max_segments.ilog2() as f32,
             edge_count: self.edge_count,
             _pad: [0; 3],
