@@ -246,6 +246,17 @@ fn adaptive_vertex(pt: Patch, p: u32, l: Levels, ij: vec2<u32>) -> u32 {
 }
 
 var<workgroup> triangle_base: u32;
+// Limit positions and normals of the patch's grid vertices (flat xyz): 3 × 561, the grid of 32
+// segments (`gpu::adaptive::MAX_SEGMENTS`).
+var<workgroup> grid_p: array<f32, 1683>;
+var<workgroup> grid_n: array<f32, 1683>;
+
+fn grid_vertex(g: u32) -> Vertex {
+    return Vertex(
+        vec3<f32>(grid_p[3u * g], grid_p[3u * g + 1u], grid_p[3u * g + 2u]),
+        vec3<f32>(grid_n[3u * g], grid_n[3u * g + 1u], grid_n[3u * g + 2u]),
+    );
+}
 
 @compute @workgroup_size(64)
 fn evaluate_adaptive(
@@ -273,6 +284,25 @@ fn evaluate_adaptive(
         walk_offset += (c + 1u) * (c + 2u) / 2u;
     }
     let count = (s + 1u) * (s + 2u) / 2u;
+    // Phase 1: the limit position and normal of every vertex of the grid, into workgroup memory
+    // (each is read again as a geomorph parent).
+    for (var g = lid; g < count; g += 64u) {
+        let ij = walk[walk_offset + g];
+        let i = ij & 0xffffu;
+        let j = ij >> 16u;
+        let e = on_edge(l, i, j);
+        if e.x < 3u && e.y % (s / l.edge_s[e.x]) != 0u {
+            continue; // snapped away: not a vertex of this tessellation
+        }
+        let v = eval_grid(pt, i, j, s);
+        for (var c = 0u; c < 3u; c++) {
+            grid_p[3u * g + c] = v.p[c];
+            grid_n[3u * g + c] = v.n[c];
+        }
+    }
+    workgroupBarrier();
+    // Phase 2: geomorph (a vertex new at this level moves from its parents' midpoint) and
+    // output of the vertices this patch owns.
     for (var g = lid; g < count; g += 64u) {
         let ij = walk[walk_offset + g];
         let i = ij & 0xffffu;
@@ -282,15 +312,14 @@ fn evaluate_adaptive(
         if e.x < 3u {
             r = s / l.edge_s[e.x];
             if e.y % r != 0u {
-                continue; // snapped away: not a vertex of this tessellation
+                continue;
             }
         }
         let out = output_vertex(pt, p, i * m, j * m);
         if out.y == 0u {
             continue;
         }
-        var v = eval_grid(pt, i, j, s);
-        // Geomorph: a vertex new at this level moves from its parents' midpoint.
+        var v = grid_vertex(g);
         var morph = false;
         var a = vec2<u32>(0u);
         var b = vec2<u32>(0u);
@@ -317,9 +346,9 @@ fn evaluate_adaptive(
             a = snap(l, a);
             b = snap(l, b);
         }
-        if morph {
-            let va = eval_grid(pt, a.x, a.y, s);
-            let vb = eval_grid(pt, b.x, b.y, s);
+        if morph && alpha < 1.0 {
+            let va = grid_vertex(grid_index(a.x, a.y, s));
+            let vb = grid_vertex(grid_index(b.x, b.y, s));
             let mp = 0.5 * (va.p + vb.p);
             let mn = 0.5 * (va.n + vb.n);
             v = Vertex(mp + alpha * (v.p - mp), unit(mn + alpha * (v.n - mn)));

@@ -305,7 +305,9 @@ impl Patches {
                             continue;
                         }
                         let (mut pos, mut nrm) = eval((i, j));
-                        if let Some((a, b, alpha)) = levels.morph((i, j)) {
+                        if let Some((a, b, alpha)) =
+                            levels.morph((i, j)).filter(|&(_, _, alpha)| alpha < 1.0)
+                        {
                             let ((pa, na), (pb, nb)) = (eval(a), eval(b));
                             let (mp, mn) = (0.5 * (pa + pb), 0.5 * (na + nb));
                             pos = mp + alpha * (pos - mp);

@@ -6,7 +6,7 @@
 
 mod adaptive;
 
-pub use adaptive::GpuAdaptive;
+pub use adaptive::{GpuAdaptive, MAX_SEGMENTS};
 
 use ::gpu::{Gpu, PassTimer, shader, transfer};
 use bytemuck::{Pod, Zeroable};

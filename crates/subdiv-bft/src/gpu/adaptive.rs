@@ -16,6 +16,9 @@ use crate::{
     patch::{grid_walk, inner_count},
 };
 
+/// Most segments per patch edge of the GPU adaptive tessellation (its workgroup-memory grid).
+pub const MAX_SEGMENTS: u32 = 32;
+
 /// Uniform block of `factors.wgsl` (`FactorParams`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -90,6 +93,13 @@ impl GpuSubdivider {
         max_level: u32,
     ) -> Result<GpuAdaptive, SubdivError> {
         let s = sub.segments(max_level)?;
+        if s > MAX_SEGMENTS {
+            return Err(SubdivError::Level {
+                level: max_level,
+                max: MAX_SEGMENTS.ilog2() + 1,
+                table_level: self.table_level,
+            });
+        }
         let vertex_count = sub.patches.output_vertex_count(s);
         let index_count = sub.patches.patches.len() as u64 * u64::from(s * s) * 3;
         if vertex_count as u64 >= u64::from(u32::MAX) || index_count >= u64::from(u32::MAX) {
