@@ -51,6 +51,8 @@ struct Patch {
 @group(0) @binding(9) var<storage, read> factors: array<f32>;
 @group(0) @binding(10) var<storage, read_write> out_indices: array<u32>;
 @group(0) @binding(11) var<storage, read_write> draw: array<atomic<u32>>;
+// Triangle q of the s-segment grid, in `Patches::triangulate` order, for s = 1, 2, 4, …
+@group(0) @binding(12) var<storage, read> triangle_walk: array<u32>;
 
 var<workgroup> ring_p: array<vec3<f32>, MAX_RING>;
 var<workgroup> ring_n: array<vec3<f32>, MAX_RING>;
@@ -246,16 +248,33 @@ fn adaptive_vertex(pt: Patch, p: u32, l: Levels, ij: vec2<u32>) -> u32 {
 }
 
 var<workgroup> triangle_base: u32;
-// Limit positions and normals of the patch's grid vertices (flat xyz): 3 × 561, the grid of 32
-// segments (`gpu::adaptive::MAX_SEGMENTS`).
-var<workgroup> grid_p: array<f32, 1683>;
-var<workgroup> grid_n: array<f32, 1683>;
+// Limit positions and normals of the vertices of the coarser grid (s / 2 segments), the only
+// possible geomorph parents: every parent has even grid coordinates. Flat xyz, 153 vertices =
+// the grid of 16 segments (`gpu::adaptive::MAX_SEGMENTS` = 32).
+var<workgroup> coarse_p: array<f32, 459>;
+var<workgroup> coarse_n: array<f32, 459>;
 
-fn grid_vertex(g: u32) -> Vertex {
+fn coarse_vertex(ij: vec2<u32>, s: u32) -> Vertex {
+    let g = 3u * grid_index(ij.x / 2u, ij.y / 2u, s / 2u);
     return Vertex(
-        vec3<f32>(grid_p[3u * g], grid_p[3u * g + 1u], grid_p[3u * g + 2u]),
-        vec3<f32>(grid_n[3u * g], grid_n[3u * g + 1u], grid_n[3u * g + 2u]),
+        vec3<f32>(coarse_p[g], coarse_p[g + 1u], coarse_p[g + 2u]),
+        vec3<f32>(coarse_n[g], coarse_n[g + 1u], coarse_n[g + 2u]),
     );
+}
+
+// First entry of the s-segment grid's walk among those of s = 1, 2, 4, …
+fn walk_offset(s: u32) -> u32 {
+    var offset = 0u;
+    for (var c = 1u; c < s; c *= 2u) {
+        offset += (c + 1u) * (c + 2u) / 2u;
+    }
+    return offset;
+}
+
+// Whether grid vertex (i, j) is a vertex of the tessellation (not snapped away).
+fn is_vertex(l: Levels, i: u32, j: u32) -> bool {
+    let e = on_edge(l, i, j);
+    return e.x >= 3u || e.y % (l.s / l.edge_s[e.x]) == 0u;
 }
 
 @compute @workgroup_size(64)
@@ -278,33 +297,33 @@ fn evaluate_adaptive(
     load_ring(pt, lid);
     workgroupBarrier();
 
-    // Vertices: the s-grid's walk starts after those of the coarser grids.
-    var walk_offset = 0u;
-    for (var c = 1u; c < s; c *= 2u) {
-        walk_offset += (c + 1u) * (c + 2u) / 2u;
-    }
-    let count = (s + 1u) * (s + 2u) / 2u;
-    // Phase 1: the limit position and normal of every vertex of the grid, into workgroup memory
-    // (each is read again as a geomorph parent).
-    for (var g = lid; g < count; g += 64u) {
-        let ij = walk[walk_offset + g];
-        let i = ij & 0xffffu;
-        let j = ij >> 16u;
-        let e = on_edge(l, i, j);
-        if e.x < 3u && e.y % (s / l.edge_s[e.x]) != 0u {
-            continue; // snapped away: not a vertex of this tessellation
-        }
-        let v = eval_grid(pt, i, j, s);
-        for (var c = 0u; c < 3u; c++) {
-            grid_p[3u * g + c] = v.p[c];
-            grid_n[3u * g + c] = v.n[c];
+    // Phase 1: the vertices of the coarser grid (parents), into workgroup memory.
+    let half = s / 2u;
+    if half > 0u {
+        let coarse_walk = walk_offset(half);
+        for (var g = lid; g < (half + 1u) * (half + 2u) / 2u; g += 64u) {
+            let ij = walk[coarse_walk + g];
+            let i = 2u * (ij & 0xffffu);
+            let j = 2u * (ij >> 16u);
+            if !is_vertex(l, i, j) {
+                continue;
+            }
+            let v = eval_grid(pt, i, j, s);
+            coarse_p[3u * g] = v.p.x;
+            coarse_p[3u * g + 1u] = v.p.y;
+            coarse_p[3u * g + 2u] = v.p.z;
+            coarse_n[3u * g] = v.n.x;
+            coarse_n[3u * g + 1u] = v.n.y;
+            coarse_n[3u * g + 2u] = v.n.z;
         }
     }
     workgroupBarrier();
-    // Phase 2: geomorph (a vertex new at this level moves from its parents' midpoint) and
-    // output of the vertices this patch owns.
-    for (var g = lid; g < count; g += 64u) {
-        let ij = walk[walk_offset + g];
+
+    // Phase 2: every vertex this patch owns; one that is new at this level is evaluated and
+    // geomorphed from its parents' midpoint, the others are read from phase 1.
+    let fine_walk = walk_offset(s);
+    for (var g = lid; g < (s + 1u) * (s + 2u) / 2u; g += 64u) {
+        let ij = walk[fine_walk + g];
         let i = ij & 0xffffu;
         let j = ij >> 16u;
         let e = on_edge(l, i, j);
@@ -312,14 +331,13 @@ fn evaluate_adaptive(
         if e.x < 3u {
             r = s / l.edge_s[e.x];
             if e.y % r != 0u {
-                continue;
+                continue; // snapped away: not a vertex of this tessellation
             }
         }
         let out = output_vertex(pt, p, i * m, j * m);
         if out.y == 0u {
             continue;
         }
-        var v = grid_vertex(g);
         var morph = false;
         var a = vec2<u32>(0u);
         var b = vec2<u32>(0u);
@@ -346,9 +364,15 @@ fn evaluate_adaptive(
             a = snap(l, a);
             b = snap(l, b);
         }
+        var v: Vertex;
+        if half > 0u && i % 2u == 0u && j % 2u == 0u {
+            v = coarse_vertex(vec2<u32>(i, j), s);
+        } else {
+            v = eval_grid(pt, i, j, s);
+        }
         if morph && alpha < 1.0 {
-            let va = grid_vertex(grid_index(a.x, a.y, s));
-            let vb = grid_vertex(grid_index(b.x, b.y, s));
+            let va = coarse_vertex(a, s);
+            let vb = coarse_vertex(b, s);
             let mp = 0.5 * (va.p + vb.p);
             let mn = 0.5 * (va.n + vb.n);
             v = Vertex(mp + alpha * (v.p - mp), unit(mn + alpha * (v.n - mn)));
@@ -357,17 +381,18 @@ fn evaluate_adaptive(
         out_normals[out.x] = vec4<f32>(v.n, 0.0);
     }
 
-    // Triangles: row j holds 2(s − j) − 1, up (even) and down (odd) alternating.
+    // Triangles: the s-grid's triangle walk (i | j << 8 | down << 16), also after the coarser
+    // grids' (1 + 4 + 16 + … entries).
+    var tri_offset = 0u;
+    for (var c = 1u; c < s; c *= 2u) {
+        tri_offset += c * c;
+    }
     for (var q = lid; q < s * s; q += 64u) {
-        var j = 0u;
-        var r = q;
-        while r >= 2u * (s - j) - 1u {
-            r -= 2u * (s - j) - 1u;
-            j += 1u;
-        }
-        let i = r / 2u;
+        let w = triangle_walk[tri_offset + q];
+        let i = w & 0xffu;
+        let j = (w >> 8u) & 0xffu;
         var t: array<vec2<u32>, 3>;
-        if r % 2u == 0u {
+        if (w >> 16u) == 0u {
             t = array<vec2<u32>, 3>(vec2<u32>(i, j), vec2<u32>(i + 1u, j), vec2<u32>(i, j + 1u));
         } else {
             t = array<vec2<u32>, 3>(

@@ -310,3 +310,18 @@ pub fn grid_walk(s: u32) -> Vec<u32> {
     }
     out
 }
+
+/// Triangles of the `s`-segment grid in [`Patches::triangulate`] order, packed as
+/// `i | j << 8 | down << 16` (down: the triangle `(i + 1, j), (i + 1, j + 1), (i, j + 1)`).
+pub fn triangle_walk(s: u32) -> Vec<u32> {
+    let mut out = Vec::with_capacity((s * s) as usize);
+    for j in 0..s {
+        for i in 0..s - j {
+            out.push(i | j << 8);
+            if i + j + 1 < s {
+                out.push(i | j << 8 | 1 << 16);
+            }
+        }
+    }
+    out
+}

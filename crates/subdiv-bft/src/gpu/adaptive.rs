@@ -13,7 +13,7 @@ use crate::{
     Refined, SubdivError, Subdivider,
     adaptive::{ScreenView, check_factors},
     bft::grid_count,
-    patch::{grid_walk, inner_count},
+    patch::{grid_walk, inner_count, triangle_walk},
 };
 
 /// Most segments per patch edge of the GPU adaptive tessellation (its workgroup-memory grid).
@@ -151,6 +151,10 @@ impl GpuSubdivider {
         )?;
         let walks: Vec<u32> = (0..=s.ilog2()).flat_map(|l| grid_walk(1 << l)).collect();
         let walk = storage(device, "grid walks", bytemuck::cast_slice(&walks))?;
+        let triangles: Vec<u32> = (0..=s.ilog2())
+            .flat_map(|l| triangle_walk(1 << l))
+            .collect();
+        let triangle_walk = storage(device, "triangle walks", bytemuck::cast_slice(&triangles))?;
         let evaluate_bind = bind(
             device,
             &self.evaluate_adaptive,
@@ -167,6 +171,7 @@ impl GpuSubdivider {
                 (9, &factors),
                 (10, &indices),
                 (11, &draw_args),
+                (12, &triangle_walk),
             ],
         );
         let factor_params = empty(
