@@ -248,20 +248,6 @@ fn adaptive_vertex(pt: Patch, p: u32, l: Levels, ij: vec2<u32>) -> u32 {
 }
 
 var<workgroup> triangle_base: u32;
-// Limit positions and normals of the vertices of the coarser grid (s / 2 segments), the only
-// possible geomorph parents: every parent has even grid coordinates. Flat xyz, 153 vertices =
-// the grid of 16 segments (`gpu::adaptive::MAX_SEGMENTS` = 32).
-var<workgroup> coarse_p: array<f32, 459>;
-var<workgroup> coarse_n: array<f32, 459>;
-
-fn coarse_vertex(ij: vec2<u32>, s: u32) -> Vertex {
-    let g = 3u * grid_index(ij.x / 2u, ij.y / 2u, s / 2u);
-    return Vertex(
-        vec3<f32>(coarse_p[g], coarse_p[g + 1u], coarse_p[g + 2u]),
-        vec3<f32>(coarse_n[g], coarse_n[g + 1u], coarse_n[g + 2u]),
-    );
-}
-
 // First entry of the s-segment grid's walk among those of s = 1, 2, 4, …
 fn walk_offset(s: u32) -> u32 {
     var offset = 0u;
@@ -269,12 +255,6 @@ fn walk_offset(s: u32) -> u32 {
         offset += (c + 1u) * (c + 2u) / 2u;
     }
     return offset;
-}
-
-// Whether grid vertex (i, j) is a vertex of the tessellation (not snapped away).
-fn is_vertex(l: Levels, i: u32, j: u32) -> bool {
-    let e = on_edge(l, i, j);
-    return e.x >= 3u || e.y % (l.s / l.edge_s[e.x]) == 0u;
 }
 
 @compute @workgroup_size(64)
@@ -297,30 +277,9 @@ fn evaluate_adaptive(
     load_ring(pt, lid);
     workgroupBarrier();
 
-    // Phase 1: the vertices of the coarser grid (parents), into workgroup memory.
-    let half = s / 2u;
-    if half > 0u {
-        let coarse_walk = walk_offset(half);
-        for (var g = lid; g < (half + 1u) * (half + 2u) / 2u; g += 64u) {
-            let ij = walk[coarse_walk + g];
-            let i = 2u * (ij & 0xffffu);
-            let j = 2u * (ij >> 16u);
-            if !is_vertex(l, i, j) {
-                continue;
-            }
-            let v = eval_grid(pt, i, j, s);
-            coarse_p[3u * g] = v.p.x;
-            coarse_p[3u * g + 1u] = v.p.y;
-            coarse_p[3u * g + 2u] = v.p.z;
-            coarse_n[3u * g] = v.n.x;
-            coarse_n[3u * g + 1u] = v.n.y;
-            coarse_n[3u * g + 2u] = v.n.z;
-        }
-    }
-    workgroupBarrier();
-
-    // Phase 2: every vertex this patch owns; one that is new at this level is evaluated and
-    // geomorphed from its parents' midpoint, the others are read from phase 1.
+    // Every vertex this patch owns; one that is new at this level moves from its parents'
+    // midpoint (geomorph; parents evaluated here too, which measured faster on the H100 than
+    // sharing them through workgroup memory behind a barrier).
     let fine_walk = walk_offset(s);
     for (var g = lid; g < (s + 1u) * (s + 2u) / 2u; g += 64u) {
         let ij = walk[fine_walk + g];
@@ -364,15 +323,10 @@ fn evaluate_adaptive(
             a = snap(l, a);
             b = snap(l, b);
         }
-        var v: Vertex;
-        if half > 0u && i % 2u == 0u && j % 2u == 0u {
-            v = coarse_vertex(vec2<u32>(i, j), s);
-        } else {
-            v = eval_grid(pt, i, j, s);
-        }
+        var v = eval_grid(pt, i, j, s);
         if morph && alpha < 1.0 {
-            let va = coarse_vertex(a, s);
-            let vb = coarse_vertex(b, s);
+            let va = eval_grid(pt, a.x, a.y, s);
+            let vb = eval_grid(pt, b.x, b.y, s);
             let mp = 0.5 * (va.p + vb.p);
             let mn = 0.5 * (va.n + vb.n);
             v = Vertex(mp + alpha * (v.p - mp), unit(mn + alpha * (v.n - mn)));

@@ -16,8 +16,9 @@ use crate::{
     patch::{grid_walk, inner_count, triangle_walk},
 };
 
-/// Most segments per patch edge of the GPU adaptive tessellation (its workgroup-memory grid).
-pub const MAX_SEGMENTS: u32 = 32;
+/// Most segments per patch edge of the GPU adaptive tessellation (its triangle walk packs grid
+/// coordinates in 8 bits).
+pub const MAX_SEGMENTS: u32 = 128;
 
 /// Uniform block of `factors.wgsl` (`FactorParams`).
 #[repr(C)]
