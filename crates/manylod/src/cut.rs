@@ -1,0 +1,177 @@
+//! Many-view cuts (§3.5.2). A *node-view* pairs a tree node with a view; the cut of view V is
+//! the set of node-views `(N, V)` with `c(N, V) < ε` (valid) whose parent is not valid (leaves
+//! are always valid: they cannot be split). Culled node-views (`c = 0`) are part of the cut —
+//! kept so later frames can start from them — but are not drawn.
+//!
+//! [`refine`] runs Listing 3.1 over an active list until it is empty (or for `q` iterations:
+//! the lazy variant), each node-view taking at most one edge up or down per iteration:
+//!
+//! 1. parent not valid (or the root), node valid → into the cut (draw or cull);
+//! 2. parent not valid, node not valid → all children become active (split);
+//! 3. parent valid and the node is its first child → the parent becomes active (merge); the
+//!    other children are dropped (the first child brings the parent).
+//!
+//! The basic cut starts from the roots ([`basic`]), the incremental one from last frame's cut.
+
+use rayon::prelude::*;
+
+use crate::{
+    Bsh, ManyLodError,
+    bsh::{first_child, parent},
+    view::View,
+};
+
+/// A node paired with a view.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct NodeView {
+    /// Node (heap index).
+    pub node: u32,
+    /// View index.
+    pub view: u32,
+}
+
+/// A multi-cut with how it was found.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Cut {
+    /// The node-views of every view's cut (drawn and culled), in no particular order.
+    pub node_views: Vec<NodeView>,
+    /// Iterations run.
+    pub iterations: u32,
+    /// Node-views processed over all iterations (the work).
+    pub processed: u64,
+    /// Whether the active list ran empty (false: a lazy cut that may still change).
+    pub converged: bool,
+}
+
+/// The criterion context: tree, views, threshold.
+pub struct CutProblem<'a> {
+    /// The hierarchy.
+    pub bsh: &'a Bsh,
+    /// The views.
+    pub views: &'a [View],
+    /// Threshold ε in pixels.
+    pub epsilon: f32,
+}
+
+impl CutProblem<'_> {
+    /// Checks views and threshold.
+    pub fn check(&self) -> Result<(), ManyLodError> {
+        for (i, v) in self.views.iter().enumerate() {
+            v.check(i)?;
+        }
+        if !(self.epsilon.is_finite() && self.epsilon > 0.0) {
+            return Err(ManyLodError::Mismatch(format!(
+                "threshold ε = {} must be positive",
+                self.epsilon
+            )));
+        }
+        Ok(())
+    }
+
+    /// `c(N, V)`.
+    pub fn criterion(&self, nv: NodeView) -> f32 {
+        self.views[nv.view as usize].criterion(&self.bsh.nodes[nv.node as usize])
+    }
+
+    /// Whether a node is a leaf.
+    pub fn is_leaf(&self, node: u32) -> bool {
+        node as usize >= self.bsh.leaf_count() - 1
+    }
+
+    /// Valid: a leaf, or `c < ε`.
+    pub fn is_valid(&self, nv: NodeView) -> bool {
+        self.is_leaf(nv.node) || self.criterion(nv) < self.epsilon
+    }
+
+    /// Whether the node-view is in the cut and drawn (`c > 0`), not culled.
+    pub fn is_drawn(&self, nv: NodeView) -> bool {
+        self.criterion(nv) > 0.0
+    }
+
+    fn parent_valid(&self, nv: NodeView) -> bool {
+        nv.node > 0
+            && self.is_valid(NodeView {
+                node: parent(nv.node),
+                view: nv.view,
+            })
+    }
+}
+
+/// The roots paired with every view: the start of the basic cut.
+pub fn roots(views: usize) -> Vec<NodeView> {
+    (0..views as u32)
+        .map(|view| NodeView { node: 0, view })
+        .collect()
+}
+
+/// One node-view's step of Listing 3.1: what goes to the cut and what stays active.
+enum Step {
+    Cut(NodeView),
+    Active(NodeView),
+    Split(NodeView, NodeView),
+    Drop,
+}
+
+/// Runs Listing 3.1 from `active` for at most `max_iterations` (`None`: until no node-view is
+/// active); a lazy cut's leftover active node-views join the cut.
+pub fn refine(
+    problem: &CutProblem,
+    active: Vec<NodeView>,
+    max_iterations: Option<u32>,
+) -> Result<Cut, ManyLodError> {
+    problem.check()?;
+    let n = problem.bsh.nodes.len() as u32;
+    if let Some(bad) = active
+        .iter()
+        .find(|nv| nv.node >= n || nv.view as usize >= problem.views.len())
+    {
+        return Err(ManyLodError::Mismatch(format!(
+            "node-view {bad:?} outside {n} nodes × {} views",
+            problem.views.len()
+        )));
+    }
+    let mut cut = Cut::default();
+    let mut active = active;
+    while !active.is_empty() && max_iterations.is_none_or(|q| cut.iterations < q) {
+        cut.iterations += 1;
+        cut.processed += active.len() as u64;
+        let steps: Vec<Step> = active
+            .par_iter()
+            .map(|&nv| {
+                if !problem.parent_valid(nv) {
+                    if problem.is_valid(nv) {
+                        Step::Cut(nv)
+                    } else {
+                        let c = first_child(nv.node);
+                        Step::Split(NodeView { node: c, ..nv }, NodeView { node: c + 1, ..nv })
+                    }
+                } else if nv.node % 2 == 1 {
+                    Step::Active(NodeView {
+                        node: parent(nv.node),
+                        ..nv
+                    })
+                } else {
+                    Step::Drop
+                }
+            })
+            .collect();
+        active = Vec::with_capacity(steps.len());
+        for s in steps {
+            match s {
+                Step::Cut(nv) => cut.node_views.push(nv),
+                Step::Active(nv) => active.push(nv),
+                Step::Split(a, b) => active.extend([a, b]),
+                Step::Drop => {}
+            }
+        }
+    }
+    cut.converged = active.is_empty();
+    cut.node_views.extend(active);
+    Ok(cut)
+}
+
+/// The basic cut: [`refine`] from the roots of all views until converged.
+pub fn basic(problem: &CutProblem) -> Result<Cut, ManyLodError> {
+    refine(problem, roots(problem.views.len()), None)
+}

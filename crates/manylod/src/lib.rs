@@ -1,0 +1,51 @@
+//! Many-view level-of-detail cuts (ManyLoDs; Holländer 2013 §3.5–3.7).
+//!
+//! The scene is sampled into `2^d` [surfels](surfels) stored as `(s, t, triangle)` so that mesh
+//! deformation moves them; a [bounding-sphere hierarchy](bsh) — a perfect complete binary tree
+//! with a bounding sphere and a normal cone per node — is built once and refit after
+//! deformation. For many [views](view) at once, a [cut](cut) through the tree is found for
+//! every view: the node-views `(N, V)` whose criterion `c(N, V)` (projected size in pixels, 0
+//! when culled) is below `ε` while their parent's is not. Basic (from the roots), incremental
+//! (from last frame's cut: split / merge / draw / cull, Listing 3.1) and lazy (q iterations).
+//!
+//! This is the CPU reference; the GPU kernels mirror it.
+
+pub mod bsh;
+pub mod cut;
+pub mod surfels;
+pub mod view;
+
+pub use bsh::{Bsh, Node};
+pub use cut::{Cut, CutProblem, NodeView};
+pub use surfels::Surfel;
+pub use view::View;
+
+/// Everything that can go wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum ManyLodError {
+    /// The mesh cannot be sampled.
+    #[error("mesh: {0}")]
+    Mesh(String),
+    /// A hierarchy needs a power-of-two number of points.
+    #[error("{0} points: a perfect binary tree needs a power of two (at least 1, at most 2^26)")]
+    PointCount(usize),
+    /// NaN or infinite input.
+    #[error("{what} {index} is not finite")]
+    NonFinite {
+        /// What.
+        what: &'static str,
+        /// Which.
+        index: usize,
+    },
+    /// A view that cannot be used.
+    #[error("view {index}: {problem}")]
+    View {
+        /// View index.
+        index: usize,
+        /// What is wrong.
+        problem: String,
+    },
+    /// Sizes that do not fit together.
+    #[error("{0}")]
+    Mismatch(String),
+}
