@@ -308,21 +308,7 @@ impl GpuSubdivider {
             bytemuck::cast_slice(&sub.patches.triangulate(s)),
             wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_SRC,
         )?;
-        let params = EvaluateParams {
-            s,
-            table_segments: 1 << self.table_level,
-            vertex_count: self.m1_count,
-            edge_count: self.edge_count,
-            patch_count: self.patch_count,
-            grid_count: grid_count(s) as u32,
-            inner_count: inner_count(s) as u32,
-        };
-        let params = transfer::buffer_init(
-            device,
-            "evaluate params",
-            bytemuck::bytes_of(&params),
-            wgpu::BufferUsages::UNIFORM,
-        )?;
+        let params = self.evaluate_params(device, s)?;
         let walk = storage(device, "grid walk", bytemuck::cast_slice(&grid_walk(s)))?;
         let bind = bind(
             device,
@@ -351,6 +337,25 @@ impl GpuSubdivider {
             bind,
             groups: (x, self.patch_count.div_ceil(x).max(1)),
         })
+    }
+
+    /// The uniform block of `evaluate.wgsl` for `s` segments (adaptive: the layout's `s_max`).
+    fn evaluate_params(&self, device: &wgpu::Device, s: u32) -> Result<wgpu::Buffer, SubdivError> {
+        let params = EvaluateParams {
+            s,
+            table_segments: 1 << self.table_level,
+            vertex_count: self.m1_count,
+            edge_count: self.edge_count,
+            patch_count: self.patch_count,
+            grid_count: grid_count(s) as u32,
+            inner_count: inner_count(s) as u32,
+        };
+        Ok(transfer::buffer_init(
+            device,
+            "evaluate params",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM,
+        )?)
     }
 
     /// Records the initial step (M⁰ → M¹ positions, then normals).

@@ -6,14 +6,11 @@
 use ::gpu::{Gpu, PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 
-use super::{
-    EvaluateParams, GpuSubdivider, MAX_GROUPS_X, WORKGROUP, bind, empty, read_vec3, storage,
-};
+use super::{GpuSubdivider, MAX_GROUPS_X, WORKGROUP, bind, empty, read_vec3, storage};
 use crate::{
     Refined, SubdivError, Subdivider,
     adaptive::{ScreenView, check_factors},
-    bft::grid_count,
-    patch::{grid_walk, inner_count, triangle_walk},
+    patch::{grid_walk, triangle_walk},
 };
 
 /// Most segments per patch edge of the GPU adaptive tessellation (its triangle walk packs grid
@@ -135,21 +132,7 @@ impl GpuSubdivider {
                 | wgpu::BufferUsages::COPY_DST
                 | wgpu::BufferUsages::COPY_SRC,
         )?;
-        let params = EvaluateParams {
-            s,
-            table_segments: 1 << self.table_level,
-            vertex_count: self.m1_count,
-            edge_count: self.edge_count,
-            patch_count: self.patch_count,
-            grid_count: grid_count(s) as u32,
-            inner_count: inner_count(s) as u32,
-        };
-        let params = transfer::buffer_init(
-            device,
-            "adaptive params",
-            bytemuck::bytes_of(&params),
-            wgpu::BufferUsages::UNIFORM,
-        )?;
+        let params = self.evaluate_params(device, s)?;
         let walks: Vec<u32> = (0..=s.ilog2()).flat_map(|l| grid_walk(1 << l)).collect();
         let walk = storage(device, "grid walks", bytemuck::cast_slice(&walks))?;
         let triangles: Vec<u32> = (0..=s.ilog2())
