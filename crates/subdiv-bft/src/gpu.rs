@@ -313,19 +313,8 @@ impl GpuSubdivider {
         let bind = bind(
             device,
             &self.evaluate,
-            &[
-                (0, &params),
-                (1, &self.patches),
-                (2, &self.rings),
-                (3, &self.tables),
-                (4, &self.m1_positions),
-                (5, &self.m1_normals),
-                (6, &walk),
-                (7, &positions),
-                (8, &normals),
-            ],
+            &self.evaluate_bindings(&params, &walk, &positions, &normals),
         );
-        let x = self.patch_count.clamp(1, MAX_GROUPS_X);
         Ok(GpuLevel {
             level,
             segments: s,
@@ -335,8 +324,35 @@ impl GpuSubdivider {
             vertex_count: vertex_count as u32,
             index_count: index_count as u32,
             bind,
-            groups: (x, self.patch_count.div_ceil(x).max(1)),
+            groups: self.patch_groups(),
         })
+    }
+
+    /// Bindings 0–8 of `evaluate.wgsl`, shared by the uniform and the adaptive kernel.
+    fn evaluate_bindings<'a>(
+        &'a self,
+        params: &'a wgpu::Buffer,
+        walk: &'a wgpu::Buffer,
+        positions: &'a wgpu::Buffer,
+        normals: &'a wgpu::Buffer,
+    ) -> Vec<(u32, &'a wgpu::Buffer)> {
+        vec![
+            (0, params),
+            (1, &self.patches),
+            (2, &self.rings),
+            (3, &self.tables),
+            (4, &self.m1_positions),
+            (5, &self.m1_normals),
+            (6, walk),
+            (7, positions),
+            (8, normals),
+        ]
+    }
+
+    /// Workgroups of a dispatch with one per patch (x at most 65 535).
+    fn patch_groups(&self) -> (u32, u32) {
+        let x = self.patch_count.clamp(1, MAX_GROUPS_X);
+        (x, self.patch_count.div_ceil(x).max(1))
     }
 
     /// The uniform block of `evaluate.wgsl` for `s` segments (adaptive: the layout's `s_max`).

@@ -6,7 +6,7 @@
 use ::gpu::{Gpu, PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 
-use super::{GpuSubdivider, MAX_GROUPS_X, WORKGROUP, bind, empty, read_vec3, storage};
+use super::{GpuSubdivider, WORKGROUP, bind, empty, read_vec3, storage};
 use crate::{
     Refined, SubdivError, Subdivider,
     adaptive::{ScreenView, check_factors},
@@ -139,25 +139,14 @@ impl GpuSubdivider {
             .flat_map(|l| triangle_walk(1 << l))
             .collect();
         let triangle_walk = storage(device, "triangle walks", bytemuck::cast_slice(&triangles))?;
-        let evaluate_bind = bind(
-            device,
-            &self.evaluate_adaptive,
-            &[
-                (0, &params),
-                (1, &self.patches),
-                (2, &self.rings),
-                (3, &self.tables),
-                (4, &self.m1_positions),
-                (5, &self.m1_normals),
-                (6, &walk),
-                (7, &positions),
-                (8, &normals),
-                (9, &factors),
-                (10, &indices),
-                (11, &draw_args),
-                (12, &triangle_walk),
-            ],
-        );
+        let mut bindings = self.evaluate_bindings(&params, &walk, &positions, &normals);
+        bindings.extend([
+            (9, &factors),
+            (10, &indices),
+            (11, &draw_args),
+            (12, &triangle_walk),
+        ]);
+        let evaluate_bind = bind(device, &self.evaluate_adaptive, &bindings);
         let factor_params = empty(
             device,
             "factor params",
@@ -174,7 +163,6 @@ impl GpuSubdivider {
                 (3, &factors),
             ],
         );
-        let x = self.patch_count.clamp(1, MAX_GROUPS_X);
         Ok(GpuAdaptive {
             max_level,
             max_segments: s,
@@ -188,7 +176,7 @@ impl GpuSubdivider {
             factor_params,
             factor_bind,
             bind: evaluate_bind,
-            groups: (x, self.patch_count.div_ceil(x).max(1)),
+            groups: self.patch_groups(),
         })
     }
 
