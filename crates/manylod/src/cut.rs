@@ -8,8 +8,18 @@
 //!
 //! 1. parent not valid (or the root), node valid → into the cut (draw or cull);
 //! 2. parent not valid, node not valid → all children become active (split);
-//! 3. parent valid and the node is its first child → the parent becomes active (merge); the
-//!    other children are dropped (the first child brings the parent).
+//! 3. parent valid → merge: the node-view climbs to its highest valid ancestor `T` (whose
+//!    parent is not valid) and, if it holds `T`'s first leaf, puts `T` into the cut; all other
+//!    node-views under `T` are dropped.
+//!
+//! Step 3 differs from the paper, whose merge climbs one level per iteration (the first child
+//! brings the parent into the active list, its sibling is dropped). That is fine when the
+//! iteration runs to convergence, but the lazy variant stops early and keeps the leftovers: a
+//! sibling dropped while the first child is still on its way up is lost for good when the
+//! views then move and split the parent again (found by a test, see docs/manylod.md).
+//! Climbing to `T` at once keeps `cut ∪ active` a partition of every view's leaves after every
+//! iteration, since validity is monotone down the tree (`T` is the same for every node-view
+//! under it) — so a lazy cut is always drawable and loses nothing.
 //!
 //! The basic cut starts from the roots ([`basic`]), the incremental one from last frame's cut.
 
@@ -96,6 +106,19 @@ impl CutProblem<'_> {
                 view: nv.view,
             })
     }
+
+    /// Step 3 for a node-view whose parent is valid: its highest valid ancestor `T` if the
+    /// node-view lies on `T`'s leftmost path (it holds `T`'s first leaf), else `None` (dropped:
+    /// the node-view on that path brings `T`).
+    pub fn merge_target(&self, nv: NodeView) -> Option<NodeView> {
+        let mut node = nv.node;
+        let mut leftmost = true;
+        while self.parent_valid(NodeView { node, ..nv }) {
+            leftmost &= node % 2 == 1;
+            node = parent(node);
+        }
+        leftmost.then_some(NodeView { node, ..nv })
+    }
 }
 
 /// The roots paired with every view: the start of the basic cut.
@@ -108,7 +131,6 @@ pub fn roots(views: usize) -> Vec<NodeView> {
 /// One node-view's step of Listing 3.1: what goes to the cut and what stays active.
 enum Step {
     Cut(NodeView),
-    Active(NodeView),
     Split(NodeView, NodeView),
     Drop,
 }
@@ -146,13 +168,11 @@ pub fn refine(
                         let c = first_child(nv.node);
                         Step::Split(NodeView { node: c, ..nv }, NodeView { node: c + 1, ..nv })
                     }
-                } else if nv.node % 2 == 1 {
-                    Step::Active(NodeView {
-                        node: parent(nv.node),
-                        ..nv
-                    })
                 } else {
-                    Step::Drop
+                    match problem.merge_target(nv) {
+                        Some(top) => Step::Cut(top),
+                        None => Step::Drop,
+                    }
                 }
             })
             .collect();
@@ -160,7 +180,6 @@ pub fn refine(
         for s in steps {
             match s {
                 Step::Cut(nv) => cut.node_views.push(nv),
-                Step::Active(nv) => active.push(nv),
                 Step::Split(a, b) => active.extend([a, b]),
                 Step::Drop => {}
             }
