@@ -122,6 +122,23 @@ pub fn texture_init(
     Ok(texture)
 }
 
+/// An uninitialised (zeroed) buffer of `size` bytes (at least 16, so empty inputs still bind),
+/// size-checked.
+pub fn buffer(
+    device: &wgpu::Device,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> Result<wgpu::Buffer, GpuError> {
+    check_buffer_size(device, label, size, usage)?;
+    Ok(device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage,
+        mapped_at_creation: false,
+    }))
+}
+
 /// A buffer holding `contents` (at least 4 bytes, so empty inputs still bind), size-checked.
 pub fn buffer_init(
     device: &wgpu::Device,

@@ -16,7 +16,7 @@ use crate::ManyLodError;
 /// A node's bounds (32 bytes, the GPU layout): sphere `center`/`radius`, normal cone
 /// `axis`/`angle` (half-angle in radians; π: any direction).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Node {
     /// Sphere centre.
     pub center: Vec3,

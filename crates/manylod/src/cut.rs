@@ -31,6 +31,10 @@ use crate::{
     view::View,
 };
 
+/// Flag on [`NodeView::node`] in a cut (CPU and GPU) marking a culled node-view (`c = 0`):
+/// kept for the next frame's incremental cut, not drawn.
+pub const CULLED: u32 = 0x8000_0000;
+
 /// A node paired with a view.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]

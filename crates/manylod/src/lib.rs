@@ -8,15 +8,19 @@
 //! when culled) is below `ε` while their parent's is not. Basic (from the roots), incremental
 //! (from last frame's cut: split / merge / draw / cull, Listing 3.1) and lazy (q iterations).
 //!
-//! This is the CPU reference; the GPU kernels mirror it.
+//! The cut is [splatted](splat) into an atlas of per-view depth tiles. The CPU reference is
+//! the specification; the [GPU kernels](gpu) mirror it.
 
 pub mod bsh;
 pub mod cut;
+pub mod gpu;
+pub mod splat;
 pub mod surfels;
 pub mod view;
 
 pub use bsh::{Bsh, Node};
 pub use cut::{Cut, CutProblem, NodeView};
+pub use splat::AtlasLayout;
 pub use surfels::Surfel;
 pub use view::View;
 
@@ -48,4 +52,17 @@ pub enum ManyLodError {
     /// Sizes that do not fit together.
     #[error("{0}")]
     Mismatch(String),
+    /// A GPU list ran out of room.
+    #[error("{what}: {needed} node-views do not fit the capacity of {capacity}; raise it")]
+    Capacity {
+        /// Which list.
+        what: &'static str,
+        /// Node-views appended.
+        needed: u64,
+        /// Capacity.
+        capacity: u64,
+    },
+    /// The GPU failed.
+    #[error(transparent)]
+    Gpu(#[from] ::gpu::GpuError),
 }

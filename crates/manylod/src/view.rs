@@ -7,7 +7,7 @@
 //! the tree (children lie inside their parent, their cones inside its cone): the property the
 //! cut definition needs.
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::{
     ManyLodError,
@@ -118,13 +118,10 @@ impl View {
         // Angular radius of the sphere seen from the eye.
         let beta = (node.radius / dist).asin();
         let dir = to / dist;
-        let visible = match *self {
-            View::Paraboloid { normal, .. } => {
-                // Any part of the sphere above the plane through the view's position.
-                normal.dot(node.center - self.eye()) > -node.radius
-            }
-            View::Perspective { view_proj, .. } => sphere_in_frustum(view_proj, node),
-        };
+        let visible = self
+            .planes()
+            .iter()
+            .all(|p| p.truncate().dot(node.center) + p.w >= -node.radius);
         // Back-facing: every normal makes more than 90° with every direction towards the eye.
         let facing_angle = angle_between(-dir, node.axis);
         let back_facing = facing_angle - node.angle - beta > std::f32::consts::FRAC_PI_2;
@@ -135,20 +132,180 @@ impl View {
     }
 }
 
-/// Whether the sphere meets the frustum of `view_proj` (depth 0..1), by its six planes.
-fn sphere_in_frustum(m: Mat4, node: &Node) -> bool {
-    let rows = [m.row(0), m.row(1), m.row(2), m.row(3)];
-    let planes = [
-        rows[3] + rows[0],
-        rows[3] - rows[0],
-        rows[3] + rows[1],
-        rows[3] - rows[1],
-        rows[2],
-        rows[3] - rows[2],
-    ];
-    planes.iter().all(|p| {
-        let n = p.truncate();
-        let len = n.length();
-        len == 0.0 || (n.dot(node.center) + p.w) / len >= -node.radius
-    })
+impl View {
+    /// The unit planes a visible sphere must not lie entirely behind: the paraboloid's base
+    /// plane, or the frustum's six (depth 0..1); unused planes are zero.
+    pub fn planes(&self) -> [Vec4; 6] {
+        match *self {
+            View::Paraboloid {
+                position, normal, ..
+            } => {
+                let mut p = [Vec4::ZERO; 6];
+                p[0] = normal.extend(-normal.dot(position));
+                p
+            }
+            View::Perspective { view_proj: m, .. } => {
+                let r = [m.row(0), m.row(1), m.row(2), m.row(3)];
+                [
+                    r[3] + r[0],
+                    r[3] - r[0],
+                    r[3] + r[1],
+                    r[3] - r[1],
+                    r[2],
+                    r[3] - r[2],
+                ]
+                .map(|p| {
+                    let len = p.truncate().length();
+                    if len > 0.0 { p / len } else { Vec4::ZERO }
+                })
+            }
+        }
+    }
+
+    /// World → view: the perspective `view_proj`, or for a paraboloid the rigid transform to
+    /// its frame (tangent, bitangent, normal; origin at the position).
+    pub fn transform(&self) -> Mat4 {
+        match *self {
+            View::Paraboloid {
+                position, normal, ..
+            } => {
+                let (t, b) = paraboloid_frame(normal);
+                Mat4::from_cols(
+                    Vec4::new(t.x, b.x, normal.x, 0.0),
+                    Vec4::new(t.y, b.y, normal.y, 0.0),
+                    Vec4::new(t.z, b.z, normal.z, 0.0),
+                    Vec4::new(
+                        -t.dot(position),
+                        -b.dot(position),
+                        -normal.dot(position),
+                        1.0,
+                    ),
+                )
+            }
+            View::Perspective { view_proj, .. } => view_proj,
+        }
+    }
+
+    /// Tile size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        match *self {
+            View::Paraboloid { size, .. } => (size, size),
+            View::Perspective { size, .. } => size,
+        }
+    }
+
+    /// The view as the GPU kernels read it.
+    pub fn gpu(&self) -> GpuView {
+        let (w, h) = self.size();
+        GpuView {
+            planes: self.planes().map(|p| p.to_array()),
+            transform: self.transform().to_cols_array_2d(),
+            eye: self.eye().to_array(),
+            kind: match self {
+                View::Paraboloid { .. } => PARABOLOID,
+                View::Perspective { .. } => PERSPECTIVE,
+            },
+            size: [w as f32, h as f32],
+            pixels_per_radian: self.pixels_per_radian(),
+            _pad: 0.0,
+        }
+    }
+
+    /// Where a node's disc lands in the view's tile: centre in pixels, radius in pixels (at
+    /// least [`MIN_SPLAT_RADIUS`], at most [`MAX_SPLAT_RADIUS`]) and depth in `[0, 1]`
+    /// (paraboloid: distance / `far`; perspective: NDC depth). `None` when the centre is not
+    /// in front of the view or the eye is inside the sphere. Mirrored by `splat.wgsl`.
+    pub fn splat(&self, node: &Node, far: f32) -> Option<Splat> {
+        let (w, h) = self.size();
+        let (center, radius, depth) = match *self {
+            View::Paraboloid { .. } => {
+                let local = self.transform().transform_point3(node.center);
+                let dist = local.length();
+                if dist <= node.radius || local.z <= 0.0 {
+                    return None;
+                }
+                let d = local / dist;
+                let uv = Vec2::new(d.x, d.y) / (1.0 + d.z);
+                let beta = (node.radius / dist).asin();
+                (
+                    (uv * 0.5 + 0.5) * w as f32,
+                    beta * (w as f32 * 0.5) / (1.0 + d.z),
+                    dist / far,
+                )
+            }
+            View::Perspective { view_proj, .. } => {
+                let clip = view_proj * node.center.extend(1.0);
+                let dist = node.center.distance(self.eye());
+                if clip.w <= 0.0 || dist <= node.radius {
+                    return None;
+                }
+                let ndc = clip.truncate() / clip.w;
+                (
+                    Vec2::new(
+                        (ndc.x * 0.5 + 0.5) * w as f32,
+                        (0.5 - ndc.y * 0.5) * h as f32,
+                    ),
+                    (node.radius / dist).asin() * self.pixels_per_radian(),
+                    ndc.z,
+                )
+            }
+        };
+        Some(Splat {
+            center,
+            radius: radius.clamp(MIN_SPLAT_RADIUS, MAX_SPLAT_RADIUS),
+            depth: depth.clamp(0.0, 1.0),
+        })
+    }
+}
+
+/// The tangent and bitangent of a paraboloid view with unit `normal` (a fixed choice the GPU
+/// shares through [`View::transform`]).
+pub fn paraboloid_frame(normal: Vec3) -> (Vec3, Vec3) {
+    let helper = if normal.z.abs() < 0.9 {
+        Vec3::Z
+    } else {
+        Vec3::X
+    };
+    let t = helper.cross(normal).normalize();
+    (t, normal.cross(t))
+}
+
+/// A disc in a view's tile (pixels) with its depth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Splat {
+    /// Centre in tile pixels (x right, y down).
+    pub center: Vec2,
+    /// Radius in pixels.
+    pub radius: f32,
+    /// Depth in `[0, 1]`.
+    pub depth: f32,
+}
+
+/// Smallest splat radius: a disc of √½ px covers at least the pixel centre nearest to it.
+pub const MIN_SPLAT_RADIUS: f32 = std::f32::consts::FRAC_1_SQRT_2;
+/// Largest splat radius in pixels (nodes near a view are leaves bigger than ε).
+pub const MAX_SPLAT_RADIUS: f32 = 16.0;
+
+/// [`View::gpu`]'s kind tag of a paraboloid view.
+pub const PARABOLOID: u32 = 0;
+/// [`View::gpu`]'s kind tag of a perspective view.
+pub const PERSPECTIVE: u32 = 1;
+
+/// A view in the layout of `common.wgsl` (`View`, 192 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuView {
+    /// [`View::planes`].
+    pub planes: [[f32; 4]; 6],
+    /// [`View::transform`] (columns).
+    pub transform: [[f32; 4]; 4],
+    /// Centre of projection.
+    pub eye: [f32; 3],
+    /// [`PARABOLOID`] or [`PERSPECTIVE`].
+    pub kind: u32,
+    /// Tile size in pixels.
+    pub size: [f32; 2],
+    /// [`View::pixels_per_radian`].
+    pub pixels_per_radian: f32,
+    _pad: f32,
 }

@@ -57,13 +57,7 @@ fn empty(
     size: u64,
     usage: wgpu::BufferUsages,
 ) -> Result<wgpu::Buffer, SubdivError> {
-    transfer::check_buffer_size(device, label, size, usage)?;
-    Ok(device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: size.max(16),
-        usage,
-        mapped_at_creation: false,
-    }))
+    Ok(transfer::buffer(device, label, size, usage)?)
 }
 
 fn bind(
@@ -71,18 +65,7 @@ fn bind(
     pipeline: &wgpu::ComputePipeline,
     entries: &[(u32, &wgpu::Buffer)],
 ) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = entries
-        .iter()
-        .map(|&(binding, b)| wgpu::BindGroupEntry {
-            binding,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("subdiv-bft"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &entries,
-    })
+    shader::bind_buffers(device, "subdiv-bft", pipeline, entries)
 }
 
 /// One tessellation level's output: a vertex and index buffer ready to draw (positions and

@@ -1,0 +1,693 @@
+//! The GPU kernels (§3.7): refit (`refit.wgsl`), many-view cuts with ping-pong active lists
+//! and indirect dispatch (`cut.wgsl`), splatting into the atlas and the in-place variant
+//! (`splat.wgsl`). Everything for one frame is recorded into the caller's encoder; counts
+//! never come back to the CPU between iterations — each pass's size is written on the GPU by
+//! a one-thread `prepare` dispatch and used as the next pass's indirect dispatch.
+//!
+//! A frame's cut lands in one of two cut lists; the next incremental or lazy frame starts from
+//! it and writes the other one.
+//!
+//! ```no_run
+//! use manylod::{AtlasLayout, Bsh, View, gpu::{CutKind, GpuManyLod}};
+//! # let gpu = gpu::Gpu::from_env()?;
+//! # let (points, normals) = (vec![glam::Vec3::ZERO; 1024], vec![glam::Vec3::Y; 1024]);
+//! let bsh = Bsh::build(&points, &normals, 0.01)?;
+//! let views = vec![View::Paraboloid { position: glam::Vec3::Y, normal: -glam::Vec3::Y, size: 32 }];
+//! let layout = AtlasLayout::new(views.len(), 32, 10.0);
+//! let mut m = GpuManyLod::new(&gpu.device, &bsh, &views, 1.0, layout, 1 << 16)?;
+//! let mut encoder = gpu.device.create_command_encoder(&Default::default());
+//! m.encode_cut(&mut encoder, CutKind::Basic, None);
+//! m.encode_splat(&mut encoder, None);
+//! gpu.queue.submit([encoder.finish()]);
+//! let cut = m.read_cut(&gpu)?;
+//! let atlas = m.read_atlas(&gpu)?;
+//! # Ok::<(), manylod::ManyLodError>(())
+//! ```
+
+use ::gpu::{Gpu, PassTimer, shader, transfer};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use crate::{
+    AtlasLayout, Bsh, Cut, ManyLodError, Node, NodeView, Surfel, View,
+    cut::{CULLED, CutProblem},
+    surfels::check_mesh,
+};
+
+/// Which cut a frame computes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CutKind {
+    /// From the roots, to convergence.
+    Basic,
+    /// From the previous frame's cut, to convergence.
+    Incremental,
+    /// From the previous frame's cut, `q` iterations; leftover node-views join the cut.
+    Lazy(u32),
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Problem {
+    epsilon: f32,
+    view_count: u32,
+    leaf_start: u32,
+    _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct PassParams {
+    in_slot: u32,
+    out_slot: u32,
+    cut_slot: u32,
+    mode: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct AtlasParams {
+    width: u32,
+    tile: u32,
+    columns: u32,
+    cut_slot: u32,
+    far: f32,
+    _pad: [u32; 3],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct RefitParams {
+    first: u32,
+    count: u32,
+    leaves: u32,
+    leaf_radius: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuSurfel {
+    s: f32,
+    t: f32,
+    triangle: u32,
+}
+
+// `cut.wgsl` modes and counter slots.
+const LIST: u32 = 0;
+const ROOTS: u32 = 1;
+const FLUSH: u32 = 2;
+const COUNT: u32 = 3;
+const BEGIN: u32 = 0x100;
+const LIST_SLOTS: [u32; 2] = [0, 1];
+const CUT_SLOTS: [u32; 2] = [2, 3];
+const SCRATCH: u32 = 4;
+const OVERFLOW: usize = 8;
+const PROCESSED: usize = 9;
+const ITERATIONS: usize = 10;
+const COUNTERS: u64 = 16 * 4;
+const WORKGROUP: u32 = 256;
+const MAX_GROUPS_X: u32 = 32_768;
+const NODE_VIEW: u64 = 8;
+
+const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+    .union(wgpu::BufferUsages::COPY_SRC)
+    .union(wgpu::BufferUsages::COPY_DST);
+
+/// A pass of `cut.wgsl`: its parameters and bind groups for `step` and `prepare`.
+struct CutPass {
+    step: wgpu::BindGroup,
+    prepare: wgpu::BindGroup,
+}
+
+/// `(x, y)` workgroups covering `n` threads of a 256-wide kernel.
+fn groups(n: u32) -> (u32, u32) {
+    let g = n.div_ceil(WORKGROUP);
+    (g.min(MAX_GROUPS_X), g.div_ceil(MAX_GROUPS_X))
+}
+
+fn uniform(device: &wgpu::Device, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, ManyLodError> {
+    Ok(transfer::buffer_init(
+        device,
+        label,
+        bytes,
+        wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+    )?)
+}
+
+/// The GPU side of one hierarchy and one set of views: nodes, views, active and cut lists,
+/// the atlas, and the pipelines.
+pub struct GpuManyLod {
+    prepare: wgpu::ComputePipeline,
+    step: wgpu::ComputePipeline,
+    clear: wgpu::ComputePipeline,
+    splat: wgpu::ComputePipeline,
+    inplace: wgpu::ComputePipeline,
+    /// Node bounds in heap order (`Node`, 32 bytes); the refit writes them.
+    pub nodes: wgpu::Buffer,
+    views: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    dispatch: wgpu::Buffer,
+    cuts: [wgpu::Buffer; 2],
+    /// Packed depths of the atlas, row-major `u32` (`STORAGE`): the VPL shadow maps.
+    pub atlas: wgpu::Buffer,
+    roots: [CutPass; 2],
+    start: [CutPass; 2],
+    steps: [[CutPass; 2]; 2],
+    flush: [[CutPass; 2]; 2],
+    count: [wgpu::BindGroup; 2],
+    splats: [wgpu::BindGroup; 2],
+    inplace_bind: wgpu::BindGroup,
+    clear_bind: wgpu::BindGroup,
+    depth: u32,
+    view_count: u32,
+    capacity: u64,
+    layout: AtlasLayout,
+    atlas_pixels: u32,
+    /// Cut list of the last frame (0 or 1) and the list slot its leftovers are in.
+    current: usize,
+    leftover: u32,
+}
+
+impl GpuManyLod {
+    /// Uploads `bsh` and `views` (threshold `epsilon`, atlas `layout`) with room for `capacity`
+    /// node-views in each active and cut list.
+    pub fn new(
+        device: &wgpu::Device,
+        bsh: &Bsh,
+        views: &[View],
+        epsilon: f32,
+        layout: AtlasLayout,
+        capacity: usize,
+    ) -> Result<Self, ManyLodError> {
+        CutProblem {
+            bsh,
+            views,
+            epsilon,
+        }
+        .check()?;
+        layout.check(views)?;
+        if views.is_empty() || capacity < views.len().max(2) {
+            return Err(ManyLodError::Mismatch(format!(
+                "{} views with a list capacity of {capacity}",
+                views.len()
+            )));
+        }
+        let cut_module = shader::module(device, "manylod/cut.wgsl")?;
+        let splat_module = shader::module(device, "manylod/splat.wgsl")?;
+        let prepare = shader::compute_pipeline(device, &cut_module, "prepare", &[]);
+        let step = shader::compute_pipeline(device, &cut_module, "step", &[]);
+        let clear = shader::compute_pipeline(device, &splat_module, "clear", &[]);
+        let splat = shader::compute_pipeline(device, &splat_module, "splat", &[]);
+        let inplace = shader::compute_pipeline(device, &splat_module, "inplace", &[]);
+
+        let nodes = transfer::buffer_init(
+            device,
+            "manylod nodes",
+            bytemuck::cast_slice(&bsh.nodes),
+            STORAGE,
+        )?;
+        let gpu_views: Vec<_> = views.iter().map(View::gpu).collect();
+        let views_buffer = transfer::buffer_init(
+            device,
+            "manylod views",
+            bytemuck::cast_slice(&gpu_views),
+            STORAGE,
+        )?;
+        let problem = uniform(
+            device,
+            "manylod problem",
+            bytemuck::bytes_of(&Problem {
+                epsilon,
+                view_count: views.len() as u32,
+                leaf_start: bsh.leaf_count() as u32 - 1,
+                _pad: 0,
+            }),
+        )?;
+        let counters = transfer::buffer(device, "manylod counters", COUNTERS, STORAGE)?;
+        let dispatch = transfer::buffer(
+            device,
+            "manylod dispatch",
+            12,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+        )?;
+        let bytes = capacity as u64 * NODE_VIEW;
+        let list = |label| transfer::buffer(device, label, bytes, STORAGE);
+        let lists = [list("manylod active 0")?, list("manylod active 1")?];
+        let cuts = [list("manylod cut 0")?, list("manylod cut 1")?];
+        let (w, h) = layout.size();
+        let atlas_pixels = w * h;
+        let atlas = transfer::buffer(
+            device,
+            "manylod atlas",
+            u64::from(atlas_pixels) * 4,
+            STORAGE,
+        )?;
+        let slot_buffer = |slot: u32| match slot {
+            0 | 1 => &lists[slot as usize],
+            _ => &cuts[slot as usize - 2],
+        };
+        let params = |in_slot: u32, out_slot: u32, cut_slot: u32, mode: u32| {
+            uniform(
+                device,
+                "manylod pass",
+                bytemuck::bytes_of(&PassParams {
+                    in_slot,
+                    out_slot,
+                    cut_slot,
+                    mode,
+                }),
+            )
+        };
+        let prepare_bind = |params: &wgpu::Buffer| {
+            shader::bind_buffers(
+                device,
+                "manylod prepare",
+                &prepare,
+                &[(2, &problem), (3, params), (4, &counters), (8, &dispatch)],
+            )
+        };
+        let make_pass = |in_slot: u32, out_slot: u32, cut_slot: u32, mode: u32| {
+            let params = params(in_slot, out_slot, cut_slot, mode)?;
+            let input = if mode & 0xFF == ROOTS {
+                &lists[1]
+            } else {
+                slot_buffer(in_slot)
+            };
+            Ok::<_, ManyLodError>(CutPass {
+                step: shader::bind_buffers(
+                    device,
+                    "manylod step",
+                    &step,
+                    &[
+                        (0, &nodes),
+                        (1, &views_buffer),
+                        (2, &problem),
+                        (3, &params),
+                        (4, &counters),
+                        (5, input),
+                        (6, slot_buffer(out_slot)),
+                        (7, slot_buffer(cut_slot)),
+                    ],
+                ),
+                prepare: prepare_bind(&params),
+            })
+        };
+        let [l0, l1] = LIST_SLOTS;
+        let roots = [0, 1].map(|c| make_pass(0, l0, CUT_SLOTS[c], ROOTS | BEGIN));
+        let start = [0, 1].map(|c| make_pass(CUT_SLOTS[1 - c], l0, CUT_SLOTS[c], LIST | BEGIN));
+        let steps = [l0, l1]
+            .map(|p| [0, 1].map(|c| make_pass(p, LIST_SLOTS[1 - p as usize], CUT_SLOTS[c], LIST)));
+        let flush = [l0, l1]
+            .map(|p| [0, 1].map(|c| make_pass(p, LIST_SLOTS[1 - p as usize], CUT_SLOTS[c], FLUSH)));
+        let count = [0, 1]
+            .map(|c| params(CUT_SLOTS[c], SCRATCH, CUT_SLOTS[c], COUNT).map(|p| prepare_bind(&p)));
+        let atlas_params = |cut_slot| {
+            uniform(
+                device,
+                "manylod atlas",
+                bytemuck::bytes_of(&AtlasParams {
+                    width: w,
+                    tile: layout.tile,
+                    columns: layout.columns,
+                    cut_slot,
+                    far: layout.far,
+                    _pad: [0; 3],
+                }),
+            )
+        };
+        let splat_params = [atlas_params(CUT_SLOTS[0])?, atlas_params(CUT_SLOTS[1])?];
+        let splats = [0, 1].map(|c| {
+            shader::bind_buffers(
+                device,
+                "manylod splat",
+                &splat,
+                &[
+                    (0, &nodes),
+                    (1, &views_buffer),
+                    (2, &splat_params[c]),
+                    (3, &counters),
+                    (4, &cuts[c]),
+                    (5, &atlas),
+                ],
+            )
+        });
+        let inplace_bind = shader::bind_buffers(
+            device,
+            "manylod inplace",
+            &inplace,
+            &[
+                (0, &nodes),
+                (1, &views_buffer),
+                (2, &splat_params[0]),
+                (3, &counters),
+                (5, &atlas),
+                (6, &problem),
+            ],
+        );
+        let clear_bind = shader::bind_buffers(device, "manylod clear", &clear, &[(5, &atlas)]);
+        let unwrap2 = |[a, b]: [Result<CutPass, ManyLodError>; 2]| Ok::<_, ManyLodError>([a?, b?]);
+        let [s0, s1] = steps;
+        let [f0, f1] = flush;
+        let [c0, c1] = count;
+        Ok(Self {
+            prepare,
+            step,
+            clear,
+            splat,
+            inplace,
+            nodes,
+            views: views_buffer,
+            counters,
+            atlas,
+            roots: unwrap2(roots)?,
+            start: unwrap2(start)?,
+            steps: [unwrap2(s0)?, unwrap2(s1)?],
+            flush: [unwrap2(f0)?, unwrap2(f1)?],
+            count: [c0?, c1?],
+            splats,
+            inplace_bind,
+            clear_bind,
+            depth: bsh.depth,
+            view_count: views.len() as u32,
+            capacity: capacity as u64,
+            layout,
+            atlas_pixels,
+            current: 1,
+            leftover: l0,
+            dispatch,
+            cuts,
+        })
+    }
+}
+
+impl GpuManyLod {
+    /// Replaces the views (same count; for moving VPLs). The next incremental or lazy frame
+    /// still starts from the last cut.
+    pub fn set_views(&self, queue: &wgpu::Queue, views: &[View]) -> Result<(), ManyLodError> {
+        if views.len() != self.view_count as usize {
+            return Err(ManyLodError::Mismatch(format!(
+                "{} views for a set-up of {}",
+                views.len(),
+                self.view_count
+            )));
+        }
+        self.layout.check(views)?;
+        let gpu_views: Vec<_> = views.iter().map(View::gpu).collect();
+        queue.write_buffer(&self.views, 0, bytemuck::cast_slice(&gpu_views));
+        Ok(())
+    }
+
+    /// The atlas layout.
+    pub fn layout(&self) -> AtlasLayout {
+        self.layout
+    }
+
+    /// Records one frame's cut into the other cut list (one compute pass, timed as `cut`):
+    /// `depth + 1` indirect iterations at most (each one `prepare` + `step`), then a flush.
+    pub fn encode_cut(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        kind: CutKind,
+        timer: Option<&PassTimer>,
+    ) {
+        let c = 1 - self.current;
+        self.current = c;
+        // Statistics and the overflow flag restart every frame.
+        encoder.clear_buffer(&self.counters, 8 * 4, Some(8 * 4));
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("manylod cut"),
+            timestamp_writes: timer.and_then(|t| t.compute_pass("cut")),
+        });
+        let run = |pass: &mut wgpu::ComputePass, p: &CutPass| {
+            pass.set_pipeline(&self.prepare);
+            pass.set_bind_group(0, &p.prepare, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+            pass.set_pipeline(&self.step);
+            pass.set_bind_group(0, &p.step, &[]);
+            pass.dispatch_workgroups_indirect(&self.dispatch, 0);
+        };
+        let (first, more) = match kind {
+            CutKind::Basic => (&self.roots[c], self.depth),
+            CutKind::Incremental => (&self.start[c], self.depth),
+            CutKind::Lazy(q) => (&self.start[c], q.saturating_sub(1)),
+        };
+        run(&mut pass, first);
+        let mut p = 0;
+        for _ in 0..more {
+            run(&mut pass, &self.steps[p][c]);
+            p = 1 - p;
+        }
+        run(&mut pass, &self.flush[p][c]);
+        self.leftover = LIST_SLOTS[p];
+    }
+
+    /// Records the splat of the last cut into the cleared atlas (one pass, timed as `splat`).
+    pub fn encode_splat(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
+        let c = self.current;
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("manylod splat"),
+            timestamp_writes: timer.and_then(|t| t.compute_pass("splat")),
+        });
+        self.encode_clear(&mut pass);
+        pass.set_pipeline(&self.prepare);
+        pass.set_bind_group(0, &self.count[c], &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipeline(&self.splat);
+        pass.set_bind_group(0, &self.splats[c], &[]);
+        pass.dispatch_workgroups_indirect(&self.dispatch, 0);
+    }
+
+    /// Records the in-place variant (§3.7.2): basic cuts found and rasterised by one workgroup
+    /// per view, no cut list (one pass, timed as `in-place`). Overflow of the workgroup stack
+    /// shows in [`GpuManyLod::read_atlas`].
+    pub fn encode_inplace(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
+        encoder.clear_buffer(&self.counters, 8 * 4, Some(8 * 4));
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("manylod in-place"),
+            timestamp_writes: timer.and_then(|t| t.compute_pass("in-place")),
+        });
+        self.encode_clear(&mut pass);
+        pass.set_pipeline(&self.inplace);
+        pass.set_bind_group(0, &self.inplace_bind, &[]);
+        let (x, y) = (
+            self.view_count.min(MAX_GROUPS_X),
+            self.view_count.div_ceil(MAX_GROUPS_X),
+        );
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    fn encode_clear(&self, pass: &mut wgpu::ComputePass) {
+        let (x, y) = groups(self.atlas_pixels);
+        pass.set_pipeline(&self.clear);
+        pass.set_bind_group(0, &self.clear_bind, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    fn read_counters(&self, gpu: &Gpu) -> Result<Vec<u32>, ManyLodError> {
+        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.counters)?;
+        Ok(bytemuck::cast_slice(&bytes).to_vec())
+    }
+
+    fn check_overflow(&self, counters: &[u32], what: &'static str) -> Result<(), ManyLodError> {
+        if counters[OVERFLOW] > 0 {
+            return Err(ManyLodError::Capacity {
+                what,
+                needed: self.capacity + u64::from(counters[OVERFLOW]),
+                capacity: self.capacity,
+            });
+        }
+        Ok(())
+    }
+
+    /// Reads the last cut back (culled flags removed; for tests and pictures), with its
+    /// iterations and work. Errors when a list overflowed.
+    pub fn read_cut(&self, gpu: &Gpu) -> Result<Cut, ManyLodError> {
+        let counters = self.read_counters(gpu)?;
+        self.check_overflow(&counters, "active or cut list")?;
+        let n = counters[CUT_SLOTS[self.current] as usize] as usize;
+        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.cuts[self.current])?;
+        let raw: &[[u32; 2]] = bytemuck::cast_slice(&bytes);
+        Ok(Cut {
+            node_views: raw[..n]
+                .iter()
+                .map(|&[node, view]| NodeView {
+                    node: node & !CULLED,
+                    view,
+                })
+                .collect(),
+            iterations: counters[ITERATIONS],
+            processed: u64::from(counters[PROCESSED]),
+            converged: counters[self.leftover as usize] == 0,
+        })
+    }
+
+    /// Reads the atlas back (row-major packed depths). Errors when the in-place stack
+    /// overflowed.
+    pub fn read_atlas(&self, gpu: &Gpu) -> Result<Vec<u32>, ManyLodError> {
+        self.check_overflow(&self.read_counters(gpu)?, "in-place stack")?;
+        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.atlas)?;
+        Ok(bytemuck::cast_slice(&bytes).to_vec())
+    }
+
+    /// Reads the node bounds back.
+    pub fn read_nodes(&self, gpu: &Gpu) -> Result<Vec<Node>, ManyLodError> {
+        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.nodes)?;
+        Ok(bytemuck::cast_slice(&bytes).to_vec())
+    }
+}
+
+/// The GPU refit (§3.5.3): surfels evaluated on the deformed mesh into the leaves, then one
+/// `merge` dispatch per level, bottom-up, into [`GpuManyLod::nodes`].
+pub struct GpuRefit {
+    leaves: wgpu::ComputePipeline,
+    merge: wgpu::ComputePipeline,
+    /// Mesh positions (`vec4<f32>`, `COPY_DST`): rewrite them after deformation.
+    pub positions: wgpu::Buffer,
+    leaves_bind: wgpu::BindGroup,
+    /// One bind group per level `l = depth − 1 … 0` with its node count.
+    levels: Vec<(wgpu::BindGroup, u32)>,
+    leaf_count: u32,
+    vertex_count: usize,
+}
+
+impl GpuRefit {
+    /// Sets up the refit of `m`'s nodes for `bsh` built over `surfels` of the mesh
+    /// `positions`/`indices`.
+    pub fn new(
+        device: &wgpu::Device,
+        m: &GpuManyLod,
+        bsh: &Bsh,
+        surfels: &[Surfel],
+        positions: &[Vec3],
+        indices: &[u32],
+    ) -> Result<Self, ManyLodError> {
+        check_mesh(positions, indices)?;
+        if surfels.len() != bsh.leaf_count() || m.depth != bsh.depth {
+            return Err(ManyLodError::Mismatch(format!(
+                "{} surfels for a tree of {} leaves",
+                surfels.len(),
+                bsh.leaf_count()
+            )));
+        }
+        let triangles = (indices.len() / 3) as u32;
+        if let Some(k) = surfels.iter().position(|s| s.triangle >= triangles) {
+            return Err(ManyLodError::Mismatch(format!(
+                "surfel {k}: triangle out of range"
+            )));
+        }
+        let module = shader::module(device, "manylod/refit.wgsl")?;
+        let leaves = shader::compute_pipeline(device, &module, "leaves", &[]);
+        let merge = shader::compute_pipeline(device, &module, "merge", &[]);
+        let gpu_surfels: Vec<GpuSurfel> = surfels
+            .iter()
+            .map(|s| GpuSurfel {
+                s: s.s,
+                t: s.t,
+                triangle: s.triangle,
+            })
+            .collect();
+        let storage = |label, bytes: &[u8]| {
+            transfer::buffer_init(device, label, bytes, STORAGE).map_err(ManyLodError::from)
+        };
+        let surfel_buffer = storage("manylod surfels", bytemuck::cast_slice(&gpu_surfels))?;
+        let order = storage("manylod order", bytemuck::cast_slice(&bsh.order))?;
+        let position_buffer =
+            storage("manylod positions", bytemuck::cast_slice(&vec4s(positions)))?;
+        let index_buffer = storage("manylod indices", bytemuck::cast_slice(indices))?;
+        let n = bsh.leaf_count() as u32;
+        let params = |first: u32, count: u32| {
+            uniform(
+                device,
+                "manylod refit",
+                bytemuck::bytes_of(&RefitParams {
+                    first,
+                    count,
+                    leaves: n,
+                    leaf_radius: bsh.leaf_radius,
+                }),
+            )
+        };
+        let leaf_params = params(n - 1, n)?;
+        let leaves_bind = shader::bind_buffers(
+            device,
+            "manylod leaves",
+            &leaves,
+            &[
+                (0, &m.nodes),
+                (1, &leaf_params),
+                (2, &surfel_buffer),
+                (3, &order),
+                (4, &position_buffer),
+                (5, &index_buffer),
+            ],
+        );
+        let levels = (0..bsh.depth)
+            .rev()
+            .map(|l| {
+                let p = params((1 << l) - 1, 1 << l)?;
+                Ok((
+                    shader::bind_buffers(
+                        device,
+                        "manylod merge",
+                        &merge,
+                        &[(0, &m.nodes), (1, &p)],
+                    ),
+                    1u32 << l,
+                ))
+            })
+            .collect::<Result<Vec<_>, ManyLodError>>()?;
+        Ok(Self {
+            leaves,
+            merge,
+            positions: position_buffer,
+            leaves_bind,
+            levels,
+            leaf_count: n,
+            vertex_count: positions.len(),
+        })
+    }
+
+    /// Uploads deformed mesh positions (same vertex count).
+    pub fn set_positions(
+        &self,
+        queue: &wgpu::Queue,
+        positions: &[Vec3],
+    ) -> Result<(), ManyLodError> {
+        if positions.len() != self.vertex_count {
+            return Err(ManyLodError::Mismatch(format!(
+                "{} positions for a mesh of {}",
+                positions.len(),
+                self.vertex_count
+            )));
+        }
+        if let Some(index) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(ManyLodError::NonFinite {
+                what: "position",
+                index,
+            });
+        }
+        queue.write_buffer(&self.positions, 0, bytemuck::cast_slice(&vec4s(positions)));
+        Ok(())
+    }
+
+    /// Records the refit (one pass, timed as `refit`).
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("manylod refit"),
+            timestamp_writes: timer.and_then(|t| t.compute_pass("refit")),
+        });
+        let (x, y) = groups(self.leaf_count);
+        pass.set_pipeline(&self.leaves);
+        pass.set_bind_group(0, &self.leaves_bind, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+        pass.set_pipeline(&self.merge);
+        for (bind, count) in &self.levels {
+            let (x, y) = groups(*count);
+            pass.set_bind_group(0, bind, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+    }
+}
+
+fn vec4s(v: &[Vec3]) -> Vec<[f32; 4]> {
+    v.iter().map(|p| [p.x, p.y, p.z, 1.0]).collect()
+}

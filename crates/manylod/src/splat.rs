@@ -1,0 +1,158 @@
+//! Splatting a multi-cut into one atlas of per-view tiles (§3.7.2): every drawn node-view is a
+//! disc ([`View::splat`]) whose covered pixels (pixel centre inside the disc) take the minimum
+//! of a 32-bit packed depth — the FreePipe encoding with the thesis's correction.
+//!
+//! [`pack_depth`]: the depth `d ∈ [0, 1]` is mapped to `m = 0.5 + d/2 ∈ [0.5, 1]`, whose IEEE
+//! bits have sign 0 and exponent 126, so the 23 mantissa bits shifted left by 9 order like `d`;
+//! the low 12 bits are left for colour. The thesis notes that `1.0` (exponent 127) breaks this
+//! (it would pack to 0, the near plane); here `m` is clamped below 1 instead of neglected.
+//! The atlas is cleared to `0xFFFFFFFF` (farther than any depth).
+
+use rayon::prelude::*;
+
+use crate::{Bsh, ManyLodError, NodeView, View, cut::CULLED};
+
+/// Packed value of an empty pixel.
+pub const CLEAR: u32 = 0xFFFF_FFFF;
+
+/// The FreePipe depth word of `depth ∈ [0, 1]` with 12 bits of `colour` (0 for depth only).
+pub fn pack_depth(depth: f32, colour: u32) -> u32 {
+    let m = (0.5 + 0.5 * depth.clamp(0.0, 1.0)).min(f32::from_bits(0x3F7F_FFFF));
+    ((m.to_bits() << 9) & 0xFFFF_F000) | (colour & 0xFFF)
+}
+
+/// Depth of a packed word (20 bits of precision; [`CLEAR`] unpacks to about 1).
+pub fn unpack_depth(word: u32) -> f32 {
+    (f32::from_bits(0x3F00_0000 | (word >> 9)) - 0.5) * 2.0
+}
+
+/// Where views' tiles lie in the atlas: `tile × tile` pixels each, `columns` per row, view `v`
+/// at column `v % columns`, row `v / columns`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AtlasLayout {
+    /// Tile side in pixels.
+    pub tile: u32,
+    /// Tiles per atlas row.
+    pub columns: u32,
+    /// Tile rows.
+    pub rows: u32,
+    /// Distance mapped to depth 1 in paraboloid tiles.
+    pub far: f32,
+}
+
+impl AtlasLayout {
+    /// A square-ish layout for `views` tiles of `tile` pixels.
+    pub fn new(views: usize, tile: u32, far: f32) -> Self {
+        let columns = (views as f64).sqrt().ceil().max(1.0) as u32;
+        Self {
+            tile,
+            columns,
+            rows: (views as u32).div_ceil(columns).max(1),
+            far,
+        }
+    }
+
+    /// Atlas width and height in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        (self.columns * self.tile, self.rows * self.tile)
+    }
+
+    /// Checks that every view is a `tile × tile` view with a slot, and `far` is positive.
+    pub fn check(&self, views: &[View]) -> Result<(), ManyLodError> {
+        if self.tile == 0 || (self.columns as usize) * (self.rows as usize) < views.len() {
+            return Err(ManyLodError::Mismatch(format!(
+                "an atlas of {}×{} tiles of {} px cannot hold {} views",
+                self.columns,
+                self.rows,
+                self.tile,
+                views.len()
+            )));
+        }
+        if !(self.far.is_finite() && self.far > 0.0) {
+            return Err(ManyLodError::Mismatch(format!("far distance {}", self.far)));
+        }
+        for (index, v) in views.iter().enumerate() {
+            v.check(index)?;
+            if v.size() != (self.tile, self.tile) {
+                return Err(ManyLodError::View {
+                    index,
+                    problem: format!("size {:?} in an atlas of {} px tiles", v.size(), self.tile),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The CPU reference splat: the drawn node-views of `cut` (culled ones, `c = 0`, skipped) into a
+/// cleared atlas, row-major `u32` packed depths. Tiles are filled in parallel.
+pub fn splat(
+    bsh: &Bsh,
+    views: &[View],
+    cut: &[NodeView],
+    layout: &AtlasLayout,
+) -> Result<Vec<u32>, ManyLodError> {
+    layout.check(views)?;
+    let tile = layout.tile as usize;
+    let mut per_view: Vec<Vec<u32>> = vec![Vec::new(); views.len()];
+    for nv in cut {
+        let node = nv.node & !CULLED;
+        if node as usize >= bsh.nodes.len() || nv.view as usize >= views.len() {
+            return Err(ManyLodError::Mismatch(format!(
+                "{nv:?} outside {} nodes × {} views",
+                bsh.nodes.len(),
+                views.len()
+            )));
+        }
+        per_view[nv.view as usize].push(node);
+    }
+    let tiles: Vec<Vec<u32>> = per_view
+        .par_iter()
+        .zip(views)
+        .map(|(nodes, view)| {
+            let mut t = vec![CLEAR; tile * tile];
+            for node in nodes.iter().map(|&n| &bsh.nodes[n as usize]) {
+                let Some(s) = view
+                    .splat(node, layout.far)
+                    .filter(|_| view.criterion(node) > 0.0)
+                else {
+                    continue;
+                };
+                let word = pack_depth(s.depth, 0);
+                let (lo_x, hi_x) = pixel_span(s.center.x, s.radius, tile);
+                let (lo_y, hi_y) = pixel_span(s.center.y, s.radius, tile);
+                for y in lo_y..hi_y {
+                    for x in lo_x..hi_x {
+                        let dx = x as f32 + 0.5 - s.center.x;
+                        let dy = y as f32 + 0.5 - s.center.y;
+                        if dx * dx + dy * dy <= s.radius * s.radius {
+                            let p = &mut t[y * tile + x];
+                            *p = (*p).min(word);
+                        }
+                    }
+                }
+            }
+            t
+        })
+        .collect();
+    let (w, h) = layout.size();
+    let mut atlas = vec![CLEAR; (w * h) as usize];
+    for (v, t) in tiles.iter().enumerate() {
+        let (ox, oy) = (
+            (v as u32 % layout.columns) as usize * tile,
+            (v as u32 / layout.columns) as usize * tile,
+        );
+        for (y, row) in t.chunks_exact(tile).enumerate() {
+            let start = (oy + y) * w as usize + ox;
+            atlas[start..start + tile].copy_from_slice(row);
+        }
+    }
+    Ok(atlas)
+}
+
+/// Pixels `lo..hi` (clipped to `0..tile`) whose centres may lie within `radius` of `c`.
+fn pixel_span(c: f32, radius: f32, tile: usize) -> (usize, usize) {
+    let lo = (c - radius - 0.5).ceil().max(0.0);
+    let hi = (c + radius - 0.5).floor() + 1.0;
+    (lo as usize, (hi.max(0.0) as usize).min(tile))
+}

@@ -1,0 +1,208 @@
+//! GPU kernels against the CPU reference: refit bounds, cut sets (basic, incremental, lazy),
+//! atlas depths (list-based splat and the in-place variant), capacity errors.
+
+mod common;
+
+use common::{scene, sorted, tree, views_in_tiles};
+use glam::Vec3;
+use manylod::{
+    AtlasLayout, Bsh, CutProblem, ManyLodError,
+    bsh::angle_between,
+    cut::{basic, refine},
+    gpu::{CutKind, GpuManyLod, GpuRefit},
+    splat::{self, CLEAR},
+    surfels,
+};
+
+const TILE: u32 = 32;
+const EPSILON: f32 = 3.0;
+
+fn setup(bsh: &Bsh, angle: f32, capacity: usize) -> Option<(&'static gpu::Gpu, GpuManyLod)> {
+    let gpu = gpu::test_gpu()?;
+    let v = views_in_tiles(angle, Some(TILE));
+    let layout = AtlasLayout::new(v.len(), TILE, 12.0);
+    let m = GpuManyLod::new(&gpu.device, bsh, &v, EPSILON, layout, capacity).expect("set-up");
+    Some((gpu, m))
+}
+
+fn run_cut(gpu: &gpu::Gpu, m: &mut GpuManyLod, kind: CutKind) -> manylod::Cut {
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    m.encode_cut(&mut encoder, kind, None);
+    gpu.queue.submit([encoder.finish()]);
+    m.read_cut(gpu).expect("cut")
+}
+
+/// The deformation: a twist around y and a wave, moving every vertex.
+fn deform(p: &[Vec3]) -> Vec<Vec3> {
+    p.iter()
+        .map(|q| {
+            let a = 0.3 * q.y;
+            Vec3::new(
+                q.x * a.cos() - q.z * a.sin(),
+                q.y + 0.1 * (2.0 * q.x).sin(),
+                q.x * a.sin() + q.z * a.cos(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn refit_matches_the_cpu() {
+    let (p, i) = scene();
+    let count = 1 << 12;
+    let s = surfels::sample(&p, &i, count, 7).expect("surfels");
+    let (pts, nrm) = surfels::evaluate(&s, &p, &i);
+    let mut bsh = Bsh::build(&pts, &nrm, surfels::disc_radius(&p, &i, count)).expect("tree");
+    let Some((gpu, m)) = setup(&bsh, 0.0, 1 << 16) else {
+        return;
+    };
+    let refit = GpuRefit::new(&gpu.device, &m, &bsh, &s, &p, &i).expect("refit set-up");
+    let moved = deform(&p);
+    refit.set_positions(&gpu.queue, &moved).expect("positions");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    refit.encode(&mut encoder, None);
+    gpu.queue.submit([encoder.finish()]);
+    let got = m.read_nodes(gpu).expect("nodes");
+    let (pts, nrm) = surfels::evaluate(&s, &moved, &i);
+    bsh.refit(&pts, &nrm).expect("cpu refit");
+    assert_eq!(got.len(), bsh.nodes.len());
+    for (k, (g, w)) in got.iter().zip(&bsh.nodes).enumerate() {
+        let tol = 1e-5 * (1.0 + w.radius);
+        assert!(
+            g.center.distance(w.center) <= tol && (g.radius - w.radius).abs() <= tol,
+            "node {k}: sphere {g:?} vs {w:?}"
+        );
+        assert!(
+            (g.angle - w.angle).abs() <= 1e-4
+                && (w.angle >= 3.14 || angle_between(g.axis, w.axis) <= 1e-3),
+            "node {k}: cone {g:?} vs {w:?}"
+        );
+    }
+    assert_eq!(
+        refit
+            .set_positions(&gpu.queue, &moved[1..])
+            .err()
+            .map(|e| e.to_string()),
+        Some(format!(
+            "{} positions for a mesh of {}",
+            moved.len() - 1,
+            moved.len()
+        ))
+    );
+}
+
+#[test]
+fn cuts_match_the_cpu() {
+    let (bsh, _, _) = tree(1 << 12);
+    let Some((gpu, mut m)) = setup(&bsh, 0.0, 1 << 18) else {
+        return;
+    };
+    let mut last = Vec::new();
+    for frame in 0..6u32 {
+        let v = views_in_tiles(frame as f32 * 10f32.to_radians(), Some(TILE));
+        m.set_views(&gpu.queue, &v).expect("views");
+        let problem = CutProblem {
+            bsh: &bsh,
+            views: &v,
+            epsilon: EPSILON,
+        };
+        // Frame 0 basic, then incremental, lazy (q = 2), incremental, basic, lazy.
+        let (kind, want) = match frame {
+            0 | 4 => (CutKind::Basic, basic(&problem).expect("basic")),
+            2 | 5 => (
+                CutKind::Lazy(2),
+                refine(&problem, last.clone(), Some(2)).expect("lazy"),
+            ),
+            _ => (
+                CutKind::Incremental,
+                refine(&problem, last.clone(), None).expect("inc"),
+            ),
+        };
+        let got = run_cut(gpu, &mut m, kind);
+        assert_eq!(
+            sorted(got.node_views.clone()),
+            sorted(want.node_views.clone()),
+            "frame {frame} {kind:?}"
+        );
+        assert_eq!(
+            (got.iterations, got.processed, got.converged),
+            (want.iterations, want.processed, want.converged),
+            "frame {frame} {kind:?}: iterations, work, converged"
+        );
+        last = want.node_views;
+    }
+}
+
+/// Pixels where the GPU and CPU atlases differ: coverage (one cleared, the other not) and
+/// depth (both written, packed words more than one depth step apart).
+fn differences(a: &[u32], b: &[u32]) -> (usize, usize) {
+    let coverage = a
+        .iter()
+        .zip(b)
+        .filter(|(x, y)| (**x == CLEAR) != (**y == CLEAR))
+        .count();
+    let depth = a
+        .iter()
+        .zip(b)
+        .filter(|(x, y)| **x != CLEAR && **y != CLEAR && (**x >> 12).abs_diff(**y >> 12) > 1)
+        .count();
+    (coverage, depth)
+}
+
+#[test]
+fn atlas_matches_the_cpu() {
+    let (bsh, _, _) = tree(1 << 14);
+    let Some((gpu, mut m)) = setup(&bsh, 0.3, 1 << 19) else {
+        return;
+    };
+    let v = views_in_tiles(0.3, Some(TILE));
+    let layout = m.layout();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    m.encode_cut(&mut encoder, CutKind::Basic, None);
+    m.encode_splat(&mut encoder, None);
+    gpu.queue.submit([encoder.finish()]);
+    let got = m.read_atlas(gpu).expect("atlas");
+    let cut = m.read_cut(gpu).expect("cut");
+    let want = splat::splat(&bsh, &v, &cut.node_views, &layout).expect("cpu splat");
+    let written = want.iter().filter(|&&w| w != CLEAR).count();
+    assert!(
+        written > want.len() / 20,
+        "the views should see the scene: {written} of {} pixels",
+        want.len()
+    );
+    let (coverage, depth) = differences(&got, &want);
+    assert!(
+        coverage <= written / 1000 && depth <= written / 1000,
+        "{coverage} coverage and {depth} depth differences of {written} pixels"
+    );
+
+    // The in-place variant rasterises the same basic cut: the same atlas, bit for bit (atomic
+    // minimum does not depend on the order).
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    m.encode_inplace(&mut encoder, None);
+    gpu.queue.submit([encoder.finish()]);
+    let inplace = m.read_atlas(gpu).expect("in-place atlas");
+    let same = inplace.iter().zip(&got).filter(|(a, b)| a == b).count();
+    assert_eq!(same, got.len(), "in-place vs list-based atlas");
+}
+
+#[test]
+fn overflow_and_bad_input_are_errors() {
+    let (bsh, _, _) = tree(1 << 12);
+    let Some((gpu, mut m)) = setup(&bsh, 0.0, 64) else {
+        return;
+    };
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    m.encode_cut(&mut encoder, CutKind::Basic, None);
+    gpu.queue.submit([encoder.finish()]);
+    assert!(matches!(
+        m.read_cut(gpu),
+        Err(ManyLodError::Capacity { capacity: 64, .. })
+    ));
+    let v = views_in_tiles(0.0, Some(TILE));
+    let layout = AtlasLayout::new(v.len(), TILE, 12.0);
+    let wrong_tiles = views_in_tiles(0.0, Some(16));
+    assert!(GpuManyLod::new(&gpu.device, &bsh, &wrong_tiles, 1.0, layout, 1 << 16).is_err());
+    assert!(GpuManyLod::new(&gpu.device, &bsh, &v, f32::NAN, layout, 1 << 16).is_err());
+    assert!(m.set_views(&gpu.queue, &v[1..]).is_err(), "view count");
+}

@@ -1,0 +1,133 @@
+// Many-view cuts on the GPU (§3.5.2, §3.7, Listing 3.1): one thread per active node-view,
+// ping-pong active lists with atomic appends, the cut appended to a third list. `prepare`
+// (one thread) turns the next pass's input count into its indirect dispatch size, so the
+// iterations run without reading counts back. Mirrors `manylod::cut::refine`, including its
+// merge that climbs to the highest valid ancestor at once.
+// #import manylod/common.wgsl
+
+// What one pass does: read `in_slot`'s list (or the roots), append splits to `out_slot`'s,
+// cut node-views to `cut_slot`'s.
+struct Pass {
+    in_slot: u32,
+    out_slot: u32,
+    cut_slot: u32,
+    mode: u32,
+}
+
+const LIST: u32 = 0u;
+const ROOTS: u32 = 1u;
+// Lazy end of frame: every leftover active node-view joins the cut.
+const FLUSH: u32 = 2u;
+// Only a dispatch size for `in_slot`'s count (the splat).
+const COUNT: u32 = 3u;
+// Roots or the first pass of an incremental frame: the cut starts empty.
+const BEGIN: u32 = 0x100u;
+
+// Counter slots after the lists' counts.
+const OVERFLOW: u32 = 8u;
+const PROCESSED: u32 = 9u;
+const ITERATIONS: u32 = 10u;
+
+const WORKGROUP: u32 = 256u;
+const MAX_GROUPS_X: u32 = 32768u;
+
+@group(0) @binding(0) var<storage, read> nodes: array<Node>;
+@group(0) @binding(1) var<storage, read> views: array<View>;
+@group(0) @binding(2) var<uniform> problem: Problem;
+@group(0) @binding(3) var<uniform> pass_: Pass;
+@group(0) @binding(4) var<storage, read_write> counters: array<atomic<u32>, 16>;
+@group(0) @binding(5) var<storage, read> list_in: array<vec2<u32>>;
+@group(0) @binding(6) var<storage, read_write> list_out: array<vec2<u32>>;
+@group(0) @binding(7) var<storage, read_write> cut: array<vec2<u32>>;
+@group(0) @binding(8) var<storage, read_write> dispatch: array<u32, 3>;
+
+@compute @workgroup_size(1)
+fn prepare() {
+    let mode = pass_.mode & 0xFFu;
+    var n = problem.view_count;
+    if mode != ROOTS {
+        n = atomicLoad(&counters[pass_.in_slot]);
+    }
+    if mode != COUNT {
+        atomicStore(&counters[pass_.out_slot], 0u);
+        if (pass_.mode & BEGIN) != 0u {
+            atomicStore(&counters[pass_.cut_slot], 0u);
+        }
+        if mode != FLUSH {
+            atomicAdd(&counters[PROCESSED], n);
+            atomicAdd(&counters[ITERATIONS], select(0u, 1u, n > 0u));
+        }
+    }
+    let groups = (n + WORKGROUP - 1u) / WORKGROUP;
+    dispatch[0] = min(groups, MAX_GROUPS_X);
+    dispatch[1] = (groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;
+    dispatch[2] = 1u;
+}
+
+fn c_of(node: u32, view: u32) -> f32 {
+    return criterion(views[view], nodes[node]);
+}
+
+fn is_valid(node: u32, view: u32) -> bool {
+    return node >= problem.leaf_start || c_of(node, view) < problem.epsilon;
+}
+
+fn parent_valid(node: u32, view: u32) -> bool {
+    return node > 0u && is_valid((node - 1u) / 2u, view);
+}
+
+fn append_cut(node: u32, view: u32) {
+    let i = atomicAdd(&counters[pass_.cut_slot], 1u);
+    if i < arrayLength(&cut) {
+        cut[i] = vec2<u32>(select(node, node | CULLED, c_of(node, view) == 0.0), view);
+    } else {
+        atomicAdd(&counters[OVERFLOW], 1u);
+    }
+}
+
+@compute @workgroup_size(256)
+fn step(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = gid.x + gid.y * groups.x * WORKGROUP;
+    let mode = pass_.mode & 0xFFu;
+    var nv = vec2<u32>(0u, i);
+    if mode == ROOTS {
+        if i >= problem.view_count {
+            return;
+        }
+    } else {
+        if i >= atomicLoad(&counters[pass_.in_slot]) {
+            return;
+        }
+        nv = list_in[i];
+        nv.x &= ~CULLED;
+    }
+    if mode == FLUSH {
+        append_cut(nv.x, nv.y);
+        return;
+    }
+    if !parent_valid(nv.x, nv.y) {
+        if is_valid(nv.x, nv.y) {
+            append_cut(nv.x, nv.y);
+        } else {
+            // Split: both children become active.
+            let o = atomicAdd(&counters[pass_.out_slot], 2u);
+            if o + 1u < arrayLength(&list_out) {
+                list_out[o] = vec2<u32>(2u * nv.x + 1u, nv.y);
+                list_out[o + 1u] = vec2<u32>(2u * nv.x + 2u, nv.y);
+            } else {
+                atomicAdd(&counters[OVERFLOW], 2u);
+            }
+        }
+        return;
+    }
+    // Merge: climb to the highest valid ancestor; the node-view on its leftmost path brings it.
+    var node = nv.x;
+    var leftmost = true;
+    while parent_valid(node, nv.y) {
+        leftmost = leftmost && (node & 1u) == 1u;
+        node = (node - 1u) / 2u;
+    }
+    if leftmost {
+        append_cut(node, nv.y);
+    }
+}
