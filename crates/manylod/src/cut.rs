@@ -103,6 +103,21 @@ impl CutProblem<'_> {
         self.criterion(nv) > 0.0
     }
 
+    /// The cut with its culled node-views (`c = 0`) flagged [`CULLED`], as the GPU stores it
+    /// and [`crate::splat::splat`] reads it.
+    pub fn flag_culled(&self, cut: &[NodeView]) -> Vec<NodeView> {
+        cut.par_iter()
+            .map(|&nv| NodeView {
+                node: if self.is_drawn(nv) {
+                    nv.node
+                } else {
+                    nv.node | CULLED
+                },
+                ..nv
+            })
+            .collect()
+    }
+
     fn parent_valid(&self, nv: NodeView) -> bool {
         nv.node > 0
             && self.is_valid(NodeView {

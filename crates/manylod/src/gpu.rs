@@ -691,3 +691,88 @@ impl GpuRefit {
 fn vec4s(v: &[Vec3]) -> Vec<[f32; 4]> {
     v.iter().map(|p| [p.x, p.y, p.z, 1.0]).collect()
 }
+
+/// The imperfect-shadow-map baseline on the GPU ([`crate::splat::ism`]): a fixed list of
+/// random points per view splatted into [`GpuManyLod::atlas`] by the same splat kernel.
+pub struct GpuIsm {
+    bind: wgpu::BindGroup,
+    count: u32,
+}
+
+impl GpuIsm {
+    /// Uploads the ISM points `nodes` and their node-views `list` for the views of `m`.
+    pub fn new(
+        device: &wgpu::Device,
+        m: &GpuManyLod,
+        nodes: &[Node],
+        list: &[NodeView],
+    ) -> Result<Self, ManyLodError> {
+        if let Some(bad) = list
+            .iter()
+            .find(|nv| nv.node as usize >= nodes.len() || nv.view >= m.view_count)
+        {
+            return Err(ManyLodError::Mismatch(format!(
+                "ISM node-view {bad:?} outside {} points × {} views",
+                nodes.len(),
+                m.view_count
+            )));
+        }
+        let storage = |label, bytes: &[u8]| {
+            transfer::buffer_init(device, label, bytes, STORAGE).map_err(ManyLodError::from)
+        };
+        let node_buffer = storage("ism points", bytemuck::cast_slice(nodes))?;
+        let raw: Vec<[u32; 2]> = list.iter().map(|nv| [nv.node, nv.view]).collect();
+        let list_buffer = storage("ism list", bytemuck::cast_slice(&raw))?;
+        let mut counts = [0u32; 16];
+        counts[CUT_SLOTS[0] as usize] = list.len() as u32;
+        let counters = storage("ism counters", bytemuck::cast_slice(&counts))?;
+        let (w, _) = m.layout.size();
+        let params = uniform(
+            device,
+            "ism atlas",
+            bytemuck::bytes_of(&AtlasParams {
+                width: w,
+                tile: m.layout.tile,
+                columns: m.layout.columns,
+                cut_slot: CUT_SLOTS[0],
+                far: m.layout.far,
+                _pad: [0; 3],
+            }),
+        )?;
+        let bind = shader::bind_buffers(
+            device,
+            "ism splat",
+            &m.splat,
+            &[
+                (0, &node_buffer),
+                (1, &m.views),
+                (2, &params),
+                (3, &counters),
+                (4, &list_buffer),
+                (5, &m.atlas),
+            ],
+        );
+        Ok(Self {
+            bind,
+            count: list.len() as u32,
+        })
+    }
+
+    /// Records clearing `m`'s atlas and splatting the ISM points into it (one pass, `ism`).
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        m: &GpuManyLod,
+        timer: Option<&PassTimer>,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("ism splat"),
+            timestamp_writes: timer.and_then(|t| t.compute_pass("ism")),
+        });
+        m.encode_clear(&mut pass);
+        pass.set_pipeline(&m.splat);
+        pass.set_bind_group(0, &self.bind, &[]);
+        let (x, y) = groups(self.count);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+}

@@ -10,7 +10,7 @@
 
 use rayon::prelude::*;
 
-use crate::{Bsh, ManyLodError, NodeView, View, cut::CULLED};
+use crate::{ManyLodError, Node, NodeView, View, cut::CULLED};
 
 /// Packed value of an empty pixel.
 pub const CLEAR: u32 = 0xFFFF_FFFF;
@@ -84,10 +84,11 @@ impl AtlasLayout {
     }
 }
 
-/// The CPU reference splat: the drawn node-views of `cut` (culled ones, `c = 0`, skipped) into a
-/// cleared atlas, row-major `u32` packed depths. Tiles are filled in parallel.
+/// The CPU reference splat: the node-views of `cut` over `nodes` (a hierarchy's, or the [`ism`]
+/// points) into a cleared atlas, row-major `u32` packed depths; node-views flagged [`CULLED`]
+/// are skipped (see [`crate::CutProblem::flag_culled`]). Tiles are filled in parallel.
 pub fn splat(
-    bsh: &Bsh,
+    nodes: &[Node],
     views: &[View],
     cut: &[NodeView],
     layout: &AtlasLayout,
@@ -96,11 +97,14 @@ pub fn splat(
     let tile = layout.tile as usize;
     let mut per_view: Vec<Vec<u32>> = vec![Vec::new(); views.len()];
     for nv in cut {
-        let node = nv.node & !CULLED;
-        if node as usize >= bsh.nodes.len() || nv.view as usize >= views.len() {
+        if nv.node & CULLED != 0 {
+            continue;
+        }
+        let node = nv.node;
+        if node as usize >= nodes.len() || nv.view as usize >= views.len() {
             return Err(ManyLodError::Mismatch(format!(
                 "{nv:?} outside {} nodes × {} views",
-                bsh.nodes.len(),
+                nodes.len(),
                 views.len()
             )));
         }
@@ -109,13 +113,10 @@ pub fn splat(
     let tiles: Vec<Vec<u32>> = per_view
         .par_iter()
         .zip(views)
-        .map(|(nodes, view)| {
+        .map(|(indices, view)| {
             let mut t = vec![CLEAR; tile * tile];
-            for node in nodes.iter().map(|&n| &bsh.nodes[n as usize]) {
-                let Some(s) = view
-                    .splat(node, layout.far)
-                    .filter(|_| view.criterion(node) > 0.0)
-                else {
+            for node in indices.iter().map(|&n| &nodes[n as usize]) {
+                let Some(s) = view.splat(node, layout.far) else {
                     continue;
                 };
                 let word = pack_depth(s.depth, 0);
@@ -155,4 +156,51 @@ fn pixel_span(c: f32, radius: f32, tile: usize) -> (usize, usize) {
     let lo = (c - radius - 0.5).ceil().max(0.0);
     let hi = (c + radius - 0.5).floor() + 1.0;
     (lo as usize, (hi.max(0.0) as usize).min(tile))
+}
+
+/// The imperfect-shadow-map baseline (Ritschel et al. 2008, the comparison of Table 3.1): every
+/// view splats its own fixed random subset of `per_view` points, each a disc standing for
+/// `n / per_view` leaves (radius grown by `√(n / per_view)`), with no hierarchy and no cut.
+/// Returns the point nodes and the node-views to splat (the same for every frame).
+pub fn ism(
+    leaves: &[Node],
+    views: usize,
+    per_view: usize,
+    seed: u64,
+) -> Result<(Vec<Node>, Vec<NodeView>), ManyLodError> {
+    if leaves.is_empty() || per_view == 0 || per_view > leaves.len() {
+        return Err(ManyLodError::Mismatch(format!(
+            "{per_view} points per view from {} points",
+            leaves.len()
+        )));
+    }
+    let grow = (leaves.len() as f32 / per_view as f32).sqrt();
+    let nodes = leaves
+        .iter()
+        .map(|l| Node {
+            radius: l.radius * grow,
+            ..*l
+        })
+        .collect();
+    let n = leaves.len() as u32;
+    let node_views = (0..views as u32)
+        .into_par_iter()
+        .flat_map_iter(|view| {
+            (0..per_view as u32).map(move |k| NodeView {
+                node: pick(seed, view, k) % n,
+                view,
+            })
+        })
+        .collect();
+    Ok((nodes, node_views))
+}
+
+/// A stateless 32-bit integer hash (Wellons' "lowbias32") of a view, a point and a seed.
+fn pick(seed: u64, view: u32, k: u32) -> u32 {
+    let mut x = (seed as u32) ^ view.wrapping_mul(0x9E37_79B1) ^ k.wrapping_mul(0x85EB_CA77);
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7FEB_352D);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846C_A68B);
+    x ^ (x >> 16)
 }

@@ -9,7 +9,7 @@ use manylod::{
     AtlasLayout, Bsh, CutProblem, ManyLodError,
     bsh::angle_between,
     cut::{basic, refine},
-    gpu::{CutKind, GpuManyLod, GpuRefit},
+    gpu::{CutKind, GpuIsm, GpuManyLod, GpuRefit},
     splat::{self, CLEAR},
     surfels,
 };
@@ -163,7 +163,13 @@ fn atlas_matches_the_cpu() {
     gpu.queue.submit([encoder.finish()]);
     let got = m.read_atlas(gpu).expect("atlas");
     let cut = m.read_cut(gpu).expect("cut");
-    let want = splat::splat(&bsh, &v, &cut.node_views, &layout).expect("cpu splat");
+    let problem = CutProblem {
+        bsh: &bsh,
+        views: &v,
+        epsilon: EPSILON,
+    };
+    let flagged = problem.flag_culled(&cut.node_views);
+    let want = splat::splat(&bsh.nodes, &v, &flagged, &layout).expect("cpu splat");
     let written = want.iter().filter(|&&w| w != CLEAR).count();
     assert!(
         written > want.len() / 20,
@@ -184,6 +190,33 @@ fn atlas_matches_the_cpu() {
     let inplace = m.read_atlas(gpu).expect("in-place atlas");
     let same = inplace.iter().zip(&got).filter(|(a, b)| a == b).count();
     assert_eq!(same, got.len(), "in-place vs list-based atlas");
+}
+
+/// The ISM baseline: GPU atlas == CPU atlas of the same random points.
+#[test]
+fn ism_atlas_matches_the_cpu() {
+    let (bsh, _, _) = tree(1 << 14);
+    let Some((gpu, m)) = setup(&bsh, 0.3, 1 << 16) else {
+        return;
+    };
+    let v = views_in_tiles(0.3, Some(TILE));
+    let n = bsh.leaf_count();
+    let (points, list) = splat::ism(&bsh.nodes[n - 1..], v.len(), 1024, 5).expect("ism");
+
+    let ism = GpuIsm::new(&gpu.device, &m, &points, &list).expect("gpu ism");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    ism.encode(&mut encoder, &m, None);
+    gpu.queue.submit([encoder.finish()]);
+    let got = m.read_atlas(gpu).expect("atlas");
+    let want = splat::splat(&points, &v, &list, &m.layout()).expect("cpu");
+    let written = want.iter().filter(|&&w| w != CLEAR).count();
+    assert!(written > want.len() / 20, "{written} pixels written");
+    let (coverage, depth) = differences(&got, &want);
+    assert!(
+        coverage <= written / 1000 && depth <= written / 1000,
+        "{coverage} coverage and {depth} depth differences of {written} pixels"
+    );
+    assert!(splat::ism(&points, v.len(), 0, 1).is_err());
 }
 
 #[test]
