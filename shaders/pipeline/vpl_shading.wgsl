@@ -1,6 +1,7 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
 // #import tiled-shading/lighting.wgsl
+// #import manylod/common.wgsl
 // SNSM — shading with no shadow map (Segovia 2006 §4.3, §6.2): each pixel sums the diffuse and
 // glossy light reflected from the hemispherical VPLs of its subset, visibility ignored. Twin of
 // `pipeline::indirect::cpu::shade_vpls`.
@@ -13,6 +14,10 @@
 // `scale` (the subset count: one subset estimates the whole set). n = m = 1 is the reference.
 //   shade_split: reads the split G-buffer at (x, y), writes split irradiance at (x, y) (BS/BG around it);
 //   shade_fused: reads the G-buffer and writes the irradiance at the image pixel (no BS/BG).
+//
+// With VPL shadow maps (`shadow.enabled`, Holländer 2013 §3.6 SSM mode), VPL k's light is
+// multiplied by its visibility: p is looked up in micro-view k of the ManyLoDs / ISM atlas
+// (paraboloid around the VPL normal, `manylod::View::splat`'s projection).
 
 struct Vpl {
     position: vec3<f32>,
@@ -47,6 +52,44 @@ override sub_height: u32 = 1u;
 @group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(8) var specular_out: texture_storage_2d<rgba16float, write>;
 
+// `pipeline::indirect::shadows::ShadowParams`.
+struct ShadowParams {
+    enabled: u32,
+    tile: u32,
+    columns: u32,
+    width: u32,
+    far: f32,
+    lift: f32,
+    bias: f32,
+    _pad: u32,
+};
+
+@group(0) @binding(9) var<storage, read> shadow_atlas: array<u32>;
+@group(0) @binding(10) var<uniform> shadow: ShadowParams;
+
+// Visibility of p from VPL k: 1 unless the atlas holds something nearer (depth bias added).
+fn vpl_visibility(k: u32, vpl: Vpl, p: vec3<f32>) -> f32 {
+    if shadow.enabled == 0u {
+        return 1.0;
+    }
+    // The paraboloid frame of `manylod::view::paraboloid_frame`.
+    let nrm = vpl.normal;
+    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), abs(nrm.z) < 0.9);
+    let t = normalize(cross(helper, nrm));
+    let b = cross(nrm, t);
+    let d = p - (vpl.position + nrm * shadow.lift);
+    let dist = length(d);
+    let l = vec3<f32>(dot(t, d), dot(b, d), dot(nrm, d)) / dist;
+    if l.z <= 0.0 {
+        return 0.0;
+    }
+    let uv = l.xy / (1.0 + l.z);
+    let px = min(vec2<u32>((uv * 0.5 + 0.5) * f32(shadow.tile)), vec2<u32>(shadow.tile - 1u));
+    let origin = vec2<u32>(k % shadow.columns, k / shadow.columns) * shadow.tile;
+    let stored = unpack_depth(shadow_atlas[(origin.y + px.y) * shadow.width + origin.x + px.x]);
+    return select(0.0, 1.0, dist / shadow.far <= stored + shadow.bias);
+}
+
 const INV_PI_VPL: f32 = 0.318309886183791;
 
 // The clamped intensity of `vpl` towards p; the direction to it goes to `l`.
@@ -76,7 +119,7 @@ fn shade(texel: vec2<u32>, pixel: vec2<u32>, subset: u32) -> Accumulated {
         let first = subset * params.per_subset;
         for (var k = first; k < first + params.per_subset; k++) {
             var l: vec3<f32>;
-            let intensity = vpl_intensity(vpls[k], p, &l);
+            let intensity = vpl_intensity(vpls[k], p, &l) * vpl_visibility(k, vpls[k], p);
             let c = reflect_light(intensity, l, nrm, v, albedo, roughness, metallic);
             sum.diffuse += c.diffuse;
             sum.specular += c.specular;

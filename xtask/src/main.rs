@@ -4,7 +4,7 @@
 //!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found), then runs the
 //!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`).
 //! - `cargo xtask bench [ARGS]`: runs the GPU benchmarks (`deferred-bench [ARGS]`,
-//!   `interleave-bench [ARGS]`, `indirect-bench [ARGS]`, `tiled-bench [ARGS]`, `ssaa-bench [ARGS]` and `subdiv-bench [ARGS]`, reports
+//!   `interleave-bench [ARGS]`, `indirect-bench [ARGS]`, `tiled-bench [ARGS]`, `ssaa-bench [ARGS]`, `subdiv-bench [ARGS]` and `manylod-bench [ARGS]`, reports
 //!   under docs/bench/) and the CPU criterion benches.
 //! - `cargo xtask bft [--level L] [--max-valence N] [-o FILE]`: builds the Loop basis-function
 //!   tables and writes their versioned binary file (default `target/bft/loop-l5-v18.bft`).
@@ -121,6 +121,7 @@ fn main() -> Result<()> {
                 ("pipeline", "tiled-bench"),
                 ("pipeline", "ssaa-bench"),
                 ("pipeline", "subdiv-bench"),
+                ("pipeline", "manylod-bench"),
             ] {
                 run(cargo()
                     .args(["run", "--release", "-p", package, "--bin", bin, "--"])

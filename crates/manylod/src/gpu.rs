@@ -520,10 +520,13 @@ impl GpuManyLod {
         })
     }
 
-    /// Reads the atlas back (row-major packed depths). Errors when the in-place stack
-    /// overflowed.
+    /// Reads the atlas back (row-major packed depths). Errors when the last cut's lists or the
+    /// in-place stack overflowed (the atlas then misses splats).
     pub fn read_atlas(&self, gpu: &Gpu) -> Result<Vec<u32>, ManyLodError> {
-        self.check_overflow(&self.read_counters(gpu)?, "in-place stack")?;
+        self.check_overflow(
+            &self.read_counters(gpu)?,
+            "a cut list or the in-place stack",
+        )?;
         let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.atlas)?;
         Ok(bytemuck::cast_slice(&bytes).to_vec())
     }

@@ -12,7 +12,7 @@ use manylod::{
 
 mod common;
 
-use common::{scene, sorted, tree, views};
+use common::{assert_partition, scene, sorted, tree, views};
 
 /// Every node's sphere contains its leaves' discs' centres and its cone their normals.
 #[test]
@@ -227,25 +227,6 @@ fn lazy_cut_converges_to_the_basic_cut() {
         lazy = l.node_views;
     }
     assert_eq!(sorted(lazy), want, "lazy converged");
-}
-
-/// Every leaf of every view covered exactly once.
-fn assert_partition(problem: &CutProblem, set: &[NodeView], frame: u32) {
-    let n = problem.bsh.leaf_count();
-    let mut cover = vec![vec![0u8; n]; problem.views.len()];
-    for nv in set {
-        let (lo, hi) = problem.bsh.leaf_range(nv.node);
-        for c in &mut cover[nv.view as usize][lo..hi] {
-            *c += 1;
-        }
-    }
-    for (v, c) in cover.iter().enumerate() {
-        let bad = c.iter().filter(|&&c| c != 1).count();
-        assert_eq!(
-            bad, 0,
-            "frame {frame} view {v}: {bad} leaves not covered once"
-        );
-    }
 }
 
 /// Lazy cuts under views moving 10° per frame (q = 2): what a frame leaves (cut and leftover

@@ -119,18 +119,46 @@ fn cuts_match_the_cpu() {
             ),
         };
         let got = run_cut(gpu, &mut m, kind);
-        assert_eq!(
+        // Exactly equal on llvmpipe; a hardware driver's asin/atan2 may decide node-views
+        // whose criterion lies within rounding of ε (or of a culling plane) the other way, so
+        // there at most 0.1 % may differ — and the GPU cut must still partition every view.
+        let (g, w) = (
             sorted(got.node_views.clone()),
             sorted(want.node_views.clone()),
-            "frame {frame} {kind:?}"
         );
-        assert_eq!(
-            (got.iterations, got.processed, got.converged),
-            (want.iterations, want.processed, want.converged),
-            "frame {frame} {kind:?}: iterations, work, converged"
+        let differ = symmetric_difference(&g, &w);
+        let allowed = if gpu.is_software() { 0 } else { w.len() / 1000 };
+        assert!(
+            differ <= allowed,
+            "frame {frame} {kind:?}: {differ} node-views differ of {}",
+            w.len()
         );
+        if kind != CutKind::Lazy(2) {
+            common::assert_partition(&problem, &got.node_views, frame);
+        }
+        if differ == 0 {
+            assert_eq!(
+                (got.iterations, got.processed, got.converged),
+                (want.iterations, want.processed, want.converged),
+                "frame {frame} {kind:?}: iterations, work, converged"
+            );
+        }
         last = want.node_views;
     }
+}
+
+/// Node-views in one sorted list but not the other.
+fn symmetric_difference(a: &[manylod::NodeView], b: &[manylod::NodeView]) -> usize {
+    let (mut i, mut j, mut n) = (0, 0, 0);
+    while i < a.len() || j < b.len() {
+        match (a.get(i), b.get(j)) {
+            (Some(x), Some(y)) if x == y => (i, j) = (i + 1, j + 1),
+            (Some(x), Some(y)) if x < y => (i, n) = (i + 1, n + 1),
+            (Some(_), None) => (i, n) = (i + 1, n + 1),
+            _ => (j, n) = (j + 1, n + 1),
+        }
+    }
+    n
 }
 
 /// Pixels where the GPU and CPU atlases differ: coverage (one cleared, the other not) and

@@ -11,7 +11,12 @@ use glam::{Vec3, Vec4};
 use scene::{Camera, Light, Scene};
 use wgpu::util::DeviceExt;
 
-use crate::indirect::{IndirectConfig, gpu::IndirectStage, vpl::VplSet};
+use crate::indirect::{
+    IndirectConfig,
+    gpu::IndirectStage,
+    shadows::{ShadowConfig, VplShadowMaps, VplShadows},
+    vpl::VplSet,
+};
 use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
 use tiled_shading::gpu::{ACCUMULATION_FORMAT, LightShading};
 
@@ -97,6 +102,7 @@ pub struct GpuRenderer {
     composition_group: wgpu::BindGroup,
     ambient: wgpu::Buffer,
     indirect: Option<IndirectStage>,
+    vpl_shadows: Option<VplShadowMaps>,
     timer: PassTimer,
 }
 
@@ -165,6 +171,7 @@ impl GpuRenderer {
             composition_group,
             ambient,
             indirect: None,
+            vpl_shadows: None,
             timer: PassTimer::new(device, 32),
         })
     }
@@ -247,6 +254,7 @@ impl GpuRenderer {
             (&self.targets).into(),
             config,
             set,
+            self.vpl_shadows.as_ref(),
         )?;
         self.composition_group = composition_group(
             device,
@@ -260,6 +268,34 @@ impl GpuRenderer {
         );
         self.indirect = Some(stage);
         Ok(())
+    }
+
+    /// Adds VPL visibility to the indirect light (`mode`: ManyLoDs cuts or the ISM baseline,
+    /// built over `scene` for the VPLs of `set`) and rebuilds the indirect stage with it. Every
+    /// frame then finds the cuts (incremental after the first frame) and splats the atlas
+    /// before the VPL shading.
+    pub fn set_vpl_shadows(
+        &mut self,
+        gpu: &Gpu,
+        scene: &Scene,
+        mode: VplShadows,
+        shadow_config: &ShadowConfig,
+        config: &IndirectConfig,
+        set: &VplSet,
+    ) -> Result<(), RenderError> {
+        self.vpl_shadows = Some(VplShadowMaps::new(
+            &gpu.device,
+            scene,
+            set,
+            mode,
+            shadow_config,
+        )?);
+        self.set_indirect(gpu, config, set)
+    }
+
+    /// The VPL shadow maps, if set.
+    pub fn vpl_shadows(&self) -> Option<&VplShadowMaps> {
+        self.vpl_shadows.as_ref()
     }
 
     /// The indirect stage, if one was set.
@@ -285,6 +321,11 @@ impl GpuRenderer {
             self.timer.render_pass("z-prepass"),
             self.timer.render_pass("gbuffer"),
         );
+        if let Some(shadows) = &mut self.vpl_shadows
+            && self.indirect.is_some()
+        {
+            shadows.encode(encoder, Some(&self.timer));
+        }
         let groups = (w.div_ceil(8), h.div_ceil(8));
         let dispatch = |encoder: &mut wgpu::CommandEncoder,
                         name: &str,

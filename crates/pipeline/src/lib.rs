@@ -64,6 +64,9 @@ pub enum RenderError {
     /// VPL generation failed.
     #[error(transparent)]
     Vpl(#[from] indirect::vpl::VplError),
+    /// The VPL shadow maps failed (ManyLoDs).
+    #[error(transparent)]
+    ManyLod(#[from] manylod::ManyLodError),
     /// The VPL set has another number of subsets than the pattern has sub-buffers.
     #[error("the VPLs come in {vpl_subsets} subsets but the pattern has {sub_buffers} sub-buffers")]
     Subsets {

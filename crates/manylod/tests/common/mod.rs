@@ -2,7 +2,7 @@
 #![allow(dead_code)] // each test binary uses part of the shared scene
 
 use glam::Vec3;
-use manylod::{Bsh, NodeView, View, surfels};
+use manylod::{Bsh, CutProblem, NodeView, View, surfels};
 
 /// A bumpy sphere above a ground quad: closed and open parts, all orientations.
 pub fn scene() -> (Vec<Vec3>, Vec<u32>) {
@@ -94,4 +94,23 @@ pub fn views_in_tiles(angle: f32, tile: Option<u32>) -> Vec<View> {
 pub fn sorted(mut v: Vec<NodeView>) -> Vec<NodeView> {
     v.sort_unstable();
     v
+}
+
+/// Every leaf of every view covered exactly once.
+pub fn assert_partition(problem: &CutProblem, set: &[NodeView], frame: u32) {
+    let n = problem.bsh.leaf_count();
+    let mut cover = vec![vec![0u8; n]; problem.views.len()];
+    for nv in set {
+        let (lo, hi) = problem.bsh.leaf_range(nv.node);
+        for c in &mut cover[nv.view as usize][lo..hi] {
+            *c += 1;
+        }
+    }
+    for (v, c) in cover.iter().enumerate() {
+        let bad = c.iter().filter(|&&c| c != 1).count();
+        assert_eq!(
+            bad, 0,
+            "frame {frame} view {v}: {bad} leaves not covered once"
+        );
+    }
 }

@@ -12,7 +12,11 @@ use glam::Vec3;
 use interleave::{Block, Blur, BlurVariant, Pattern, SplitVariant};
 use pipeline::{
     DEFAULT_AMBIENT, PassTiming, Rendered,
-    indirect::{IndirectConfig, IndirectStages, Interleaving, vpl},
+    indirect::{
+        IndirectConfig, IndirectStages, Interleaving,
+        shadows::{ShadowConfig, VplShadows},
+        vpl,
+    },
 };
 use scene::{Light, Scene};
 
@@ -112,6 +116,15 @@ struct Args {
     /// Distance under which a VPL's 1/d² is clamped (default: 2 % of the scene diagonal).
     #[arg(long)]
     vpl_clamp: Option<f32>,
+    /// VPL visibility from per-VPL shadow maps in an atlas (GPU only; Holländer 2013 §3.6):
+    /// `manylod` (a many-view LoD cut of 2^20 surfels per VPL, incremental after the first frame) or `ism` (imperfect shadow
+    /// maps: 8 k random surfels per VPL). Default: no VPL visibility. Also writes the atlas
+    /// as vpl-shadow-atlas.png.
+    #[arg(long, value_name = "MODE")]
+    vpl_shadows: Option<ShadowMode>,
+    /// With --vpl-shadows manylod: the cut threshold ε in micro-view pixels.
+    #[arg(long, default_value_t = 2.0)]
+    vpl_shadow_epsilon: f32,
     /// Supersample with M×M samples per pixel (Holländer 2013 §4.3, GPU only): full
     /// supersampling, or with --adaptive only where the metrics ask for samples.
     #[arg(long, value_name = "M")]
@@ -623,6 +636,9 @@ fn main() -> Result<()> {
             m,
         );
     }
+    if args.vpl_shadows.is_some() && (args.cpu || indirect.is_none()) {
+        bail!("--vpl-shadows needs --vpls N and runs on the GPU only (no --cpu)");
+    }
     let gpu = if args.cpu {
         None
     } else {
@@ -641,10 +657,26 @@ fn main() -> Result<()> {
                     pipeline::gpu::GpuRenderer::new(gpu, &scene, &direct_lights, width, height)?;
                 renderer.set_shading(gpu, &shading)?;
                 if let Some((config, set)) = indirect_ref {
-                    renderer.set_indirect(gpu, config, set)?;
+                    match args.vpl_shadows {
+                        Some(mode) => renderer.set_vpl_shadows(
+                            gpu,
+                            &scene,
+                            mode.into(),
+                            &ShadowConfig {
+                                epsilon: args.vpl_shadow_epsilon,
+                                ..ShadowConfig::default()
+                            },
+                            config,
+                            set,
+                        )?,
+                        None => renderer.set_indirect(gpu, config, set)?,
+                    }
                 }
                 renderer.render(gpu, &camera, ambient)?; // warm-up: first use of pipelines and caches
                 let rendered = renderer.render(gpu, &camera, ambient)?;
+                if let Some(shadows) = renderer.vpl_shadows() {
+                    write_shadow_atlas(&args, gpu, shadows)?;
+                }
                 if args.heatmap {
                     match renderer.shading().read_counts(gpu)? {
                         Some(counts) => {
@@ -866,5 +898,46 @@ fn dump_stages(
         irradiance("indirect-diffuse-blurred", d)?;
         irradiance("indirect-specular-blurred", sp)?;
     }
+    Ok(())
+}
+
+/// `--vpl-shadows` modes.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum ShadowMode {
+    /// ManyLoDs cuts.
+    Manylod,
+    /// Imperfect shadow maps.
+    Ism,
+}
+
+impl From<ShadowMode> for VplShadows {
+    fn from(m: ShadowMode) -> Self {
+        match m {
+            ShadowMode::Manylod => VplShadows::ManyLod,
+            ShadowMode::Ism => VplShadows::Ism,
+        }
+    }
+}
+
+/// Writes the VPL shadow-map atlas as a grey image (near = dark, empty = white).
+fn write_shadow_atlas(
+    args: &Args,
+    gpu: &gpu::Gpu,
+    shadows: &pipeline::indirect::shadows::VplShadowMaps,
+) -> Result<()> {
+    let m = shadows.manylod();
+    let (w, h) = m.layout().size();
+    let atlas = m.read_atlas(gpu)?;
+    let pixels: Vec<[f32; 4]> = atlas
+        .iter()
+        .map(|&word| {
+            let d = manylod::splat::unpack_depth(word).clamp(0.0, 1.0).sqrt();
+            [d, d, d, 1.0]
+        })
+        .collect();
+    std::fs::create_dir_all(&args.out)?;
+    let path = args.out.join("vpl-shadow-atlas.png");
+    gbuffer::Image::from_vec(w, h, pixels)?.write_png(&path)?;
+    println!("wrote {}", path.display());
     Ok(())
 }

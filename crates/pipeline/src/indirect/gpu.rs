@@ -34,7 +34,11 @@ use interleave::{
     },
 };
 
-use super::{IndirectConfig, IndirectStages, Interleaving, vpl::VplSet};
+use super::{
+    IndirectConfig, IndirectStages, Interleaving,
+    shadows::{VplShadowMaps, disabled_bindings},
+    vpl::VplSet,
+};
 use crate::RenderError;
 
 /// Uniform block of `vpl_shading.wgsl`.
@@ -76,15 +80,25 @@ pub struct IndirectStage {
 
 impl IndirectStage {
     /// Builds the passes reading `gbuffer` and the camera uniform `frame` (a
-    /// [`gbuffer::Frame`]), shading the VPLs of `set` as `config` says.
+    /// [`gbuffer::Frame`]), shading the VPLs of `set` as `config` says, with visibility from
+    /// `shadows` (built for the same VPLs) if given.
     pub fn new(
         device: &wgpu::Device,
         frame: &wgpu::Buffer,
         gbuffer: GBufferTextures<'_>,
         config: &IndirectConfig,
         set: &VplSet,
+        shadows: Option<&VplShadowMaps>,
     ) -> Result<Self, RenderError> {
         config.validate(set)?;
+        let disabled;
+        let (shadow_atlas, shadow_params) = match shadows {
+            Some(s) => s.bindings(),
+            None => {
+                disabled = disabled_bindings(device)?;
+                (&disabled.0, &disabled.1)
+            }
+        };
         let size = (gbuffer.linear_depth.width(), gbuffer.linear_depth.height());
         let layout = SplitLayout::new(size.0, size.1, config.shading_pattern())?;
         let split_size = (layout.split_width(), layout.split_height());
@@ -137,6 +151,8 @@ impl IndirectStage {
                     tv(&views[3]),
                     tv(&outs[0]),
                     tv(&outs[1]),
+                    shadow_atlas.as_entire_binding(),
+                    shadow_params.as_entire_binding(),
                 ],
                 (split_size.0.div_ceil(8), split_size.1.div_ceil(8)),
             )
@@ -316,6 +332,7 @@ pub fn run(
         uploaded.textures(),
         config,
         set,
+        None,
     )?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     stage.encode(&mut encoder, None);

@@ -26,6 +26,7 @@
 
 pub mod cpu;
 pub mod gpu;
+pub mod shadows;
 pub mod vpl;
 
 use gbuffer::Image;
