@@ -98,6 +98,8 @@ fn cuts_match_the_cpu() {
         return;
     };
     let mut last = Vec::new();
+    // Iterations and work match while the GPU's earlier cuts (its starting points) did.
+    let mut exact = true;
     for frame in 0..6u32 {
         let v = views_in_tiles(frame as f32 * 10f32.to_radians(), Some(TILE));
         m.set_views(&gpu.queue, &v).expect("views");
@@ -136,7 +138,8 @@ fn cuts_match_the_cpu() {
         if kind != CutKind::Lazy(2) {
             common::assert_partition(&problem, &got.node_views, frame);
         }
-        if differ == 0 {
+        exact &= differ == 0;
+        if exact {
             assert_eq!(
                 (got.iterations, got.processed, got.converged),
                 (want.iterations, want.processed, want.converged),

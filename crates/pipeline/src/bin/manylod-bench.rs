@@ -1,6 +1,6 @@
 //! `manylod-bench`: many-view LoD cuts (Holländer 2013 Tables 3.1/3.2) on Sponza. The scene is
 //! sampled into 2^20 and 2^21 surfels (the paper: 1.3 M points); 1024 VPLs (32×32 paraboloid
-//! micro-views, a 1024×1024 atlas) come from a point light circling 10° per frame. Per threshold
+//! micro-views, a 1024×1024 atlas) come from a sun turning 10° per frame. Per threshold
 //! ε = 1, 2, 4 px: the CPU build, the GPU refit, and over the animation the cut (basic,
 //! incremental, lazy with q = 2) and the splat of each, the in-place variant, and the ISM
 //! baseline (8 k random points per view, Table 3.1) measured in the same run; then 4096 views.
@@ -17,8 +17,11 @@ use manylod::{
     gpu::{CutKind, GpuIsm, GpuManyLod, GpuRefit},
     splat, surfels,
 };
-use pipeline::indirect::shadows::{scene_mesh, vpl_atlas};
-use scene::{Bvh, Scene};
+use pipeline::indirect::{
+    shadows::{scene_mesh, vpl_atlas, vpl_views},
+    vpl,
+};
+use scene::{Bvh, Light, Scene};
 use serde::Serialize;
 
 /// Benchmarks ManyLoDs cuts and splats.
@@ -39,7 +42,7 @@ struct Args {
 }
 
 const TILE: u32 = 32;
-/// Frames of the animation: the light circles 10° per frame.
+/// Frames of the animation: the sun turns 10° per frame.
 const CYCLE: usize = 36;
 
 #[derive(Serialize)]
@@ -74,48 +77,30 @@ struct Report {
     rows: Vec<Row>,
 }
 
-/// The VPL views of every frame of the animation: a point light circling the scene's centre
-/// (10° per frame, at a third of the diagonal) shoots `count` rays in fixed directions (a
-/// Fibonacci sphere); each first hit is a VPL facing back towards the light. Fixed directions
-/// keep consecutive frames coherent, as an animated light's photons with fixed random numbers.
-fn animation(scene: &Scene, bvh: &Bvh, count: usize) -> Vec<Vec<View>> {
-    let bounds = scene.bounds();
-    let (center, radius) = (bounds.center(), bounds.diagonal() / 3.0);
-    let lift = 1e-3 * bounds.diagonal();
-    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-    let directions: Vec<Vec3> = (0..count)
-        .map(|i| {
-            let y = 1.0 - 2.0 * (i as f32 + 0.5) / count as f32;
-            let r = (1.0 - y * y).sqrt();
-            let a = golden * i as f32;
-            Vec3::new(r * a.cos(), y, r * a.sin())
-        })
-        .collect();
+/// The VPL views of every frame of the animation: VPLs of a sun turning 10° per frame
+/// (generated with the same random numbers every frame).
+fn animation(scene: &Scene, bvh: &Bvh, count: usize) -> Result<Vec<Vec<View>>> {
+    let lift = 1e-3 * scene.bounds().diagonal();
     (0..CYCLE)
         .map(|f| {
             let a = (f as f32 * 10.0).to_radians();
-            let light =
-                center + radius * Vec3::new(a.cos(), 0.0, a.sin()) * Vec3::new(1.0, 0.0, 0.3);
-            let mut views = Vec::with_capacity(count);
-            for &d in &directions {
-                // A ray that hits nothing keeps the direction's VPL at the light (facing down).
-                let (p, n) = match bvh.closest_hit(light, d, f32::INFINITY) {
-                    Some(hit) => {
-                        let m = &scene.meshes[hit.mesh as usize];
-                        let t = &m.indices[3 * hit.triangle as usize..][..3];
-                        let [x, y, z] = [t[0], t[1], t[2]].map(|i| m.positions[i as usize]);
-                        let n = (y - x).cross(z - x).normalize_or(Vec3::Y);
-                        (hit.position, if n.dot(d) > 0.0 { -n } else { n })
-                    }
-                    None => (light, -Vec3::Y),
-                };
-                views.push(View::Paraboloid {
-                    position: p + n * lift,
-                    normal: n,
-                    size: TILE,
-                });
-            }
-            views
+            let sun = Light::Directional {
+                direction: Vec3::new(0.45 * a.cos(), -1.0, 0.45 * a.sin()).normalize(),
+                color: Vec3::ONE,
+                intensity: 3.0,
+            };
+            let set = vpl::generate(
+                scene,
+                bvh,
+                &[sun],
+                &vpl::VplConfig {
+                    count,
+                    subsets: 1,
+                    seed: 1,
+                    emissive: false,
+                },
+            )?;
+            Ok(vpl_views(&set, TILE, lift))
         })
         .collect()
 }
@@ -258,8 +243,8 @@ fn main() -> Result<()> {
     let bvh = Bvh::build(&scene);
     let diagonal = scene.bounds().diagonal();
     let (positions, indices) = scene_mesh(&scene);
-    let views_1k = animation(&scene, &bvh, 1024);
-    let views_4k = animation(&scene, &bvh, 4096);
+    let views_1k = animation(&scene, &bvh, 1024)?;
+    let views_4k = animation(&scene, &bvh, 4096)?;
     let timer = PassTimer::new(&gpu.device, 8);
     let mut setups = Vec::new();
     let mut rows = Vec::new();
@@ -358,8 +343,9 @@ fn main() -> Result<()> {
         args.frames,
     );
     md.push_str(&format!(
-        "\nScene: {} ({} triangles). VPLs: first hits of fixed ray directions from a point light \
-         circling the atrium 10° per frame ({CYCLE}-frame cycle); each VPL is a 32×32 paraboloid micro-view (1024 views: a 1024×1024 atlas, 4096: \
+        "\nScene: {} ({} triangles). VPLs from a sun turning 10° per frame over a {CYCLE}-frame \
+         cycle (same random numbers each frame, but the photons land far apart from frame to \
+         frame, so consecutive VPL sets are not coherent); each VPL is a 32×32 paraboloid micro-view (1024 views: a 1024×1024 atlas, 4096: \
          2048×2048). GPU times (timestamp queries, median of {} frames of the animation): `cut` \
          = all iterations of the many-view cut (indirect dispatch, no read-back), `splat` = \
          atlas clear + disc splats with atomic-min FreePipe depth; in-place = cut and splat in one \
