@@ -40,7 +40,8 @@ fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
     return atan2(length(cross(a, b)), dot(a, b));
 }
 
-// c(N, V): projected diameter in pixels, 0 when culled (outside a plane or back-facing).
+// c(N, V): projected diameter in pixels, 0 when culled (outside a plane or back-facing);
+// a paraboloid measures it at its scale where the sphere reaches furthest from the axis.
 fn criterion(v: View, n: Node) -> f32 {
     let to = n.center - v.eye;
     let dist = length(to);
@@ -57,7 +58,13 @@ fn criterion(v: View, n: Node) -> f32 {
     if !visible || back_facing {
         return 0.0;
     }
-    return 2.0 * beta * v.pixels_per_radian;
+    var scale = 1.0;
+    if v.kind == PARABOLOID {
+        // The paraboloid's scale where the sphere reaches furthest from the axis (planes[0] is
+        // the base plane, its normal the axis).
+        scale = 1.0 / (1.0 + cos(min(angle_between(to / dist, v.planes[0].xyz) + beta, HALF_PI)));
+    }
+    return 2.0 * beta * v.pixels_per_radian * scale;
 }
 
 struct Splat {

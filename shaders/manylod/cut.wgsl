@@ -76,58 +76,93 @@ fn parent_valid(node: u32, view: u32) -> bool {
     return node > 0u && is_valid((node - 1u) / 2u, view);
 }
 
-fn append_cut(node: u32, view: u32) {
-    let i = atomicAdd(&counters[pass_.cut_slot], 1u);
-    if i < arrayLength(&cut) {
-        cut[i] = vec2<u32>(select(node, node | CULLED, c_of(node, view) == 0.0), view);
-    } else {
-        atomicAdd(&counters[OVERFLOW], 1u);
-    }
-}
+// Appends are aggregated per workgroup: each thread takes its place with a workgroup atomic,
+// one thread reserves the workgroup's total in the global list (one global atomic per list and
+// workgroup instead of one per node-view).
+var<workgroup> group_out: atomic<u32>;
+var<workgroup> group_cut: atomic<u32>;
+var<workgroup> base_out: u32;
+var<workgroup> base_cut: u32;
+
+const NONE: u32 = 0xFFFFFFFFu;
 
 @compute @workgroup_size(256)
-fn step(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn step(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) t: u32,
+) {
+    if t == 0u {
+        atomicStore(&group_out, 0u);
+        atomicStore(&group_cut, 0u);
+    }
+    workgroupBarrier();
     let i = gid.x + gid.y * groups.x * WORKGROUP;
     let mode = pass_.mode & 0xFFu;
-    var nv = vec2<u32>(0u, i);
+    var nv = vec2<u32>(NONE, i);
     if mode == ROOTS {
-        if i >= problem.view_count {
-            return;
+        if i < problem.view_count {
+            nv.x = 0u;
         }
-    } else {
-        if i >= atomicLoad(&counters[pass_.in_slot]) {
-            return;
-        }
+    } else if i < atomicLoad(&counters[pass_.in_slot]) {
         nv = list_in[i];
         nv.x &= ~CULLED;
     }
-    if mode == FLUSH {
-        append_cut(nv.x, nv.y);
-        return;
-    }
-    if !parent_valid(nv.x, nv.y) {
-        if is_valid(nv.x, nv.y) {
-            append_cut(nv.x, nv.y);
-        } else {
-            // Split: both children become active.
-            let o = atomicAdd(&counters[pass_.out_slot], 2u);
-            if o + 1u < arrayLength(&list_out) {
-                list_out[o] = vec2<u32>(2u * nv.x + 1u, nv.y);
-                list_out[o + 1u] = vec2<u32>(2u * nv.x + 2u, nv.y);
+    // What this node-view yields: a cut node-view (`drawn`) or a split (children of `split`).
+    var drawn = NONE;
+    var split = NONE;
+    if nv.x != NONE {
+        if mode == FLUSH {
+            drawn = nv.x;
+        } else if !parent_valid(nv.x, nv.y) {
+            if is_valid(nv.x, nv.y) {
+                drawn = nv.x;
             } else {
-                atomicAdd(&counters[OVERFLOW], 2u);
+                split = nv.x;
+            }
+        } else {
+            // Merge: climb to the highest valid ancestor; the node-view on its leftmost path
+            // brings it.
+            var node = nv.x;
+            var leftmost = true;
+            while parent_valid(node, nv.y) {
+                leftmost = leftmost && (node & 1u) == 1u;
+                node = (node - 1u) / 2u;
+            }
+            if leftmost {
+                drawn = node;
             }
         }
-        return;
     }
-    // Merge: climb to the highest valid ancestor; the node-view on its leftmost path brings it.
-    var node = nv.x;
-    var leftmost = true;
-    while parent_valid(node, nv.y) {
-        leftmost = leftmost && (node & 1u) == 1u;
-        node = (node - 1u) / 2u;
+    var out_at = 0u;
+    var cut_at = 0u;
+    if split != NONE {
+        out_at = atomicAdd(&group_out, 2u);
     }
-    if leftmost {
-        append_cut(node, nv.y);
+    if drawn != NONE {
+        cut_at = atomicAdd(&group_cut, 1u);
+    }
+    workgroupBarrier();
+    if t == 0u {
+        base_out = atomicAdd(&counters[pass_.out_slot], atomicLoad(&group_out));
+        base_cut = atomicAdd(&counters[pass_.cut_slot], atomicLoad(&group_cut));
+    }
+    workgroupBarrier();
+    if split != NONE {
+        let o = base_out + out_at;
+        if o + 1u < arrayLength(&list_out) {
+            list_out[o] = vec2<u32>(2u * split + 1u, nv.y);
+            list_out[o + 1u] = vec2<u32>(2u * split + 2u, nv.y);
+        } else {
+            atomicAdd(&counters[OVERFLOW], 2u);
+        }
+    }
+    if drawn != NONE {
+        let o = base_cut + cut_at;
+        if o < arrayLength(&cut) {
+            cut[o] = vec2<u32>(select(drawn, drawn | CULLED, c_of(drawn, nv.y) == 0.0), nv.y);
+        } else {
+            atomicAdd(&counters[OVERFLOW], 1u);
+        }
     }
 }

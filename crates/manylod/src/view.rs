@@ -97,11 +97,12 @@ impl View {
         }
     }
 
-    /// Pixels per radian at the centre of the view.
+    /// Pixels per radian the criterion scales angular sizes by: a perspective view's at its
+    /// centre; a paraboloid's at its rim, its largest (see [`View::criterion`]).
     pub fn pixels_per_radian(&self) -> f32 {
         match *self {
             // The paraboloid maps the hemisphere (π/2 from the axis) to the tile's half side,
-            // r = tan(γ/2): dr/dγ is largest at the rim (1 per radian, in units of half sides).
+            // r = tan(γ/2): dr/dγ = 1 / (1 + cos γ) half sides per radian, 1 at the rim.
             View::Paraboloid { size, .. } => size as f32 * 0.5,
             View::Perspective { fov_y, size, .. } => size.1 as f32 * 0.5 / (fov_y * 0.5).tan(),
         }
@@ -109,6 +110,12 @@ impl View {
 
     /// `c(N, V)`: projected diameter in pixels, 0 when culled, [`INSIDE`] when the eye is in
     /// the sphere. Mirrored by the GPU kernels.
+    ///
+    /// The paraboloid is conformal with scale `1 / (1 + cos γ)` at angle γ from its axis, which
+    /// grows towards the rim; the sphere is measured at the largest scale it reaches,
+    /// γ + β (β its angular radius, γ + β capped at the rim). A child's sphere lies inside its
+    /// parent's, so it reaches no further from the axis and `c` still decreases down the tree,
+    /// while spheres near the axis are measured at down to half the rim's scale.
     pub fn criterion(&self, node: &Node) -> f32 {
         let to = node.center - self.eye();
         let dist = to.length();
@@ -128,7 +135,14 @@ impl View {
         if !visible || back_facing {
             return 0.0;
         }
-        2.0 * beta * self.pixels_per_radian()
+        let scale = match *self {
+            View::Paraboloid { normal, .. } => {
+                let reach = (angle_between(dir, normal) + beta).min(std::f32::consts::FRAC_PI_2);
+                1.0 / (1.0 + reach.cos())
+            }
+            View::Perspective { .. } => 1.0,
+        };
+        2.0 * beta * self.pixels_per_radian() * scale
     }
 }
 

@@ -8,6 +8,7 @@ use manylod::{
     bsh::{angle_between, level, parent},
     cut::{basic, refine, roots},
     surfels,
+    view::{MAX_SPLAT_RADIUS, MIN_SPLAT_RADIUS},
 };
 
 mod common;
@@ -93,6 +94,38 @@ fn criterion_decreases_down_the_tree() {
             );
         }
     }
+}
+
+/// A node's disc in a paraboloid view is never wider than its criterion says (the criterion
+/// measures at the largest scale the sphere reaches), and no wider than the rim's scale makes it.
+#[test]
+fn criterion_bounds_the_splatted_disc() {
+    let (bsh, _, _) = tree(1 << 10);
+    let mut checked = 0;
+    for v in views(0.3) {
+        let View::Paraboloid { size, .. } = v else {
+            continue;
+        };
+        for node in &bsh.nodes {
+            let c = v.criterion(node);
+            let Some(s) = v.splat(node, 100.0) else {
+                continue;
+            };
+            if c == 0.0 || s.radius <= MIN_SPLAT_RADIUS || s.radius >= MAX_SPLAT_RADIUS {
+                continue;
+            }
+            let rim =
+                2.0 * (node.radius / (node.center - v.eye()).length()).asin() * size as f32 * 0.5;
+            assert!(
+                2.0 * s.radius <= c * (1.0 + 1e-5),
+                "disc {} px > c {c}",
+                2.0 * s.radius
+            );
+            assert!(c <= rim * (1.0 + 1e-5), "c {c} > rim scale {rim}");
+            checked += 1;
+        }
+    }
+    assert!(checked > 1000, "only {checked} discs checked");
 }
 
 /// Per view: cut nodes cover every leaf exactly once, every visible leaf by a drawn node; every
