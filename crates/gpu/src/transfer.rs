@@ -15,10 +15,10 @@ pub fn check_buffer_size(
     let limits = device.limits();
     let mut limit = limits.max_buffer_size;
     if usage.contains(wgpu::BufferUsages::STORAGE) {
-        limit = limit.min(u64::from(limits.max_storage_buffer_binding_size));
+        limit = limit.min(limits.max_storage_buffer_binding_size);
     }
     if usage.contains(wgpu::BufferUsages::UNIFORM) {
-        limit = limit.min(u64::from(limits.max_uniform_buffer_binding_size));
+        limit = limit.min(limits.max_uniform_buffer_binding_size);
     }
     if size > limit {
         return Err(GpuError::TooLarge {
@@ -120,6 +120,17 @@ pub fn texture_init(
         texture.size(),
     );
     Ok(texture)
+}
+
+/// Three-component vectors padded to four with `w`, the 16-byte stride WGSL storage arrays of
+/// `vec3<f32>` / `vec4<f32>` need.
+pub fn vec4s<T: Copy + Into<[f32; 3]>>(v: &[T], w: f32) -> Vec<[f32; 4]> {
+    v.iter()
+        .map(|&p| {
+            let [x, y, z] = p.into();
+            [x, y, z, w]
+        })
+        .collect()
 }
 
 /// An uninitialised (zeroed) buffer of `size` bytes (at least 16, so empty inputs still bind),

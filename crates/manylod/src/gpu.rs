@@ -593,8 +593,10 @@ impl GpuRefit {
         };
         let surfel_buffer = storage("manylod surfels", bytemuck::cast_slice(&gpu_surfels))?;
         let order = storage("manylod order", bytemuck::cast_slice(&bsh.order))?;
-        let position_buffer =
-            storage("manylod positions", bytemuck::cast_slice(&vec4s(positions)))?;
+        let position_buffer = storage(
+            "manylod positions",
+            bytemuck::cast_slice(&transfer::vec4s(positions, 1.0)),
+        )?;
         let index_buffer = storage("manylod indices", bytemuck::cast_slice(indices))?;
         let n = bsh.leaf_count() as u32;
         let params = |first: u32, count: u32| {
@@ -668,7 +670,11 @@ impl GpuRefit {
                 index,
             });
         }
-        queue.write_buffer(&self.positions, 0, bytemuck::cast_slice(&vec4s(positions)));
+        queue.write_buffer(
+            &self.positions,
+            0,
+            bytemuck::cast_slice(&transfer::vec4s(positions, 1.0)),
+        );
         Ok(())
     }
 
@@ -689,10 +695,6 @@ impl GpuRefit {
             pass.dispatch_workgroups(x, y, 1);
         }
     }
-}
-
-fn vec4s(v: &[Vec3]) -> Vec<[f32; 4]> {
-    v.iter().map(|p| [p.x, p.y, p.z, 1.0]).collect()
 }
 
 /// The imperfect-shadow-map baseline on the GPU ([`crate::splat::ism`]): a fixed list of

@@ -74,7 +74,8 @@ fn refit_matches_the_cpu() {
         );
         assert!(
             (g.angle - w.angle).abs() <= 1e-4
-                && (w.angle >= 3.14 || angle_between(g.axis, w.axis) <= 1e-3),
+                && (w.angle >= std::f32::consts::PI - 1e-3
+                    || angle_between(g.axis, w.axis) <= 1e-3),
             "node {k}: cone {g:?} vs {w:?}"
         );
     }

@@ -6,9 +6,43 @@ use scene::Camera;
 
 use crate::{PassTiming, RenderError, gpu::GpuRenderer};
 
-/// Per pass name, the per-frame GPU milliseconds of `frames` frames (passes of one name summed
-/// within a frame), after a warm-up of at least 10 frames and 300 ms of back-to-back work, so
-/// that the GPU has left the idle clocks it drops to while the CPU prepares a configuration.
+/// Runs `frame` for a warm-up of at least 10 frames and 300 ms of back-to-back work, so that
+/// the GPU has left the idle clocks it drops to while the CPU prepares a configuration, then
+/// `frames` more times, and returns those frames' results.
+pub fn warm_then_time<T, E>(
+    frames: u32,
+    mut frame: impl FnMut() -> Result<T, E>,
+) -> Result<Vec<T>, E> {
+    let start = std::time::Instant::now();
+    let mut warm = 0;
+    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
+        frame()?;
+        warm += 1;
+    }
+    (0..frames).map(|_| frame()).collect()
+}
+
+/// Per pass name, the per-frame milliseconds of `frames` frames of `frame`'s `(name, ms)`
+/// passes (passes of one name summed within a frame), after [`warm_then_time`]'s warm-up.
+pub fn time_named<E>(
+    frames: u32,
+    frame: impl FnMut() -> Result<Vec<(String, f64)>, E>,
+) -> Result<Vec<(String, Vec<f64>)>, E> {
+    let mut by_name: Vec<(String, Vec<f64>)> = Vec::new();
+    for (f, passes) in warm_then_time(frames, frame)?.into_iter().enumerate() {
+        for (name, ms) in passes {
+            match by_name.iter_mut().find(|(n, _)| *n == name) {
+                Some((_, v)) if v.len() > f => v[f] += ms,
+                Some((_, v)) => v.push(ms),
+                None => by_name.push((name, vec![ms])),
+            }
+        }
+    }
+    Ok(by_name)
+}
+
+/// Per pass name, the per-frame GPU milliseconds of `frames` frames of `renderer`
+/// ([`time_named`]).
 pub fn time_passes(
     gpu: &Gpu,
     renderer: &mut GpuRenderer,
@@ -16,29 +50,15 @@ pub fn time_passes(
     ambient: Vec3,
     frames: u32,
 ) -> Result<Vec<(String, Vec<f64>)>, RenderError> {
-    let start = std::time::Instant::now();
-    let mut warm = 0;
-    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
-        renderer.time_frame(gpu, camera, ambient)?;
-        warm += 1;
-    }
-    let mut by_name: Vec<(String, Vec<f64>)> = Vec::new();
-    for f in 0..frames as usize {
+    time_named(frames, || {
         let timings: Vec<PassTiming> = renderer.time_frame(gpu, camera, ambient)?;
-        for t in timings {
-            match by_name.iter_mut().find(|(n, _)| *n == t.name) {
-                Some((_, v)) if v.len() > f => v[f] += t.ms,
-                Some((_, v)) => v.push(t.ms),
-                None => by_name.push((t.name, vec![t.ms])),
-            }
-        }
-    }
-    Ok(by_name)
+        Ok(timings.into_iter().map(|t| (t.name, t.ms)).collect())
+    })
 }
 
 /// Per-frame GPU ms of the passes `record` encodes (summed over the frame's passes; with
 /// `span`, from the first pass's begin to the last one's end, which also counts commands
-/// recorded between passes such as buffer clears), after the same warm-up as [`time_passes`].
+/// recorded between passes such as buffer clears), after [`warm_then_time`]'s warm-up.
 pub fn time_encoded(
     gpu: &Gpu,
     timer: &gpu::PassTimer,
@@ -57,17 +77,7 @@ pub fn time_encoded(
             _ => times.iter().map(|t| t.ms).sum(),
         })
     };
-    let start = std::time::Instant::now();
-    let mut warm = 0;
-    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
-        frame()?;
-        warm += 1;
-    }
-    Ok(gpu::bench::Stat::of(
-        (0..frames)
-            .map(|_| frame())
-            .collect::<Result<Vec<_>, _>>()?,
-    ))
+    Ok(gpu::bench::Stat::of(warm_then_time(frames, frame)?))
 }
 
 /// Per frame, the sum of the passes named in `names`.

@@ -86,7 +86,7 @@ impl Mesh {
                 self.uvs.len()
             ));
         }
-        if self.indices.len() % 3 != 0 {
+        if !self.indices.len().is_multiple_of(3) {
             return bad(format!(
                 "{} indices is not a multiple of 3",
                 self.indices.len()

@@ -38,10 +38,6 @@ pub struct EvaluateParams {
 const WORKGROUP: u32 = 64;
 const MAX_GROUPS_X: u32 = 65_535;
 
-fn vec4s(v: &[Vec3], w: f32) -> Vec<[f32; 4]> {
-    v.iter().map(|p| [p.x, p.y, p.z, w]).collect()
-}
-
 fn storage(device: &wgpu::Device, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, SubdivError> {
     Ok(transfer::buffer_init(
         device,
@@ -258,7 +254,7 @@ impl GpuSubdivider {
         queue.write_buffer(
             &self.m0_positions,
             0,
-            bytemuck::cast_slice(&vec4s(positions, 1.0)),
+            bytemuck::cast_slice(&transfer::vec4s(positions, 1.0)),
         );
         Ok(())
     }

@@ -1,6 +1,6 @@
 //! `manylod-bench`: many-view LoD cuts (Holländer 2013 Tables 3.1/3.2) on Sponza. The scene is
 //! sampled into 2^20 and 2^21 surfels (the paper: 1.3 M points); 1024 VPLs (32×32 paraboloid
-//! micro-views, a 1024×1024 atlas) come from a sun turning 10° per frame. Per threshold
+//! micro-views, a 1024×1024 atlas) come from a spot light orbiting 10° per frame. Per threshold
 //! ε = 1, 2, 4 px: the CPU build, the GPU refit, and over the animation the cut (basic,
 //! incremental, lazy with q = 2) and the splat of each, the in-place variant, and the ISM
 //! baseline (8 k random points per view, Table 3.1) measured in the same run; then 4096 views.
@@ -71,42 +71,67 @@ struct Setup {
 struct Report {
     header: gpu::bench::Header,
     frames: u32,
+    /// Mean VPL move per frame, fraction of the scene's diagonal.
+    vpl_move: f32,
     scene: String,
     triangles: usize,
     setups: Vec<Setup>,
     rows: Vec<Row>,
 }
 
-/// The VPL views of every frame of the animation: VPLs of a sun turning 10° per frame
-/// (generated with the same random numbers every frame).
-fn animation(scene: &Scene, bvh: &Bvh, count: usize) -> Result<Vec<Vec<View>>> {
-    let lift = 1e-3 * scene.bounds().diagonal();
-    (0..CYCLE)
+/// The VPL views of every frame of the animation, and the VPLs' mean move per frame as a
+/// fraction of the scene's diagonal: VPLs of a spot light high in the scene, pointing down,
+/// orbiting the vertical axis through the scene's centre by 10° per frame. The photons leave
+/// in the same directions every frame and all of them land (the spot reaches past the scene),
+/// so VPL `j` of consecutive frames comes from the same photon: the coherent set-up of the
+/// paper's moving area light.
+fn animation(scene: &Scene, bvh: &Bvh, count: usize) -> Result<(Vec<Vec<View>>, f32)> {
+    let bounds = scene.bounds();
+    let diagonal = bounds.diagonal();
+    let (center, extent) = (bounds.center(), bounds.max - bounds.min);
+    let lift = 1e-3 * diagonal;
+    let orbit = 0.1 * extent.x.min(extent.z);
+    let sets = (0..CYCLE)
         .map(|f| {
             let a = (f as f32 * 10.0).to_radians();
-            let sun = Light::Directional {
-                direction: Vec3::new(0.45 * a.cos(), -1.0, 0.45 * a.sin()).normalize(),
+            let spot = Light::Spot {
+                position: center + Vec3::new(orbit * a.cos(), 0.3 * extent.y, orbit * a.sin()),
+                direction: Vec3::NEG_Y,
                 color: Vec3::ONE,
-                intensity: 3.0,
+                intensity: 30.0,
+                radius: 2.0 * diagonal,
+                inner_angle: 50f32.to_radians(),
+                outer_angle: 60f32.to_radians(),
             };
-            let set = vpl::generate(
+            Ok(vpl::generate(
                 scene,
                 bvh,
-                &[sun],
+                &[spot],
                 &vpl::VplConfig {
                     count,
                     subsets: 1,
                     seed: 1,
                     emissive: false,
                 },
-            )?;
-            Ok(vpl_views(&set, TILE, lift))
+            )?)
         })
-        .collect()
+        .collect::<Result<Vec<_>>>()?;
+    let moved: f32 = sets
+        .windows(2)
+        .flat_map(|w| {
+            w[0].vpls
+                .iter()
+                .zip(&w[1].vpls)
+                .map(|(a, b)| a.position.distance(b.position))
+        })
+        .sum::<f32>()
+        / ((sets.len() - 1) * count) as f32;
+    let views = sets.iter().map(|set| vpl_views(set, TILE, lift)).collect();
+    Ok((views, moved / diagonal))
 }
 
 /// Per-frame GPU times of the passes `record` encodes for each frame of `views` in turn
-/// (the views of frame `f` uploaded first), after ≥ 10 warm-up frames and ≥ 300 ms.
+/// (the views of frame `f` uploaded first; `pipeline::bench::time_named`).
 fn time_animation(
     gpu: &Gpu,
     timer: &PassTimer,
@@ -116,31 +141,19 @@ fn time_animation(
     record: &dyn Fn(&mut GpuManyLod, &mut wgpu::CommandEncoder, &PassTimer),
 ) -> Result<Vec<(String, Vec<f64>)>> {
     let mut frame = 0usize;
-    let mut run = |m: &mut GpuManyLod| -> Result<Vec<gpu::PassTime>> {
+    pipeline::bench::time_named(frames, || -> Result<Vec<(String, f64)>> {
         m.set_views(&gpu.queue, &views[frame % views.len()])?;
         frame += 1;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         record(m, &mut encoder, timer);
         timer.resolve(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
-        Ok(timer.read(gpu)?)
-    };
-    let start = std::time::Instant::now();
-    let mut warm = 0;
-    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
-        run(m)?;
-        warm += 1;
-    }
-    let mut by_name: Vec<(String, Vec<f64>)> = Vec::new();
-    for _ in 0..frames {
-        for t in run(m)? {
-            match by_name.iter_mut().find(|(n, _)| *n == t.name) {
-                Some((_, v)) => v.push(t.ms),
-                None => by_name.push((t.name, vec![t.ms])),
-            }
-        }
-    }
-    Ok(by_name)
+        Ok(timer
+            .read(gpu)?
+            .into_iter()
+            .map(|t| (t.name, t.ms))
+            .collect())
+    })
 }
 
 fn stat(by_name: &[(String, Vec<f64>)], name: &str) -> Option<Stat> {
@@ -150,8 +163,9 @@ fn stat(by_name: &[(String, Vec<f64>)], name: &str) -> Option<Stat> {
         .map(|(_, v)| Stat::of(v.clone()))
 }
 
-/// A GPU set-up whose lists hold the largest cut of the run: starts at 4 node-views per
-/// micro-view pixel and doubles on overflow.
+/// A GPU set-up whose lists hold the largest cuts of the run: starts at 4 node-views per
+/// micro-view pixel and doubles while a basic cut or the incremental cuts of the next frames
+/// overflow.
 fn gpu_manylod(
     gpu: &Gpu,
     bsh: &Bsh,
@@ -164,10 +178,15 @@ fn gpu_manylod(
         let layout = vpl_atlas(views[0].len(), TILE, diagonal);
         let mut m = GpuManyLod::new(&gpu.device, bsh, &views[0], epsilon, layout, capacity)?;
         let mut ok = true;
-        for v in views.iter().take(4) {
+        for (f, v) in views.iter().take(4).enumerate() {
             m.set_views(&gpu.queue, v)?;
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            m.encode_cut(&mut encoder, CutKind::Basic, None);
+            let kind = if f == 0 {
+                CutKind::Basic
+            } else {
+                CutKind::Incremental
+            };
+            m.encode_cut(&mut encoder, kind, None);
             gpu.queue.submit([encoder.finish()]);
             match m.read_cut(gpu) {
                 Err(ManyLodError::Capacity { .. }) => ok = false,
@@ -243,8 +262,9 @@ fn main() -> Result<()> {
     let bvh = Bvh::build(&scene);
     let diagonal = scene.bounds().diagonal();
     let (positions, indices) = scene_mesh(&scene);
-    let views_1k = animation(&scene, &bvh, 1024)?;
-    let views_4k = animation(&scene, &bvh, 4096)?;
+    let (views_1k, moved) = animation(&scene, &bvh, 1024)?;
+    let (views_4k, _) = animation(&scene, &bvh, 4096)?;
+    println!("VPLs move {:.2} % of the diagonal per frame", 100.0 * moved);
     let timer = PassTimer::new(&gpu.device, 8);
     let mut setups = Vec::new();
     let mut rows = Vec::new();
@@ -343,9 +363,9 @@ fn main() -> Result<()> {
         args.frames,
     );
     md.push_str(&format!(
-        "\nScene: {} ({} triangles). VPLs from a sun turning 10° per frame over a {CYCLE}-frame \
-         cycle (same random numbers each frame, but the photons land far apart from frame to \
-         frame, so consecutive VPL sets are not coherent); each VPL is a 32×32 paraboloid micro-view (1024 views: a 1024×1024 atlas, 4096: \
+        "\nScene: {} ({} triangles). VPLs from a spot light pointing down from high in the scene and \
+         orbiting its vertical axis by 10° per frame over a {CYCLE}-frame cycle (the same photons \
+         every frame: VPLs move {:.2} % of the scene's diagonal per frame on average); each VPL is a 32×32 paraboloid micro-view (1024 views: a 1024×1024 atlas, 4096: \
          2048×2048). GPU times (timestamp queries, median of {} frames of the animation): `cut` \
          = all iterations of the many-view cut (indirect dispatch, no read-back), `splat` = \
          atlas clear + disc splats with atomic-min FreePipe depth; in-place = cut and splat in one \
@@ -357,6 +377,7 @@ fn main() -> Result<()> {
         path.file_name()
             .map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
         scene.triangle_count(),
+        100.0 * moved,
         args.frames
     ));
     for s in &setups {
@@ -398,6 +419,7 @@ fn main() -> Result<()> {
     let report = Report {
         header,
         frames: args.frames,
+        vpl_move: moved,
         scene: path.display().to_string(),
         triangles: scene.triangle_count(),
         setups,
