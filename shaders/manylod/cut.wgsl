@@ -20,7 +20,8 @@ const ROOTS: u32 = 1u;
 const FLUSH: u32 = 2u;
 // Only a dispatch size for `in_slot`'s count (the splat).
 const COUNT: u32 = 3u;
-// Roots or the first pass of an incremental frame: the cut starts empty.
+// Roots or the first pass of an incremental or lazy frame: the cut starts empty, and only
+// this pass checks parents (later passes hold split children, whose parents are not valid).
 const BEGIN: u32 = 0x100u;
 
 // Counter slots after the lists' counts.
@@ -108,14 +109,18 @@ fn step(
         nv = list_in[i];
         nv.x &= ~CULLED;
     }
-    // What this node-view yields: a cut node-view (`drawn`) or a split (children of `split`).
+    // What this node-view yields: a cut node-view (`drawn`, its criterion `c` when known) or a
+    // split (children of `split`). Only a frame's first pass can hold node-views whose parent
+    // is valid (last frame's cut under moved views); later passes hold split children.
     var drawn = NONE;
+    var c = -1.0;
     var split = NONE;
     if nv.x != NONE {
         if mode == FLUSH {
             drawn = nv.x;
-        } else if !parent_valid(nv.x, nv.y) {
-            if is_valid(nv.x, nv.y) {
+        } else if (pass_.mode & BEGIN) == 0u || !parent_valid(nv.x, nv.y) {
+            c = c_of(nv.x, nv.y);
+            if nv.x >= problem.leaf_start || c < problem.epsilon {
                 drawn = nv.x;
             } else {
                 split = nv.x;
@@ -160,7 +165,10 @@ fn step(
     if drawn != NONE {
         let o = base_cut + cut_at;
         if o < arrayLength(&cut) {
-            cut[o] = vec2<u32>(select(drawn, drawn | CULLED, c_of(drawn, nv.y) == 0.0), nv.y);
+            if c < 0.0 {
+                c = c_of(drawn, nv.y);
+            }
+            cut[o] = vec2<u32>(select(drawn, drawn | CULLED, c == 0.0), nv.y);
         } else {
             atomicAdd(&counters[OVERFLOW], 1u);
         }
