@@ -15,6 +15,7 @@ use glam::Vec3;
 use gpu::{Gpu, PassTimer, bench::Stat};
 use manylod::{
     Bsh, ManyLodError, View,
+    cut::CULLED,
     gpu::{CutKind, GpuIsm, GpuManyLod, GpuRefit},
     splat, surfels,
 };
@@ -57,6 +58,8 @@ struct Row {
     total: Stat,
     /// Node-views in the last frame's cut and processed to find it.
     cut_size: u64,
+    /// Of those, culled (kept for the next frame, not drawn).
+    culled: u64,
     processed: u64,
     iterations: u32,
 }
@@ -165,8 +168,8 @@ fn stat(by_name: &[(String, Vec<f64>)], name: &str) -> Option<Stat> {
 }
 
 /// A GPU set-up whose lists hold the largest cuts of the run: starts at 4 node-views per
-/// micro-view pixel and grows to 1.25 × the largest need while a basic cut or the incremental
-/// cuts of the next frames overflow.
+/// micro-view pixel and doubles (up to the device's largest list) while a basic cut or the
+/// incremental cuts of the next frames overflow.
 fn gpu_manylod(
     gpu: &Gpu,
     bsh: &Bsh,
@@ -174,11 +177,16 @@ fn gpu_manylod(
     epsilon: f32,
     diagonal: f32,
 ) -> Result<GpuManyLod> {
+    let limits = gpu.device.limits();
+    let largest = (limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size)
+        / 8) as usize;
     let mut capacity = views[0].len() * (TILE * TILE) as usize * 4;
     loop {
         let layout = vpl_atlas(views[0].len(), TILE, diagonal);
         let mut m = GpuManyLod::new(&gpu.device, bsh, &views[0], epsilon, layout, capacity)?;
-        let mut needed = 0;
+        let mut overflowed = false;
         for (f, v) in views.iter().take(4).enumerate() {
             m.set_views(&gpu.queue, v)?;
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -190,19 +198,22 @@ fn gpu_manylod(
             m.encode_cut(&mut encoder, kind, None);
             gpu.queue.submit([encoder.finish()]);
             match m.read_cut(gpu) {
-                Err(ManyLodError::Capacity { needed: n, .. }) => {
-                    needed = needed.max(n as usize);
+                Err(ManyLodError::Capacity { .. }) => {
+                    overflowed = true;
                     // The next frame cannot start from an overflowed cut.
                     break;
                 }
                 r => drop(r?),
             }
         }
-        if needed == 0 {
+        if !overflowed {
             return Ok(m);
         }
         drop(m);
-        capacity = capacity.max(needed + needed / 4);
+        if capacity >= largest {
+            anyhow::bail!("the cuts need more than the device's {largest} node-views per list");
+        }
+        capacity = (2 * capacity).min(largest);
     }
 }
 
@@ -229,14 +240,24 @@ fn variant_row(
         &by_name,
         &["cut", "splat", "in-place"],
     ));
-    let (cut_size, processed, iterations) = match kind {
+    let (cut_size, culled, processed, iterations) = match kind {
         Some(_) => {
             let c = m.read_cut(gpu)?;
-            (c.node_views.len() as u64, c.processed, c.iterations)
+            let culled = c
+                .node_views
+                .iter()
+                .filter(|nv| nv.node & CULLED != 0)
+                .count();
+            (
+                c.node_views.len() as u64,
+                culled as u64,
+                c.processed,
+                c.iterations,
+            )
         }
         None => {
             m.read_atlas(gpu)?;
-            (0, 0, 0)
+            (0, 0, 0, 0)
         }
     };
     println!(
@@ -253,6 +274,7 @@ fn variant_row(
         splat: stat(&by_name, "splat"),
         total,
         cut_size,
+        culled,
         processed,
         iterations,
     })
@@ -338,6 +360,7 @@ fn main() -> Result<()> {
                     splat: Some(total),
                     total,
                     cut_size: list.len() as u64,
+                    culled: 0,
                     processed: 0,
                     iterations: 0,
                 });
@@ -395,8 +418,8 @@ fn main() -> Result<()> {
         ));
     }
     md.push_str(
-        "\n| points | views | ε px | variant | cut ms | splat ms | total ms | ÷ basic | cut node-views | processed | iterations |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|\n",
+        "\n| points | views | ε px | variant | cut ms | splat ms | total ms | ÷ basic | cut node-views | culled | processed | iterations |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let ms = |s: &Option<Stat>| s.map_or("–".into(), |s| format!("{:.3}", s.median_ms));
     for r in &rows {
@@ -410,7 +433,7 @@ fn main() -> Result<()> {
             })
             .map_or(f64::NAN, |b| b.total.median_ms);
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} | {:.3} | {:.2} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {:.3} | {:.2} | {} | {} | {} | {} |\n",
             r.points,
             r.views,
             r.epsilon,
@@ -420,6 +443,7 @@ fn main() -> Result<()> {
             r.total.median_ms,
             r.total.median_ms / basic,
             r.cut_size,
+            r.culled,
             r.processed,
             r.iterations
         ));
