@@ -56,6 +56,8 @@ pub struct Cut {
     pub processed: u64,
     /// Whether the active list ran empty (false: a lazy cut that may still change).
     pub converged: bool,
+    /// How many of `node_views` are culled (`c = 0`: kept for the next frame, not drawn).
+    pub culled: u64,
 }
 
 /// The criterion context: tree, views, threshold.
@@ -206,6 +208,11 @@ pub fn refine(
     }
     cut.converged = active.is_empty();
     cut.node_views.extend(active);
+    cut.culled = cut
+        .node_views
+        .par_iter()
+        .filter(|&&nv| problem.criterion(nv) == 0.0)
+        .count() as u64;
     Ok(cut)
 }
 

@@ -498,8 +498,8 @@ impl GpuManyLod {
         Ok(())
     }
 
-    /// Reads the last cut back (culled flags removed; for tests and pictures), with its
-    /// iterations and work. Errors when a list overflowed.
+    /// Reads the last cut back (culled flags removed and counted; for tests and pictures),
+    /// with its iterations and work. Errors when a list overflowed.
     pub fn read_cut(&self, gpu: &Gpu) -> Result<Cut, ManyLodError> {
         let counters = self.read_counters(gpu)?;
         self.check_overflow(&counters, "active or cut list")?;
@@ -517,6 +517,7 @@ impl GpuManyLod {
             iterations: counters[ITERATIONS],
             processed: u64::from(counters[PROCESSED]),
             converged: counters[self.leftover as usize] == 0,
+            culled: raw[..n].iter().filter(|nv| nv[0] & CULLED != 0).count() as u64,
         })
     }
 

@@ -142,9 +142,9 @@ fn cuts_match_the_cpu() {
         exact &= differ == 0;
         if exact {
             assert_eq!(
-                (got.iterations, got.processed, got.converged),
-                (want.iterations, want.processed, want.converged),
-                "frame {frame} {kind:?}: iterations, work, converged"
+                (got.iterations, got.processed, got.converged, got.culled),
+                (want.iterations, want.processed, want.converged, want.culled),
+                "frame {frame} {kind:?}: iterations, work, converged, culled"
             );
         }
         last = want.node_views;

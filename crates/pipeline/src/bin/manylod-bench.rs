@@ -15,7 +15,6 @@ use glam::Vec3;
 use gpu::{Gpu, PassTimer, bench::Stat};
 use manylod::{
     Bsh, ManyLodError, View,
-    cut::CULLED,
     gpu::{CutKind, GpuIsm, GpuManyLod, GpuRefit},
     splat, surfels,
 };
@@ -243,14 +242,9 @@ fn variant_row(
     let (cut_size, culled, processed, iterations) = match kind {
         Some(_) => {
             let c = m.read_cut(gpu)?;
-            let culled = c
-                .node_views
-                .iter()
-                .filter(|nv| nv.node & CULLED != 0)
-                .count();
             (
                 c.node_views.len() as u64,
-                culled as u64,
+                c.culled,
                 c.processed,
                 c.iterations,
             )
