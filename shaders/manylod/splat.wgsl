@@ -1,12 +1,6 @@
 // Splatting the drawn node-views of a cut into the atlas of per-view tiles (§3.7.2): one thread
 // per cut node-view, every pixel whose centre lies in the node's disc takes an atomic-min of
 // the FreePipe-packed depth. Mirrors `manylod::splat::splat`.
-//
-// `inplace`: the in-place variant (§3.7.2, Listings 3.3/3.4) — one workgroup per view walks the
-// tree depth-first from the root with a stack in workgroup memory: each round the cutfinders
-// pop up to one node each, split nodes push their two children (the slots handed out by a
-// workgroup atomic, the compaction Listing 3.4 does with a ballot scan) and valid nodes are
-// rasterised at once; no cut list is written. Basic cuts only, as in the paper.
 // #import manylod/common.wgsl
 
 struct Atlas {
@@ -25,10 +19,7 @@ struct Atlas {
 @group(0) @binding(3) var<storage, read_write> counters: array<atomic<u32>, 16>;
 @group(0) @binding(4) var<storage, read> cut: array<vec2<u32>>;
 @group(0) @binding(5) var<storage, read_write> atlas: array<atomic<u32>>;
-@group(0) @binding(6) var<uniform> problem: Problem;
 
-// Counter slot of the in-place stack overflow (as `cut.wgsl`'s OVERFLOW).
-const OVERFLOW: u32 = 8u;
 
 @compute @workgroup_size(256)
 fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -72,65 +63,4 @@ fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
         return;
     }
     splat_disc(nv.y, nodes[nv.x]);
-}
-
-const CUTFINDERS: u32 = 64u;
-// x(1 + (n − 1)d) node-views for x cutfinders, arity n = 2, depth d ≤ 26.
-const STACK: u32 = 64u * 27u;
-
-var<workgroup> stack: array<u32, STACK>;
-var<workgroup> size: u32;
-var<workgroup> pushed: atomic<u32>;
-
-@compute @workgroup_size(64)
-fn inplace(
-    @builtin(workgroup_id) wid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-    @builtin(local_invocation_index) t: u32,
-) {
-    let v = wid.x + wid.y * groups.x;
-    if v >= problem.view_count {
-        return;
-    }
-    let view = views[v];
-    if t == 0u {
-        stack[0] = 0u;
-        size = 1u;
-    }
-    loop {
-        let n = workgroupUniformLoad(&size);
-        if n == 0u {
-            break;
-        }
-        let take = min(n, CUTFINDERS);
-        let base = n - take;
-        var node = 0u;
-        if t < take {
-            node = stack[base + t];
-        }
-        if t == 0u {
-            atomicStore(&pushed, 0u);
-        }
-        workgroupBarrier();
-        if t < take {
-            let c = criterion(view, nodes[node]);
-            if node >= problem.leaf_start || c < problem.epsilon {
-                if c > 0.0 {
-                    splat_disc(v, nodes[node]);
-                }
-            } else {
-                let o = base + atomicAdd(&pushed, 2u);
-                if o + 1u < STACK {
-                    stack[o] = 2u * node + 1u;
-                    stack[o + 1u] = 2u * node + 2u;
-                } else {
-                    atomicAdd(&counters[OVERFLOW], 2u);
-                }
-            }
-        }
-        workgroupBarrier();
-        if t == 0u {
-            size = min(base + atomicLoad(&pushed), STACK);
-        }
-    }
 }

@@ -1,6 +1,6 @@
 //! The GPU kernels (§3.7): refit (`refit.wgsl`), many-view cuts with ping-pong active lists
-//! and indirect dispatch (`cut.wgsl`), splatting into the atlas and the in-place variant
-//! (`splat.wgsl`). Everything for one frame is recorded into the caller's encoder; counts
+//! and indirect dispatch (`cut.wgsl`), splatting into the atlas (`splat.wgsl`) and the in-place
+//! variant (`inplace_atomic.wgsl`, and `inplace_ballot.wgsl` where the device has subgroups). Everything for one frame is recorded into the caller's encoder; counts
 //! never come back to the CPU between iterations — each pass's size is written on the GPU by
 //! a one-thread `prepare` dispatch and used as the next pass's indirect dispatch.
 //!
@@ -43,6 +43,18 @@ pub enum CutKind {
     Incremental,
     /// From the previous frame's cut, `q` iterations; leftover node-views join the cut.
     Lazy(u32),
+}
+
+/// How the in-place variant's cutfinders find the stack slots of the children they push
+/// (§3.7.2, Listing 3.4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Compaction {
+    /// A workgroup atomic per splitting cutfinder (every adapter).
+    Atomic,
+    /// The paper's ballot scan: each lane counts the splitting lanes below it in its
+    /// subgroup's ballot, and one workgroup atomic per subgroup reserves their slots (devices
+    /// with `wgpu::Features::SUBGROUP`).
+    Ballot,
 }
 
 #[repr(C)]
@@ -140,7 +152,8 @@ pub struct GpuManyLod {
     step: wgpu::ComputePipeline,
     clear: wgpu::ComputePipeline,
     splat: wgpu::ComputePipeline,
-    inplace: wgpu::ComputePipeline,
+    /// The in-place variant per available compaction, with its bind group.
+    inplace: Vec<(Compaction, wgpu::ComputePipeline, wgpu::BindGroup)>,
     /// Node bounds in heap order (`Node`, 32 bytes); the refit writes them.
     pub nodes: wgpu::Buffer,
     views: wgpu::Buffer,
@@ -155,7 +168,6 @@ pub struct GpuManyLod {
     flush: [[CutPass; 2]; 2],
     count: [wgpu::BindGroup; 2],
     splats: [wgpu::BindGroup; 2],
-    inplace_bind: wgpu::BindGroup,
     clear_bind: wgpu::BindGroup,
     depth: u32,
     view_count: u32,
@@ -197,7 +209,10 @@ impl GpuManyLod {
         let step = shader::compute_pipeline(device, &cut_module, "step", &[]);
         let clear = shader::compute_pipeline(device, &splat_module, "clear", &[]);
         let splat = shader::compute_pipeline(device, &splat_module, "splat", &[]);
-        let inplace = shader::compute_pipeline(device, &splat_module, "inplace", &[]);
+        let mut compactions = vec![(Compaction::Atomic, "manylod/inplace_atomic.wgsl")];
+        if device.features().contains(wgpu::Features::SUBGROUP) {
+            compactions.push((Compaction::Ballot, "manylod/inplace_ballot.wgsl"));
+        }
 
         let nodes = transfer::buffer_init(
             device,
@@ -330,19 +345,27 @@ impl GpuManyLod {
                 ],
             )
         });
-        let inplace_bind = shader::bind_buffers(
-            device,
-            "manylod inplace",
-            &inplace,
-            &[
-                (0, &nodes),
-                (1, &views_buffer),
-                (2, &splat_params[0]),
-                (3, &counters),
-                (5, &atlas),
-                (6, &problem),
-            ],
-        );
+        let inplace = compactions
+            .into_iter()
+            .map(|(compaction, file)| {
+                let module = shader::module(device, file)?;
+                let pipeline = shader::compute_pipeline(device, &module, "inplace", &[]);
+                let bind = shader::bind_buffers(
+                    device,
+                    "manylod inplace",
+                    &pipeline,
+                    &[
+                        (0, &nodes),
+                        (1, &views_buffer),
+                        (2, &splat_params[0]),
+                        (3, &counters),
+                        (5, &atlas),
+                        (6, &problem),
+                    ],
+                );
+                Ok::<_, ManyLodError>((compaction, pipeline, bind))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         let clear_bind = shader::bind_buffers(device, "manylod clear", &clear, &[(5, &atlas)]);
         let unwrap2 = |[a, b]: [Result<CutPass, ManyLodError>; 2]| Ok::<_, ManyLodError>([a?, b?]);
         let [s0, s1] = steps;
@@ -364,7 +387,6 @@ impl GpuManyLod {
             flush: [unwrap2(f0)?, unwrap2(f1)?],
             count: [c0?, c1?],
             splats,
-            inplace_bind,
             clear_bind,
             depth: bsh.depth,
             view_count: views.len() as u32,
@@ -456,23 +478,43 @@ impl GpuManyLod {
         pass.dispatch_workgroups_indirect(&self.dispatch, 0);
     }
 
-    /// Records the in-place variant (§3.7.2): basic cuts found and rasterised by one workgroup
-    /// per view, no cut list (one pass, timed as `in-place`). Overflow of the workgroup stack
-    /// shows in [`GpuManyLod::read_atlas`].
-    pub fn encode_inplace(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
+    /// The in-place variant's compactions this device runs: [`Compaction::Atomic`], and
+    /// [`Compaction::Ballot`] where it has subgroups.
+    pub fn compactions(&self) -> Vec<Compaction> {
+        self.inplace.iter().map(|(c, _, _)| *c).collect()
+    }
+
+    /// Records the in-place variant (§3.7.2) with `compaction`: basic cuts found and rasterised
+    /// by one workgroup per view, no cut list (one pass, timed as `in-place`). Overflow of the
+    /// workgroup stack shows in [`GpuManyLod::read_atlas`]; a compaction the device cannot run
+    /// (see [`GpuManyLod::compactions`]) is an error.
+    pub fn encode_inplace(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        compaction: Compaction,
+        timer: Option<&PassTimer>,
+    ) -> Result<(), ManyLodError> {
+        let (_, pipeline, bind) = self
+            .inplace
+            .iter()
+            .find(|(c, _, _)| *c == compaction)
+            .ok_or(ManyLodError::Unsupported(
+                "the in-place ballot compaction needs subgroups, which this device lacks",
+            ))?;
         encoder.clear_buffer(&self.counters, 8 * 4, Some(8 * 4));
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("manylod in-place"),
             timestamp_writes: timer.and_then(|t| t.compute_pass("in-place")),
         });
         self.encode_clear(&mut pass);
-        pass.set_pipeline(&self.inplace);
-        pass.set_bind_group(0, &self.inplace_bind, &[]);
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind, &[]);
         let (x, y) = (
             self.view_count.min(MAX_GROUPS_X),
             self.view_count.div_ceil(MAX_GROUPS_X),
         );
         pass.dispatch_workgroups(x, y, 1);
+        Ok(())
     }
 
     fn encode_clear(&self, pass: &mut wgpu::ComputePass) {

@@ -62,6 +62,9 @@ pub enum ManyLodError {
         /// Capacity.
         capacity: u64,
     },
+    /// The device lacks a feature the request needs.
+    #[error("{0}")]
+    Unsupported(&'static str),
     /// The GPU failed.
     #[error(transparent)]
     Gpu(#[from] ::gpu::GpuError),

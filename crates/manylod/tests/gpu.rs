@@ -9,7 +9,7 @@ use manylod::{
     AtlasLayout, Bsh, CutProblem, ManyLodError,
     bsh::angle_between,
     cut::{basic, refine},
-    gpu::{CutKind, GpuIsm, GpuManyLod, GpuRefit},
+    gpu::{Compaction, CutKind, GpuIsm, GpuManyLod, GpuRefit},
     splat::{self, CLEAR},
     surfels,
 };
@@ -214,14 +214,28 @@ fn atlas_matches_the_cpu() {
         "{coverage} coverage and {depth} depth differences of {written} pixels"
     );
 
-    // The in-place variant rasterises the same basic cut: the same atlas, bit for bit (atomic
-    // minimum does not depend on the order).
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    m.encode_inplace(&mut encoder, None);
-    gpu.queue.submit([encoder.finish()]);
-    let inplace = m.read_atlas(gpu).expect("in-place atlas");
-    let same = inplace.iter().zip(&got).filter(|(a, b)| a == b).count();
-    assert_eq!(same, got.len(), "in-place vs list-based atlas");
+    // The in-place variant rasterises the same basic cut with either compaction: the same
+    // atlas, bit for bit (atomic minimum does not depend on the order).
+    let compactions = m.compactions();
+    assert_eq!(
+        compactions.contains(&Compaction::Ballot),
+        gpu.device.features().contains(wgpu::Features::SUBGROUP),
+        "the ballot compaction runs exactly where the device has subgroups"
+    );
+    eprintln!("in-place compactions tested: {compactions:?}");
+    for compaction in compactions {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        m.encode_inplace(&mut encoder, compaction, None)
+            .expect("in-place");
+        gpu.queue.submit([encoder.finish()]);
+        let inplace = m.read_atlas(gpu).expect("in-place atlas");
+        let same = inplace.iter().zip(&got).filter(|(a, b)| a == b).count();
+        assert_eq!(
+            same,
+            got.len(),
+            "in-place ({compaction:?}) vs list-based atlas"
+        );
+    }
 }
 
 /// The ISM baseline: GPU atlas == CPU atlas of the same random points.

@@ -15,7 +15,7 @@ use glam::Vec3;
 use gpu::{Gpu, PassTimer, bench::Stat};
 use manylod::{
     Bsh, ManyLodError, View,
-    gpu::{CutKind, GpuIsm, GpuManyLod, GpuRefit},
+    gpu::{Compaction, CutKind, GpuIsm, GpuManyLod, GpuRefit},
     splat, surfels,
 };
 use pipeline::indirect::{
@@ -133,6 +133,10 @@ fn animation(scene: &Scene, bvh: &Bvh, count: usize) -> Result<(Vec<Vec<View>>, 
     Ok((views, moved / diagonal))
 }
 
+/// Records one frame's passes.
+type Record<'a> =
+    dyn Fn(&mut GpuManyLod, &mut wgpu::CommandEncoder, &PassTimer) -> Result<(), ManyLodError> + 'a;
+
 /// Per-frame GPU times of the passes `record` encodes for each frame of `views` in turn
 /// (the views of frame `f` uploaded first; `pipeline::bench::time_named`).
 fn time_animation(
@@ -141,14 +145,14 @@ fn time_animation(
     frames: u32,
     views: &[Vec<View>],
     m: &mut GpuManyLod,
-    record: &dyn Fn(&mut GpuManyLod, &mut wgpu::CommandEncoder, &PassTimer),
+    record: &Record<'_>,
 ) -> Result<Vec<(String, Vec<f64>)>> {
     let mut frame = 0usize;
     pipeline::bench::time_named(frames, || -> Result<Vec<(String, f64)>> {
         m.set_views(&gpu.queue, &views[frame % views.len()])?;
         frame += 1;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        record(m, &mut encoder, timer);
+        record(m, &mut encoder, timer)?;
         timer.resolve(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
         Ok(timer
@@ -216,6 +220,32 @@ fn gpu_manylod(
     }
 }
 
+/// What a row measures: a list-based cut and its splat, or the in-place variant.
+#[derive(Clone, Copy)]
+enum Variant {
+    Cut(CutKind),
+    InPlace(Compaction),
+}
+
+/// The variants measured at a set-up: basic, incremental and (with `lazy`) lazy cuts, and the
+/// in-place variant with each compaction the device runs.
+fn variants(m: &GpuManyLod, lazy: bool) -> Vec<(&'static str, Variant)> {
+    let mut v = vec![
+        ("basic", Variant::Cut(CutKind::Basic)),
+        ("incremental", Variant::Cut(CutKind::Incremental)),
+    ];
+    if lazy {
+        v.push(("lazy q=2", Variant::Cut(CutKind::Lazy(2))));
+    }
+    for c in m.compactions() {
+        v.push(match c {
+            Compaction::Atomic => ("in-place (basic, atomic)", Variant::InPlace(c)),
+            Compaction::Ballot => ("in-place (basic, ballot)", Variant::InPlace(c)),
+        });
+    }
+    v
+}
+
 #[allow(clippy::too_many_arguments)]
 fn variant_row(
     gpu: &Gpu,
@@ -225,22 +255,22 @@ fn variant_row(
     m: &mut GpuManyLod,
     points: usize,
     epsilon: f32,
-    variant: &str,
-    kind: Option<CutKind>,
+    (name, variant): (&str, Variant),
 ) -> Result<Row> {
-    let by_name = time_animation(gpu, timer, frames, views, m, &|m, e, t| match kind {
-        Some(k) => {
+    let by_name = time_animation(gpu, timer, frames, views, m, &|m, e, t| match variant {
+        Variant::Cut(k) => {
             m.encode_cut(e, k, Some(t));
             m.encode_splat(e, Some(t));
+            Ok(())
         }
-        None => m.encode_inplace(e, Some(t)),
+        Variant::InPlace(c) => m.encode_inplace(e, c, Some(t)),
     })?;
     let total = Stat::of(pipeline::bench::per_frame_sum(
         &by_name,
         &["cut", "splat", "in-place"],
     ));
-    let (cut_size, culled, processed, iterations) = match kind {
-        Some(_) => {
+    let (cut_size, culled, processed, iterations) = match variant {
+        Variant::Cut(_) => {
             let c = m.read_cut(gpu)?;
             (
                 c.node_views.len() as u64,
@@ -249,13 +279,13 @@ fn variant_row(
                 c.iterations,
             )
         }
-        None => {
+        Variant::InPlace(_) => {
             m.read_atlas(gpu)?;
             (0, 0, 0, 0)
         }
     };
     println!(
-        "{points} points, {} views, ε {epsilon}: {variant} {:.3} ms ({cut_size} node-views, {processed} processed)",
+        "{points} points, {} views, ε {epsilon}: {name} {:.3} ms ({cut_size} node-views, {processed} processed)",
         views[0].len(),
         total.median_ms
     );
@@ -263,7 +293,7 @@ fn variant_row(
         points,
         views: views[0].len(),
         epsilon,
-        variant: variant.into(),
+        variant: name.into(),
         cut: stat(&by_name, "cut"),
         splat: stat(&by_name, "splat"),
         total,
@@ -314,12 +344,7 @@ fn main() -> Result<()> {
                     refit: refit_stat,
                 });
             }
-            for (variant, kind) in [
-                ("basic", Some(CutKind::Basic)),
-                ("incremental", Some(CutKind::Incremental)),
-                ("lazy q=2", Some(CutKind::Lazy(2))),
-                ("in-place (basic)", None),
-            ] {
+            for variant in variants(&m, true) {
                 rows.push(variant_row(
                     &gpu,
                     &timer,
@@ -329,7 +354,6 @@ fn main() -> Result<()> {
                     points,
                     epsilon,
                     variant,
-                    kind,
                 )?);
             }
             if epsilon == 1.0 {
@@ -339,6 +363,7 @@ fn main() -> Result<()> {
                 let by_name =
                     time_animation(&gpu, &timer, args.frames, &views_1k, &mut m, &|m, e, t| {
                         ism.encode(e, m, Some(t));
+                        Ok(())
                     })?;
                 let total = stat(&by_name, "ism").unwrap_or(Stat::of(Vec::new()));
                 println!(
@@ -362,11 +387,7 @@ fn main() -> Result<()> {
         }
         for epsilon in [1.0f32, 4.0] {
             let mut m = gpu_manylod(&gpu, &bsh, &views_4k, epsilon, diagonal)?;
-            for (variant, kind) in [
-                ("basic", Some(CutKind::Basic)),
-                ("incremental", Some(CutKind::Incremental)),
-                ("in-place (basic)", None),
-            ] {
+            for variant in variants(&m, false) {
                 rows.push(variant_row(
                     &gpu,
                     &timer,
@@ -376,7 +397,6 @@ fn main() -> Result<()> {
                     points,
                     epsilon,
                     variant,
-                    kind,
                 )?);
             }
         }
