@@ -6,6 +6,25 @@ use scene::Camera;
 
 use crate::{PassTiming, RenderError, gpu::GpuRenderer};
 
+/// The ManyLoDs benchmark's light (`manylod-bench`, `manylod-cuts`) at `angle` radians along
+/// its orbit: a spot light high in the scene pointing down, circling the vertical axis through
+/// the scene's centre at a tenth of the smaller horizontal extent; it reaches past the scene, so
+/// every photon lands.
+pub fn orbiting_spot(bounds: &scene::Aabb, angle: f32) -> scene::Light {
+    let extent = bounds.max - bounds.min;
+    let orbit = 0.1 * extent.x.min(extent.z);
+    scene::Light::Spot {
+        position: bounds.center()
+            + Vec3::new(orbit * angle.cos(), 0.3 * extent.y, orbit * angle.sin()),
+        direction: Vec3::NEG_Y,
+        color: Vec3::ONE,
+        intensity: 30.0,
+        radius: 2.0 * bounds.diagonal(),
+        inner_angle: 50f32.to_radians(),
+        outer_angle: 60f32.to_radians(),
+    }
+}
+
 /// Runs `frame` for a warm-up of at least 10 frames and 300 ms of back-to-back work, so that
 /// the GPU has left the idle clocks it drops to while the CPU prepares a configuration, then
 /// `frames` more times, and returns those frames' results.

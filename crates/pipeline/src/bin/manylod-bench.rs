@@ -11,7 +11,6 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Parser;
-use glam::Vec3;
 use gpu::{Gpu, PassTimer, bench::Stat};
 use manylod::{
     Bsh, ManyLodError, View,
@@ -22,7 +21,7 @@ use pipeline::indirect::{
     shadows::{scene_mesh, vpl_atlas, vpl_views},
     vpl,
 };
-use scene::{Bvh, Light, Scene};
+use scene::{Bvh, Scene};
 use serde::Serialize;
 
 /// Benchmarks ManyLoDs cuts and splats.
@@ -91,21 +90,10 @@ struct Report {
 fn animation(scene: &Scene, bvh: &Bvh, count: usize) -> Result<(Vec<Vec<View>>, f32)> {
     let bounds = scene.bounds();
     let diagonal = bounds.diagonal();
-    let (center, extent) = (bounds.center(), bounds.max - bounds.min);
     let lift = 1e-3 * diagonal;
-    let orbit = 0.1 * extent.x.min(extent.z);
     let sets = (0..CYCLE)
         .map(|f| {
-            let a = (f as f32 * 10.0).to_radians();
-            let spot = Light::Spot {
-                position: center + Vec3::new(orbit * a.cos(), 0.3 * extent.y, orbit * a.sin()),
-                direction: Vec3::NEG_Y,
-                color: Vec3::ONE,
-                intensity: 30.0,
-                radius: 2.0 * diagonal,
-                inner_angle: 50f32.to_radians(),
-                outer_angle: 60f32.to_radians(),
-            };
+            let spot = pipeline::bench::orbiting_spot(&bounds, (f as f32 * 10.0).to_radians());
             Ok(vpl::generate(
                 scene,
                 bvh,

@@ -18,7 +18,7 @@ use pipeline::indirect::{
     vpl,
 };
 use rayon::prelude::*;
-use scene::{Bvh, Light, Scene};
+use scene::{Bvh, Scene};
 
 /// Draws three VPL views' cuts.
 #[derive(Parser, Debug)]
@@ -79,16 +79,8 @@ fn main() -> Result<()> {
     let bvh = Bvh::build(&scene);
     let bounds = scene.bounds();
     let (center, extent, diagonal) = (bounds.center(), bounds.max - bounds.min, bounds.diagonal());
-    // The benchmark's spot light at frame 0 (`manylod-bench`).
-    let spot = Light::Spot {
-        position: center + Vec3::new(0.1 * extent.x.min(extent.z), 0.3 * extent.y, 0.0),
-        direction: Vec3::NEG_Y,
-        color: Vec3::ONE,
-        intensity: 30.0,
-        radius: 2.0 * diagonal,
-        inner_angle: 50f32.to_radians(),
-        outer_angle: 60f32.to_radians(),
-    };
+    // The benchmark's spot light at frame 0.
+    let spot = pipeline::bench::orbiting_spot(&bounds, 0.0);
     let set = vpl::generate(
         &scene,
         &bvh,
