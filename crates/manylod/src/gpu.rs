@@ -1,8 +1,9 @@
 //! The GPU kernels (§3.7): refit (`refit.wgsl`), many-view cuts with ping-pong active lists
 //! and indirect dispatch (`cut.wgsl`), splatting into the atlas (`splat.wgsl`) and the in-place
-//! variant (`inplace_atomic.wgsl`, and `inplace_ballot.wgsl` where the device has subgroups). Everything for one frame is recorded into the caller's encoder; counts
-//! never come back to the CPU between iterations — each pass's size is written on the GPU by
-//! a one-thread `prepare` dispatch and used as the next pass's indirect dispatch.
+//! variant (`inplace_atomic.wgsl`, and `inplace_ballot.wgsl` where the device has subgroups).
+//! Everything for one frame is recorded into the caller's encoder; counts never come back to
+//! the CPU between iterations — each pass's size is written on the GPU by a one-thread
+//! `prepare` dispatch and used as the next pass's indirect dispatch.
 //!
 //! A frame's cut lands in one of two cut lists; the next incremental or lazy frame starts from
 //! it and writes the other one.
