@@ -32,10 +32,10 @@ fn refine_m1(@builtin(global_invocation_id) id: vec3<u32>) {
     p1_out[v] = vec4<f32>(p, 1.0);
 }
 
-@group(0) @binding(5) var<storage, read> p1: array<vec4<f32>>;
-@group(0) @binding(6) var<storage, read> ring_offsets: array<u32>;
-@group(0) @binding(7) var<storage, read> ring: array<u32>;
-@group(0) @binding(8) var<storage, read_write> n1_out: array<vec4<f32>>;
+@group(1) @binding(0) var<storage, read> p1: array<vec4<f32>>;
+@group(1) @binding(1) var<storage, read> ring_offsets: array<u32>;
+@group(1) @binding(2) var<storage, read> ring: array<u32>;
+@group(1) @binding(3) var<storage, read_write> n1_out: array<vec4<f32>>;
 
 @compute @workgroup_size(64)
 fn normals_m1(@builtin(global_invocation_id) id: vec3<u32>) {

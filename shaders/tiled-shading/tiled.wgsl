@@ -8,7 +8,8 @@
 // lights: every invocation tests one light of a batch against the tile frustum and appends it
 // to the tile's list in workgroup memory; whenever the list could overflow with the next batch,
 // and after the last one, the invocations switch back to pixels and shade from the list.
-// Twin of `tiled_shading::cpu` (same names). gpu.rs rewrites METHOD, TILE and WG.
+// Twin of `tiled_shading::cpu` (same names). `tiled_shading::gpu::specialisation` sets
+// METHOD, TILE and WG.
 
 const METHOD: u32 = 1u;
 const TILE: u32 = 16u;
@@ -276,7 +277,7 @@ fn brute_force(@builtin(global_invocation_id) id: vec3<u32>) {
     textureStore(specular_out, id.xy, vec4<f32>(specular, 0.0));
 }
 
-@compute @workgroup_size(16, 16)
+@compute @workgroup_size(WG, WG)
 fn shade_tiles(
     @builtin(workgroup_id) group: vec3<u32>,
     @builtin(local_invocation_id) local: vec3<u32>,

@@ -1,6 +1,8 @@
 //! CPU reference timings of the adaptive supersampling stages (the GPU numbers come from
 //! `ssaa-bench`).
 
+#![allow(missing_docs)] // criterion_group! generates an undocumented function
+
 use adaptive_ssaa::cpu::{self, ShadingInputs, SsGBuffer};
 use adaptive_ssaa::{SsaaConfig, SsaaMaterial, TextureArray};
 use criterion::{Criterion, criterion_group, criterion_main};

@@ -6,7 +6,8 @@
 //! Pipelines, buffers and bind groups are built once per image size; nothing is read back
 //! between passes (the sorted resolve sizes its last dispatch indirectly).
 
-use ::gpu::{Gpu, GpuError, PassTimer, shader, transfer};
+use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
+use ::gpu::{Gpu, GpuError, PassTimer, transfer};
 use gbuffer::gpu::{GBufferPass, GpuScene};
 use gbuffer::{DEPTH_FORMAT, Frame, Image, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
 use scene::{Camera, Scene};
@@ -186,13 +187,9 @@ pub struct SsGBufferPass {
 impl SsGBufferPass {
     /// Builds the pipeline for scenes uploaded with `gbuffer_pass`.
     pub fn new(device: &wgpu::Device, gbuffer_pass: &GBufferPass) -> Result<Self, GpuError> {
-        let module = shader::module(device, "adaptive-ssaa/gbuffer.wgsl")?;
+        let module = crate::SHADERS.module(device, "gbuffer.wgsl")?;
         let [frame, material] = gbuffer_pass.layouts();
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("ss gbuffer"),
-            bind_group_layouts: &[Some(frame), Some(material)],
-            immediate_size: 0,
-        });
+        let layout = kernel::pipeline_layout(device, "ss gbuffer", &[frame, material]);
         let attributes = GBufferPass::vertex_attributes();
         let target = |format| {
             Some(wgpu::ColorTargetState {
@@ -458,45 +455,26 @@ impl Ssaa {
         {
             return Err(SsaaError::InvalidSize { width, height, m });
         }
-        let module = shader::module(device, "adaptive-ssaa/ssaa.wgsl")?;
-        let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ssaa"),
-            entries: &bind_group_entries(),
-        });
-        let args_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("ssaa dispatch args"),
-            entries: &[storage_entry(0, false)],
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("ssaa"),
-            bind_group_layouts: &[Some(&group_layout)],
-            immediate_size: 0,
-        });
-        let scan_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("ssaa scan"),
-            bind_group_layouts: &[Some(&group_layout), Some(&args_layout)],
-            immediate_size: 0,
-        });
-        let make = |entry: &str, layout: &wgpu::PipelineLayout| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(layout),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let module = crate::SHADERS.module(device, "ssaa.wgsl")?;
+        let group_layout = Layout::compute(device, "ssaa", &SSAA_BINDINGS);
+        let args_layout = Layout::compute(device, "ssaa dispatch args", &[Binding::Storage]);
+        let make = |entry: &str| kernel::pipeline(device, &module, entry, &[&group_layout], &[]);
         let pipelines = Pipelines {
-            first: make("shade_first", &layout),
-            evaluate: make("evaluate", &layout),
-            adaptive: make("shade_adaptive", &layout),
-            full: make("shade_full", &layout),
-            sort_count: make("sort_count", &layout),
-            sort_scan: make("sort_scan", &scan_layout),
-            sort_scatter: make("sort_scatter", &layout),
-            shade_sorted: make("shade_sorted", &layout),
-            fxaa: make("fxaa", &layout),
+            first: make("shade_first"),
+            evaluate: make("evaluate"),
+            adaptive: make("shade_adaptive"),
+            full: make("shade_full"),
+            sort_count: make("sort_count"),
+            sort_scan: kernel::pipeline(
+                device,
+                &module,
+                "sort_scan",
+                &[&group_layout, &args_layout],
+                &[],
+            ),
+            sort_scatter: make("sort_scatter"),
+            shade_sorted: make("shade_sorted"),
+            fxaa: make("fxaa"),
         };
         let pixels = u64::from(width) * u64::from(height);
         let params = SsaaParams::new(config, width, height, 1.0, 0);
@@ -547,46 +525,30 @@ impl Ssaa {
         let t = inputs.targets;
         let views = [&t.linear_depth, &t.normal, &t.uv, &t.uv_grad, &t.material]
             .map(|t| t.create_view(&Default::default()));
-        fn buffer(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: b.as_entire_binding(),
-            }
-        }
-        let view = |binding, v| wgpu::BindGroupEntry {
-            binding,
-            resource: wgpu::BindingResource::TextureView(v),
-        };
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ssaa"),
-            layout: &group_layout,
-            entries: &[
-                buffer(0, inputs.frame),
-                buffer(1, &params_buffer),
-                view(2, &views[0]),
-                view(3, &views[1]),
-                view(4, &views[2]),
-                view(5, &views[3]),
-                view(6, &views[4]),
-                view(7, &inputs.textures.view),
-                wgpu::BindGroupEntry {
-                    binding: 8,
-                    resource: wgpu::BindingResource::Sampler(&inputs.textures.sampler),
-                },
-                buffer(9, inputs.materials),
-                buffer(10, &lights),
-                buffer(11, &first),
-                buffer(12, &counts),
-                buffer(13, &output),
-                buffer(14, &sort),
-                buffer(15, &list),
-            ],
-        });
-        let args_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("ssaa dispatch args"),
-            layout: &args_layout,
-            entries: &[buffer(0, &args)],
-        });
+        let view = wgpu::BindingResource::TextureView;
+        let mut resources = vec![
+            inputs.frame.as_entire_binding(),
+            params_buffer.as_entire_binding(),
+        ];
+        resources.extend(views.iter().map(view));
+        resources.extend([
+            view(&inputs.textures.view),
+            wgpu::BindingResource::Sampler(&inputs.textures.sampler),
+        ]);
+        resources.extend(
+            [
+                inputs.materials,
+                &lights,
+                &first,
+                &counts,
+                &output,
+                &sort,
+                &list,
+            ]
+            .map(|b| b.as_entire_binding()),
+        );
+        let group = group_layout.bind(device, &resources);
+        let args_group = args_layout.bind_buffers(device, &[&args]);
         Ok(Self {
             config: *config,
             params,
@@ -667,17 +629,8 @@ impl Ssaa {
         timer: Option<&PassTimer>,
         name: &str,
     ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(name),
-            timestamp_writes: timer.and_then(|t| t.compute_pass(name)),
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &self.group, &[]);
-        pass.dispatch_workgroups(
-            self.params.width.div_ceil(8),
-            self.params.height.div_ceil(8),
-            1,
-        );
+        let workgroups = Workgroups::covering(self.params.width, self.params.height, 8);
+        Passes::one(name, pipeline, vec![self.group.clone()], workgroups).encode(encoder, timer);
     }
 
     /// Shades the first sample per pixel into `S`.
@@ -699,24 +652,19 @@ impl Ssaa {
             Resolve::Sorted => {
                 encoder.clear_buffer(&self.sort, 0, None);
                 self.dispatch(encoder, &self.pipelines.sort_count, timer, "sort count");
-                {
-                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some("sort scan"),
-                        timestamp_writes: timer.and_then(|t| t.compute_pass("sort scan")),
-                    });
-                    pass.set_pipeline(&self.pipelines.sort_scan);
-                    pass.set_bind_group(0, &self.group, &[]);
-                    pass.set_bind_group(1, &self.args_group, &[]);
-                    pass.dispatch_workgroups(1, 1, 1);
-                }
+                let groups = vec![self.group.clone(), self.args_group.clone()];
+                let scan = Workgroups::Direct([1, 1, 1]);
+                Passes::one("sort scan", &self.pipelines.sort_scan, groups, scan)
+                    .encode(encoder, timer);
                 self.dispatch(encoder, &self.pipelines.sort_scatter, timer, "sort scatter");
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("shade sorted"),
-                    timestamp_writes: timer.and_then(|t| t.compute_pass("shade sorted")),
-                });
-                pass.set_pipeline(&self.pipelines.shade_sorted);
-                pass.set_bind_group(0, &self.group, &[]);
-                pass.dispatch_workgroups_indirect(&self.args, 0);
+                let sorted = Workgroups::Indirect(self.args.clone(), 0);
+                Passes::one(
+                    "shade sorted",
+                    &self.pipelines.shade_sorted,
+                    vec![self.group.clone()],
+                    sorted,
+                )
+                .encode(encoder, timer);
             }
         }
     }
@@ -775,67 +723,32 @@ impl Ssaa {
     }
 }
 
-fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
-
-fn bind_group_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
-    let uniform = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
+/// Group 0 of `ssaa.wgsl`: frame, params; linear depth, normal, uv, uv gradient, material
+/// targets; texture array and sampler; materials, lights; first sample, counts, output, sort
+/// histogram, pixel list.
+const SSAA_BINDINGS: [Binding; 16] = {
+    use Binding::{
+        Sampler, Storage, StorageRead, TextureArray, TextureUint, TextureUnfilterable, Uniform,
     };
-    let texture = |binding, sample_type, dim| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type,
-            view_dimension: dim,
-            multisampled: false,
-        },
-        count: None,
-    };
-    let unfilterable = wgpu::TextureSampleType::Float { filterable: false };
-    let d2 = wgpu::TextureViewDimension::D2;
-    let mut entries = vec![
-        uniform(0),
-        uniform(1),
-        texture(2, unfilterable, d2),
-        texture(3, wgpu::TextureSampleType::Uint, d2),
-        texture(4, unfilterable, d2),
-        texture(5, unfilterable, d2),
-        texture(6, wgpu::TextureSampleType::Uint, d2),
-        texture(
-            7,
-            wgpu::TextureSampleType::Float { filterable: true },
-            wgpu::TextureViewDimension::D2Array,
-        ),
-        wgpu::BindGroupLayoutEntry {
-            binding: 8,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-            count: None,
-        },
-        storage_entry(9, true),
-        storage_entry(10, true),
-    ];
-    entries.extend((11..16).map(|b| storage_entry(b, false)));
-    entries
-}
+    [
+        Uniform,
+        Uniform,
+        TextureUnfilterable,
+        TextureUint,
+        TextureUnfilterable,
+        TextureUnfilterable,
+        TextureUint,
+        TextureArray,
+        Sampler,
+        StorageRead,
+        StorageRead,
+        Storage,
+        Storage,
+        Storage,
+        Storage,
+        Storage,
+    ]
+};
 
 /// A scene set up for adaptive supersampling at one size: G-buffer passes, uploaded scene,
 /// texture array, materials, targets and the [`Ssaa`] passes.

@@ -43,6 +43,21 @@ use glam::Vec3;
 pub use dither::{bayer_matrix, dither_matrix, dither_order, prefix_spread};
 pub use texture::{MAX_ANISOTROPY, TextureArray, anisotropic_footprint};
 
+/// This crate's WGSL (`shaders/adaptive-ssaa/`, carried into the package by the `shaders` link).
+pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
+    "adaptive-ssaa",
+    imports: [gbuffer::SHADERS, tiled_shading::SHADERS],
+    files: [
+        "gbuffer.wgsl",
+        "ssaa.wgsl",
+    ],
+);
+
+/// What this crate's kernels need of a device: wgpu's default limits suffice (the adaptive shading binds exactly the default 8 storage buffers).
+pub fn device_needs() -> ::gpu::DeviceNeeds {
+    ::gpu::DeviceNeeds::default()
+}
+
 /// Largest window side `m` (64 samples per pixel).
 pub const MAX_M: u32 = 8;
 /// Format of the supersampled texture-coordinate target.

@@ -135,7 +135,7 @@ impl Fixture {
     /// The checkerboard scene's supersampled G-buffer, `m × m` samples per pixel, textures
     /// filtered with up to `anisotropy`.
     fn new(m: u32, anisotropy: u32) -> Option<Self> {
-        let gpu = gpu::test_gpu()?;
+        let gpu = gpu::test_device(&adaptive_ssaa::device_needs())?;
         let scene = scene::checkerboard();
         let camera = scene.camera_or_framed();
         let lights = tiled_shading::gpu_lights(&scene.lights).expect("valid lights");
@@ -415,7 +415,9 @@ fn fxaa_cpu_matches_gpu() {
 
 #[test]
 fn bad_input_is_an_error() {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&adaptive_ssaa::device_needs()) else {
+        return;
+    };
     let scene = scene::checkerboard();
     let lights = tiled_shading::gpu_lights(&scene.lights).expect("valid lights");
     let bad = |w: u32, h: u32, m: u32| {

@@ -1,6 +1,7 @@
 //! GPU G-buffer creation: a render pipeline writing all targets at once (MRT), the twin of
 //! [`crate::cpu::rasterize`]. Shader: `shaders/gbuffer/gbuffer.wgsl`.
 
+use ::gpu::kernel::{self, Binding, Layout};
 use ::gpu::{Gpu, GpuError, transfer};
 use glam::Vec4;
 use scene::{Camera, Scene};
@@ -55,6 +56,7 @@ impl GpuMaterial {
 }
 
 /// The five G-buffer textures of one resolution (see the layout table in the crate docs).
+#[derive(Clone)]
 pub struct GBufferTargets {
     /// Width in pixels.
     pub width: u32,
@@ -325,24 +327,14 @@ impl GpuScene {
                     .base_color_texture
                     .map_or(&white, |t| &textures[t as usize]);
                 let view = texture.create_view(&Default::default());
-                Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("material"),
-                    layout: &pass.material_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: uniform.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: wgpu::BindingResource::TextureView(&view),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::Sampler(&pass.sampler),
-                        },
+                Ok(pass.material_layout.bind(
+                    device,
+                    &[
+                        uniform.as_entire_binding(),
+                        wgpu::BindingResource::TextureView(&view),
+                        wgpu::BindingResource::Sampler(&pass.sampler),
                     ],
-                }))
+                ))
             })
             .collect::<Result<Vec<_>, GpuError>>()?;
         let materials = transfer::buffer_init(
@@ -385,8 +377,8 @@ pub struct GBufferPass {
     pipeline: wgpu::RenderPipeline,
     prepass: wgpu::RenderPipeline,
     after_prepass: wgpu::RenderPipeline,
-    frame_layout: wgpu::BindGroupLayout,
-    material_layout: wgpu::BindGroupLayout,
+    frame_layout: Layout,
+    material_layout: Layout,
     sampler: wgpu::Sampler,
     frame: wgpu::Buffer,
     frame_group: wgpu::BindGroup,
@@ -395,56 +387,20 @@ pub struct GBufferPass {
 impl GBufferPass {
     /// Builds the pipeline.
     pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
-        let module = ::gpu::shader::module(device, "gbuffer/gbuffer.wgsl")?;
-        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gbuffer frame"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
-        let material_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("gbuffer material"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 2,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gbuffer"),
-            bind_group_layouts: &[Some(&frame_layout), Some(&material_layout)],
-            immediate_size: 0,
-        });
+        let module = crate::SHADERS.module(device, "gbuffer.wgsl")?;
+        let frame_layout = Layout::new(
+            device,
+            "gbuffer frame",
+            wgpu::ShaderStages::VERTEX_FRAGMENT,
+            &[Binding::Uniform],
+        );
+        let material_layout = Layout::new(
+            device,
+            "gbuffer material",
+            wgpu::ShaderStages::FRAGMENT,
+            &[Binding::Uniform, Binding::Texture, Binding::Sampler],
+        );
+        let layout = kernel::pipeline_layout(device, "gbuffer", &[&frame_layout, &material_layout]);
         let target = |format| {
             Some(wgpu::ColorTargetState {
                 format,
@@ -452,11 +408,7 @@ impl GBufferPass {
                 write_mask: wgpu::ColorWrites::ALL,
             })
         };
-        let depth_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("gbuffer z-prepass"),
-            bind_group_layouts: &[Some(&frame_layout)],
-            immediate_size: 0,
-        });
+        let depth_layout = kernel::pipeline_layout(device, "gbuffer z-prepass", &[&frame_layout]);
         let targets = [
             target(LINEAR_DEPTH_FORMAT),
             target(NORMAL_FORMAT),
@@ -530,14 +482,7 @@ impl GBufferPass {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let frame_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("gbuffer frame"),
-            layout: &frame_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: frame.as_entire_binding(),
-            }],
-        });
+        let frame_group = frame_layout.bind_buffers(device, &[&frame]);
         Ok(Self {
             pipeline,
             prepass,
@@ -553,7 +498,7 @@ impl GBufferPass {
     /// The bind group layouts of the frame uniform (group 0) and of a material (group 1), for
     /// pipelines that draw the same [`GpuScene`] with another fragment stage
     /// ([`GBufferPass::draw_scene`]).
-    pub fn layouts(&self) -> [&wgpu::BindGroupLayout; 2] {
+    pub fn layouts(&self) -> [&Layout; 2] {
         [&self.frame_layout, &self.material_layout]
     }
 

@@ -38,6 +38,24 @@ pub use image::{Image, ImageError, linear_to_srgb, srgb_to_linear};
 use glam::{Mat4, Vec4};
 use scene::Camera;
 
+/// This crate's WGSL (`shaders/gbuffer/`, carried into the package by the `shaders` link).
+pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
+    "gbuffer",
+    imports: [],
+    files: [
+        "encode_normals.wgsl",
+        "frame.wgsl",
+        "gbuffer.wgsl",
+        "material.wgsl",
+        "normal_encoding.wgsl",
+    ],
+);
+
+/// What this crate's kernels need of a device: wgpu's default limits suffice.
+pub fn device_needs() -> ::gpu::DeviceNeeds {
+    ::gpu::DeviceNeeds::default()
+}
+
 /// Depth target format.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Linear view depth target format.

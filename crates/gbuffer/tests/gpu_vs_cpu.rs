@@ -72,7 +72,7 @@ fn compare(
     w: u32,
     h: u32,
 ) -> Result<(), String> {
-    let Some(gpu) = gpu::test_gpu() else {
+    let Some(gpu) = gpu::test_device(&gbuffer::device_needs()) else {
         return Ok(());
     };
     let expected = cpu::rasterize(scene, camera, w, h).map_err(|e| e.to_string())?;
@@ -153,7 +153,9 @@ proptest! {
 /// exactly coplanar overlaps, so no depth ties).
 #[test]
 fn z_prepass_gives_the_same_gbuffer() {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&gbuffer::device_needs()) else {
+        return;
+    };
     let cases = [
         (scene::cornell_box(), None),
         (scene::checkerboard(), None),
@@ -176,7 +178,9 @@ fn z_prepass_gives_the_same_gbuffer() {
 #[test]
 fn wgsl_normal_encodings_match_rust() {
     use gpu::wgpu;
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&gbuffer::device_needs()) else {
+        return;
+    };
     let normals: Vec<Vec3> = normal::fibonacci_sphere(4096).collect();
     let input: Vec<[f32; 4]> = normals.iter().map(|n| n.extend(0.0).to_array()).collect();
     let count = normals.len();
@@ -188,40 +192,21 @@ fn wgsl_normal_encodings_match_rust() {
         .expect("buffer");
     let decoded = gpu::transfer::buffer_init(d, "decoded", &vec![0u8; count * 5 * 16], storage)
         .expect("buffer");
-    let module = gpu::shader::module(d, "gbuffer/encode_normals.wgsl").expect("shader");
-    let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("encode_normals"),
-        layout: None,
-        module: &module,
-        entry_point: Some("encode_normals"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let group = d.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: encoded.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: decoded.as_entire_binding(),
-            },
-        ],
-    });
+    let module = gbuffer::SHADERS
+        .module(d, "encode_normals.wgsl")
+        .expect("shader");
+    use gpu::kernel::{Binding, Kernel, Passes, Workgroups};
+    let kernel = Kernel::new(
+        d,
+        &module,
+        "encode_normals",
+        &[Binding::StorageRead, Binding::Storage, Binding::Storage],
+        &[],
+    );
+    let group = kernel.bind_buffers(d, &[&input_buf, &encoded, &decoded]);
     let mut enc = d.create_command_encoder(&Default::default());
-    {
-        let mut pass = enc.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups((count as u32).div_ceil(64), 1, 1);
-    }
+    let workgroups = Workgroups::Direct([(count as u32).div_ceil(64), 1, 1]);
+    Passes::one("encode normals", &kernel.pipeline, vec![group], workgroups).encode(&mut enc, None);
     gpu.queue.submit([enc.finish()]);
     let e_bytes = gpu::transfer::read_buffer(d, &gpu.queue, &encoded).expect("read");
     let d_bytes = gpu::transfer::read_buffer(d, &gpu.queue, &decoded).expect("read");
@@ -254,7 +239,9 @@ fn wgsl_normal_encodings_match_rust() {
 
 #[test]
 fn zero_size_is_an_error_not_a_panic() {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&gbuffer::device_needs()) else {
+        return;
+    };
     let s = scene::cornell_box();
     assert!(run(gpu, &s, &s.camera.expect("camera"), 0, 16).is_err());
 }

@@ -1,8 +1,64 @@
 //! Adapter and device selection from the environment, and the test helper.
 
-use std::sync::OnceLock;
+use std::sync::Mutex;
 
 use crate::GpuError;
+
+/// What a kernel needs of a device beyond wgpu's defaults: required features and limits.
+///
+/// Each crate states its needs (`interleave::device_needs()`, …); a caller creating its own
+/// device requests `needs.limits` and `needs.features`. Needs combine with [`DeviceNeeds::and`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeviceNeeds {
+    /// Features that must be present.
+    pub features: wgpu::Features,
+    /// Limits that must be met (at least `wgpu::Limits::default()`).
+    pub limits: wgpu::Limits,
+}
+
+impl Default for DeviceNeeds {
+    /// No features, `wgpu::Limits::default()`.
+    fn default() -> Self {
+        Self {
+            features: wgpu::Features::empty(),
+            limits: wgpu::Limits::default(),
+        }
+    }
+}
+
+impl DeviceNeeds {
+    /// What both `self` and `other` need.
+    pub fn and(self, other: &DeviceNeeds) -> Self {
+        Self {
+            features: self.features | other.features,
+            limits: self.limits.or_better_values_from(&other.limits),
+        }
+    }
+
+    /// Fails with [`GpuError::Unsupported`] naming every missing feature and limit when
+    /// `features`/`limits` (a device's or an adapter's) do not meet these needs.
+    pub fn check(&self, features: wgpu::Features, limits: &wgpu::Limits) -> Result<(), GpuError> {
+        let mut missing = Vec::new();
+        let absent = self.features - features;
+        if !absent.is_empty() {
+            missing.push(format!("features {absent:?}"));
+        }
+        self.limits
+            .check_limits_with_fail_fn(limits, false, |name, needed, allowed| {
+                missing.push(format!("{name} {needed} (has {allowed})"))
+            });
+        if missing.is_empty() {
+            Ok(())
+        } else {
+            Err(GpuError::Unsupported(missing.join(", ")))
+        }
+    }
+
+    /// [`DeviceNeeds::check`] against `device`.
+    pub fn check_device(&self, device: &wgpu::Device) -> Result<(), GpuError> {
+        self.check(device.features(), &device.limits())
+    }
+}
 
 /// An adapter with its device and queue.
 ///
@@ -34,11 +90,21 @@ impl Gpu {
     /// `WGPU_BACKEND` (e.g. `vulkan`) limits the backends, `WGPU_ADAPTER_NAME` picks the first
     /// adapter whose name contains the given text (case-insensitive), `WGPU_POWER_PREF`
     /// (`low`/`high`) guides the default choice.
+    /// The device gets the adapter's own limits (programs want the largest buffers); see
+    /// [`Gpu::from_env_with`] for a device with exactly stated needs.
     pub fn from_env() -> Result<Self, GpuError> {
-        pollster::block_on(Self::from_env_async())
+        pollster::block_on(Self::from_env_async(None))
     }
 
-    async fn from_env_async() -> Result<Self, GpuError> {
+    /// Like [`Gpu::from_env`], but the device has `wgpu`'s default limits raised only as far as
+    /// `needs` states (plus the optional features the adapter has): what an embedding
+    /// application would create, and what tests use, so a kernel needing more than it states
+    /// fails.
+    pub fn from_env_with(needs: &DeviceNeeds) -> Result<Self, GpuError> {
+        pollster::block_on(Self::from_env_async(Some(needs)))
+    }
+
+    async fn from_env_async(needs: Option<&DeviceNeeds>) -> Result<Self, GpuError> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = match std::env::var("WGPU_ADAPTER_NAME") {
@@ -68,11 +134,18 @@ impl Gpu {
                 .map_err(|e| GpuError::NoAdapter(e.to_string()))?,
         };
         let info = adapter.get_info();
+        let (features, limits) = match needs {
+            Some(needs) => {
+                needs.check(adapter.features(), &adapter.limits())?;
+                (needs.features, needs.limits.clone())
+            }
+            None => (wgpu::Features::empty(), adapter.limits()),
+        };
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("deferred toolkit device"),
-                required_features: adapter.features() & OPTIONAL_FEATURES,
-                required_limits: adapter.limits(),
+                required_features: features | (adapter.features() & OPTIONAL_FEATURES),
+                required_limits: limits,
                 ..Default::default()
             })
             .await
@@ -119,22 +192,35 @@ impl Gpu {
     }
 }
 
-/// The shared device for GPU tests.
+/// The device for GPU tests: `wgpu::Limits::default()` raised only to what `needs` states.
 ///
-/// Returns `None` (and prints why) when no adapter exists, so the caller can skip the test;
-/// when the environment variable `CI` is set, a missing adapter is a failure instead: GPU tests
-/// never pass silently without running. All tests of one process share one device.
+/// Returns `None` (and prints why) when no adapter exists or it cannot meet `needs`, so the
+/// caller can skip the test; when the environment variable `CI` is set, that is a failure
+/// instead: GPU tests never pass silently without running. Tests of one process asking for
+/// the same needs share one device.
 ///
 /// ```no_run
-/// let Some(gpu) = gpu::test_gpu() else { return };
+/// let Some(gpu) = gpu::test_device(&gpu::DeviceNeeds::default()) else { return };
 /// assert!(!gpu.info.name.is_empty());
 /// ```
-pub fn test_gpu() -> Option<&'static Gpu> {
-    static GPU: OnceLock<Result<Gpu, String>> = OnceLock::new();
-    match GPU.get_or_init(|| Gpu::from_env().map_err(|e| e.to_string())) {
+pub fn test_device(needs: &DeviceNeeds) -> Option<&'static Gpu> {
+    type Devices = Vec<(DeviceNeeds, Result<&'static Gpu, String>)>;
+    static DEVICES: Mutex<Devices> = Mutex::new(Vec::new());
+    let mut devices = DEVICES.lock().unwrap_or_else(|e| e.into_inner());
+    let result = match devices.iter().find(|(n, _)| n == needs) {
+        Some((_, r)) => r.clone(),
+        None => {
+            let r = Gpu::from_env_with(needs)
+                .map(|g| &*Box::leak(Box::new(g)))
+                .map_err(|e| e.to_string());
+            devices.push((needs.clone(), r.clone()));
+            r
+        }
+    };
+    match result {
         Ok(gpu) => Some(gpu),
         Err(reason) if std::env::var_os("CI").is_some() => {
-            panic!("CI is set and no GPU adapter is available: {reason}")
+            panic!("CI is set and no GPU device meets the test's needs: {reason}")
         }
         Err(reason) => {
             eprintln!("skipping GPU test: {reason}");

@@ -3,8 +3,12 @@
 //! - [`Gpu`]: instance, adapter, device and queue chosen from the environment
 //!   (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`, `WGPU_POWER_PREF`), with only the optional
 //!   features the adapter has and the adapter's own limits.
-//! - [`test_gpu`]: the device helper every GPU test uses (skips with a reason, fails under `CI`).
-//! - [`shader`]: loading WGSL from the workspace's `shaders/` folder, with `#import`.
+//! - [`DeviceNeeds`]: the features and limits a kernel states; [`test_device`], the device
+//!   helper every GPU test uses (default limits + stated needs; skips with a reason, fails
+//!   under `CI`).
+//! - [`shader`]: each crate's WGSL [`shader::Library`], `#import`, one specialisation
+//!   mechanism, naga validation.
+//! - [`kernel`]: explicit bind-group layouts from binding kinds, pipelines, [`kernel::Passes`].
 //! - [`transfer`]: upload and readback helpers.
 //! - [`PassTimer`]: GPU time of named passes from timestamp queries.
 //!
@@ -16,11 +20,12 @@
 
 pub mod bench;
 mod device;
+pub mod kernel;
 pub mod shader;
 mod timer;
 pub mod transfer;
 
-pub use device::{Gpu, test_gpu};
+pub use device::{DeviceNeeds, Gpu, OPTIONAL_FEATURES, test_device};
 pub use timer::{PassTime, PassTimer};
 pub use wgpu;
 
@@ -56,6 +61,17 @@ pub enum GpuError {
         /// What is wrong.
         message: String,
     },
+    /// A texture or buffer handed to a kernel's `bind` does not fit it.
+    #[error("{what} {problem}")]
+    Resource {
+        /// The resource, as the kernel names it.
+        what: String,
+        /// What is wrong (size, format, usage).
+        problem: String,
+    },
+    /// The device lacks features or limits a kernel needs.
+    #[error("the device lacks what this kernel needs: {0}")]
+    Unsupported(String),
     /// A resource is larger than the device allows.
     #[error("{what} needs {needed} but the device allows at most {limit}")]
     TooLarge {

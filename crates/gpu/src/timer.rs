@@ -1,6 +1,8 @@
 //! GPU time of named passes from timestamp queries.
 
-use crate::{Gpu, GpuError, transfer};
+use std::sync::Mutex;
+
+use crate::{GpuError, transfer};
 
 /// The GPU time one named pass took.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,6 +26,8 @@ impl PassTime {
 ///
 /// When the device lacks `TIMESTAMP_QUERY` the timer is disabled: the pass hooks return
 /// `None` and [`PassTimer::read`] returns an empty list, so callers need no special case.
+/// A frame starts with [`PassTimer::reset`], so frames encoded without reading their timings
+/// never fill the timer up; reading after a submission gives that frame's passes.
 ///
 /// ```no_run
 /// # let gpu = gpu::Gpu::from_env()?;
@@ -36,13 +40,13 @@ impl PassTime {
 /// drop(pass);
 /// timer.resolve(&mut encoder);
 /// gpu.queue.submit([encoder.finish()]);
-/// for t in timer.read(&gpu)? { println!("{}: {:.3} ms", t.name, t.ms); }
+/// for t in timer.read(&gpu.device, &gpu.queue)? { println!("{}: {:.3} ms", t.name, t.ms); }
 /// # Ok::<(), gpu::GpuError>(())
 /// ```
 pub struct PassTimer {
     queries: Option<(wgpu::QuerySet, wgpu::Buffer)>,
     capacity: u32,
-    names: std::cell::RefCell<Vec<String>>,
+    names: Mutex<Vec<String>>,
 }
 
 impl PassTimer {
@@ -77,9 +81,18 @@ impl PassTimer {
         self.queries.is_some()
     }
 
+    fn names(&self) -> std::sync::MutexGuard<'_, Vec<String>> {
+        self.names.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Forgets the passes recorded so far: call at the start of each frame's encoding.
+    pub fn reset(&self) {
+        self.names().clear();
+    }
+
     fn next(&self, name: &str) -> Option<(&wgpu::QuerySet, u32)> {
         let (set, _) = self.queries.as_ref()?;
-        let mut names = self.names.borrow_mut();
+        let mut names = self.names();
         let index = names.len() as u32;
         if index >= self.capacity {
             log::warn!(
@@ -114,25 +127,30 @@ impl PassTimer {
 
     /// Resolves the recorded timestamps; call once after the last timed pass of the encoder.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        let count = self.names().len() as u32;
         if let Some((set, buffer)) = &self.queries
-            && !self.names.borrow().is_empty()
+            && count > 0
         {
-            encoder.resolve_query_set(set, 0..self.names.borrow().len() as u32 * 2, buffer, 0);
+            encoder.resolve_query_set(set, 0..count * 2, buffer, 0);
         }
     }
 
     /// Waits for the submitted work, returns each pass's time and clears the list of passes.
-    pub fn read(&self, gpu: &Gpu) -> Result<Vec<PassTime>, GpuError> {
-        let names = self.names.take();
+    pub fn read(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<PassTime>, GpuError> {
+        let names = std::mem::take(&mut *self.names());
         let Some((_, buffer)) = &self.queries else {
             return Ok(Vec::new());
         };
         if names.is_empty() {
             return Ok(Vec::new());
         }
-        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, buffer)?;
+        let bytes = transfer::read_buffer(device, queue, buffer)?;
         let ticks: &[u64] = bytemuck::cast_slice(&bytes);
-        let period = f64::from(gpu.queue.get_timestamp_period());
+        let period = f64::from(queue.get_timestamp_period());
         let ms = |a: u64, b: u64| b.wrapping_sub(a) as f64 * period * 1e-6;
         Ok(names
             .into_iter()
@@ -143,5 +161,14 @@ impl PassTimer {
                 start_ms: ms(ticks[0], ticks[2 * i]),
             })
             .collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn timer_is_send_and_sync() {
+        fn check<T: Send + Sync>() {}
+        check::<super::PassTimer>();
     }
 }

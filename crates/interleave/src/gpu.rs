@@ -17,7 +17,9 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use ::gpu::{Gpu, PassTimer, shader, transfer, wgpu};
+use ::gpu::kernel::{self, Binding, Layout, Workgroups};
+use ::gpu::shader::Specialisation;
+use ::gpu::{Gpu, transfer, wgpu};
 use bytemuck::Pod;
 use gbuffer::Image;
 
@@ -36,110 +38,71 @@ const USAGE: wgpu::TextureUsages = wgpu::TextureUsages::TEXTURE_BINDING
     .union(wgpu::TextureUsages::COPY_SRC)
     .union(wgpu::TextureUsages::COPY_DST);
 
-/// One compute dispatch with its pipeline and bind group.
-struct Pass {
-    name: String,
-    pipeline: wgpu::ComputePipeline,
-    group: wgpu::BindGroup,
-    workgroups: (u32, u32),
-}
+pub use ::gpu::kernel::Passes;
 
-/// Compute dispatches ready to record, each in its own timed compute pass.
-pub struct Passes(Vec<Pass>);
-
-impl Passes {
-    /// Records the dispatches; with a timer, each is timed under its name.
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        for pass in &self.0 {
-            let mut cp = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(&pass.name),
-                timestamp_writes: timer.and_then(|t| t.compute_pass(&pass.name)),
-            });
-            cp.set_pipeline(&pass.pipeline);
-            cp.set_bind_group(0, &pass.group, &[]);
-            cp.dispatch_workgroups(pass.workgroups.0, pass.workgroups.1, 1);
-        }
-    }
-
-    /// One dispatch of `pipeline` over `workgroups` with `resources` bound in order to
-    /// bindings 0, 1, … of group 0 (for kernels composed with this crate's passes).
-    pub fn dispatch(
-        device: &wgpu::Device,
-        name: &str,
-        pipeline: &wgpu::ComputePipeline,
-        resources: &[wgpu::BindingResource<'_>],
-        workgroups: (u32, u32),
-    ) -> Passes {
-        Passes(vec![pass(device, name, pipeline, resources, workgroups)])
-    }
-
-    /// The same passes, all timed under `name` (a stage of a larger pipeline).
-    pub fn named(mut self, name: &str) -> Passes {
-        for p in &mut self.0 {
-            p.name = name.to_owned();
-        }
-        self
-    }
-
-    /// These passes followed by `other`.
-    pub fn then(mut self, other: Passes) -> Passes {
-        self.0.extend(other.0);
-        self
-    }
-}
-
+/// A pass of one dispatch of `pipeline` with `resources` bound in order by `layout`.
 fn pass(
     device: &wgpu::Device,
     name: &str,
-    pipeline: &wgpu::ComputePipeline,
+    (pipeline, layout): &(wgpu::ComputePipeline, Layout),
     resources: &[wgpu::BindingResource<'_>],
     workgroups: (u32, u32),
-) -> Pass {
-    let entries: Vec<_> = resources
-        .iter()
-        .enumerate()
-        .map(|(i, r)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: r.clone(),
-        })
-        .collect();
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(name),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &entries,
-    });
-    Pass {
-        name: name.to_owned(),
-        pipeline: pipeline.clone(),
-        group,
-        workgroups,
-    }
+) -> Passes {
+    Passes::one(
+        name,
+        pipeline,
+        vec![layout.bind(device, resources)],
+        Workgroups::Direct([workgroups.0, workgroups.1, 1]),
+    )
+}
+
+/// A compute pipeline of `entry` in `module` with one explicit bind group of `bindings`.
+fn kernel(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    bindings: &[Binding],
+    constants: &[(&str, f64)],
+) -> (wgpu::ComputePipeline, Layout) {
+    let layout = Layout::compute(device, entry, bindings);
+    let pipeline = kernel::pipeline(device, module, entry, &[&layout], constants);
+    (pipeline, layout)
 }
 
 fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
 }
 
-fn check_texture(
-    what: &'static str,
+/// A texture a kernel reads (`TEXTURE_BINDING`).
+fn check_input(
+    what: &str,
     t: &wgpu::Texture,
     size: (u32, u32),
     format: wgpu::TextureFormat,
 ) -> Result<(), InterleaveError> {
-    let problem = if (t.width(), t.height()) != size {
-        format!(
-            "is {}×{}, {}×{} expected",
-            t.width(),
-            t.height(),
-            size.0,
-            size.1
-        )
-    } else if t.format() != format {
-        format!("has format {:?}, {format:?} expected", t.format())
-    } else {
-        return Ok(());
-    };
-    Err(InterleaveError::Texture { what, problem })
+    Ok(kernel::check_texture(
+        what,
+        t,
+        size,
+        format,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    )?)
+}
+
+/// A texture a kernel writes (`STORAGE_BINDING`).
+fn check_output(
+    what: &str,
+    t: &wgpu::Texture,
+    size: (u32, u32),
+    format: wgpu::TextureFormat,
+) -> Result<(), InterleaveError> {
+    Ok(kernel::check_texture(
+        what,
+        t,
+        size,
+        format,
+        wgpu::TextureUsages::STORAGE_BINDING,
+    )?)
 }
 
 fn groups(size: (u32, u32), workgroup: u32) -> (u32, u32) {
@@ -171,48 +134,70 @@ pub fn texel_format(
     })
 }
 
-/// `shaders/interleave/<file>` with the texel declarations of `texel.wgsl` rewritten for
-/// `format`.
-fn texel_module(
-    device: &wgpu::Device,
-    file: &str,
+/// The specialisation of `texel.wgsl`'s `Texel`, `Source` and `Destination` declarations
+/// for `format`, so one kernel moves any supported format bit for bit.
+pub fn texel_specialisation(
     format: wgpu::TextureFormat,
-) -> Result<wgpu::ShaderModule, InterleaveError> {
+) -> Result<Specialisation, InterleaveError> {
     let (storage, scalar) = texel_format(format)?;
-    let name = format!("interleave/{file}");
-    let mut src = shader::source(&name)?;
-    for (from, to) in [
-        (
-            "alias Texel = vec4<u32>;",
-            format!("alias Texel = vec4<{scalar}>;"),
-        ),
-        (
-            "var source: texture_2d<u32>;",
-            format!("var source: texture_2d<{scalar}>;"),
-        ),
-        (
-            "texture_storage_2d<r32uint, write>",
+    Ok(Specialisation::default()
+        .set("Texel", format!("vec4<{scalar}>"))
+        .set("Source", format!("texture_2d<{scalar}>"))
+        .set(
+            "Destination",
             format!("texture_storage_2d<{storage}, write>"),
-        ),
-    ] {
-        if !src.contains(from) {
-            return Err(::gpu::GpuError::Shader {
-                name,
-                message: format!("texel declaration `{from}` not found"),
-            }
-            .into());
-        }
-        src = src.replace(from, &to);
-    }
-    Ok(shader::module_from_source(device, &name, src))
+        ))
+}
+
+/// The source texture's binding kind of a splittable format (read with `textureLoad` only).
+fn texel_binding(format: wgpu::TextureFormat) -> Result<Binding, InterleaveError> {
+    Ok(match texel_format(format)?.1 {
+        "u32" => Binding::TextureUint,
+        "i32" => Binding::TextureSint,
+        _ => Binding::TextureUnfilterable,
+    })
+}
+
+/// Every splittable format.
+pub const SPLIT_FORMATS: [wgpu::TextureFormat; 15] = {
+    use wgpu::TextureFormat as F;
+    [
+        F::R32Uint,
+        F::Rg32Uint,
+        F::Rgba32Uint,
+        F::Rgba16Uint,
+        F::Rgba8Uint,
+        F::R32Sint,
+        F::Rg32Sint,
+        F::Rgba32Sint,
+        F::Rgba16Sint,
+        F::Rgba8Sint,
+        F::R32Float,
+        F::Rg32Float,
+        F::Rgba32Float,
+        F::Rgba16Float,
+        F::Rgba8Unorm,
+    ]
+};
+
+/// Every shader variant this crate can build: each split/gather file for each format.
+pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
+    ["one_pass.wgsl", "two_pass.wgsl", "tiled.wgsl"]
+        .into_iter()
+        .flat_map(|file| {
+            SPLIT_FORMATS
+                .iter()
+                .filter_map(move |&f| texel_specialisation(f).ok().map(|s| (file, s)))
+        })
+        .collect()
 }
 
 /// Split and gather of one texture format for one [`SplitLayout`] and [`SplitVariant`].
 pub struct Splitter {
     layout: SplitLayout,
     format: wgpu::TextureFormat,
-    split_pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
-    gather_pipelines: Vec<(&'static str, wgpu::ComputePipeline)>,
+    split_pipelines: Vec<(&'static str, (wgpu::ComputePipeline, Layout))>,
+    gather_pipelines: Vec<(&'static str, (wgpu::ComputePipeline, Layout))>,
     /// Two-pass only: the block-split texture between the passes, and its geometry.
     intermediate: Option<(wgpu::Texture, BlockGeometry)>,
     tile: (u32, u32),
@@ -260,7 +245,8 @@ impl Splitter {
                 crate::tile(layout.pattern)?,
             ),
         };
-        let module = texel_module(device, file, format)?;
+        let module = crate::SHADERS.module_with(device, file, &texel_specialisation(format)?)?;
+        let bindings = [texel_binding(format)?, Binding::StorageTexture(format)];
         let constants = [
             ("width", f64::from(layout.width)),
             ("height", f64::from(layout.height)),
@@ -274,7 +260,7 @@ impl Splitter {
         let build = |entries: &[&'static str]| {
             entries
                 .iter()
-                .map(|e| (*e, shader::compute_pipeline(device, &module, e, &constants)))
+                .map(|e| (*e, kernel(device, &module, e, &bindings, &constants)))
                 .collect()
         };
         let intermediate = match variant {
@@ -352,7 +338,8 @@ impl Splitter {
         image: &wgpu::Texture,
         split: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
-        self.check(image, split)?;
+        check_input("image", image, self.image_size(), self.format)?;
+        check_output("split texture", split, self.split_size(), self.format)?;
         self.passes(
             device,
             &self.split_pipelines,
@@ -368,7 +355,8 @@ impl Splitter {
         split: &wgpu::Texture,
         image: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
-        self.check(image, split)?;
+        check_input("split texture", split, self.split_size(), self.format)?;
+        check_output("image", image, self.image_size(), self.format)?;
         self.passes(
             device,
             &self.gather_pipelines,
@@ -377,17 +365,11 @@ impl Splitter {
         )
     }
 
-    /// Checks that `image` and `split` fit this splitter's layout and format.
-    fn check(&self, image: &wgpu::Texture, split: &wgpu::Texture) -> Result<(), InterleaveError> {
-        check_texture("image", image, self.image_size(), self.format)?;
-        check_texture("split texture", split, self.split_size(), self.format)
-    }
-
     /// The passes from `textures.0` to `textures.1`, whose size is `to_size`.
     fn passes(
         &self,
         device: &wgpu::Device,
-        pipelines: &[(&'static str, wgpu::ComputePipeline)],
+        pipelines: &[(&'static str, (wgpu::ComputePipeline, Layout))],
         (from, to): (&wgpu::Texture, &wgpu::Texture),
         to_size: (u32, u32),
     ) -> Result<Passes, InterleaveError> {
@@ -396,44 +378,38 @@ impl Splitter {
         let passes = match (self.variant, &self.intermediate, pipelines) {
             (SplitVariant::TwoPass(_), Some((mid, g)), [(first, p1), (second, p2)]) => {
                 let mid_view = view(mid);
-                vec![
-                    pass(
-                        device,
-                        first,
-                        p1,
-                        &[res(&from_view), res(&mid_view)],
-                        groups(g.intermediate_size(), 16),
-                    ),
-                    pass(
-                        device,
-                        second,
-                        p2,
-                        &[res(&mid_view), res(&to_view)],
-                        groups(to_size, 16),
-                    ),
-                ]
-            }
-            (SplitVariant::Tiled, _, [(name, p)]) => {
-                vec![pass(
+                pass(
                     device,
-                    name,
-                    p,
-                    &[res(&from_view), res(&to_view)],
-                    self.tiles(),
-                )]
-            }
-            (_, _, [(name, p)]) => {
-                vec![pass(
+                    first,
+                    p1,
+                    &[res(&from_view), res(&mid_view)],
+                    groups(g.intermediate_size(), 16),
+                )
+                .then(pass(
                     device,
-                    name,
-                    p,
-                    &[res(&from_view), res(&to_view)],
+                    second,
+                    p2,
+                    &[res(&mid_view), res(&to_view)],
                     groups(to_size, 16),
-                )]
+                ))
             }
+            (SplitVariant::Tiled, _, [(name, p)]) => pass(
+                device,
+                name,
+                p,
+                &[res(&from_view), res(&to_view)],
+                self.tiles(),
+            ),
+            (_, _, [(name, p)]) => pass(
+                device,
+                name,
+                p,
+                &[res(&from_view), res(&to_view)],
+                groups(to_size, 16),
+            ),
             _ => unreachable!("pipelines are built per variant in Splitter::new"),
         };
-        Ok(Passes(passes))
+        Ok(passes)
     }
 }
 
@@ -449,15 +425,26 @@ struct ThresholdsUniform {
 
 /// The discontinuity buffer kernel (§4.5).
 pub struct DiscontinuityPass {
-    pipeline: wgpu::ComputePipeline,
+    pipeline: (wgpu::ComputePipeline, Layout),
     thresholds: wgpu::Buffer,
 }
 
 impl DiscontinuityPass {
     /// Builds the pipeline with `thresholds` (change them with [`Self::set_thresholds`]).
     pub fn new(device: &wgpu::Device, thresholds: &Thresholds) -> Result<Self, InterleaveError> {
-        let module = shader::module(device, "interleave/discontinuity.wgsl")?;
-        let pipeline = shader::compute_pipeline(device, &module, "discontinuity", &[]);
+        let module = crate::SHADERS.module(device, "discontinuity.wgsl")?;
+        let pipeline = kernel(
+            device,
+            &module,
+            "discontinuity",
+            &[
+                Binding::TextureUnfilterable,
+                Binding::TextureUint,
+                Binding::StorageTexture(DISCONTINUITY_FORMAT),
+                Binding::Uniform,
+            ],
+            &[],
+        );
         let thresholds = transfer::buffer_init(
             device,
             "discontinuity thresholds",
@@ -501,21 +488,21 @@ impl DiscontinuityPass {
         discontinuities: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
         let size = (linear_depth.width(), linear_depth.height());
-        check_texture(
+        check_input(
             "linear depth",
             linear_depth,
             size,
             gbuffer::LINEAR_DEPTH_FORMAT,
         )?;
-        check_texture("normals", normals, size, gbuffer::NORMAL_FORMAT)?;
-        check_texture(
+        check_input("normals", normals, size, gbuffer::NORMAL_FORMAT)?;
+        check_output(
             "discontinuity buffer",
             discontinuities,
             size,
             DISCONTINUITY_FORMAT,
         )?;
         let (d, nrm, out) = (view(linear_depth), view(normals), view(discontinuities));
-        Ok(Passes(vec![pass(
+        Ok(pass(
             device,
             "discontinuity buffer",
             &self.pipeline,
@@ -526,7 +513,7 @@ impl DiscontinuityPass {
                 self.thresholds.as_entire_binding(),
             ],
             groups(size, 16),
-        )]))
+        ))
     }
 }
 
@@ -543,7 +530,7 @@ struct BlurUniform {
 /// The edge-aware separable Gaussian blur (§4.5): a horizontal and a vertical pass.
 pub struct BlurPass {
     blur: Blur,
-    pipeline: wgpu::ComputePipeline,
+    pipeline: (wgpu::ComputePipeline, Layout),
     params: [wgpu::Buffer; 2],
     sampler: wgpu::Sampler,
 }
@@ -552,12 +539,20 @@ impl BlurPass {
     /// Builds the pipeline of `blur`'s variant.
     pub fn new(device: &wgpu::Device, blur: &Blur) -> Result<Self, InterleaveError> {
         blur.validate()?;
-        let module = shader::module(device, "interleave/blur.wgsl")?;
-        let entry = match blur.variant {
-            BlurVariant::Plain => "blur_plain",
-            BlurVariant::Fast => "blur_fast",
+        let module = crate::SHADERS.module(device, "blur.wgsl")?;
+        let storage = Binding::StorageTexture(IRRADIANCE_FORMAT);
+        let pipeline = match blur.variant {
+            BlurVariant::Plain => {
+                let bindings = [Binding::TextureUnfilterable, Binding::TextureUnfilterable];
+                let bindings = [&bindings[..], &[storage, Binding::Uniform]].concat();
+                kernel(device, &module, "blur_plain", &bindings, &[])
+            }
+            BlurVariant::Fast => {
+                let bindings = [Binding::Texture, Binding::Texture, storage];
+                let bindings = [&bindings[..], &[Binding::Uniform, Binding::Sampler]].concat();
+                kernel(device, &module, "blur_fast", &bindings, &[])
+            }
         };
-        let pipeline = shader::compute_pipeline(device, &module, entry, &[]);
         let mut weights = [0.0; 12];
         for (w, v) in weights.iter_mut().zip(blur.weights()) {
             *w = v;
@@ -611,15 +606,16 @@ impl BlurPass {
         output: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
         let size = (irradiance.width(), irradiance.height());
-        check_texture("irradiance", irradiance, size, IRRADIANCE_FORMAT)?;
-        check_texture(
+        check_input("irradiance", irradiance, size, IRRADIANCE_FORMAT)?;
+        check_input(
             "discontinuity buffer",
             discontinuities,
             size,
             DISCONTINUITY_FORMAT,
         )?;
-        check_texture("blur scratch", scratch, size, IRRADIANCE_FORMAT)?;
-        check_texture("blur output", output, size, IRRADIANCE_FORMAT)?;
+        check_input("blur scratch", scratch, size, IRRADIANCE_FORMAT)?;
+        check_output("blur scratch", scratch, size, IRRADIANCE_FORMAT)?;
+        check_output("blur output", output, size, IRRADIANCE_FORMAT)?;
         let disc = view(discontinuities);
         let [h, v] = &self.params;
         let one = |name: &str, from: &wgpu::Texture, to: &wgpu::Texture, params: &wgpu::Buffer| {
@@ -635,10 +631,12 @@ impl BlurPass {
             }
             pass(device, name, &self.pipeline, &resources, groups(size, 16))
         };
-        Ok(Passes(vec![
-            one("blur horizontal", irradiance, scratch, h),
-            one("blur vertical", scratch, output, v),
-        ]))
+        Ok(one("blur horizontal", irradiance, scratch, h).then(one(
+            "blur vertical",
+            scratch,
+            output,
+            v,
+        )))
     }
 }
 
@@ -658,8 +656,8 @@ pub fn lights_per_subset(count: usize, pattern: Pattern) -> Result<u32, Interlea
 /// gathered) or fused with the split by strided addressing (§3.1's indirection).
 pub struct SubsetShading {
     layout: SplitLayout,
-    split_pipeline: wgpu::ComputePipeline,
-    fused_pipeline: wgpu::ComputePipeline,
+    split_pipeline: (wgpu::ComputePipeline, Layout),
+    fused_pipeline: (wgpu::ComputePipeline, Layout),
     lights: wgpu::Buffer,
 }
 
@@ -671,7 +669,13 @@ impl SubsetShading {
         lights: &[SubsetLight],
     ) -> Result<Self, InterleaveError> {
         let per_subset = lights_per_subset(lights.len(), layout.pattern)?;
-        let module = shader::module(device, "interleave/shade.wgsl")?;
+        let module = crate::SHADERS.module(device, "shade.wgsl")?;
+        let bindings = [
+            Binding::TextureUnfilterable,
+            Binding::TextureUint,
+            Binding::StorageRead,
+            Binding::StorageTexture(IRRADIANCE_FORMAT),
+        ];
         let constants = [
             ("width", f64::from(layout.width)),
             ("height", f64::from(layout.height)),
@@ -689,8 +693,8 @@ impl SubsetShading {
         )?;
         Ok(Self {
             layout: *layout,
-            split_pipeline: shader::compute_pipeline(device, &module, "shade_split", &constants),
-            fused_pipeline: shader::compute_pipeline(device, &module, "shade_fused", &constants),
+            split_pipeline: kernel(device, &module, "shade_split", &bindings, &constants),
+            fused_pipeline: kernel(device, &module, "shade_fused", &bindings, &constants),
             lights,
         })
     }
@@ -699,17 +703,17 @@ impl SubsetShading {
         &self,
         device: &wgpu::Device,
         name: &str,
-        pipeline: &wgpu::ComputePipeline,
+        pipeline: &(wgpu::ComputePipeline, Layout),
         size: (u32, u32),
         textures: [&wgpu::Texture; 3],
     ) -> Result<Passes, InterleaveError> {
         let [depth, normals, irradiance] = textures;
-        check_texture("linear depth", depth, size, gbuffer::LINEAR_DEPTH_FORMAT)?;
-        check_texture("normals", normals, size, gbuffer::NORMAL_FORMAT)?;
-        check_texture("irradiance", irradiance, size, IRRADIANCE_FORMAT)?;
+        check_input("linear depth", depth, size, gbuffer::LINEAR_DEPTH_FORMAT)?;
+        check_input("normals", normals, size, gbuffer::NORMAL_FORMAT)?;
+        check_output("irradiance", irradiance, size, IRRADIANCE_FORMAT)?;
         let (d, nrm, out) = (view(depth), view(normals), view(irradiance));
         let l = &self.layout;
-        Ok(Passes(vec![pass(
+        Ok(pass(
             device,
             name,
             pipeline,
@@ -720,7 +724,7 @@ impl SubsetShading {
                 wgpu::BindingResource::TextureView(&out),
             ],
             groups((l.split_width(), l.split_height()), 16),
-        )]))
+        ))
     }
 
     /// Shades the split G-buffer (split size) into split irradiance.
@@ -780,14 +784,15 @@ fn check_texel<T>(format: wgpu::TextureFormat) -> Result<(), InterleaveError> {
 /// Uploads `image` into a new texture of `format` (texels of the same size), usable by every
 /// kernel of this crate.
 pub fn upload_image<T: Pod>(
-    gpu: &Gpu,
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
     label: &str,
     image: &Image<T>,
     format: wgpu::TextureFormat,
 ) -> Result<wgpu::Texture, InterleaveError> {
     Ok(transfer::texture_init(
-        &gpu.device,
-        &gpu.queue,
+        device,
+        queue,
         label,
         image.width(),
         image.height(),
@@ -799,10 +804,11 @@ pub fn upload_image<T: Pod>(
 
 /// Reads `texture` back into an image of texels `T` (of the format's texel size).
 pub fn download_image<T: Pod>(
-    gpu: &Gpu,
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
     texture: &wgpu::Texture,
 ) -> Result<Image<T>, InterleaveError> {
-    let bytes = transfer::read_texture(&gpu.device, &gpu.queue, texture, wgpu::TextureAspect::All)?;
+    let bytes = transfer::read_texture(device, queue, texture, wgpu::TextureAspect::All)?;
     Image::from_vec(
         texture.width(),
         texture.height(),
@@ -829,10 +835,10 @@ pub fn run_split<T: Pod>(
     check_texel::<T>(format)?;
     crate::cpu::check_size("image", image, layout.width, layout.height)?;
     let splitter = Splitter::new(&gpu.device, layout, variant, format)?;
-    let source = upload_image(gpu, "image", image, format)?;
+    let source = upload_image(&gpu.device, &gpu.queue, "image", image, format)?;
     let split = splitter.split_texture(&gpu.device, "split");
     submit(gpu, &splitter.split(&gpu.device, &source, &split)?);
-    download_image(gpu, &split)
+    download_image(&gpu.device, &gpu.queue, &split)
 }
 
 /// Convenience for tests and examples: gathers a split image on the GPU.
@@ -851,10 +857,10 @@ pub fn run_gather<T: Pod>(
         layout.split_height(),
     )?;
     let splitter = Splitter::new(&gpu.device, layout, variant, format)?;
-    let source = upload_image(gpu, "split", split, format)?;
+    let source = upload_image(&gpu.device, &gpu.queue, "split", split, format)?;
     let image = splitter.image_texture(&gpu.device, "gathered");
     submit(gpu, &splitter.gather(&gpu.device, &source, &image)?);
-    download_image(gpu, &image)
+    download_image(&gpu.device, &gpu.queue, &image)
 }
 
 /// Convenience for tests and examples: the discontinuity buffer on the GPU.
@@ -872,12 +878,19 @@ pub fn run_discontinuity(
     )?;
     let pass = DiscontinuityPass::new(&gpu.device, thresholds)?;
     let depth = upload_image(
-        gpu,
+        &gpu.device,
+        &gpu.queue,
         "linear depth",
         linear_depth,
         gbuffer::LINEAR_DEPTH_FORMAT,
     )?;
-    let nrm = upload_image(gpu, "normals", normals, gbuffer::NORMAL_FORMAT)?;
+    let nrm = upload_image(
+        &gpu.device,
+        &gpu.queue,
+        "normals",
+        normals,
+        gbuffer::NORMAL_FORMAT,
+    )?;
     let out = transfer::texture_2d(
         &gpu.device,
         "discontinuities",
@@ -887,7 +900,7 @@ pub fn run_discontinuity(
         USAGE,
     );
     submit(gpu, &pass.bind(&gpu.device, &depth, &nrm, &out)?);
-    download_image(gpu, &out)
+    download_image(&gpu.device, &gpu.queue, &out)
 }
 
 /// Linear RGBA as f16 texels of an [`IRRADIANCE_FORMAT`] texture.
@@ -911,13 +924,15 @@ pub fn run_blur(
     let pass = BlurPass::new(&gpu.device, blur)?;
     let (w, h) = (irradiance.width(), irradiance.height());
     let input = upload_image(
-        gpu,
+        &gpu.device,
+        &gpu.queue,
         "irradiance",
         &to_f16_texels(irradiance),
         IRRADIANCE_FORMAT,
     )?;
     let disc = upload_image(
-        gpu,
+        &gpu.device,
+        &gpu.queue,
         "discontinuities",
         discontinuities,
         DISCONTINUITY_FORMAT,
@@ -925,7 +940,10 @@ pub fn run_blur(
     let scratch = BlurPass::irradiance_texture(&gpu.device, "blur scratch", w, h);
     let out = BlurPass::irradiance_texture(&gpu.device, "blurred", w, h);
     submit(gpu, &pass.bind(&gpu.device, &input, &disc, &scratch, &out)?);
-    Ok(download_image::<[half::f16; 4]>(gpu, &out)?.map(|p| p.map(half::f16::to_f32)))
+    Ok(
+        download_image::<[half::f16; 4]>(&gpu.device, &gpu.queue, &out)?
+            .map(|p| p.map(half::f16::to_f32)),
+    )
 }
 
 /// How [`run_shading`] reaches the sub-buffers.
@@ -952,12 +970,19 @@ pub fn run_shading(
     let device = &gpu.device;
     let shade = SubsetShading::new(device, layout, lights)?;
     let depth = upload_image(
-        gpu,
+        &gpu.device,
+        &gpu.queue,
         "linear depth",
         linear_depth,
         gbuffer::LINEAR_DEPTH_FORMAT,
     )?;
-    let nrm = upload_image(gpu, "normals", normals, gbuffer::NORMAL_FORMAT)?;
+    let nrm = upload_image(
+        &gpu.device,
+        &gpu.queue,
+        "normals",
+        normals,
+        gbuffer::NORMAL_FORMAT,
+    )?;
     let out = BlurPass::irradiance_texture(device, "irradiance", layout.width, layout.height);
     let passes = match shading {
         Shading::Fused => shade.shade_fused(device, &depth, &nrm, &out)?,
@@ -976,5 +1001,8 @@ pub fn run_shading(
         }
     };
     submit(gpu, &passes);
-    Ok(download_image::<[half::f16; 4]>(gpu, &out)?.map(|p| p.map(half::f16::to_f32)))
+    Ok(
+        download_image::<[half::f16; 4]>(&gpu.device, &gpu.queue, &out)?
+            .map(|p| p.map(half::f16::to_f32)),
+    )
 }

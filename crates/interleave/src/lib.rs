@@ -50,6 +50,27 @@ pub use filter::{Blur, BlurVariant, Thresholds};
 
 use ::gpu::GpuError;
 
+/// This crate's WGSL (`shaders/interleave/`, carried into the package by the `shaders` link).
+pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
+    "interleave",
+    imports: [gbuffer::SHADERS],
+    files: [
+        "blur.wgsl",
+        "discontinuity.wgsl",
+        "one_pass.wgsl",
+        "pattern.wgsl",
+        "shade.wgsl",
+        "texel.wgsl",
+        "tiled.wgsl",
+        "two_pass.wgsl",
+    ],
+);
+
+/// What this crate's kernels need of a device: wgpu's default limits suffice.
+pub fn device_needs() -> ::gpu::DeviceNeeds {
+    ::gpu::DeviceNeeds::default()
+}
+
 /// Largest pattern side accepted (a 256×256 pattern already leaves 1 texel per sub-buffer at 4K).
 pub const MAX_PATTERN: u32 = 256;
 /// Largest image side accepted.
@@ -157,14 +178,6 @@ pub enum InterleaveError {
         count: usize,
         /// Sub-buffers, n·m.
         subsets: u32,
-    },
-    /// A GPU texture has the wrong size or format for the binding it is given to.
-    #[error("{what}: {problem}")]
-    Texture {
-        /// Which binding.
-        what: &'static str,
-        /// What is wrong.
-        problem: String,
     },
     /// GPU failure.
     #[error(transparent)]

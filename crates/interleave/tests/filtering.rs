@@ -185,7 +185,7 @@ proptest! {
         width in 8u32..120, height in 8u32..120, spheres in 1u32..12,
         normal_deg in 1.0f32..179.0, depth_ratio in 0.0f32..0.3,
     ) {
-        let Some(gpu) = gpu::test_gpu() else { return Ok(()) };
+        let Some(gpu) = gpu::test_device(&interleave::device_needs()) else { return Ok(()) };
         let (depth, normals) = scene_gbuffer(width, height, spheres);
         let t = Thresholds { normal_deg, depth_ratio };
         let expected = cpu::discontinuity(&depth, &normals, &t).expect("cpu");
@@ -196,7 +196,9 @@ proptest! {
 
 #[test]
 fn gpu_discontinuity_buffer_on_random_normals() {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&interleave::device_needs()) else {
+        return;
+    };
     // Random words cover every octahedral case (both hemispheres, ±32768) at once.
     let mut s = 0x9e37_79b9u32;
     let words: Vec<u32> = (0..97 * 61)
@@ -239,7 +241,7 @@ fn constant_image_stays_constant() {
             constant,
             "{blur:?}"
         );
-        if let Some(gpu) = gpu::test_gpu() {
+        if let Some(gpu) = gpu::test_device(&interleave::device_needs()) {
             let got = igpu::run_blur(gpu, &constant, &disc, &blur).expect("gpu blur");
             assert!(got == constant, "GPU {blur:?}");
         }
@@ -261,7 +263,7 @@ fn blur_never_mixes_across_a_discontinuity() {
             }
         }
     }
-    let gpu = gpu::test_gpu();
+    let gpu = gpu::test_device(&interleave::device_needs());
     for blur in blurs() {
         let mut results = vec![(
             "CPU",
@@ -302,7 +304,7 @@ proptest! {
 
     #[test]
     fn gpu_blur_matches_cpu(width in 8u32..100, height in 8u32..100, spheres in 1u32..10, seed in any::<u32>()) {
-        let Some(gpu) = gpu::test_gpu() else { return Ok(()) };
+        let Some(gpu) = gpu::test_device(&interleave::device_needs()) else { return Ok(()) };
         let (depth, normals) = scene_gbuffer(width, height, spheres);
         let disc = cpu::discontinuity(&depth, &normals, &Thresholds::default()).expect("disc");
         let irradiance = noise(width, height, seed);
@@ -368,7 +370,7 @@ proptest! {
     fn gpu_fused_shading_equals_split_shade_gather_and_cpu(
         width in 8u32..110, height in 8u32..110, n in 1u32..9, m in 1u32..7, per_subset in 1u32..5,
     ) {
-        let Some(gpu) = gpu::test_gpu() else { return Ok(()) };
+        let Some(gpu) = gpu::test_device(&interleave::device_needs()) else { return Ok(()) };
         let (depth, normals) = scene_gbuffer(width, height, 5);
         let pattern = Pattern::new(n, m).expect("pattern");
         let layout = SplitLayout::new(width, height, pattern).expect("layout");

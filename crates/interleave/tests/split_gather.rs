@@ -220,7 +220,7 @@ proptest! {
         width in 1u32..150, height in 1u32..150, n in 1u32..9, m in 1u32..9,
         a in 1u32..9, b in 1u32..9, format in 0usize..FORMATS.len(), seed in any::<u64>(),
     ) {
-        let Some(gpu) = gpu::test_gpu() else { return Ok(()) };
+        let Some(gpu) = gpu::test_device(&interleave::device_needs()) else { return Ok(()) };
         let pattern = Pattern::new(n, m).expect("pattern");
         let layout = SplitLayout::new(width, height, pattern).expect("layout");
         for variant in variants(pattern, a, b) {
@@ -231,7 +231,9 @@ proptest! {
 
 #[test]
 fn gpu_every_format_and_the_paper_patterns() {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&interleave::device_needs()) else {
+        return;
+    };
     for (k, format) in FORMATS.into_iter().enumerate() {
         for (n, m) in [(2, 2), (4, 4), (8, 6), (8, 8)] {
             let layout = SplitLayout::new(67, 45, Pattern { n, m }).expect("layout");
@@ -244,7 +246,9 @@ fn gpu_every_format_and_the_paper_patterns() {
 
 #[test]
 fn gpu_rejects_bad_formats_and_texel_sizes() {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&interleave::device_needs()) else {
+        return;
+    };
     let layout = SplitLayout::new(8, 8, Pattern { n: 2, m: 2 }).expect("layout");
     let image = numbered(8, 8);
     assert!(matches!(

@@ -25,7 +25,8 @@
 //! # Ok::<(), manylod::ManyLodError>(())
 //! ```
 
-use ::gpu::{Gpu, PassTimer, shader, transfer};
+use ::gpu::kernel::{Binding, Dispatch, Kernel, Passes, Workgroups};
+use ::gpu::{Gpu, PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -149,12 +150,12 @@ fn uniform(device: &wgpu::Device, label: &str, bytes: &[u8]) -> Result<wgpu::Buf
 /// The GPU side of one hierarchy and one set of views: nodes, views, active and cut lists,
 /// the atlas, and the pipelines.
 pub struct GpuManyLod {
-    prepare: wgpu::ComputePipeline,
-    step: wgpu::ComputePipeline,
-    clear: wgpu::ComputePipeline,
-    splat: wgpu::ComputePipeline,
+    prepare: Kernel,
+    step: Kernel,
+    clear: Kernel,
+    splat: Kernel,
     /// The in-place variant per available compaction, with its bind group.
-    inplace: Vec<(Compaction, wgpu::ComputePipeline, wgpu::BindGroup)>,
+    inplace: Vec<(Compaction, Kernel, wgpu::BindGroup)>,
     /// Node bounds in heap order (`Node`, 32 bytes); the refit writes them.
     pub nodes: wgpu::Buffer,
     views: wgpu::Buffer,
@@ -204,15 +205,29 @@ impl GpuManyLod {
                 views.len()
             )));
         }
-        let cut_module = shader::module(device, "manylod/cut.wgsl")?;
-        let splat_module = shader::module(device, "manylod/splat.wgsl")?;
-        let prepare = shader::compute_pipeline(device, &cut_module, "prepare", &[]);
-        let step = shader::compute_pipeline(device, &cut_module, "step", &[]);
-        let clear = shader::compute_pipeline(device, &splat_module, "clear", &[]);
-        let splat = shader::compute_pipeline(device, &splat_module, "splat", &[]);
-        let mut compactions = vec![(Compaction::Atomic, "manylod/inplace_atomic.wgsl")];
+        let cut_module = crate::SHADERS.module(device, "cut.wgsl")?;
+        let splat_module = crate::SHADERS.module(device, "splat.wgsl")?;
+        use Binding::{Storage as Rw, StorageRead as R, Uniform as U};
+        // cut.wgsl: nodes, views, problem, pass, counters, list in, list out, cut, dispatch.
+        let prepare = Kernel::numbered(
+            device,
+            &cut_module,
+            "prepare",
+            &[(2, U), (3, U), (4, Rw), (8, Rw)],
+        );
+        let step = Kernel::new(
+            device,
+            &cut_module,
+            "step",
+            &[R, R, U, U, Rw, R, Rw, Rw],
+            &[],
+        );
+        // splat.wgsl: nodes, views, atlas parameters, counters, cut, atlas.
+        let clear = Kernel::numbered(device, &splat_module, "clear", &[(5, Rw)]);
+        let splat = Kernel::new(device, &splat_module, "splat", &[R, R, U, Rw, R, Rw], &[]);
+        let mut compactions = vec![(Compaction::Atomic, "inplace_atomic.wgsl")];
         if device.features().contains(wgpu::Features::SUBGROUP) {
-            compactions.push((Compaction::Ballot, "manylod/inplace_ballot.wgsl"));
+            compactions.push((Compaction::Ballot, "inplace_ballot.wgsl"));
         }
 
         let nodes = transfer::buffer_init(
@@ -274,12 +289,7 @@ impl GpuManyLod {
             )
         };
         let prepare_bind = |params: &wgpu::Buffer| {
-            shader::bind_buffers(
-                device,
-                "manylod prepare",
-                &prepare,
-                &[(2, &problem), (3, params), (4, &counters), (8, &dispatch)],
-            )
+            prepare.bind_buffers(device, &[&problem, &params, &counters, &dispatch])
         };
         let make_pass = |in_slot: u32, out_slot: u32, cut_slot: u32, mode: u32| {
             let params = params(in_slot, out_slot, cut_slot, mode)?;
@@ -289,19 +299,17 @@ impl GpuManyLod {
                 slot_buffer(in_slot)
             };
             Ok::<_, ManyLodError>(CutPass {
-                step: shader::bind_buffers(
+                step: step.bind_buffers(
                     device,
-                    "manylod step",
-                    &step,
                     &[
-                        (0, &nodes),
-                        (1, &views_buffer),
-                        (2, &problem),
-                        (3, &params),
-                        (4, &counters),
-                        (5, input),
-                        (6, slot_buffer(out_slot)),
-                        (7, slot_buffer(cut_slot)),
+                        &nodes,
+                        &views_buffer,
+                        &problem,
+                        &params,
+                        &counters,
+                        input,
+                        slot_buffer(out_slot),
+                        slot_buffer(cut_slot),
                     ],
                 ),
                 prepare: prepare_bind(&params),
@@ -332,42 +340,40 @@ impl GpuManyLod {
         };
         let splat_params = [atlas_params(CUT_SLOTS[0])?, atlas_params(CUT_SLOTS[1])?];
         let splats = [0, 1].map(|c| {
-            shader::bind_buffers(
+            splat.bind_buffers(
                 device,
-                "manylod splat",
-                &splat,
                 &[
-                    (0, &nodes),
-                    (1, &views_buffer),
-                    (2, &splat_params[c]),
-                    (3, &counters),
-                    (4, &cuts[c]),
-                    (5, &atlas),
+                    &nodes,
+                    &views_buffer,
+                    &splat_params[c],
+                    &counters,
+                    &cuts[c],
+                    &atlas,
                 ],
             )
         });
         let inplace = compactions
             .into_iter()
             .map(|(compaction, file)| {
-                let module = shader::module(device, file)?;
-                let pipeline = shader::compute_pipeline(device, &module, "inplace", &[]);
-                let bind = shader::bind_buffers(
+                let module = crate::SHADERS.module(device, file)?;
+                // inplace.wgsl: splat.wgsl's bindings but the cut list, and the problem at 6.
+                let bindings = [(0, R), (1, R), (2, U), (3, Rw), (5, Rw), (6, U)];
+                let kernel = Kernel::numbered(device, &module, "inplace", &bindings);
+                let bind = kernel.bind_buffers(
                     device,
-                    "manylod inplace",
-                    &pipeline,
                     &[
-                        (0, &nodes),
-                        (1, &views_buffer),
-                        (2, &splat_params[0]),
-                        (3, &counters),
-                        (5, &atlas),
-                        (6, &problem),
+                        &nodes,
+                        &views_buffer,
+                        &splat_params[0],
+                        &counters,
+                        &atlas,
+                        &problem,
                     ],
                 );
-                Ok::<_, ManyLodError>((compaction, pipeline, bind))
+                Ok::<_, ManyLodError>((compaction, kernel, bind))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let clear_bind = shader::bind_buffers(device, "manylod clear", &clear, &[(5, &atlas)]);
+        let clear_bind = clear.bind_buffers(device, &[&atlas]);
         let unwrap2 = |[a, b]: [Result<CutPass, ManyLodError>; 2]| Ok::<_, ManyLodError>([a?, b?]);
         let [s0, s1] = steps;
         let [f0, f1] = flush;
@@ -436,47 +442,42 @@ impl GpuManyLod {
         self.current = c;
         // Statistics and the overflow flag restart every frame.
         encoder.clear_buffer(&self.counters, 8 * 4, Some(8 * 4));
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("manylod cut"),
-            timestamp_writes: timer.and_then(|t| t.compute_pass("cut")),
-        });
-        let run = |pass: &mut wgpu::ComputePass, p: &CutPass| {
-            pass.set_pipeline(&self.prepare);
-            pass.set_bind_group(0, &p.prepare, &[]);
-            pass.dispatch_workgroups(1, 1, 1);
-            pass.set_pipeline(&self.step);
-            pass.set_bind_group(0, &p.step, &[]);
-            pass.dispatch_workgroups_indirect(&self.dispatch, 0);
+        let mut dispatches = Vec::new();
+        let mut run = |p: &CutPass| {
+            dispatches.push(
+                self.prepare
+                    .dispatch(&p.prepare, Workgroups::Direct([1, 1, 1])),
+            );
+            dispatches.push(self.step.dispatch(&p.step, self.indirect()));
         };
         let (first, more) = match kind {
             CutKind::Basic => (&self.roots[c], self.depth),
             CutKind::Incremental => (&self.start[c], self.depth),
             CutKind::Lazy(q) => (&self.start[c], q.saturating_sub(1)),
         };
-        run(&mut pass, first);
+        run(first);
         let mut p = 0;
         for _ in 0..more {
-            run(&mut pass, &self.steps[p][c]);
+            run(&self.steps[p][c]);
             p = 1 - p;
         }
-        run(&mut pass, &self.flush[p][c]);
+        run(&self.flush[p][c]);
+        Passes::new().pass("cut", dispatches).encode(encoder, timer);
         self.leftover = LIST_SLOTS[p];
     }
 
     /// Records the splat of the last cut into the cleared atlas (one pass, timed as `splat`).
     pub fn encode_splat(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
         let c = self.current;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("manylod splat"),
-            timestamp_writes: timer.and_then(|t| t.compute_pass("splat")),
-        });
-        self.encode_clear(&mut pass);
-        pass.set_pipeline(&self.prepare);
-        pass.set_bind_group(0, &self.count[c], &[]);
-        pass.dispatch_workgroups(1, 1, 1);
-        pass.set_pipeline(&self.splat);
-        pass.set_bind_group(0, &self.splats[c], &[]);
-        pass.dispatch_workgroups_indirect(&self.dispatch, 0);
+        let dispatches = vec![
+            self.clear_dispatch(),
+            self.prepare
+                .dispatch(&self.count[c], Workgroups::Direct([1, 1, 1])),
+            self.splat.dispatch(&self.splats[c], self.indirect()),
+        ];
+        Passes::new()
+            .pass("splat", dispatches)
+            .encode(encoder, timer);
     }
 
     /// The in-place variant's compactions this device runs: [`Compaction::Atomic`], and
@@ -495,7 +496,7 @@ impl GpuManyLod {
         compaction: Compaction,
         timer: Option<&PassTimer>,
     ) -> Result<(), ManyLodError> {
-        let (_, pipeline, bind) = self
+        let (_, kernel, bind) = self
             .inplace
             .iter()
             .find(|(c, _, _)| *c == compaction)
@@ -503,26 +504,30 @@ impl GpuManyLod {
                 "the in-place ballot compaction needs subgroups, which this device lacks",
             ))?;
         encoder.clear_buffer(&self.counters, 8 * 4, Some(8 * 4));
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("manylod in-place"),
-            timestamp_writes: timer.and_then(|t| t.compute_pass("in-place")),
-        });
-        self.encode_clear(&mut pass);
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind, &[]);
         let (x, y) = (
             self.view_count.min(MAX_GROUPS_X),
             self.view_count.div_ceil(MAX_GROUPS_X),
         );
-        pass.dispatch_workgroups(x, y, 1);
+        let dispatches = vec![
+            self.clear_dispatch(),
+            kernel.dispatch(bind, Workgroups::Direct([x, y, 1])),
+        ];
+        Passes::new()
+            .pass("in-place", dispatches)
+            .encode(encoder, timer);
         Ok(())
     }
 
-    fn encode_clear(&self, pass: &mut wgpu::ComputePass) {
+    /// The atlas clear, first dispatch of every splatting pass.
+    fn clear_dispatch(&self) -> Dispatch {
         let (x, y) = groups(self.atlas_pixels);
-        pass.set_pipeline(&self.clear);
-        pass.set_bind_group(0, &self.clear_bind, &[]);
-        pass.dispatch_workgroups(x, y, 1);
+        self.clear
+            .dispatch(&self.clear_bind, Workgroups::Direct([x, y, 1]))
+    }
+
+    /// Workgroups the last `prepare` wrote into the dispatch buffer.
+    fn indirect(&self) -> Workgroups {
+        Workgroups::Indirect(self.dispatch.clone(), 0)
     }
 
     fn read_counters(&self, gpu: &Gpu) -> Result<Vec<u32>, ManyLodError> {
@@ -585,8 +590,8 @@ impl GpuManyLod {
 /// The GPU refit (§3.5.3): surfels evaluated on the deformed mesh into the leaves, then one
 /// `merge` dispatch per level, bottom-up, into [`GpuManyLod::nodes`].
 pub struct GpuRefit {
-    leaves: wgpu::ComputePipeline,
-    merge: wgpu::ComputePipeline,
+    leaves: Kernel,
+    merge: Kernel,
     /// Mesh positions (`vec4<f32>`, `COPY_DST`): rewrite them after deformation.
     pub positions: wgpu::Buffer,
     leaves_bind: wgpu::BindGroup,
@@ -621,9 +626,11 @@ impl GpuRefit {
                 "surfel {k}: triangle out of range"
             )));
         }
-        let module = shader::module(device, "manylod/refit.wgsl")?;
-        let leaves = shader::compute_pipeline(device, &module, "leaves", &[]);
-        let merge = shader::compute_pipeline(device, &module, "merge", &[]);
+        let module = crate::SHADERS.module(device, "refit.wgsl")?;
+        use Binding::{Storage as Rw, StorageRead as R, Uniform as U};
+        // refit.wgsl: nodes, refit parameters, surfels, order, positions, indices.
+        let leaves = Kernel::new(device, &module, "leaves", &[Rw, U, R, R, R, R], &[]);
+        let merge = Kernel::new(device, &module, "merge", &[Rw, U], &[]);
         let gpu_surfels: Vec<GpuSurfel> = surfels
             .iter()
             .map(|s| GpuSurfel {
@@ -656,32 +663,22 @@ impl GpuRefit {
             )
         };
         let leaf_params = params(n - 1, n)?;
-        let leaves_bind = shader::bind_buffers(
+        let leaves_bind = leaves.bind_buffers(
             device,
-            "manylod leaves",
-            &leaves,
             &[
-                (0, &m.nodes),
-                (1, &leaf_params),
-                (2, &surfel_buffer),
-                (3, &order),
-                (4, &position_buffer),
-                (5, &index_buffer),
+                &m.nodes,
+                &leaf_params,
+                &surfel_buffer,
+                &order,
+                &position_buffer,
+                &index_buffer,
             ],
         );
         let levels = (0..bsh.depth)
             .rev()
             .map(|l| {
                 let p = params((1 << l) - 1, 1 << l)?;
-                Ok((
-                    shader::bind_buffers(
-                        device,
-                        "manylod merge",
-                        &merge,
-                        &[(0, &m.nodes), (1, &p)],
-                    ),
-                    1u32 << l,
-                ))
+                Ok((merge.bind_buffers(device, &[&m.nodes, &p]), 1u32 << l))
             })
             .collect::<Result<Vec<_>, ManyLodError>>()?;
         Ok(Self {
@@ -724,20 +721,18 @@ impl GpuRefit {
 
     /// Records the refit (one pass, timed as `refit`).
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("manylod refit"),
-            timestamp_writes: timer.and_then(|t| t.compute_pass("refit")),
-        });
         let (x, y) = groups(self.leaf_count);
-        pass.set_pipeline(&self.leaves);
-        pass.set_bind_group(0, &self.leaves_bind, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-        pass.set_pipeline(&self.merge);
-        for (bind, count) in &self.levels {
+        let mut dispatches = vec![
+            self.leaves
+                .dispatch(&self.leaves_bind, Workgroups::Direct([x, y, 1])),
+        ];
+        dispatches.extend(self.levels.iter().map(|(bind, count)| {
             let (x, y) = groups(*count);
-            pass.set_bind_group(0, bind, &[]);
-            pass.dispatch_workgroups(x, y, 1);
-        }
+            self.merge.dispatch(bind, Workgroups::Direct([x, y, 1]))
+        }));
+        Passes::new()
+            .pass("refit", dispatches)
+            .encode(encoder, timer);
     }
 }
 
@@ -788,17 +783,15 @@ impl GpuIsm {
                 _pad: [0; 3],
             }),
         )?;
-        let bind = shader::bind_buffers(
+        let bind = m.splat.bind_buffers(
             device,
-            "ism splat",
-            &m.splat,
             &[
-                (0, &node_buffer),
-                (1, &m.views),
-                (2, &params),
-                (3, &counters),
-                (4, &list_buffer),
-                (5, &m.atlas),
+                &node_buffer,
+                &m.views,
+                &params,
+                &counters,
+                &list_buffer,
+                &m.atlas,
             ],
         );
         Ok(Self {
@@ -814,14 +807,11 @@ impl GpuIsm {
         m: &GpuManyLod,
         timer: Option<&PassTimer>,
     ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("ism splat"),
-            timestamp_writes: timer.and_then(|t| t.compute_pass("ism")),
-        });
-        m.encode_clear(&mut pass);
-        pass.set_pipeline(&m.splat);
-        pass.set_bind_group(0, &self.bind, &[]);
         let (x, y) = groups(self.count);
-        pass.dispatch_workgroups(x, y, 1);
+        let dispatches = vec![
+            m.clear_dispatch(),
+            m.splat.dispatch(&self.bind, Workgroups::Direct([x, y, 1])),
+        ];
+        Passes::new().pass("ism", dispatches).encode(encoder, timer);
     }
 }

@@ -24,6 +24,26 @@ pub use splat::AtlasLayout;
 pub use surfels::Surfel;
 pub use view::View;
 
+/// This crate's WGSL (`shaders/manylod/`, carried into the package by the `shaders` link).
+pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
+    "manylod",
+    imports: [],
+    files: [
+        "common.wgsl",
+        "cut.wgsl",
+        "inplace.wgsl",
+        "inplace_atomic.wgsl",
+        "inplace_ballot.wgsl",
+        "refit.wgsl",
+        "splat.wgsl",
+    ],
+);
+
+/// What this crate's kernels need of a device: wgpu's default limits suffice; the ballot compaction of the in-place variant is used only where the device has `SUBGROUP`.
+pub fn device_needs() -> ::gpu::DeviceNeeds {
+    ::gpu::DeviceNeeds::default()
+}
+
 /// Everything that can go wrong.
 #[derive(Debug, thiserror::Error)]
 pub enum ManyLodError {

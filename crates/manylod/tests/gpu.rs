@@ -18,7 +18,7 @@ const TILE: u32 = 32;
 const EPSILON: f32 = 3.0;
 
 fn setup(bsh: &Bsh, angle: f32, capacity: usize) -> Option<(&'static gpu::Gpu, GpuManyLod)> {
-    let gpu = gpu::test_gpu()?;
+    let gpu = gpu::test_device(&manylod::device_needs())?;
     let v = views_in_tiles(angle, Some(TILE));
     let layout = AtlasLayout::new(v.len(), TILE, 12.0);
     let m = GpuManyLod::new(&gpu.device, bsh, &v, EPSILON, layout, capacity).expect("set-up");

@@ -70,7 +70,8 @@ pub fn time_passes(
     frames: u32,
 ) -> Result<Vec<(String, Vec<f64>)>, RenderError> {
     time_named(frames, || {
-        let timings: Vec<PassTiming> = renderer.time_frame(gpu, camera, ambient)?;
+        let timings: Vec<PassTiming> =
+            renderer.time_frame(&gpu.device, &gpu.queue, camera, ambient)?;
         Ok(timings.into_iter().map(|t| (t.name, t.ms)).collect())
     })
 }
@@ -90,7 +91,7 @@ pub fn time_encoded(
         record(&mut encoder, timer);
         timer.resolve(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
-        let times = timer.read(gpu)?;
+        let times = timer.read(&gpu.device, &gpu.queue)?;
         Ok(match (span, times.first(), times.last()) {
             (true, Some(first), Some(last)) => last.end_ms() - first.start_ms,
             _ => times.iter().map(|t| t.ms).sum(),

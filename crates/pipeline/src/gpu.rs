@@ -2,7 +2,8 @@
 //! ([`tiled_shading::gpu::LightShading`]) and composition compute passes. Pipelines and bind groups are built once; nothing is read
 //! back between passes.
 
-use ::gpu::{Gpu, PassTimer, transfer};
+use ::gpu::kernel::{Binding, Kernel, Passes, Workgroups};
+use ::gpu::{PassTimer, transfer};
 use gbuffer::{
     Frame, Image,
     gpu::{GBufferPass, GBufferTargets, GpuScene},
@@ -18,27 +19,28 @@ use crate::indirect::{
     vpl::VplSet,
 };
 use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
-use tiled_shading::gpu::{ACCUMULATION_FORMAT, LightShading};
-
-fn tv(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: wgpu::BindingResource::TextureView(view),
-    }
-}
+use tiled_shading::gpu::{ACCUMULATION_FORMAT, BoundShading, LightShading};
 
 fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
 }
 
-fn compute_pipeline(
-    device: &wgpu::Device,
-    shader: &str,
-    entry: &str,
-) -> Result<wgpu::ComputePipeline, ::gpu::GpuError> {
-    let module = ::gpu::shader::module(device, shader)?;
-    Ok(::gpu::shader::compute_pipeline(device, &module, entry, &[]))
-}
+/// `composition.wgsl`: ambient, materials; albedo, material, direct diffuse and specular;
+/// radiance output; indirect diffuse and specular.
+const COMPOSITION_BINDINGS: [Binding; 9] = [
+    Binding::Uniform,
+    Binding::StorageRead,
+    Binding::TextureUnfilterable,
+    Binding::TextureUint,
+    Binding::TextureUnfilterable,
+    Binding::TextureUnfilterable,
+    Binding::StorageTexture(RADIANCE_FORMAT),
+    Binding::TextureUnfilterable,
+    Binding::TextureUnfilterable,
+];
+
+/// Format of the renderer's output ([`GpuRenderer::output`]): linear radiance.
+pub const RADIANCE_FORMAT: wgpu::TextureFormat = ACCUMULATION_FORMAT;
 
 fn indirect_texture(device: &wgpu::Device, label: &str, width: u32, height: u32) -> wgpu::Texture {
     transfer::texture_2d(
@@ -55,7 +57,7 @@ fn indirect_texture(device: &wgpu::Device, label: &str, width: u32, height: u32)
 #[allow(clippy::too_many_arguments)]
 fn composition_group(
     device: &wgpu::Device,
-    composition: &wgpu::ComputePipeline,
+    composition: &Kernel,
     ambient: &wgpu::Buffer,
     materials: &wgpu::Buffer,
     targets: &GBufferTargets,
@@ -72,25 +74,31 @@ fn composition_group(
         view(indirect[0]),
         view(indirect[1]),
     ];
-    let mut entries = vec![
-        wgpu::BindGroupEntry {
-            binding: 0,
-            resource: ambient.as_entire_binding(),
-        },
-        wgpu::BindGroupEntry {
-            binding: 1,
-            resource: materials.as_entire_binding(),
-        },
-    ];
-    entries.extend(views.iter().enumerate().map(|(i, v)| tv(i as u32 + 2, v)));
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("composition"),
-        layout: &composition.get_bind_group_layout(0),
-        entries: &entries,
-    })
+    let mut resources = vec![ambient.as_entire_binding(), materials.as_entire_binding()];
+    resources.extend(views.iter().map(wgpu::BindingResource::TextureView));
+    composition.bind(device, &resources)
 }
 
-/// A deferred renderer for one scene at one resolution.
+/// A deferred renderer for one scene, on the caller's device: `new` uploads the scene and
+/// builds every pipeline once; [`GpuRenderer::set_camera`], [`GpuRenderer::set_ambient`] and
+/// [`GpuRenderer::set_lights`] only write buffers; [`GpuRenderer::resize`] rebinds the
+/// size-dependent targets; [`GpuRenderer::encode`] records a frame (z-prepass, G-buffer,
+/// light accumulation, the indirect stage if set, composition) into the caller's encoder and
+/// reads nothing back; [`GpuRenderer::output`] is the radiance texture the caller samples,
+/// copies or presents.
+///
+/// ```no_run
+/// # let gpu = gpu::Gpu::from_env()?;
+/// let scene = scene::cornell_box();
+/// let mut renderer =
+///     pipeline::gpu::GpuRenderer::new(&gpu.device, &gpu.queue, &scene, &scene.lights, 640, 480)?;
+/// renderer.set_camera(&gpu.queue, &scene.camera_or_framed())?;
+/// let mut encoder = gpu.device.create_command_encoder(&Default::default());
+/// renderer.encode(&mut encoder);
+/// gpu.queue.submit([encoder.finish()]);
+/// let radiance: &gpu::wgpu::Texture = renderer.output();
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub struct GpuRenderer {
     gbuffer_pass: GBufferPass,
     scene: GpuScene,
@@ -98,140 +106,241 @@ pub struct GpuRenderer {
     radiance: wgpu::Texture,
     lights: Vec<GpuLight>,
     shading: LightShading,
-    composition: wgpu::ComputePipeline,
+    shading_bound: BoundShading,
+    direct: [wgpu::Texture; 2],
+    no_indirect: [wgpu::Texture; 2],
+    composition: Kernel,
     composition_group: wgpu::BindGroup,
     ambient: wgpu::Buffer,
-    indirect: Option<IndirectStage>,
+    camera: Option<Camera>,
+    indirect: Option<(IndirectStage, IndirectConfig, VplSet)>,
     vpl_shadows: Option<VplShadowMaps>,
     timer: PassTimer,
+}
+
+/// Textures of one frame size: G-buffer targets, radiance, direct light, no indirect light.
+struct SizedTargets {
+    targets: GBufferTargets,
+    radiance: wgpu::Texture,
+    direct: [wgpu::Texture; 2],
+    no_indirect: [wgpu::Texture; 2],
+}
+
+impl SizedTargets {
+    fn new(device: &wgpu::Device, width: u32, height: u32) -> Result<Self, RenderError> {
+        transfer::check_texture_size(device, "frame", width, height)?;
+        Ok(Self {
+            targets: GBufferTargets::new(device, width, height)?,
+            radiance: transfer::texture_2d(
+                device,
+                "radiance",
+                width,
+                height,
+                RADIANCE_FORMAT,
+                wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+            ),
+            direct: LightShading::output_textures(device, width, height),
+            no_indirect: [
+                indirect_texture(device, "no indirect diffuse", width, height),
+                indirect_texture(device, "no indirect specular", width, height),
+            ],
+        })
+    }
 }
 
 impl GpuRenderer {
     /// Uploads `scene` and `lights` and builds pipelines and targets for `width × height`,
     /// with the default (tiled) light accumulation.
     pub fn new(
-        gpu: &Gpu,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
         scene: &Scene,
         lights: &[Light],
         width: u32,
         height: u32,
     ) -> Result<Self, RenderError> {
         let gpu_lights = crate::validate_lights(lights)?;
-        let device = &gpu.device;
-        transfer::check_texture_size(device, "frame", width, height)?;
+        let sized = SizedTargets::new(device, width, height)?;
         let gbuffer_pass = GBufferPass::new(device)?;
-        let gpu_scene = GpuScene::upload(device, &gpu.queue, scene, &gbuffer_pass)?;
-        let targets = GBufferTargets::new(device, width, height)?;
-        let radiance = transfer::texture_2d(
-            device,
-            "radiance",
-            width,
-            height,
-            ACCUMULATION_FORMAT,
-            wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-        );
+        let gpu_scene = GpuScene::upload(device, queue, scene, &gbuffer_pass)?;
         let ambient = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("ambient"),
             contents: bytemuck::bytes_of(&crate::DEFAULT_AMBIENT.extend(0.0)),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
-        let shading = Self::light_shading(
-            gpu,
-            &gbuffer_pass,
-            &targets,
-            &ShadingConfig::default(),
-            &gpu_lights,
-        )?;
-        let composition =
-            compute_pipeline(device, "pipeline/composition.wgsl", "composition_main")?;
-        let none = [
-            indirect_texture(device, "no indirect diffuse", width, height),
-            indirect_texture(device, "no indirect specular", width, height),
-        ];
+        let shading = LightShading::new(device, &ShadingConfig::default())?;
+        let module = crate::SHADERS.module(device, "composition.wgsl")?;
+        let composition = Kernel::new(
+            device,
+            &module,
+            "composition_main",
+            &COMPOSITION_BINDINGS,
+            &[],
+        );
+        let shading_bound =
+            Self::bind_shading(device, queue, &shading, &gbuffer_pass, &sized, &gpu_lights)?;
         let composition_group = composition_group(
             device,
             &composition,
             &ambient,
             &gpu_scene.materials,
-            &targets,
-            shading.output(),
-            &radiance,
-            [&none[0], &none[1]],
+            &sized.targets,
+            [&sized.direct[0], &sized.direct[1]],
+            &sized.radiance,
+            [&sized.no_indirect[0], &sized.no_indirect[1]],
         );
         Ok(Self {
             gbuffer_pass,
             scene: gpu_scene,
-            targets,
-            radiance,
+            targets: sized.targets,
+            radiance: sized.radiance,
             lights: gpu_lights,
             shading,
+            shading_bound,
+            direct: sized.direct,
+            no_indirect: sized.no_indirect,
             composition,
             composition_group,
             ambient,
+            camera: None,
             indirect: None,
             vpl_shadows: None,
             timer: PassTimer::new(device, 32),
         })
     }
 
-    fn light_shading(
-        gpu: &Gpu,
+    fn bind_shading(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        shading: &LightShading,
         gbuffer_pass: &GBufferPass,
-        targets: &GBufferTargets,
-        config: &ShadingConfig,
+        sized: &SizedTargets,
         lights: &[GpuLight],
-    ) -> Result<LightShading, RenderError> {
-        let mut shading = LightShading::new(
-            &gpu.device,
+    ) -> Result<BoundShading, RenderError> {
+        let mut bound = shading.bind(
+            device,
             gbuffer_pass.frame_buffer(),
-            targets.into(),
-            config,
+            (&sized.targets).into(),
+            [&sized.direct[0], &sized.direct[1]],
             lights.len(),
             false,
         )?;
-        shading.set_lights(&gpu.queue, lights)?;
-        Ok(shading)
+        bound.set_lights(queue, lights)?;
+        Ok(bound)
     }
 
-    /// Switches the light accumulation to `config` (brute force, tiled, tiled with normal
-    /// cones, clustered; tile size).
-    pub fn set_shading(&mut self, gpu: &Gpu, config: &ShadingConfig) -> Result<(), RenderError> {
-        let shading =
-            Self::light_shading(gpu, &self.gbuffer_pass, &self.targets, config, &self.lights)?;
-        let indirect = self.indirect.as_ref().map(IndirectStage::output);
-        let none;
-        let indirect = match indirect {
-            Some(textures) => textures,
-            None => {
-                let (w, h) = (self.targets.width, self.targets.height);
-                none = [
-                    indirect_texture(&gpu.device, "no indirect diffuse", w, h),
-                    indirect_texture(&gpu.device, "no indirect specular", w, h),
-                ];
-                [&none[0], &none[1]]
-            }
+    /// Rebinds the light accumulation and the composition to the current targets, lights,
+    /// camera and indirect stage.
+    fn rebind(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), RenderError> {
+        let sized = SizedTargets {
+            targets: self.targets.clone(),
+            radiance: self.radiance.clone(),
+            direct: self.direct.clone(),
+            no_indirect: self.no_indirect.clone(),
+        };
+        let mut bound = Self::bind_shading(
+            device,
+            queue,
+            &self.shading,
+            &self.gbuffer_pass,
+            &sized,
+            &self.lights,
+        )?;
+        if let Some(camera) = &self.camera {
+            bound.set_camera(queue, camera);
+        }
+        let indirect = match &self.indirect {
+            Some((stage, _, _)) => stage.output(),
+            None => [&self.no_indirect[0], &self.no_indirect[1]],
         };
         self.composition_group = composition_group(
-            &gpu.device,
+            device,
             &self.composition,
             &self.ambient,
             &self.scene.materials,
             &self.targets,
-            shading.output(),
+            [&self.direct[0], &self.direct[1]],
             &self.radiance,
             indirect,
         );
-        self.shading = shading;
+        self.shading_bound = bound;
         Ok(())
     }
 
-    /// Replaces the direct lights (the light accumulation is rebuilt for their count).
-    pub fn set_lights(&mut self, gpu: &Gpu, lights: &[Light]) -> Result<(), RenderError> {
-        self.lights = crate::validate_lights(lights)?;
-        let config = *self.shading.config();
-        self.set_shading(gpu, &config)
+    /// Switches the light accumulation to `config` (brute force, tiled, tiled with normal
+    /// cones, clustered; tile size).
+    pub fn set_shading(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        config: &ShadingConfig,
+    ) -> Result<(), RenderError> {
+        self.shading = LightShading::new(device, config)?;
+        self.rebind(device, queue)
+    }
+
+    /// Replaces the direct lights (the light buffer is rebound for their count; no shader is
+    /// recompiled).
+    pub fn set_lights(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        lights: &[Light],
+    ) -> Result<(), RenderError> {
+        let lights = crate::validate_lights(lights)?;
+        if lights.len() <= self.shading_bound.capacity() {
+            self.shading_bound.set_lights(queue, &lights)?;
+            self.lights = lights;
+            return Ok(());
+        }
+        self.lights = lights;
+        self.rebind(device, queue)
+    }
+
+    /// Sets the camera of the following frames (validated: finite, positive field of view).
+    pub fn set_camera(&mut self, queue: &wgpu::Queue, camera: &Camera) -> Result<(), RenderError> {
+        gbuffer::validate_camera(camera)?;
+        let frame = Frame::new(camera, self.targets.width, self.targets.height);
+        self.gbuffer_pass.write_frame(queue, &frame);
+        self.shading_bound.set_camera(queue, camera);
+        self.camera = Some(*camera);
+        Ok(())
+    }
+
+    /// Sets the ambient light of the composition.
+    pub fn set_ambient(&self, queue: &wgpu::Queue, ambient: Vec3) {
+        queue.write_buffer(&self.ambient, 0, bytemuck::bytes_of(&ambient.extend(0.0)));
+    }
+
+    /// Resizes the frame: new targets and output, rebinds the light accumulation, the
+    /// indirect stage and the composition (pipelines are kept). The camera's aspect follows.
+    pub fn resize(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        width: u32,
+        height: u32,
+    ) -> Result<(), RenderError> {
+        let sized = SizedTargets::new(device, width, height)?;
+        self.targets = sized.targets;
+        self.radiance = sized.radiance;
+        self.direct = sized.direct;
+        self.no_indirect = sized.no_indirect;
+        if let Some((_, config, set)) = self.indirect.take() {
+            self.set_indirect(device, &config, &set)?;
+        }
+        self.rebind(device, queue)?;
+        if let Some(camera) = self.camera {
+            self.set_camera(queue, &camera)?;
+        }
+        Ok(())
+    }
+
+    /// The frame size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.targets.width, self.targets.height)
     }
 
     /// The light accumulation stage.
@@ -239,15 +348,23 @@ impl GpuRenderer {
         &self.shading
     }
 
+    /// Reads back each tile's light count of the last frame (`None` for brute force).
+    pub fn light_counts(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<Vec<u32>>, RenderError> {
+        Ok(self.shading_bound.read_counts(device, queue)?)
+    }
+
     /// Adds one-bounce indirect light from `set`'s VPLs as `config` says (the stage reads this
     /// renderer's G-buffer; the composition adds its output). Replaces an earlier stage.
     pub fn set_indirect(
         &mut self,
-        gpu: &Gpu,
+        device: &wgpu::Device,
         config: &IndirectConfig,
         set: &VplSet,
     ) -> Result<(), RenderError> {
-        let device = &gpu.device;
         let stage = IndirectStage::new(
             device,
             self.gbuffer_pass.frame_buffer(),
@@ -262,11 +379,11 @@ impl GpuRenderer {
             &self.ambient,
             &self.scene.materials,
             &self.targets,
-            self.shading.output(),
+            [&self.direct[0], &self.direct[1]],
             &self.radiance,
             stage.output(),
         );
-        self.indirect = Some(stage);
+        self.indirect = Some((stage, *config, set.clone()));
         Ok(())
     }
 
@@ -276,21 +393,15 @@ impl GpuRenderer {
     /// before the VPL shading.
     pub fn set_vpl_shadows(
         &mut self,
-        gpu: &Gpu,
+        device: &wgpu::Device,
         scene: &Scene,
         mode: VplShadows,
         shadow_config: &ShadowConfig,
         config: &IndirectConfig,
         set: &VplSet,
     ) -> Result<(), RenderError> {
-        self.vpl_shadows = Some(VplShadowMaps::new(
-            &gpu.device,
-            scene,
-            set,
-            mode,
-            shadow_config,
-        )?);
-        self.set_indirect(gpu, config, set)
+        self.vpl_shadows = Some(VplShadowMaps::new(device, scene, set, mode, shadow_config)?);
+        self.set_indirect(device, config, set)
     }
 
     /// The VPL shadow maps, if set.
@@ -300,7 +411,7 @@ impl GpuRenderer {
 
     /// The indirect stage, if one was set.
     pub fn indirect(&self) -> Option<&IndirectStage> {
-        self.indirect.as_ref()
+        self.indirect.as_ref().map(|(stage, _, _)| stage)
     }
 
     /// The G-buffer targets (read them back with [`GBufferTargets::read`] after a frame).
@@ -308,10 +419,17 @@ impl GpuRenderer {
         &self.targets
     }
 
-    /// Records one frame (z-prepass, G-buffer, light accumulation, the indirect stage if set,
-    /// composition) into `encoder`, with GPU timestamps around each pass.
+    /// The frame's linear radiance ([`RADIANCE_FORMAT`], `TEXTURE_BINDING | COPY_SRC`): sample,
+    /// copy or tone-map it into a surface after submitting [`GpuRenderer::encode`].
+    pub fn output(&self) -> &wgpu::Texture {
+        &self.radiance
+    }
+
+    /// Records one frame into `encoder`, each pass timed (read with
+    /// [`GpuRenderer::timings`]). Needs a camera ([`GpuRenderer::set_camera`]); reads nothing
+    /// back, so frames can be encoded back to back.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        let (w, h) = (self.targets.width, self.targets.height);
+        self.timer.reset();
         // The z-prepass path: 1.3× faster than the single MRT pass on Sponza on an H100
         // (docs/bench), and the same G-buffer.
         self.gbuffer_pass.encode_with_prepass(
@@ -326,53 +444,32 @@ impl GpuRenderer {
         {
             shadows.encode(encoder, Some(&self.timer));
         }
-        let groups = (w.div_ceil(8), h.div_ceil(8));
-        let dispatch = |encoder: &mut wgpu::CommandEncoder,
-                        name: &str,
-                        pipeline: &wgpu::ComputePipeline,
-                        group: &wgpu::BindGroup| {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(name),
-                timestamp_writes: self.timer.compute_pass(name),
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
-        };
-        self.shading.encode(encoder, Some(&self.timer));
-        if let Some(stage) = &self.indirect {
+        self.shading
+            .encode(&self.shading_bound, encoder, Some(&self.timer));
+        if let Some((stage, _, _)) = &self.indirect {
             stage.encode(encoder, Some(&self.timer));
         }
-        dispatch(
-            encoder,
+        let (w, h) = self.size();
+        Passes::one(
             "composition",
-            &self.composition,
-            &self.composition_group,
-        );
+            &self.composition.pipeline,
+            vec![self.composition_group.clone()],
+            Workgroups::covering(w, h, 8),
+        )
+        .encode(encoder, Some(&self.timer));
         self.timer.resolve(encoder);
     }
 
-    /// Renders a frame from `camera` with `ambient` and reports the GPU time of each pass,
-    /// reading nothing else back (for benchmarks).
-    pub fn time_frame(
-        &mut self,
-        gpu: &Gpu,
-        camera: &Camera,
-        ambient: Vec3,
+    /// The GPU time of each pass of the last encoded frame (waits for it; empty without
+    /// timestamp queries).
+    pub fn timings(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
     ) -> Result<Vec<PassTiming>, RenderError> {
-        let (w, h) = (self.targets.width, self.targets.height);
-        gbuffer::validate_camera(camera)?;
-        let frame = Frame::new(camera, w, h);
-        gpu.queue
-            .write_buffer(&self.ambient, 0, bytemuck::bytes_of(&ambient.extend(0.0)));
-        self.gbuffer_pass.write_frame(&gpu.queue, &frame);
-        self.shading.set_camera(&gpu.queue, camera);
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        self.encode(&mut encoder);
-        gpu.queue.submit([encoder.finish()]);
         Ok(self
             .timer
-            .read(gpu)?
+            .read(device, queue)?
             .into_iter()
             .map(|t| PassTiming {
                 name: t.name,
@@ -381,28 +478,60 @@ impl GpuRenderer {
             .collect())
     }
 
+    /// Renders a frame from `camera` with `ambient` and reports the GPU time of each pass,
+    /// reading nothing else back (for benchmarks).
+    pub fn time_frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        ambient: Vec3,
+    ) -> Result<Vec<PassTiming>, RenderError> {
+        self.set_camera(queue, camera)?;
+        self.set_ambient(queue, ambient);
+        let mut encoder = device.create_command_encoder(&Default::default());
+        self.encode(&mut encoder);
+        queue.submit([encoder.finish()]);
+        self.timings(device, queue)
+    }
+
     /// Renders a frame from `camera` with `ambient`, reads the radiance back and reports
     /// the GPU time of each pass.
     pub fn render(
         &mut self,
-        gpu: &Gpu,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
         camera: &Camera,
         ambient: Vec3,
     ) -> Result<Rendered, RenderError> {
-        let timings = self.time_frame(gpu, camera, ambient)?;
-        let (w, h) = (self.targets.width, self.targets.height);
-        let bytes = transfer::read_texture(
-            &gpu.device,
-            &gpu.queue,
-            &self.radiance,
-            wgpu::TextureAspect::All,
-        )?;
-        let pixels: Vec<[f32; 4]> = bytemuck::cast_slice::<u8, Vec4>(&bytes)
-            .iter()
-            .map(|v| v.to_array())
-            .collect();
-        let image =
-            Image::from_vec(w, h, pixels).map_err(|e| ::gpu::GpuError::Readback(e.to_string()))?;
-        Ok(Rendered { image, timings })
+        let timings = self.time_frame(device, queue, camera, ambient)?;
+        Ok(Rendered {
+            image: read_radiance(device, queue, &self.radiance)?,
+            timings,
+        })
+    }
+}
+
+/// Reads a [`RADIANCE_FORMAT`] texture back as linear RGBA.
+pub fn read_radiance(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<Image<[f32; 4]>, RenderError> {
+    let bytes = transfer::read_texture(device, queue, texture, wgpu::TextureAspect::All)?;
+    let pixels: Vec<[f32; 4]> = bytemuck::cast_slice::<u8, Vec4>(&bytes)
+        .iter()
+        .map(|v| v.to_array())
+        .collect();
+    Ok(Image::from_vec(texture.width(), texture.height(), pixels)
+        .map_err(|e| ::gpu::GpuError::Readback(e.to_string()))?)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn renderer_is_send_and_sync() {
+        fn check<T: Send + Sync>() {}
+        check::<super::GpuRenderer>();
     }
 }

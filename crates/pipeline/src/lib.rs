@@ -32,6 +32,26 @@ pub const DEFAULT_AMBIENT: Vec3 = Vec3::splat(0.03);
 
 pub use tiled_shading::{GpuLight, Method as ShadingMethod, ShadingConfig};
 
+/// This crate's WGSL (`shaders/pipeline/`, carried into the package by the `shaders` link).
+pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
+    "pipeline",
+    imports: [gbuffer::SHADERS, tiled_shading::SHADERS, manylod::SHADERS],
+    files: [
+        "composition.wgsl",
+        "vpl_shading.wgsl",
+    ],
+);
+
+/// What this crate's kernels need of a device: what every stage it composes needs.
+pub fn device_needs() -> ::gpu::DeviceNeeds {
+    gbuffer::device_needs()
+        .and(&interleave::device_needs())
+        .and(&tiled_shading::device_needs())
+        .and(&adaptive_ssaa::device_needs())
+        .and(&subdiv_bft::device_needs())
+        .and(&manylod::device_needs())
+}
+
 /// Time one pass of a frame took.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PassTiming {

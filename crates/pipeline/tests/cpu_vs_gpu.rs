@@ -8,11 +8,16 @@ mod common;
 use common::write_failure;
 
 fn check(name: &str, scene: &scene::Scene, lights: &[Light], w: u32, h: u32) {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
+        return;
+    };
     let camera = scene.camera_or_framed();
     let expected = cpu::render(scene, &camera, lights, w, h, DEFAULT_AMBIENT).expect("cpu");
-    let mut renderer = GpuRenderer::new(gpu, scene, lights, w, h).expect("gpu renderer");
-    let actual = renderer.render(gpu, &camera, DEFAULT_AMBIENT).expect("gpu");
+    let mut renderer =
+        GpuRenderer::new(&gpu.device, &gpu.queue, scene, lights, w, h).expect("gpu renderer");
+    let actual = renderer
+        .render(&gpu.device, &gpu.queue, &camera, DEFAULT_AMBIENT)
+        .expect("gpu");
     let db = psnr(&expected.image, &actual.image);
     assert!(
         db >= 40.0,
@@ -111,7 +116,9 @@ fn energy_is_additive_over_lights() {
 #[test]
 fn cornell_box_with_indirect_light_gpu_matches_cpu() {
     use pipeline::indirect::{IndirectConfig, vpl};
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
+        return;
+    };
     let s = scene::cornell_box();
     let camera = s.camera_or_framed();
     let (w, h) = (96, 72);
@@ -140,9 +147,14 @@ fn cornell_box_with_indirect_light_gpu_matches_cpu() {
     )
     .expect("cpu");
     let direct_only = cpu::render(&s, &camera, &s.lights, w, h, Vec3::ZERO).expect("cpu");
-    let mut renderer = GpuRenderer::new(gpu, &s, &s.lights, w, h).expect("gpu renderer");
-    renderer.set_indirect(gpu, &config, &set).expect("indirect");
-    let actual = renderer.render(gpu, &camera, Vec3::ZERO).expect("gpu");
+    let mut renderer =
+        GpuRenderer::new(&gpu.device, &gpu.queue, &s, &s.lights, w, h).expect("gpu renderer");
+    renderer
+        .set_indirect(&gpu.device, &config, &set)
+        .expect("indirect");
+    let actual = renderer
+        .render(&gpu.device, &gpu.queue, &camera, Vec3::ZERO)
+        .expect("gpu");
     let db = psnr(&expected.image, &actual.image);
     assert!(
         db >= 40.0,

@@ -358,7 +358,7 @@ fn pattern_1x1_is_the_reference() {
         let c = config(&s, (1, 1), interleaving, None);
         let actual = cpu::indirect(&gb, &frame, &set, &c).expect("1x1");
         assert!(actual.diffuse == expected.diffuse && actual.specular == expected.specular);
-        if let Some(gpu) = gpu::test_gpu() {
+        if let Some(gpu) = gpu::test_device(&pipeline::device_needs()) {
             let g_ref = igpu::run(gpu, &gb, &frame, &set, &reference).expect("gpu reference");
             let g = igpu::run(gpu, &gb, &frame, &set, &c).expect("gpu 1x1");
             assert!(g.diffuse == g_ref.diffuse && g.specular == g_ref.specular);
@@ -423,7 +423,7 @@ fn each_pixel_sums_its_own_subset() {
     ] {
         let c = config(&s, (n, m), interleaving, None);
         check("cpu", &cpu::indirect(&gb, &frame, &set, &c).expect("cpu"));
-        if let Some(gpu) = gpu::test_gpu() {
+        if let Some(gpu) = gpu::test_device(&pipeline::device_needs()) {
             check("gpu", &igpu::run(gpu, &gb, &frame, &set, &c).expect("gpu"));
         }
     }
@@ -475,7 +475,9 @@ fn flat_plane_mean_matches_the_reference() {
 /// floor of 2⁻¹² of the image's maximum.
 #[test]
 fn gpu_indirect_stage_matches_cpu() {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
+        return;
+    };
     let mut s = scene::cornell_box();
     s.materials[1].roughness = 0.3; // a glossy wall
     let cam = s.camera_or_framed();

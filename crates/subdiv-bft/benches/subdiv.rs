@@ -2,6 +2,8 @@
 //! configuration mesh, and the CPU mirror of the BFT evaluation (fandisk or a bipyramid when
 //! the shared fixtures are absent).
 
+#![allow(missing_docs)] // criterion_group! generates an undocumented function
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use subdiv_bft::{BftSet, Corner, Subdivider, TriMesh, bft::build_table, obj::ObjMesh};
 

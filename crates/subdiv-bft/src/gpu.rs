@@ -8,7 +8,8 @@ mod adaptive;
 
 pub use adaptive::{GpuAdaptive, MAX_SEGMENTS};
 
-use ::gpu::{Gpu, PassTimer, shader, transfer};
+use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
+use ::gpu::{Gpu, PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -56,12 +57,52 @@ fn empty(
     Ok(transfer::buffer(device, label, size, usage)?)
 }
 
-fn bind(
+/// Bindings 0–8 of `evaluate.wgsl`, shared by the uniform and the adaptive kernel: params,
+/// patches, rings, tables, M¹ positions and normals, grid walk; fine positions and normals.
+const EVALUATE_BINDINGS: [Binding; 9] = [
+    Binding::Uniform,
+    Binding::StorageRead,
+    Binding::StorageRead,
+    Binding::StorageRead,
+    Binding::StorageRead,
+    Binding::StorageRead,
+    Binding::StorageRead,
+    Binding::Storage,
+    Binding::Storage,
+];
+
+/// Storage buffers the adaptive kernel binds (`evaluate_adaptive`: 8 + factors, indices, draw
+/// arguments, triangle walk), above `wgpu::Limits::default()`'s 8.
+pub const ADAPTIVE_STORAGE_BUFFERS: u32 = 12;
+
+/// A compute pipeline of `entry` in `module` over one explicit layout per bind group.
+fn kernel(
     device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    groups: &[&[Binding]],
+) -> (wgpu::ComputePipeline, Vec<Layout>) {
+    let layouts: Vec<Layout> = groups
+        .iter()
+        .map(|b| Layout::compute(device, entry, b))
+        .collect();
+    let refs: Vec<&Layout> = layouts.iter().collect();
+    (kernel::pipeline(device, module, entry, &refs, &[]), layouts)
+}
+
+/// One pass of one dispatch.
+fn pass(
+    name: &str,
     pipeline: &wgpu::ComputePipeline,
-    entries: &[(u32, &wgpu::Buffer)],
-) -> wgpu::BindGroup {
-    shader::bind_buffers(device, "subdiv-bft", pipeline, entries)
+    groups: &[&wgpu::BindGroup],
+    workgroups: (u32, u32),
+) -> Passes {
+    Passes::one(
+        name,
+        pipeline,
+        groups.iter().map(|&g| g.clone()).collect(),
+        Workgroups::Direct([workgroups.0, workgroups.1, 1]),
+    )
 }
 
 /// One tessellation level's output: a vertex and index buffer ready to draw (positions and
@@ -89,9 +130,10 @@ pub struct GpuLevel {
 pub struct GpuSubdivider {
     refine: wgpu::ComputePipeline,
     normals: wgpu::ComputePipeline,
-    evaluate: wgpu::ComputePipeline,
-    evaluate_adaptive: wgpu::ComputePipeline,
-    edge_factors: wgpu::ComputePipeline,
+    evaluate: (wgpu::ComputePipeline, Layout),
+    /// The adaptive kernels (`evaluate_adaptive`, `edge_factors`), where the device binds
+    /// [`ADAPTIVE_STORAGE_BUFFERS`] storage buffers.
+    adaptive: Option<[(wgpu::ComputePipeline, Layout); 2]>,
     /// End vertices of each M¹ edge (`factors.wgsl`).
     edge_ends: wgpu::Buffer,
     /// M⁰ positions (`vec4<f32>`, `COPY_DST`): rewrite them to animate.
@@ -101,7 +143,7 @@ pub struct GpuSubdivider {
     /// M¹ normals.
     pub m1_normals: wgpu::Buffer,
     refine_bind: wgpu::BindGroup,
-    normals_bind: wgpu::BindGroup,
+    normals_bind: [wgpu::BindGroup; 2],
     patches: wgpu::Buffer,
     rings: wgpu::Buffer,
     tables: wgpu::Buffer,
@@ -121,15 +163,38 @@ impl GpuSubdivider {
                 sub.table_level, bft.level
             )));
         }
-        let initial = shader::module(device, "subdiv-bft/initial.wgsl")?;
-        let evaluate_module = shader::module(device, "subdiv-bft/evaluate.wgsl")?;
-        let refine = shader::compute_pipeline(device, &initial, "refine_m1", &[]);
-        let normals = shader::compute_pipeline(device, &initial, "normals_m1", &[]);
-        let evaluate = shader::compute_pipeline(device, &evaluate_module, "evaluate", &[]);
-        let evaluate_adaptive =
-            shader::compute_pipeline(device, &evaluate_module, "evaluate_adaptive", &[]);
-        let factors_module = shader::module(device, "subdiv-bft/factors.wgsl")?;
-        let edge_factors = shader::compute_pipeline(device, &factors_module, "edge_factors", &[]);
+        let initial = crate::SHADERS.module(device, "initial.wgsl")?;
+        let evaluate_module = crate::SHADERS.module(device, "evaluate.wgsl")?;
+        let read = Binding::StorageRead;
+        let refine = kernel(
+            device,
+            &initial,
+            "refine_m1",
+            &[&[Binding::Uniform, read, read, read, Binding::Storage]],
+        );
+        let normals = kernel(
+            device,
+            &initial,
+            "normals_m1",
+            &[&[Binding::Uniform], &[read, read, read, Binding::Storage]],
+        );
+        let (evaluate, mut evaluate_layout) =
+            kernel(device, &evaluate_module, "evaluate", &[&EVALUATE_BINDINGS]);
+        let evaluate = (evaluate, evaluate_layout.remove(0));
+        let adaptive = (device.limits().max_storage_buffers_per_shader_stage
+            >= ADAPTIVE_STORAGE_BUFFERS)
+            .then(|| -> Result<_, SubdivError> {
+                let extra = [read, Binding::Storage, Binding::Storage, read];
+                let bindings = [&EVALUATE_BINDINGS[..], &extra].concat();
+                let (p, mut l) =
+                    kernel(device, &evaluate_module, "evaluate_adaptive", &[&bindings]);
+                let factors_module = crate::SHADERS.module(device, "factors.wgsl")?;
+                let factor_bindings = [Binding::Uniform, read, read, Binding::Storage];
+                let (f, mut fl) =
+                    kernel(device, &factors_module, "edge_factors", &[&factor_bindings]);
+                Ok([(p, l.remove(0)), (f, fl.remove(0))])
+            })
+            .transpose()?;
         let ends: Vec<[u32; 2]> = sub
             .m1
             .edges
@@ -181,28 +246,20 @@ impl GpuSubdivider {
             bytemuck::cast_slice(&ring_offsets),
         )?;
         let ring = storage(device, "normal entries", bytemuck::cast_slice(&ring))?;
-        let refine_bind = bind(
+        let refine_bind = refine.1[0].bind_buffers(
             device,
-            &refine,
             &[
-                (0, &counts),
-                (1, &m0_positions),
-                (2, &entry_offsets),
-                (3, &entries),
-                (4, &m1_positions),
+                &counts,
+                &m0_positions,
+                &entry_offsets,
+                &entries,
+                &m1_positions,
             ],
         );
-        let normals_bind = bind(
-            device,
-            &normals,
-            &[
-                (0, &counts),
-                (5, &m1_positions),
-                (6, &ring_offsets),
-                (7, &ring),
-                (8, &m1_normals),
-            ],
-        );
+        let normals_bind = [
+            normals.1[0].bind_buffers(device, &[&counts]),
+            normals.1[1].bind_buffers(device, &[&m1_positions, &ring_offsets, &ring, &m1_normals]),
+        ];
         let (weights, _) = padded_weights(bft);
         Ok(Self {
             patches: storage(
@@ -220,11 +277,10 @@ impl GpuSubdivider {
                 "basis-function tables",
                 bytemuck::cast_slice(&weights),
             )?,
-            refine,
-            normals,
+            refine: refine.0,
+            normals: normals.0,
             evaluate,
-            evaluate_adaptive,
-            edge_factors,
+            adaptive,
             edge_ends,
             m0_positions,
             m1_positions,
@@ -289,9 +345,8 @@ impl GpuSubdivider {
         )?;
         let params = self.evaluate_params(device, s)?;
         let walk = storage(device, "grid walk", bytemuck::cast_slice(&grid_walk(s)))?;
-        let bind = bind(
+        let bind = self.evaluate.1.bind_buffers(
             device,
-            &self.evaluate,
             &self.evaluate_bindings(&params, &walk, &positions, &normals),
         );
         Ok(GpuLevel {
@@ -314,17 +369,17 @@ impl GpuSubdivider {
         walk: &'a wgpu::Buffer,
         positions: &'a wgpu::Buffer,
         normals: &'a wgpu::Buffer,
-    ) -> Vec<(u32, &'a wgpu::Buffer)> {
+    ) -> Vec<&'a wgpu::Buffer> {
         vec![
-            (0, params),
-            (1, &self.patches),
-            (2, &self.rings),
-            (3, &self.tables),
-            (4, &self.m1_positions),
-            (5, &self.m1_normals),
-            (6, walk),
-            (7, positions),
-            (8, normals),
+            params,
+            &self.patches,
+            &self.rings,
+            &self.tables,
+            &self.m1_positions,
+            &self.m1_normals,
+            walk,
+            positions,
+            normals,
         ]
     }
 
@@ -355,19 +410,21 @@ impl GpuSubdivider {
 
     /// Records the initial step (M⁰ → M¹ positions, then normals).
     pub fn encode_initial(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        let groups = self.m1_count.div_ceil(WORKGROUP).max(1);
-        for (name, pipeline, bind) in [
-            ("initial step: positions", &self.refine, &self.refine_bind),
-            ("initial step: normals", &self.normals, &self.normals_bind),
-        ] {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some(name),
-                timestamp_writes: timer.and_then(|t| t.compute_pass(name)),
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, bind, &[]);
-            pass.dispatch_workgroups(groups, 1, 1);
-        }
+        let groups = (self.m1_count.div_ceil(WORKGROUP).max(1), 1);
+        let [counts, normals] = &self.normals_bind;
+        pass(
+            "initial step: positions",
+            &self.refine,
+            &[&self.refine_bind],
+            groups,
+        )
+        .then(pass(
+            "initial step: normals",
+            &self.normals,
+            &[counts, normals],
+            groups,
+        ))
+        .encode(encoder, timer);
     }
 
     /// Records the main step for `level` (after [`GpuSubdivider::encode_initial`]).
@@ -377,14 +434,13 @@ impl GpuSubdivider {
         level: &GpuLevel,
         timer: Option<&PassTimer>,
     ) {
-        let name = "main step: evaluate";
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(name),
-            timestamp_writes: timer.and_then(|t| t.compute_pass(name)),
-        });
-        pass.set_pipeline(&self.evaluate);
-        pass.set_bind_group(0, &level.bind, &[]);
-        pass.dispatch_workgroups(level.groups.0, level.groups.1, 1);
+        pass(
+            "main step: evaluate",
+            &self.evaluate.0,
+            &[&level.bind],
+            level.groups,
+        )
+        .encode(encoder, timer);
     }
 
     /// Records both steps.

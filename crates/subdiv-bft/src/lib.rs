@@ -46,6 +46,35 @@ pub use cpu::{Stencils, TriMesh};
 pub use mesh::Topology;
 pub use patch::Patches;
 
+/// This crate's WGSL (`shaders/subdiv-bft/`, carried into the package by the `shaders` link).
+pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
+    "subdiv-bft",
+    imports: [],
+    files: [
+        "evaluate.wgsl",
+        "factors.wgsl",
+        "initial.wgsl",
+    ],
+);
+
+/// What this crate's kernels need of a device: wgpu's default limits suffice for the uniform evaluation; see [`adaptive_device_needs`] for adaptive tessellation.
+pub fn device_needs() -> ::gpu::DeviceNeeds {
+    ::gpu::DeviceNeeds::default()
+}
+
+/// What adaptive tessellation needs ([`gpu::GpuSubdivider::adaptive`]): its kernel binds
+/// [`gpu::ADAPTIVE_STORAGE_BUFFERS`] storage buffers. On a device with fewer, `GpuSubdivider`
+/// builds only the uniform evaluation and `adaptive` is an error naming the limit.
+pub fn adaptive_device_needs() -> ::gpu::DeviceNeeds {
+    ::gpu::DeviceNeeds {
+        features: ::gpu::wgpu::Features::empty(),
+        limits: ::gpu::wgpu::Limits {
+            max_storage_buffers_per_shader_stage: gpu::ADAPTIVE_STORAGE_BUFFERS,
+            ..Default::default()
+        },
+    }
+}
+
 /// Everything that can go wrong.
 #[derive(Debug, thiserror::Error)]
 pub enum SubdivError {

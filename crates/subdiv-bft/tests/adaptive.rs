@@ -294,7 +294,9 @@ fn triangle_set(indices: &[u32]) -> Vec<[u32; 3]> {
 /// where triangles use them; factors from the GPU metric == the CPU metric.
 #[test]
 fn adaptive_cpu_equals_gpu() {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&subdiv_bft::adaptive_device_needs()) else {
+        return;
+    };
     let bft = tables();
     let max_level = bft.level + 1;
     for (name, mesh) in [("bipyramid 9", bipyramid(9)), ("half disk 5", half_disk(5))] {

@@ -40,7 +40,9 @@ fn compare(what: &str, cpu: &[Vec3], gpu: &[Vec3], tolerance: f32, normals: bool
 
 #[test]
 fn initial_and_main_step_cpu_equals_gpu() {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&subdiv_bft::device_needs()) else {
+        return;
+    };
     let bft = tables();
     for (name, mesh) in meshes() {
         let sub = Subdivider::new(&mesh.topology, bft).expect("subdivider");
@@ -159,7 +161,9 @@ fn shared_edges_are_crack_free() {
 /// Animation: new M⁰ positions go through the same buffers, entries and tables.
 #[test]
 fn animated_control_mesh_needs_no_rebuild() {
-    let Some(gpu) = gpu::test_gpu() else { return };
+    let Some(gpu) = gpu::test_device(&subdiv_bft::device_needs()) else {
+        return;
+    };
     let bft = tables();
     let mesh = bipyramid(7);
     let sub = Subdivider::new(&mesh.topology, bft).expect("subdivider");
@@ -192,4 +196,37 @@ fn animated_control_mesh_needs_no_rebuild() {
             false,
         );
     }
+}
+
+/// At `wgpu::Limits::default()` (8 storage buffers) the uniform evaluation works and adaptive
+/// tessellation is refused with an error naming the limit, never a wgpu panic.
+#[test]
+fn default_limits_fall_back_to_uniform_evaluation() {
+    let Some(gpu) = gpu::test_device(&subdiv_bft::device_needs()) else {
+        return;
+    };
+    assert!(
+        gpu.device.limits().max_storage_buffers_per_shader_stage
+            < subdiv_bft::gpu::ADAPTIVE_STORAGE_BUFFERS
+    );
+    let bft = tables();
+    let mesh = bipyramid(5);
+    let sub = Subdivider::new(&mesh.topology, bft).expect("subdivider");
+    let g =
+        GpuSubdivider::new(&gpu.device, &sub, bft).expect("uniform pipelines at default limits");
+    let err = g
+        .adaptive(&gpu.device, &sub, 2)
+        .err()
+        .expect("adaptive refused");
+    assert!(err.to_string().contains("storage buffers"), "{err}");
+    let positions = mesh.positions_f32();
+    let got = subdiv_bft::gpu::run(gpu, &sub, bft, &positions, 2).expect("uniform");
+    let want = sub.evaluate_cpu(bft, &positions, 2).expect("cpu");
+    compare(
+        "default limits",
+        &want.positions,
+        &got.positions,
+        (POSITION_TOLERANCE * mesh.diagonal()) as f32,
+        false,
+    );
 }

@@ -18,7 +18,9 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use ::gpu::{Gpu, GpuError, PassTimer, shader, transfer};
+use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
+use ::gpu::shader::Specialisation;
+use ::gpu::{Gpu, GpuError, PassTimer, transfer};
 use gbuffer::{Frame, GBuffer, Image, gpu::GBufferTextures, gpu::UploadedGBuffer};
 use glam::{Vec3, Vec4};
 use scene::Camera;
@@ -49,11 +51,17 @@ pub struct ShadingParams {
     pub _pad: [u32; 2],
 }
 
-/// Light accumulation for one G-buffer resolution, one [`ShadingConfig`] and up to
-/// `capacity` lights.
+/// Light accumulation with one [`ShadingConfig`]: the pipeline, built once
+/// ([`LightShading::new`]); [`LightShading::bind`] binds it to a G-buffer, the caller's output
+/// textures and a light buffer of some capacity; [`LightShading::encode`] records the pass.
 pub struct LightShading {
     config: ShadingConfig,
     pipeline: wgpu::ComputePipeline,
+    layout: Layout,
+}
+
+/// A [`LightShading`] bound to one G-buffer, its outputs and a light buffer.
+pub struct BoundShading {
     group: wgpu::BindGroup,
     params: ShadingParams,
     params_buffer: wgpu::Buffer,
@@ -61,78 +69,142 @@ pub struct LightShading {
     capacity: usize,
     counts: wgpu::Buffer,
     lists: wgpu::Buffer,
-    output: [wgpu::Texture; 2],
     size: (u32, u32),
+    tiles: (u32, u32),
+    brute_force: bool,
 }
 
-fn tiled_module(
-    device: &wgpu::Device,
-    config: &ShadingConfig,
-) -> Result<wgpu::ShaderModule, GpuError> {
-    let name = "tiled-shading/tiled.wgsl";
+/// The compile-time constants of `tiled.wgsl`'s `shade_tiles` for `config`.
+pub fn specialisation(config: &ShadingConfig) -> Specialisation {
     let method = match config.method {
         Method::TiledCones => 2,
         Method::Clustered => 3,
         _ => 1,
     };
-    let wg = config.tile_size.min(16);
-    let mut src = shader::source(name)?;
-    for (from, to) in [
-        (
-            "const METHOD: u32 = 1u;".to_string(),
-            format!("const METHOD: u32 = {method}u;"),
-        ),
-        (
-            "const TILE: u32 = 16u;".to_string(),
-            format!("const TILE: u32 = {}u;", config.tile_size),
-        ),
-        (
-            "const WG: u32 = 16u;".to_string(),
-            format!("const WG: u32 = {wg}u;"),
-        ),
-        (
-            "@workgroup_size(16, 16)".to_string(),
-            format!("@workgroup_size({wg}, {wg})"),
-        ),
-    ] {
-        if !src.contains(&from) {
-            return Err(GpuError::Shader {
-                name: name.into(),
-                message: format!("`{from}` not found"),
-            });
-        }
-        src = src.replace(&from, &to);
-    }
-    Ok(shader::module_from_source(device, name, src))
+    Specialisation::default()
+        .set("METHOD", format!("{method}u"))
+        .set("TILE", format!("{}u", config.tile_size))
+        .set("WG", format!("{}u", config.tile_size.min(16)))
+}
+
+/// Every shader variant this crate builds: `tiled.wgsl` for each tiled method and tile size.
+pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
+    let methods = [Method::Tiled, Method::TiledCones, Method::Clustered];
+    methods
+        .into_iter()
+        .flat_map(|method| {
+            [8, 16, 32].map(|tile_size| {
+                let config = ShadingConfig {
+                    method,
+                    tile_size,
+                    ..Default::default()
+                };
+                ("tiled.wgsl", specialisation(&config))
+            })
+        })
+        .collect()
 }
 
 fn storage(device: &wgpu::Device, label: &str, bytes: u64) -> Result<wgpu::Buffer, GpuError> {
     let usage =
         wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-    transfer::check_buffer_size(device, label, bytes, usage)?;
-    Ok(device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: bytes.max(16),
-        usage,
-        mapped_at_creation: false,
-    }))
+    transfer::buffer(device, label, bytes.max(16), usage)
 }
 
 impl LightShading {
-    /// Builds the pass reading `frame` (a `gbuffer::Frame` uniform) and `gbuffer`, with a light
-    /// buffer for `capacity` lights, initially `lights`. With `record_lists`, every tile's
-    /// list is kept for [`LightShading::read_lists`] (tiles × capacity entries: for tests).
-    pub fn new(
+    /// Builds the pipeline of `config` (bad configurations are an error here).
+    pub fn new(device: &wgpu::Device, config: &ShadingConfig) -> Result<Self, ShadingError> {
+        config.validate()?;
+        let (module, entry) = if config.method == Method::BruteForce {
+            (crate::SHADERS.module(device, "tiled.wgsl")?, "brute_force")
+        } else {
+            let spec = specialisation(config);
+            (
+                crate::SHADERS.module_with(device, "tiled.wgsl", &spec)?,
+                "shade_tiles",
+            )
+        };
+        let mut bindings = vec![
+            Binding::Uniform,
+            Binding::Uniform,
+            Binding::StorageRead,
+            Binding::TextureUnfilterable,
+            Binding::TextureUint,
+            Binding::TextureUnfilterable,
+            Binding::TextureUint,
+            Binding::StorageTexture(ACCUMULATION_FORMAT),
+            Binding::StorageTexture(ACCUMULATION_FORMAT),
+        ];
+        if config.method != Method::BruteForce {
+            bindings.extend([Binding::Storage, Binding::Storage]);
+        }
+        let layout = Layout::compute(device, "light shading", &bindings);
+        let pipeline = kernel::pipeline(device, &module, entry, &[&layout], &[]);
+        Ok(Self {
+            config: *config,
+            pipeline,
+            layout,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ShadingConfig {
+        &self.config
+    }
+
+    /// Two textures of `width × height` for [`LightShading::bind`]'s outputs
+    /// ([`ACCUMULATION_FORMAT`], storage + sampled + copy source).
+    pub fn output_textures(device: &wgpu::Device, width: u32, height: u32) -> [wgpu::Texture; 2] {
+        ["diffuse accumulation", "specular accumulation"].map(|label| {
+            transfer::texture_2d(
+                device,
+                label,
+                width,
+                height,
+                ACCUMULATION_FORMAT,
+                wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+            )
+        })
+    }
+
+    /// Binds the pass to `frame` (a `gbuffer::Frame` uniform), `gbuffer`, the caller's
+    /// diffuse and specular `outputs` ([`ACCUMULATION_FORMAT`], G-buffer size, storage) and a
+    /// new light buffer for `capacity` lights (empty until [`BoundShading::set_lights`]). With
+    /// `record_lists`, every tile's list is kept for [`BoundShading::read_lists`] (tiles ×
+    /// capacity entries: for tests). Textures of the wrong size, format or usage are an error.
+    pub fn bind(
+        &self,
         device: &wgpu::Device,
         frame: &wgpu::Buffer,
         gbuffer: GBufferTextures<'_>,
-        config: &ShadingConfig,
+        outputs: [&wgpu::Texture; 2],
         capacity: usize,
         record_lists: bool,
-    ) -> Result<Self, ShadingError> {
-        config.validate()?;
+    ) -> Result<BoundShading, ShadingError> {
         let size = (gbuffer.linear_depth.width(), gbuffer.linear_depth.height());
-        let (tiles_x, tiles_y) = config.tiles(size.0, size.1);
+        let input = wgpu::TextureUsages::TEXTURE_BINDING;
+        for (what, texture, format) in [
+            (
+                "linear depth",
+                gbuffer.linear_depth,
+                gbuffer::LINEAR_DEPTH_FORMAT,
+            ),
+            ("normals", gbuffer.normal, gbuffer::NORMAL_FORMAT),
+            ("albedo", gbuffer.albedo, gbuffer::ALBEDO_FORMAT),
+            ("material", gbuffer.material, gbuffer::MATERIAL_FORMAT),
+        ] {
+            kernel::check_texture(what, texture, size, format, input)?;
+        }
+        let output = wgpu::TextureUsages::STORAGE_BINDING;
+        for (what, texture) in [
+            ("diffuse output", outputs[0]),
+            ("specular output", outputs[1]),
+        ] {
+            kernel::check_texture(what, texture, size, ACCUMULATION_FORMAT, output)?;
+        }
+        let (tiles_x, tiles_y) = self.config.tiles(size.0, size.1);
         let tiles = u64::from(tiles_x) * u64::from(tiles_y);
         let capacity = capacity.max(1);
         let lights = storage(device, "lights", (capacity * size_of::<GpuLight>()) as u64)?;
@@ -154,90 +226,68 @@ impl LightShading {
             bytemuck::bytes_of(&params),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
-        let output = ["diffuse accumulation", "specular accumulation"].map(|label| {
-            transfer::texture_2d(
-                device,
-                label,
-                size.0,
-                size.1,
-                ACCUMULATION_FORMAT,
-                wgpu::TextureUsages::STORAGE_BINDING
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-            )
-        });
-        let (module, entry) = if config.method == Method::BruteForce {
-            (
-                shader::module(device, "tiled-shading/tiled.wgsl")?,
-                "brute_force",
-            )
-        } else {
-            (tiled_module(device, config)?, "shade_tiles")
-        };
-        let pipeline = shader::compute_pipeline(device, &module, entry, &[]);
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let views = [
             view(gbuffer.linear_depth),
             view(gbuffer.normal),
             view(gbuffer.albedo),
             view(gbuffer.material),
-            view(&output[0]),
-            view(&output[1]),
+            view(outputs[0]),
+            view(outputs[1]),
         ];
-        let mut entries = vec![
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: frame.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: params_buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: lights.as_entire_binding(),
-            },
+        let mut resources = vec![
+            frame.as_entire_binding(),
+            params_buffer.as_entire_binding(),
+            lights.as_entire_binding(),
         ];
-        entries.extend(views.iter().enumerate().map(|(i, v)| wgpu::BindGroupEntry {
-            binding: i as u32 + 3,
-            resource: wgpu::BindingResource::TextureView(v),
-        }));
-        if config.method != Method::BruteForce {
-            entries.push(wgpu::BindGroupEntry {
-                binding: 9,
-                resource: counts.as_entire_binding(),
-            });
-            entries.push(wgpu::BindGroupEntry {
-                binding: 10,
-                resource: lists.as_entire_binding(),
-            });
+        resources.extend(views.iter().map(wgpu::BindingResource::TextureView));
+        let brute_force = self.config.method == Method::BruteForce;
+        if !brute_force {
+            resources.extend([counts.as_entire_binding(), lists.as_entire_binding()]);
         }
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("light shading"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
-        Ok(Self {
-            config: *config,
-            pipeline,
-            group,
+        Ok(BoundShading {
+            group: self.layout.bind(device, &resources),
             params,
             params_buffer,
             lights,
             capacity,
             counts,
             lists,
-            output,
             size,
+            tiles: (tiles_x, tiles_y),
+            brute_force,
         })
     }
 
-    /// The configuration.
-    pub fn config(&self) -> &ShadingConfig {
-        &self.config
+    /// The pass name in timings: `light accumulation (METHOD)`.
+    pub fn pass_name(&self) -> String {
+        format!("light accumulation ({})", self.config.method)
     }
 
-    /// Replaces the lights (at most the capacity given at creation).
+    /// Records the pass over `bound`, timed by `timer` under [`LightShading::pass_name`].
+    pub fn encode(
+        &self,
+        bound: &BoundShading,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&PassTimer>,
+    ) {
+        let workgroups = if bound.brute_force {
+            Workgroups::covering(bound.size.0, bound.size.1, 8)
+        } else {
+            Workgroups::Direct([bound.tiles.0, bound.tiles.1, 1])
+        };
+        Passes::one(
+            &self.pass_name(),
+            &self.pipeline,
+            vec![bound.group.clone()],
+            workgroups,
+        )
+        .encode(encoder, timer);
+    }
+}
+
+impl BoundShading {
+    /// Replaces the lights (at most the capacity given to [`LightShading::bind`]).
     pub fn set_lights(
         &mut self,
         queue: &wgpu::Queue,
@@ -263,55 +313,41 @@ impl LightShading {
         queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
     }
 
-    /// The pass name in timings: `light accumulation (METHOD)`.
-    pub fn pass_name(&self) -> String {
-        format!("light accumulation ({})", self.config.method)
-    }
-
-    /// Records the pass, timed by `timer` under [`LightShading::pass_name`].
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        let name = self.pass_name();
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(&name),
-            timestamp_writes: timer.and_then(|t| t.compute_pass(&name)),
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.group, &[]);
-        let (x, y) = if self.config.method == Method::BruteForce {
-            (self.size.0.div_ceil(8), self.size.1.div_ceil(8))
-        } else {
-            self.config.tiles(self.size.0, self.size.1)
-        };
-        pass.dispatch_workgroups(x, y, 1);
-    }
-
-    /// The diffuse and specular accumulation textures (`Rgba32Float`).
-    pub fn output(&self) -> [&wgpu::Texture; 2] {
-        [&self.output[0], &self.output[1]]
+    /// The light capacity.
+    pub fn capacity(&self) -> usize {
+        self.capacity
     }
 
     /// Reads back each tile's list length (`None` for brute force, which has no lists).
-    pub fn read_counts(&self, gpu: &Gpu) -> Result<Option<Vec<u32>>, ShadingError> {
-        if self.config.method == Method::BruteForce {
+    pub fn read_counts(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<Vec<u32>>, ShadingError> {
+        if self.brute_force {
             return Ok(None);
         }
-        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.counts)?;
-        let (tx, ty) = self.config.tiles(self.size.0, self.size.1);
+        let bytes = transfer::read_buffer(device, queue, &self.counts)?;
+        let (tx, ty) = self.tiles;
         Ok(Some(
             bytemuck::cast_slice::<u8, u32>(&bytes)[..(tx * ty) as usize].to_vec(),
         ))
     }
 
     /// Reads back every tile's list of (light index, slice mask), sorted by light index;
-    /// `None` unless built with `record_lists` (and for brute force).
-    pub fn read_lists(&self, gpu: &Gpu) -> Result<Option<Vec<Vec<(u32, u32)>>>, ShadingError> {
-        let Some(counts) = self.read_counts(gpu)? else {
+    /// `None` unless bound with `record_lists` (and for brute force).
+    pub fn read_lists(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<Vec<Vec<(u32, u32)>>>, ShadingError> {
+        let Some(counts) = self.read_counts(device, queue)? else {
             return Ok(None);
         };
         if self.params.record_lists == 0 {
             return Ok(None);
         }
-        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.lists)?;
+        let bytes = transfer::read_buffer(device, queue, &self.lists)?;
         let entries: &[[u32; 2]] = bytemuck::cast_slice(&bytes);
         let stride = self.params.list_stride as usize;
         Ok(Some(
@@ -329,21 +365,24 @@ impl LightShading {
                 .collect(),
         ))
     }
+}
 
-    /// Reads back the diffuse and specular sums.
-    pub fn read_output(&self, gpu: &Gpu) -> Result<[Image<Vec3>; 2], ShadingError> {
-        let read = |t: &wgpu::Texture| -> Result<Image<Vec3>, ShadingError> {
-            let bytes =
-                transfer::read_texture(&gpu.device, &gpu.queue, t, wgpu::TextureAspect::All)?;
-            let pixels = bytemuck::cast_slice::<u8, Vec4>(&bytes)
-                .iter()
-                .map(|v| v.truncate())
-                .collect();
-            Image::from_vec(self.size.0, self.size.1, pixels)
-                .map_err(|e| GpuError::Readback(e.to_string()).into())
-        };
-        Ok([read(&self.output[0])?, read(&self.output[1])?])
-    }
+/// Reads back diffuse and specular accumulation textures ([`ACCUMULATION_FORMAT`]).
+pub fn read_outputs(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    outputs: [&wgpu::Texture; 2],
+) -> Result<[Image<Vec3>; 2], ShadingError> {
+    let read = |t: &wgpu::Texture| -> Result<Image<Vec3>, ShadingError> {
+        let bytes = transfer::read_texture(device, queue, t, wgpu::TextureAspect::All)?;
+        let pixels = bytemuck::cast_slice::<u8, Vec4>(&bytes)
+            .iter()
+            .map(|v| v.truncate())
+            .collect();
+        Image::from_vec(t.width(), t.height(), pixels)
+            .map_err(|e| GpuError::Readback(e.to_string()).into())
+    };
+    Ok([read(outputs[0])?, read(outputs[1])?])
 }
 
 /// Uploads `gb`, `frame` and `lights`, runs one light accumulation with `config` and reads
@@ -358,23 +397,27 @@ pub fn run(
     lights: &[GpuLight],
     config: &ShadingConfig,
 ) -> Result<Shaded, ShadingError> {
+    let (device, queue) = (&gpu.device, &gpu.queue);
     let uploaded = UploadedGBuffer::new(gpu, gb, frame)?;
-    let mut stage = LightShading::new(
-        &gpu.device,
+    let stage = LightShading::new(device, config)?;
+    let outputs = LightShading::output_textures(device, gb.width(), gb.height());
+    let outputs = [&outputs[0], &outputs[1]];
+    let mut bound = stage.bind(
+        device,
         &uploaded.frame,
         uploaded.textures(),
-        config,
+        outputs,
         lights.len(),
         true,
     )?;
-    stage.set_lights(&gpu.queue, lights)?;
-    stage.set_camera(&gpu.queue, camera);
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    stage.encode(&mut encoder, None);
-    gpu.queue.submit([encoder.finish()]);
-    let [diffuse, specular] = stage.read_output(gpu)?;
+    bound.set_lights(queue, lights)?;
+    bound.set_camera(queue, camera);
+    let mut encoder = device.create_command_encoder(&Default::default());
+    stage.encode(&bound, &mut encoder, None);
+    queue.submit([encoder.finish()]);
+    let [diffuse, specular] = read_outputs(device, queue, outputs)?;
     let tiles = config.tiles(gb.width(), gb.height());
-    let lists = match stage.read_lists(gpu)? {
+    let lists = match bound.read_lists(device, queue)? {
         Some(lists) => lists,
         None => (0..tiles.0 * tiles.1)
             .map(|t| {

@@ -33,6 +33,21 @@ use std::str::FromStr;
 use glam::{Vec3, Vec4Swizzles};
 use scene::{Camera, Light};
 
+/// This crate's WGSL (`shaders/tiled-shading/`, carried into the package by the `shaders` link).
+pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
+    "tiled-shading",
+    imports: [gbuffer::SHADERS],
+    files: [
+        "lighting.wgsl",
+        "tiled.wgsl",
+    ],
+);
+
+/// What this crate's kernels need of a device: wgpu's default limits suffice.
+pub fn device_needs() -> ::gpu::DeviceNeeds {
+    ::gpu::DeviceNeeds::default()
+}
+
 /// A light as the shaders see it (WGSL `Light` in `tiled-shading/lighting.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

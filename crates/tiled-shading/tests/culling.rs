@@ -259,7 +259,9 @@ fn normal_cones_remove_exactly_the_lights_behind_a_wall() {
         "the lights behind reach the wall's tiles ({removed_total})"
     );
     compare("cones vs tiled", &tiled, &cones, 0.0, 0.0);
-    let Some(g) = ::gpu::test_gpu() else { return };
+    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+        return;
+    };
     let cfg = config(Method::TiledCones, 16);
     let gpu_cones = gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &cfg).expect("gpu run");
     same_lists("wall cones", &c, &cfg, &gpu_cones, &cones);
@@ -271,7 +273,9 @@ fn normal_cones_never_change_the_image() {
         let tiled = shade_cpu(&c, &config(Method::Tiled, 16));
         let cones = shade_cpu(&c, &config(Method::TiledCones, 16));
         compare("cpu cones vs tiled", &tiled, &cones, 0.0, SAME_TERMS);
-        let Some(g) = ::gpu::test_gpu() else { continue };
+        let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+            continue;
+        };
         let run = |m| {
             gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &config(m, 16)).expect("gpu run")
         };
@@ -287,7 +291,9 @@ fn normal_cones_never_change_the_image() {
 
 #[test]
 fn gpu_matches_cpu_images_and_lists() {
-    let Some(g) = ::gpu::test_gpu() else { return };
+    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+        return;
+    };
     for c in [spheres(100, 70, 300), walls(500, 128, 72)] {
         let brute = shade_cpu(&c, &config(Method::BruteForce, 16));
         for method in Method::ALL {
@@ -331,7 +337,9 @@ fn lists_longer_than_workgroup_memory_are_shaded_in_flushes() {
         .collect();
     c.lights = tiled_shading::gpu_lights(&lights).expect("valid");
     let brute = shade_cpu(&c, &config(Method::BruteForce, 16));
-    let Some(g) = ::gpu::test_gpu() else { return };
+    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+        return;
+    };
     for method in [Method::Tiled, Method::TiledCones, Method::Clustered] {
         let out = gpu::run(
             g,
@@ -431,33 +439,57 @@ fn bad_input_is_an_error() {
         tiled_shading::gpu_lights(&[bad]),
         Err(ShadingError::InvalidLight { index: 0, .. })
     ));
-    let Some(g) = ::gpu::test_gpu() else { return };
+    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+        return;
+    };
     let uploaded = gbuffer::gpu::UploadedGBuffer::new(g, &c.gb, &c.frame).expect("upload");
-    let mut stage = gpu::LightShading::new(
-        &g.device,
-        &uploaded.frame,
-        uploaded.textures(),
-        &config(Method::Tiled, 16),
-        2,
-        false,
-    )
-    .expect("stage");
+    let stage = gpu::LightShading::new(&g.device, &config(Method::Tiled, 16)).expect("stage");
+    let (w, h) = (c.gb.width(), c.gb.height());
+    let outputs = gpu::LightShading::output_textures(&g.device, w, h);
+    let mut bound = stage
+        .bind(
+            &g.device,
+            &uploaded.frame,
+            uploaded.textures(),
+            [&outputs[0], &outputs[1]],
+            2,
+            false,
+        )
+        .expect("bind");
     assert!(matches!(
-        stage.set_lights(&g.queue, &c.lights),
+        bound.set_lights(&g.queue, &c.lights),
         Err(ShadingError::TooManyLights {
             count: 7,
             capacity: 2
         })
     ));
-    assert!(
-        gpu::LightShading::new(
-            &g.device,
-            &uploaded.frame,
-            uploaded.textures(),
-            &config(Method::Tiled, 64),
-            2,
-            false
-        )
-        .is_err()
+    assert!(gpu::LightShading::new(&g.device, &config(Method::Tiled, 64)).is_err());
+    // Outputs of the wrong size, format or usage are an error from `bind`, naming them.
+    let small = gpu::LightShading::output_textures(&g.device, w / 2, h);
+    let wrong_size = stage.bind(
+        &g.device,
+        &uploaded.frame,
+        uploaded.textures(),
+        [&small[0], &outputs[1]],
+        2,
+        false,
     );
+    assert!(matches!(&wrong_size, Err(e) if e.to_string().contains("diffuse output")));
+    let sampled_only = ::gpu::transfer::texture_2d(
+        &g.device,
+        "sampled only",
+        w,
+        h,
+        gpu::ACCUMULATION_FORMAT,
+        ::gpu::wgpu::TextureUsages::TEXTURE_BINDING,
+    );
+    let no_storage = stage.bind(
+        &g.device,
+        &uploaded.frame,
+        uploaded.textures(),
+        [&outputs[0], &sampled_only],
+        2,
+        false,
+    );
+    assert!(matches!(&no_storage, Err(e) if e.to_string().contains("specular output")));
 }

@@ -140,7 +140,7 @@ impl Bench<'_> {
             record(&mut encoder, &self.timer);
             self.timer.resolve(&mut encoder);
             self.gpu.queue.submit([encoder.finish()]);
-            let times = self.timer.read(self.gpu)?;
+            let times = self.timer.read(&self.gpu.device, &self.gpu.queue)?;
             let (Some(first), Some(last)) = (times.first(), times.last()) else {
                 bail!("the adapter has no timestamp queries");
             };
@@ -393,8 +393,20 @@ fn main() -> Result<()> {
     // 3: blur (Table 2) and discontinuity buffer.
     let (w, h) = (1280, 1024);
     let (depth, normals) = scene_gbuffer(w, h)?;
-    let depth_t = upload_image(&gpu, "linear depth", &depth, gbuffer::LINEAR_DEPTH_FORMAT)?;
-    let normal_t = upload_image(&gpu, "normals", &normals, gbuffer::NORMAL_FORMAT)?;
+    let depth_t = upload_image(
+        &gpu.device,
+        &gpu.queue,
+        "linear depth",
+        &depth,
+        gbuffer::LINEAR_DEPTH_FORMAT,
+    )?;
+    let normal_t = upload_image(
+        &gpu.device,
+        &gpu.queue,
+        "normals",
+        &normals,
+        gbuffer::NORMAL_FORMAT,
+    )?;
     let disc_pass = DiscontinuityPass::new(device, &Thresholds::default())?;
     let disc = bench.texture(
         "discontinuities",
@@ -434,8 +446,20 @@ fn main() -> Result<()> {
     let mut shading = Vec::new();
     for size in SIZES {
         let (depth, normals) = scene_gbuffer(size.0, size.1)?;
-        let depth_t = upload_image(&gpu, "linear depth", &depth, gbuffer::LINEAR_DEPTH_FORMAT)?;
-        let normal_t = upload_image(&gpu, "normals", &normals, gbuffer::NORMAL_FORMAT)?;
+        let depth_t = upload_image(
+            &gpu.device,
+            &gpu.queue,
+            "linear depth",
+            &depth,
+            gbuffer::LINEAR_DEPTH_FORMAT,
+        )?;
+        let normal_t = upload_image(
+            &gpu.device,
+            &gpu.queue,
+            "normals",
+            &normals,
+            gbuffer::NORMAL_FORMAT,
+        )?;
         let d = bench.texture(
             "discontinuities",
             size,

@@ -121,7 +121,7 @@ fn bench_gbuffer(
         );
         timer.resolve(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
-        let t = timer.read(gpu)?;
+        let t = timer.read(&gpu.device, &gpu.queue)?;
         if t.len() != 6 {
             bail!("the adapter has no timestamp queries; nothing to measure");
         }

@@ -653,13 +653,14 @@ fn main() -> Result<()> {
     let (device, rendered, stages, gbuffer): (String, Rendered, Option<IndirectStages>, _) =
         match &gpu {
             Some(gpu) => {
+                let (d, q) = (&gpu.device, &gpu.queue);
                 let mut renderer =
-                    pipeline::gpu::GpuRenderer::new(gpu, &scene, &direct_lights, width, height)?;
-                renderer.set_shading(gpu, &shading)?;
+                    pipeline::gpu::GpuRenderer::new(d, q, &scene, &direct_lights, width, height)?;
+                renderer.set_shading(d, q, &shading)?;
                 if let Some((config, set)) = indirect_ref {
                     match args.vpl_shadows {
                         Some(mode) => renderer.set_vpl_shadows(
-                            gpu,
+                            d,
                             &scene,
                             mode.into(),
                             &ShadowConfig {
@@ -669,16 +670,16 @@ fn main() -> Result<()> {
                             config,
                             set,
                         )?,
-                        None => renderer.set_indirect(gpu, config, set)?,
+                        None => renderer.set_indirect(d, config, set)?,
                     }
                 }
-                renderer.render(gpu, &camera, ambient)?; // warm-up: first use of pipelines and caches
-                let rendered = renderer.render(gpu, &camera, ambient)?;
+                renderer.render(d, q, &camera, ambient)?; // warm-up: first use of pipelines and caches
+                let rendered = renderer.render(d, q, &camera, ambient)?;
                 if let Some(shadows) = renderer.vpl_shadows() {
                     write_shadow_atlas(&args, gpu, shadows)?;
                 }
                 if args.heatmap {
-                    match renderer.shading().read_counts(gpu)? {
+                    match renderer.light_counts(d, q)? {
                         Some(counts) => {
                             write_heatmap(&args, &shading, width, height, &counts)?;
                         }
@@ -687,7 +688,7 @@ fn main() -> Result<()> {
                 }
                 let (stages, gbuffer) = if args.dump_stages {
                     (
-                        renderer.indirect().map(|s| s.read(gpu)).transpose()?,
+                        renderer.indirect().map(|s| s.read(d, q)).transpose()?,
                         Some(renderer.targets().read(&gpu.device, &gpu.queue)?),
                     )
                 } else {

@@ -130,7 +130,7 @@ fn main() -> Result<()> {
     let mut qualities = Vec::new();
     for &(w, h) in sizes {
         // Indirect light only: no direct lights, no ambient (the direct sun would hide errors).
-        let mut renderer = GpuRenderer::new(&gpu, &scene, &[], w, h)?;
+        let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, &scene, &[], w, h)?;
         for &count in counts {
             let mut reference_ms: Option<Vec<f64>> = None;
             for &(n, m) in patterns {
@@ -149,8 +149,10 @@ fn main() -> Result<()> {
                     },
                 )?;
                 let reference = config(bounds, pattern, Interleaving::Reference, false);
-                renderer.set_indirect(&gpu, &reference, &set)?;
-                let reference_image = renderer.render(&gpu, &camera, Vec3::ZERO)?.image;
+                renderer.set_indirect(&gpu.device, &reference, &set)?;
+                let reference_image = renderer
+                    .render(&gpu.device, &gpu.queue, &camera, Vec3::ZERO)?
+                    .image;
                 // The reference cost depends on the VPL count only: time it once per count.
                 let reference_ms = match &reference_ms {
                     Some(v) => v.clone(),
@@ -164,8 +166,12 @@ fn main() -> Result<()> {
                 let mut images = Vec::new();
                 for blur in [true, false] {
                     let c = config(bounds, pattern, Interleaving::Fused, blur);
-                    renderer.set_indirect(&gpu, &c, &set)?;
-                    images.push(renderer.render(&gpu, &camera, Vec3::ZERO)?.image);
+                    renderer.set_indirect(&gpu.device, &c, &set)?;
+                    images.push(
+                        renderer
+                            .render(&gpu.device, &gpu.queue, &camera, Vec3::ZERO)?
+                            .image,
+                    );
                 }
                 let q = QualityRow {
                     width: w,
@@ -185,7 +191,7 @@ fn main() -> Result<()> {
                     Interleaving::Split(SplitVariant::Tiled),
                 ] {
                     let c = config(bounds, pattern, interleaving, true);
-                    renderer.set_indirect(&gpu, &c, &set)?;
+                    renderer.set_indirect(&gpu.device, &c, &set)?;
                     let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, args.frames)?;
                     let indirect = Stat::of(per_frame_sum(&t, &INDIRECT));
                     let reference_shading = Stat::of(reference_ms.clone());

@@ -144,7 +144,7 @@ fn time_animation(
         timer.resolve(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
         Ok(timer
-            .read(gpu)?
+            .read(&gpu.device, &gpu.queue)?
             .into_iter()
             .map(|t| (t.name, t.ms))
             .collect())

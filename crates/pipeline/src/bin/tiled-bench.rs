@@ -89,7 +89,8 @@ fn measure(
     frames: u32,
 ) -> Result<(Stat, Option<f64>)> {
     renderer.set_shading(
-        gpu,
+        &gpu.device,
+        &gpu.queue,
         &ShadingConfig {
             method,
             tile_size: 16,
@@ -98,10 +99,12 @@ fn measure(
     let name = renderer.shading().pass_name();
     let t = time_passes(gpu, renderer, camera, DEFAULT_AMBIENT, frames)?;
     let ms = Stat::of(per_frame_sum(&t, &[name.as_str()]));
-    let mean = renderer.shading().read_counts(gpu)?.map(|counts| {
-        let lit: Vec<u32> = counts.into_iter().filter(|&c| c > 0).collect();
-        lit.iter().map(|&c| f64::from(c)).sum::<f64>() / lit.len().max(1) as f64
-    });
+    let mean = renderer
+        .light_counts(&gpu.device, &gpu.queue)?
+        .map(|counts| {
+            let lit: Vec<u32> = counts.into_iter().filter(|&c| c > 0).collect();
+            lit.iter().map(|&c| f64::from(c)).sum::<f64>() / lit.len().max(1) as f64
+        });
     Ok((ms, mean))
 }
 
@@ -126,10 +129,10 @@ fn main() -> Result<()> {
 
     let mut sweep = Vec::new();
     for &(w, h) in sizes {
-        let mut renderer = GpuRenderer::new(&gpu, &scene, &[], w, h)?;
+        let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, &scene, &[], w, h)?;
         for &count in counts {
             let lights = scene::scatter_point_lights(scene.bounds(), count, 1);
-            renderer.set_lights(&gpu, &lights)?;
+            renderer.set_lights(&gpu.device, &gpu.queue, &lights)?;
             let mut brute = f64::NAN;
             for method in ShadingMethod::ALL {
                 let (ms, mean_list) = measure(&gpu, &mut renderer, &camera, method, args.frames)?;
@@ -160,7 +163,7 @@ fn main() -> Result<()> {
         let walls = scene::thesis_walls(behind);
         let cam = walls.camera.unwrap_or_else(|| walls.camera_or_framed());
         for &(w, h) in &TEST_SIZES {
-            let mut renderer = GpuRenderer::new(&gpu, &walls, &[], w, h)?;
+            let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, &walls, &[], w, h)?;
             for frustum_culling in [true, false] {
                 let all = pipeline::validate_lights(&walls.lights)?;
                 let sent: Vec<Light> = if frustum_culling {
@@ -171,7 +174,7 @@ fn main() -> Result<()> {
                 } else {
                     walls.lights.clone()
                 };
-                renderer.set_lights(&gpu, &sent)?;
+                renderer.set_lights(&gpu.device, &gpu.queue, &sent)?;
                 for method in ShadingMethod::ALL {
                     let (ms, mean_list) = measure(&gpu, &mut renderer, &cam, method, args.frames)?;
                     println!(

@@ -20,7 +20,8 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use ::gpu::{Gpu, PassTimer, shader, transfer, wgpu};
+use ::gpu::kernel::{Binding, Kernel, Passes, Workgroups};
+use ::gpu::{Gpu, PassTimer, transfer, wgpu};
 use gbuffer::{
     Frame, GBuffer, Image,
     gpu::{GBufferTextures, UploadedGBuffer},
@@ -29,7 +30,7 @@ use half::f16;
 use interleave::{
     SplitLayout,
     gpu::{
-        BlurPass, DISCONTINUITY_FORMAT, DiscontinuityPass, IRRADIANCE_FORMAT, Passes, Splitter,
+        BlurPass, DISCONTINUITY_FORMAT, DiscontinuityPass, IRRADIANCE_FORMAT, Splitter,
         download_image,
     },
 };
@@ -55,6 +56,22 @@ const USAGE: wgpu::TextureUsages = wgpu::TextureUsages::TEXTURE_BINDING
     .union(wgpu::TextureUsages::STORAGE_BINDING)
     .union(wgpu::TextureUsages::COPY_SRC)
     .union(wgpu::TextureUsages::COPY_DST);
+
+/// `vpl_shading.wgsl`: frame, params, VPLs; linear depth, normal, albedo, material; diffuse and
+/// specular outputs; shadow atlas and its parameters.
+const VPL_SHADING_BINDINGS: [Binding; 11] = [
+    Binding::Uniform,
+    Binding::Uniform,
+    Binding::StorageRead,
+    Binding::TextureUnfilterable,
+    Binding::TextureUint,
+    Binding::TextureUnfilterable,
+    Binding::TextureUint,
+    Binding::StorageTexture(IRRADIANCE_FORMAT),
+    Binding::StorageTexture(IRRADIANCE_FORMAT),
+    Binding::StorageRead,
+    Binding::Uniform,
+];
 
 fn irradiance(device: &wgpu::Device, label: &str, (w, h): (u32, u32)) -> wgpu::Texture {
     transfer::texture_2d(device, label, w, h, IRRADIANCE_FORMAT, USAGE)
@@ -119,7 +136,7 @@ impl IndirectStage {
             }),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
-        let module = shader::module(device, "pipeline/vpl_shading.wgsl")?;
+        let module = crate::SHADERS.module(device, "vpl_shading.wgsl")?;
         let constants = [
             ("width", f64::from(size.0)),
             ("height", f64::from(size.1)),
@@ -132,15 +149,13 @@ impl IndirectStage {
             Interleaving::Fused => "shade_fused",
             _ => "shade_split",
         };
-        let pipeline = shader::compute_pipeline(device, &module, entry, &constants);
+        let kernel = Kernel::new(device, &module, entry, &VPL_SHADING_BINDINGS, &constants);
         let shading = |name: &str, g: [&wgpu::Texture; 4], out: [&wgpu::Texture; 2]| {
             let views = g.map(view);
             let outs = out.map(view);
             let tv = wgpu::BindingResource::TextureView;
-            Passes::dispatch(
+            let group = kernel.bind(
                 device,
-                name,
-                &pipeline,
                 &[
                     frame.as_entire_binding(),
                     params.as_entire_binding(),
@@ -154,8 +169,9 @@ impl IndirectStage {
                     shadow_atlas.as_entire_binding(),
                     shadow_params.as_entire_binding(),
                 ],
-                (split_size.0.div_ceil(8), split_size.1.div_ceil(8)),
-            )
+            );
+            let workgroups = Workgroups::covering(split_size.0, split_size.1, 8);
+            Passes::one(name, &kernel.pipeline, vec![group], workgroups)
         };
         let gathered = [
             irradiance(device, "indirect diffuse", size),
@@ -289,15 +305,19 @@ impl IndirectStage {
     }
 
     /// Reads every stage's texture back (after the encoded work was submitted).
-    pub fn read(&self, gpu: &Gpu) -> Result<IndirectStages, RenderError> {
+    pub fn read(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<IndirectStages, RenderError> {
         let irr = |t: &wgpu::Texture| -> Result<Image<[f32; 4]>, RenderError> {
-            Ok(download_image::<[f16; 4]>(gpu, t)?.map(|p| p.map(f16::to_f32)))
+            Ok(download_image::<[f16; 4]>(device, queue, t)?.map(|p| p.map(f16::to_f32)))
         };
         Ok(IndirectStages {
             split_normal: self
                 .split_normal
                 .as_ref()
-                .map(|t| download_image(gpu, t))
+                .map(|t| download_image(device, queue, t))
                 .transpose()?,
             shaded_diffuse: irr(&self.shaded_diffuse)?,
             diffuse: irr(&self.gathered[0])?,
@@ -305,7 +325,7 @@ impl IndirectStage {
             discontinuities: self
                 .discontinuities
                 .as_ref()
-                .map(|t| download_image(gpu, t))
+                .map(|t| download_image(device, queue, t))
                 .transpose()?,
             blurred: match &self.blurred {
                 Some([d, s]) => Some([irr(d)?, irr(s)?]),
@@ -337,5 +357,5 @@ pub fn run(
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     stage.encode(&mut encoder, None);
     gpu.queue.submit([encoder.finish()]);
-    stage.read(gpu)
+    stage.read(&gpu.device, &gpu.queue)
 }

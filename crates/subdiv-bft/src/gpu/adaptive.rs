@@ -6,7 +6,7 @@
 use ::gpu::{Gpu, PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 
-use super::{GpuSubdivider, WORKGROUP, bind, empty, read_vec3, storage};
+use super::{ADAPTIVE_STORAGE_BUFFERS, GpuSubdivider, WORKGROUP, empty, pass, read_vec3, storage};
 use crate::{
     Refined, SubdivError, Subdivider,
     adaptive::{ScreenView, check_factors},
@@ -90,6 +90,13 @@ impl GpuSubdivider {
         sub: &Subdivider,
         max_level: u32,
     ) -> Result<GpuAdaptive, SubdivError> {
+        let Some([evaluate, factors_kernel]) = &self.adaptive else {
+            return Err(::gpu::GpuError::Unsupported(format!(
+                "adaptive tessellation binds {ADAPTIVE_STORAGE_BUFFERS} storage buffers per shader stage; the device allows {} (request crate::adaptive_device_needs())",
+                device.limits().max_storage_buffers_per_shader_stage
+            ))
+            .into());
+        };
         let s = sub.segments(max_level)?;
         if s > MAX_SEGMENTS {
             return Err(SubdivError::Level {
@@ -140,27 +147,21 @@ impl GpuSubdivider {
             .collect();
         let triangle_walk = storage(device, "triangle walks", bytemuck::cast_slice(&triangles))?;
         let mut bindings = self.evaluate_bindings(&params, &walk, &positions, &normals);
-        bindings.extend([
-            (9, &factors),
-            (10, &indices),
-            (11, &draw_args),
-            (12, &triangle_walk),
-        ]);
-        let evaluate_bind = bind(device, &self.evaluate_adaptive, &bindings);
+        bindings.extend([&factors, &indices, &draw_args, &triangle_walk]);
+        let evaluate_bind = evaluate.1.bind_buffers(device, &bindings);
         let factor_params = empty(
             device,
             "factor params",
             size_of::<FactorParams>() as u64,
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
-        let factor_bind = bind(
+        let factor_bind = factors_kernel.1.bind_buffers(
             device,
-            &self.edge_factors,
             &[
-                (0, &factor_params),
-                (1, &self.m1_positions),
-                (2, &self.edge_ends),
-                (3, &factors),
+                &factor_params,
+                &self.m1_positions,
+                &self.edge_ends,
+                &factors,
             ],
         );
         Ok(GpuAdaptive {
@@ -188,14 +189,17 @@ impl GpuSubdivider {
         adaptive: &GpuAdaptive,
         timer: Option<&PassTimer>,
     ) {
-        let name = "adaptive: edge factors";
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(name),
-            timestamp_writes: timer.and_then(|t| t.compute_pass(name)),
-        });
-        pass.set_pipeline(&self.edge_factors);
-        pass.set_bind_group(0, &adaptive.factor_bind, &[]);
-        pass.dispatch_workgroups(self.edge_count.div_ceil(WORKGROUP).max(1), 1, 1);
+        let Some([_, (edge_factors, _)]) = &self.adaptive else {
+            return; // `adaptive` refused to make `adaptive` without the kernels.
+        };
+        let groups = (self.edge_count.div_ceil(WORKGROUP).max(1), 1);
+        pass(
+            "adaptive: edge factors",
+            edge_factors,
+            &[&adaptive.factor_bind],
+            groups,
+        )
+        .encode(encoder, timer);
     }
 
     /// Records the adaptive main step (after [`GpuSubdivider::encode_initial`]): resets the
@@ -206,15 +210,17 @@ impl GpuSubdivider {
         adaptive: &GpuAdaptive,
         timer: Option<&PassTimer>,
     ) {
+        let Some([(evaluate_adaptive, _), _]) = &self.adaptive else {
+            return; // `adaptive` refused to make `adaptive` without the kernels.
+        };
         encoder.clear_buffer(&adaptive.draw_args, 0, Some(4));
-        let name = "main step: evaluate adaptive";
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(name),
-            timestamp_writes: timer.and_then(|t| t.compute_pass(name)),
-        });
-        pass.set_pipeline(&self.evaluate_adaptive);
-        pass.set_bind_group(0, &adaptive.bind, &[]);
-        pass.dispatch_workgroups(adaptive.groups.0, adaptive.groups.1, 1);
+        pass(
+            "main step: evaluate adaptive",
+            evaluate_adaptive,
+            &[&adaptive.bind],
+            adaptive.groups,
+        )
+        .encode(encoder, timer);
     }
 
     /// Reads back the factors (tests).
