@@ -6,6 +6,10 @@
 //! - `cargo xtask bench [ARGS]`: runs the GPU benchmarks (`deferred-bench [ARGS]`,
 //!   `interleave-bench [ARGS]`, `indirect-bench [ARGS]`, `tiled-bench [ARGS]`, `ssaa-bench [ARGS]`, `subdiv-bench [ARGS]` and `manylod-bench [ARGS]`, reports
 //!   under docs/bench/) and the CPU criterion benches.
+//! - `cargo xtask package-check`: packages every library crate (`cargo package --no-verify`),
+//!   unpacks `deferred-interleave` and `deferred-tiled-shading` with the toolkit crates they
+//!   depend on, and builds and runs a throwaway crate outside the workspace that depends on the
+//!   unpacked packages (through `[patch.crates-io]`) and runs their `examples/embed.rs`.
 //! - `cargo xtask bft [--level L] [--max-valence N] [-o FILE]`: builds the Loop basis-function
 //!   tables and writes their versioned binary file (default `target/bft/loop-l5-v18.bft`).
 //! - `cargo xtask subdiv-fixtures`: regenerates `fixtures/subdiv/*.f32`, Loop subdivision of
@@ -154,6 +158,7 @@ fn main() -> Result<()> {
                 "--quick",
             ]))
         }
+        "package-check" => package_check(),
         "bft" => run(cargo()
             .args(["run", "--release", "-p", "subdiv-bft", "--bin", "bft", "--"])
             .args(&rest)),
@@ -176,7 +181,142 @@ fn main() -> Result<()> {
                 .arg("fixtures/subdiv"))
         }
         _ => bail!(
-            "usage: cargo xtask test [CARGO TEST ARGS] | cargo xtask bench [BENCH ARGS: --frames N, --out DIR, --allow-software] | cargo xtask bft [--level L] [--max-valence N] [-o FILE] | cargo xtask subdiv-fixtures"
+            "usage: cargo xtask test [CARGO TEST ARGS] | cargo xtask package-check | cargo xtask bench [BENCH ARGS: --frames N, --out DIR, --allow-software] | cargo xtask bft [--level L] [--max-valence N] [-o FILE] | cargo xtask subdiv-fixtures"
         ),
     }
+}
+
+/// Library crates of the workspace that publish: (package name, manifest folder).
+fn library_packages() -> Result<Vec<(String, PathBuf)>> {
+    let out = cargo()
+        .args(["metadata", "--no-deps", "--format-version", "1"])
+        .output()
+        .context("cargo metadata")?;
+    if !out.status.success() {
+        bail!(
+            "cargo metadata failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let meta: serde_json::Value = serde_json::from_slice(&out.stdout)?;
+    let mut packages = Vec::new();
+    for p in meta["packages"].as_array().into_iter().flatten() {
+        let publishes = !p["publish"].as_array().is_some_and(Vec::is_empty);
+        let is_lib = p["targets"].as_array().into_iter().flatten().any(|t| {
+            t["kind"]
+                .as_array()
+                .is_some_and(|k| k.iter().any(|k| k == "lib"))
+        });
+        let (Some(name), Some(manifest)) = (p["name"].as_str(), p["manifest_path"].as_str()) else {
+            continue;
+        };
+        if publishes && is_lib {
+            let dir = Path::new(manifest)
+                .parent()
+                .map(Path::to_path_buf)
+                .unwrap_or_default();
+            packages.push((name.to_owned(), dir));
+        }
+    }
+    Ok(packages)
+}
+
+/// The crates the throwaway user crate depends on, the toolkit crates they need, and the
+/// example each user binary runs.
+const USER_DEPENDS_ON: [&str; 4] = [
+    "deferred-interleave",
+    "deferred-tiled-shading",
+    "deferred-gbuffer",
+    "deferred-scene",
+];
+const PACKAGE_CLOSURE: [&str; 5] = [
+    "deferred-gpu",
+    "deferred-scene",
+    "deferred-gbuffer",
+    "deferred-interleave",
+    "deferred-tiled-shading",
+];
+const USER_BINARIES: [(&str, &str); 2] = [
+    ("interleave-embed", "crates/interleave/examples/embed.rs"),
+    (
+        "tiled-shading-embed",
+        "crates/tiled-shading/examples/embed.rs",
+    ),
+];
+
+fn package_check() -> Result<()> {
+    let root = workspace_root();
+    let packages = library_packages()?;
+    let version = env!("CARGO_PKG_VERSION");
+    let mut cmd = cargo();
+    cmd.args(["package", "--no-verify", "--allow-dirty"]);
+    for (name, _) in &packages {
+        cmd.args(["-p", name]);
+    }
+    run(&mut cmd)?;
+    let check = root.join("target/package-check");
+    if check.exists() {
+        std::fs::remove_dir_all(&check).with_context(|| format!("removing {}", check.display()))?;
+    }
+    let unpacked = check.join("crates");
+    std::fs::create_dir_all(&unpacked)?;
+    for name in PACKAGE_CLOSURE {
+        let file = root.join(format!("target/package/{name}-{version}.crate"));
+        run(Command::new("tar")
+            .arg("xzf")
+            .arg(&file)
+            .arg("-C")
+            .arg(&unpacked))?;
+    }
+    for (name, dir) in &packages {
+        // Every WGSL file of the crate's shader folder travels with its package.
+        let shaders = dir.join("shaders");
+        let Ok(entries) = std::fs::read_dir(&shaders) else {
+            continue;
+        };
+        let file = root.join(format!("target/package/{name}-{version}.crate"));
+        let listing = Command::new("tar").arg("tzf").arg(&file).output()?;
+        let listing = String::from_utf8_lossy(&listing.stdout);
+        for e in entries.flatten() {
+            let wgsl = e.file_name().to_string_lossy().into_owned();
+            if wgsl.ends_with(".wgsl") && !listing.contains(&format!("/shaders/{wgsl}")) {
+                bail!("{name}'s package lacks shaders/{wgsl}");
+            }
+        }
+    }
+    let user = check.join("user");
+    std::fs::create_dir_all(user.join("src/bin"))?;
+    let wgpu = "wgpu = { version = \"30\", default-features = false, features = [\"std\", \"parking_lot\", \"wgsl\", \"vulkan\", \"metal\", \"dx12\"] }";
+    let mut manifest = format!(
+        "[package]\nname = \"package-check-user\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\n[workspace]\n\n[dependencies]\n{wgpu}\npollster = \"0.4\"\n"
+    );
+    for name in USER_DEPENDS_ON {
+        manifest.push_str(&format!("{name} = \"{version}\"\n"));
+    }
+    // The workspace's release profile, so the third-party builds in its target folder are reused.
+    manifest.push_str("\n[profile.release]\ndebug = \"line-tables-only\"\n");
+    manifest.push_str("\n[patch.crates-io]\n");
+    for name in PACKAGE_CLOSURE {
+        manifest.push_str(&format!(
+            "{name} = {{ path = \"../crates/{name}-{version}\" }}\n"
+        ));
+    }
+    std::fs::write(user.join("Cargo.toml"), manifest)?;
+    // The workspace's lock file pins the same third-party versions, so their builds are reused.
+    std::fs::copy(root.join("Cargo.lock"), user.join("Cargo.lock"))?;
+    for (bin, example) in USER_BINARIES {
+        std::fs::copy(root.join(example), user.join(format!("src/bin/{bin}.rs")))?;
+    }
+    for (bin, _) in USER_BINARIES {
+        run(
+            Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+                .current_dir(&user)
+                .args(["run", "--release", "--bin", bin, "--target-dir"])
+                .arg(root.join("target")),
+        )?;
+    }
+    eprintln!(
+        "xtask: package-check passed: a crate outside the workspace built and ran the packaged kernels"
+    );
+    Ok(())
 }

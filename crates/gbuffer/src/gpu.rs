@@ -174,12 +174,17 @@ pub struct UploadedGBuffer {
 impl UploadedGBuffer {
     /// Uploads `frame` and `gb`'s linear depth, normal, albedo and material images (sampled
     /// and copied).
-    pub fn new(gpu: &Gpu, gb: &GBuffer, frame: &Frame) -> Result<Self, GpuError> {
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        gb: &GBuffer,
+        frame: &Frame,
+    ) -> Result<Self, GpuError> {
         let usage = wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
         let upload = |label: &str, format, bytes: &[u8]| {
             transfer::texture_init(
-                &gpu.device,
-                &gpu.queue,
+                device,
+                queue,
                 label,
                 gb.width(),
                 gb.height(),
@@ -190,7 +195,7 @@ impl UploadedGBuffer {
         };
         Ok(Self {
             frame: transfer::buffer_init(
-                &gpu.device,
+                device,
                 "frame",
                 bytemuck::bytes_of(frame),
                 wgpu::BufferUsages::UNIFORM,

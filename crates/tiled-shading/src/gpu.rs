@@ -398,7 +398,7 @@ pub fn run(
     config: &ShadingConfig,
 ) -> Result<Shaded, ShadingError> {
     let (device, queue) = (&gpu.device, &gpu.queue);
-    let uploaded = UploadedGBuffer::new(gpu, gb, frame)?;
+    let uploaded = UploadedGBuffer::new(&gpu.device, &gpu.queue, gb, frame)?;
     let stage = LightShading::new(device, config)?;
     let outputs = LightShading::output_textures(device, gb.width(), gb.height());
     let outputs = [&outputs[0], &outputs[1]];

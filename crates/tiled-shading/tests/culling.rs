@@ -442,7 +442,8 @@ fn bad_input_is_an_error() {
     let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
         return;
     };
-    let uploaded = gbuffer::gpu::UploadedGBuffer::new(g, &c.gb, &c.frame).expect("upload");
+    let uploaded =
+        gbuffer::gpu::UploadedGBuffer::new(&g.device, &g.queue, &c.gb, &c.frame).expect("upload");
     let stage = gpu::LightShading::new(&g.device, &config(Method::Tiled, 16)).expect("stage");
     let (w, h) = (c.gb.width(), c.gb.height());
     let outputs = gpu::LightShading::output_textures(&g.device, w, h);

@@ -345,7 +345,7 @@ pub fn run(
     set: &VplSet,
     config: &IndirectConfig,
 ) -> Result<IndirectStages, RenderError> {
-    let uploaded = UploadedGBuffer::new(gpu, gb, frame)?;
+    let uploaded = UploadedGBuffer::new(&gpu.device, &gpu.queue, gb, frame)?;
     let stage = IndirectStage::new(
         &gpu.device,
         &uploaded.frame,
