@@ -2,10 +2,12 @@
 //!
 //! - `cargo xtask test [ARGS]`: makes sure a Vulkan driver exists (installs Mesa's software
 //!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found), then runs the
-//!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`).
-//! - `cargo xtask bench [ARGS]`: runs the GPU benchmarks (`deferred-bench [ARGS]`,
-//!   `interleave-bench [ARGS]`, `indirect-bench [ARGS]`, `tiled-bench [ARGS]`, `ssaa-bench [ARGS]`, `subdiv-bench [ARGS]` and `manylod-bench [ARGS]`, reports
-//!   under docs/bench/) and the CPU criterion benches.
+//!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`), builds
+//!   every benchmark and example, and runs every `*-embed` example (each crate in a device
+//!   the example creates itself at `wgpu::Limits::default()` plus the crate's stated needs).
+//! - `cargo xtask bench [ARGS]`: runs every GPU benchmark (the `*-gpu` bench targets beside
+//!   their crates, on the `deferred-bench` harness; reports under docs/bench/) with `ARGS`,
+//!   then the CPU criterion benches.
 //! - `cargo xtask package-check`: packages every library crate (`cargo package --no-verify`),
 //!   unpacks `deferred-interleave` and `deferred-tiled-shading` with the toolkit crates they
 //!   depend on, and builds and runs a throwaway crate outside the workspace that depends on the
@@ -115,52 +117,47 @@ fn main() -> Result<()> {
             ensure_vulkan()?;
             run(cargo()
                 .args(["test", "--workspace", "--release"])
-                .args(&rest))
+                .args(&rest))?;
+            // Benchmarks and examples build on every run, so they cannot rot unseen.
+            run(cargo().args([
+                "build",
+                "--release",
+                "--workspace",
+                "--benches",
+                "--examples",
+            ]))?;
+            for (package, example) in targets("example", "-embed")? {
+                run(cargo().args(["run", "--release", "-p", &package, "--example", &example]))?;
+            }
+            Ok(())
         }
         "bench" => {
-            for (package, bin) in [
-                ("pipeline", "deferred-bench"),
-                ("interleave", "interleave-bench"),
-                ("pipeline", "indirect-bench"),
-                ("pipeline", "tiled-bench"),
-                ("pipeline", "ssaa-bench"),
-                ("pipeline", "subdiv-bench"),
-                ("pipeline", "manylod-bench"),
-            ] {
+            for (package, bench) in targets("bench", "-gpu")? {
                 run(cargo()
-                    .args(["run", "--release", "-p", package, "--bin", bin, "--"])
+                    .args(["bench", "-p", &package, "--bench", &bench, "--"])
                     .args(&rest))?;
             }
-            run(cargo().args([
-                "bench",
-                "-p",
-                "gbuffer",
-                "-p",
-                "interleave",
-                "-p",
-                "tiled-shading",
-                "-p",
-                "adaptive-ssaa",
-                "-p",
-                "subdiv-bft",
-                // Only the criterion targets: the library test harnesses reject `--quick`.
-                "--bench",
-                "rasterize",
-                "--bench",
-                "split",
-                "--bench",
-                "shade",
-                "--bench",
-                "adaptive",
-                "--bench",
-                "subdiv",
-                "--",
-                "--quick",
-            ]))
+            // The CPU criterion benches: every other bench target.
+            let mut criterion = cargo();
+            criterion.arg("bench");
+            for (package, bench) in targets("bench", "")? {
+                if !bench.ends_with("-gpu") {
+                    criterion.args(["-p", &package, "--bench", &bench]);
+                }
+            }
+            run(criterion.args(["--", "--quick"]))
         }
         "package-check" => package_check(),
         "bft" => run(cargo()
-            .args(["run", "--release", "-p", "subdiv-bft", "--bin", "bft", "--"])
+            .args([
+                "run",
+                "--release",
+                "-p",
+                "deferred-subdiv-bft",
+                "--bin",
+                "bft",
+                "--",
+            ])
             .args(&rest)),
         "subdiv-fixtures" => {
             let shared = workspace_root().join("../shared/fixtures");
@@ -184,6 +181,41 @@ fn main() -> Result<()> {
             "usage: cargo xtask test [CARGO TEST ARGS] | cargo xtask package-check | cargo xtask bench [BENCH ARGS: --frames N, --out DIR, --allow-software] | cargo xtask bft [--level L] [--max-valence N] [-o FILE] | cargo xtask subdiv-fixtures"
         ),
     }
+}
+
+/// `(package, target)` of every workspace target of `kind` (`bench`, `example`) whose name
+/// ends with `suffix`: the GPU benchmarks (`*-gpu`) and the embedding examples (`*-embed`).
+fn targets(kind: &str, suffix: &str) -> Result<Vec<(String, String)>> {
+    let mut found = Vec::new();
+    for p in metadata()?["packages"].as_array().into_iter().flatten() {
+        for t in p["targets"].as_array().into_iter().flatten() {
+            let of_kind = t["kind"]
+                .as_array()
+                .is_some_and(|k| k.iter().any(|k| k == kind));
+            if let (true, Some(name), Some(package)) =
+                (of_kind, t["name"].as_str(), p["name"].as_str())
+                && name.ends_with(suffix)
+            {
+                found.push((package.to_owned(), name.to_owned()));
+            }
+        }
+    }
+    found.sort();
+    Ok(found)
+}
+
+fn metadata() -> Result<serde_json::Value> {
+    let out = cargo()
+        .args(["metadata", "--no-deps", "--format-version", "1"])
+        .output()
+        .context("cargo metadata")?;
+    if !out.status.success() {
+        bail!(
+            "cargo metadata failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    Ok(serde_json::from_slice(&out.stdout)?)
 }
 
 /// Library crates of the workspace that publish: (package name, manifest folder).

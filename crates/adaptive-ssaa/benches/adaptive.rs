@@ -22,7 +22,16 @@ fn inputs() -> Option<(
     let config = SsaaConfig::default();
     let (w, h) = (160, 120);
     let lights = tiled_shading::gpu_lights(&scene.lights).ok()?;
-    let mut r = adaptive_ssaa::gpu::SsaaRenderer::new(&gpu, &scene, &lights, w, h, &config).ok()?;
+    let mut r = adaptive_ssaa::gpu::SsaaRenderer::new(
+        &gpu.device,
+        &gpu.queue,
+        &scene,
+        &lights,
+        w,
+        h,
+        &config,
+    )
+    .ok()?;
     r.set_camera(&gpu.queue, &camera).ok()?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     r.encode_gbuffer(&mut encoder, None);

@@ -691,8 +691,13 @@ impl Ssaa {
         &self.output
     }
 
-    fn read_rgba(&self, gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Image<[f32; 4]>, SsaaError> {
-        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, buffer)?;
+    fn read_rgba(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        buffer: &wgpu::Buffer,
+    ) -> Result<Image<[f32; 4]>, SsaaError> {
+        let bytes = transfer::read_buffer(device, queue, buffer)?;
         let texels: Vec<[f32; 4]> = bytemuck::cast_slice::<u8, f32>(&bytes)
             .chunks_exact(4)
             .map(|c| [c[0], c[1], c[2], c[3]])
@@ -702,18 +707,30 @@ impl Ssaa {
     }
 
     /// Reads the output back.
-    pub fn read_output(&self, gpu: &Gpu) -> Result<Image<[f32; 4]>, SsaaError> {
-        self.read_rgba(gpu, &self.output)
+    pub fn read_output(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Image<[f32; 4]>, SsaaError> {
+        self.read_rgba(device, queue, &self.output)
     }
 
     /// Reads `S` back.
-    pub fn read_first(&self, gpu: &Gpu) -> Result<Image<[f32; 4]>, SsaaError> {
-        self.read_rgba(gpu, &self.first)
+    pub fn read_first(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Image<[f32; 4]>, SsaaError> {
+        self.read_rgba(device, queue, &self.first)
     }
 
     /// Reads the sample counts back.
-    pub fn read_counts(&self, gpu: &Gpu) -> Result<Image<u32>, SsaaError> {
-        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.counts)?;
+    pub fn read_counts(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Image<u32>, SsaaError> {
+        let bytes = transfer::read_buffer(device, queue, &self.counts)?;
         Image::from_vec(
             self.params.width,
             self.params.height,
@@ -768,7 +785,8 @@ impl SsaaRenderer {
     /// Uploads `scene` (textures resampled to at most [`TEXTURE_SIZE`]) and builds every pass
     /// for a `width × height` image.
     pub fn new(
-        gpu: &Gpu,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
         scene: &Scene,
         lights: &[GpuLight],
         width: u32,
@@ -791,13 +809,12 @@ impl SsaaRenderer {
                 m: config.m,
             });
         }
-        let device = &gpu.device;
         let gbuffer_pass = GBufferPass::new(device)?;
         let ss_pass = SsGBufferPass::new(device, &gbuffer_pass)?;
-        let gpu_scene = GpuScene::upload(device, &gpu.queue, scene, &gbuffer_pass)?;
+        let gpu_scene = GpuScene::upload(device, queue, scene, &gbuffer_pass)?;
         let textures = GpuTextures::new(
             device,
-            &gpu.queue,
+            queue,
             &TextureArray::new(scene, TEXTURE_SIZE),
             config.anisotropy,
         )?;
@@ -815,7 +832,7 @@ impl SsaaRenderer {
             materials: &materials,
         };
         let mut ssaa = Ssaa::new(device, &inputs, config, width, height, lights.len())?;
-        ssaa.set_lights(&gpu.queue, lights)?;
+        ssaa.set_lights(queue, lights)?;
         Ok(Self {
             gbuffer_pass,
             ss_pass,
@@ -860,15 +877,23 @@ pub fn run(
     height: u32,
     config: &SsaaConfig,
 ) -> Result<Output, SsaaError> {
-    let mut renderer = SsaaRenderer::new(gpu, scene, lights, width, height, config)?;
+    let mut renderer = SsaaRenderer::new(
+        &gpu.device,
+        &gpu.queue,
+        scene,
+        lights,
+        width,
+        height,
+        config,
+    )?;
     renderer.set_camera(&gpu.queue, camera)?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     renderer.encode_gbuffer(&mut encoder, None);
     renderer.ssaa.encode(&mut encoder, None);
     gpu.queue.submit([encoder.finish()]);
     Ok(Output {
-        image: renderer.ssaa.read_output(gpu)?,
-        first: renderer.ssaa.read_first(gpu)?,
-        counts: renderer.ssaa.read_counts(gpu)?,
+        image: renderer.ssaa.read_output(&gpu.device, &gpu.queue)?,
+        first: renderer.ssaa.read_first(&gpu.device, &gpu.queue)?,
+        counts: renderer.ssaa.read_counts(&gpu.device, &gpu.queue)?,
     })
 }

@@ -145,7 +145,8 @@ impl Fixture {
             ..Default::default()
         };
         let mut renderer =
-            SsaaRenderer::new(gpu, &scene, &lights, W, H, &config).expect("renderer");
+            SsaaRenderer::new(&gpu.device, &gpu.queue, &scene, &lights, W, H, &config)
+                .expect("renderer");
         renderer.set_camera(&gpu.queue, &camera).expect("camera");
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         renderer.encode_gbuffer(&mut encoder, None);
@@ -194,9 +195,12 @@ impl Fixture {
         }
         self.gpu.queue.submit([encoder.finish()]);
         (
-            ssaa.read_output(self.gpu).expect("read"),
-            ssaa.read_first(self.gpu).expect("read"),
-            ssaa.read_counts(self.gpu).expect("read"),
+            ssaa.read_output(&self.gpu.device, &self.gpu.queue)
+                .expect("read"),
+            ssaa.read_first(&self.gpu.device, &self.gpu.queue)
+                .expect("read"),
+            ssaa.read_counts(&self.gpu.device, &self.gpu.queue)
+                .expect("read"),
         )
     }
 }
@@ -401,7 +405,7 @@ fn fxaa_cpu_matches_gpu() {
     let mut encoder = f.gpu.device.create_command_encoder(&Default::default());
     ssaa.encode_fxaa(&mut encoder, None);
     f.gpu.queue.submit([encoder.finish()]);
-    let gpu_fxaa = ssaa.read_output(f.gpu).expect("read");
+    let gpu_fxaa = ssaa.read_output(&f.gpu.device, &f.gpu.queue).expect("read");
     let cpu_fxaa = cpu::fxaa(&first);
     let worst = gpu_fxaa
         .pixels()
@@ -425,7 +429,7 @@ fn bad_input_is_an_error() {
             m,
             ..Default::default()
         };
-        SsaaRenderer::new(gpu, &scene, &lights, w, h, &config).err()
+        SsaaRenderer::new(&gpu.device, &gpu.queue, &scene, &lights, w, h, &config).err()
     };
     assert!(matches!(bad(0, 10, 4), Some(SsaaError::InvalidSize { .. })));
     assert!(matches!(

@@ -156,3 +156,21 @@ impl Image<[f32; 4]> {
         })
     }
 }
+
+/// Peak signal-to-noise ratio in dB between two images' RGB, after clamping to \[0, 1\] and
+/// the sRGB transfer function (what a PNG shows). Infinite for identical images.
+pub fn psnr(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>) -> f64 {
+    let to = |c: f32| f64::from(linear_to_srgb(c));
+    let mse = a
+        .pixels()
+        .iter()
+        .zip(b.pixels())
+        .map(|(p, q)| (0..3).map(|c| (to(p[c]) - to(q[c])).powi(2)).sum::<f64>())
+        .sum::<f64>()
+        / (a.pixels().len() * 3).max(1) as f64;
+    if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        -10.0 * mse.log10()
+    }
+}

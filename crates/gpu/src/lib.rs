@@ -18,7 +18,6 @@
 //! # Ok::<(), gpu::GpuError>(())
 //! ```
 
-pub mod bench;
 mod device;
 pub mod kernel;
 pub mod shader;

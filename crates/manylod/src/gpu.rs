@@ -20,13 +20,13 @@
 //! m.encode_cut(&mut encoder, CutKind::Basic, None);
 //! m.encode_splat(&mut encoder, None);
 //! gpu.queue.submit([encoder.finish()]);
-//! let cut = m.read_cut(&gpu)?;
-//! let atlas = m.read_atlas(&gpu)?;
+//! let cut = m.read_cut(&gpu.device, &gpu.queue)?;
+//! let atlas = m.read_atlas(&gpu.device, &gpu.queue)?;
 //! # Ok::<(), manylod::ManyLodError>(())
 //! ```
 
 use ::gpu::kernel::{Binding, Dispatch, Kernel, Passes, Workgroups};
-use ::gpu::{Gpu, PassTimer, transfer};
+use ::gpu::{PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -530,8 +530,12 @@ impl GpuManyLod {
         Workgroups::Indirect(self.dispatch.clone(), 0)
     }
 
-    fn read_counters(&self, gpu: &Gpu) -> Result<Vec<u32>, ManyLodError> {
-        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.counters)?;
+    fn read_counters(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<u32>, ManyLodError> {
+        let bytes = transfer::read_buffer(device, queue, &self.counters)?;
         Ok(bytemuck::cast_slice(&bytes).to_vec())
     }
 
@@ -548,11 +552,15 @@ impl GpuManyLod {
 
     /// Reads the last cut back (culled flags removed and counted; for tests and pictures),
     /// with its iterations and work. Errors when a list overflowed.
-    pub fn read_cut(&self, gpu: &Gpu) -> Result<Cut, ManyLodError> {
-        let counters = self.read_counters(gpu)?;
+    pub fn read_cut(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Cut, ManyLodError> {
+        let counters = self.read_counters(device, queue)?;
         self.check_overflow(&counters, "active or cut list")?;
         let n = counters[CUT_SLOTS[self.current] as usize] as usize;
-        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.cuts[self.current])?;
+        let bytes = transfer::read_buffer(device, queue, &self.cuts[self.current])?;
         let raw: &[[u32; 2]] = bytemuck::cast_slice(&bytes);
         Ok(Cut {
             node_views: raw[..n]
@@ -571,18 +579,26 @@ impl GpuManyLod {
 
     /// Reads the atlas back (row-major packed depths). Errors when the last cut's lists or the
     /// in-place stack overflowed (the atlas then misses splats).
-    pub fn read_atlas(&self, gpu: &Gpu) -> Result<Vec<u32>, ManyLodError> {
+    pub fn read_atlas(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<u32>, ManyLodError> {
         self.check_overflow(
-            &self.read_counters(gpu)?,
+            &self.read_counters(device, queue)?,
             "a cut list or the in-place stack",
         )?;
-        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.atlas)?;
+        let bytes = transfer::read_buffer(device, queue, &self.atlas)?;
         Ok(bytemuck::cast_slice(&bytes).to_vec())
     }
 
     /// Reads the node bounds back.
-    pub fn read_nodes(&self, gpu: &Gpu) -> Result<Vec<Node>, ManyLodError> {
-        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &self.nodes)?;
+    pub fn read_nodes(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<Node>, ManyLodError> {
+        let bytes = transfer::read_buffer(device, queue, &self.nodes)?;
         Ok(bytemuck::cast_slice(&bytes).to_vec())
     }
 }

@@ -29,7 +29,7 @@ fn run_cut(gpu: &gpu::Gpu, m: &mut GpuManyLod, kind: CutKind) -> manylod::Cut {
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     m.encode_cut(&mut encoder, kind, None);
     gpu.queue.submit([encoder.finish()]);
-    m.read_cut(gpu).expect("cut")
+    m.read_cut(&gpu.device, &gpu.queue).expect("cut")
 }
 
 /// The deformation: a twist around y and a wave, moving every vertex.
@@ -62,7 +62,7 @@ fn refit_matches_the_cpu() {
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     refit.encode(&mut encoder, None);
     gpu.queue.submit([encoder.finish()]);
-    let got = m.read_nodes(gpu).expect("nodes");
+    let got = m.read_nodes(&gpu.device, &gpu.queue).expect("nodes");
     let (pts, nrm) = surfels::evaluate(&s, &moved, &i);
     bsh.refit(&pts, &nrm).expect("cpu refit");
     assert_eq!(got.len(), bsh.nodes.len());
@@ -193,8 +193,8 @@ fn atlas_matches_the_cpu() {
     m.encode_cut(&mut encoder, CutKind::Basic, None);
     m.encode_splat(&mut encoder, None);
     gpu.queue.submit([encoder.finish()]);
-    let got = m.read_atlas(gpu).expect("atlas");
-    let cut = m.read_cut(gpu).expect("cut");
+    let got = m.read_atlas(&gpu.device, &gpu.queue).expect("atlas");
+    let cut = m.read_cut(&gpu.device, &gpu.queue).expect("cut");
     let problem = CutProblem {
         bsh: &bsh,
         views: &v,
@@ -228,7 +228,9 @@ fn atlas_matches_the_cpu() {
         m.encode_inplace(&mut encoder, compaction, None)
             .expect("in-place");
         gpu.queue.submit([encoder.finish()]);
-        let inplace = m.read_atlas(gpu).expect("in-place atlas");
+        let inplace = m
+            .read_atlas(&gpu.device, &gpu.queue)
+            .expect("in-place atlas");
         let same = inplace.iter().zip(&got).filter(|(a, b)| a == b).count();
         assert_eq!(
             same,
@@ -253,7 +255,7 @@ fn ism_atlas_matches_the_cpu() {
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     ism.encode(&mut encoder, &m, None);
     gpu.queue.submit([encoder.finish()]);
-    let got = m.read_atlas(gpu).expect("atlas");
+    let got = m.read_atlas(&gpu.device, &gpu.queue).expect("atlas");
     let want = splat::splat(&points, &v, &list, &m.layout()).expect("cpu");
     let written = want.iter().filter(|&&w| w != CLEAR).count();
     assert!(written > want.len() / 20, "{written} pixels written");
@@ -275,7 +277,7 @@ fn overflow_and_bad_input_are_errors() {
     m.encode_cut(&mut encoder, CutKind::Basic, None);
     gpu.queue.submit([encoder.finish()]);
     assert!(matches!(
-        m.read_cut(gpu),
+        m.read_cut(&gpu.device, &gpu.queue),
         Err(ManyLodError::Capacity { capacity: 64, .. })
     ));
     let v = views_in_tiles(0.0, Some(TILE));

@@ -18,7 +18,6 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod bench;
 pub mod cpu;
 pub mod gpu;
 pub mod indirect;
@@ -128,90 +127,7 @@ impl From<tiled_shading::ShadingError> for RenderError {
     }
 }
 
-/// The scene a benchmark runs on: `path`, or else the shared fixtures' Dabrovic Sponza.
-pub fn bench_scene_path(path: Option<&std::path::Path>) -> anyhow::Result<std::path::PathBuf> {
-    use anyhow::Context;
-    Ok(match path {
-        Some(p) => p.to_path_buf(),
-        None => scene::shared_fixtures()
-            .context("../shared/fixtures not found; pass --scene")?
-            .join("sponza/dabrovic/sponza.gltf"),
-    })
-}
-
-/// The view `fixtures/views.json` gives for a scene file without a camera, by file name
-/// (e.g. inside the Sponza atrium rather than the framing view from outside).
-pub fn preset_view(path: &std::path::Path, scene: &scene::Scene) -> Option<scene::Camera> {
-    #[derive(serde::Deserialize)]
-    struct View {
-        eye: [f32; 3],
-        target: [f32; 3],
-        fov_deg: f32,
-    }
-    let views: std::collections::HashMap<String, serde_json::Value> =
-        serde_json::from_str(include_str!("../../../fixtures/views.json")).ok()?;
-    let name = path.file_name()?.to_str()?;
-    let view: View = serde_json::from_value(views.get(name)?.clone()).ok()?;
-    let mut camera = scene::Camera::look_at(Vec3::from(view.eye), Vec3::from(view.target));
-    camera.fov_y = view.fov_deg.to_radians();
-    camera.fit_planes(scene.bounds());
-    Some(camera)
-}
-
-/// Image error against a reference, on what a PNG shows (RGB clamped to \[0, 1\], sRGB).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Quality {
-    /// Root-mean-square error.
-    pub rmse: f64,
-    /// Peak signal-to-noise ratio, dB ([`psnr`]).
-    pub psnr: f64,
-    /// Mean of the FLIP error map (LDR FLIP, 67 pixels per degree; 0 = identical, 1 = maximal).
-    pub flip_mean: f64,
-}
-
-/// [`Quality`] of `test` against `reference` (same size).
-pub fn quality(reference: &Image<[f32; 4]>, test: &Image<[f32; 4]>) -> Quality {
-    let psnr = psnr(reference, test);
-    let rmse = 10f64.powf(-psnr / 20.0);
-    let srgb8 = |img: &Image<[f32; 4]>| -> Vec<u8> {
-        img.pixels()
-            .iter()
-            .flat_map(|p| {
-                [0, 1, 2]
-                    .map(|c| (gbuffer::linear_to_srgb(p[c].clamp(0.0, 1.0)) * 255.0).round() as u8)
-            })
-            .collect()
-    };
-    let (w, h) = (reference.width(), reference.height());
-    let map = nv_flip::flip(
-        nv_flip::FlipImageRgb8::with_data(w, h, &srgb8(reference)),
-        nv_flip::FlipImageRgb8::with_data(w, h, &srgb8(test)),
-        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
-    );
-    Quality {
-        rmse,
-        psnr,
-        flip_mean: f64::from(nv_flip::FlipPool::from_image(&map).mean()),
-    }
-}
-
-/// Peak signal-to-noise ratio in dB between two images' RGB, after clamping to \[0, 1\] and
-/// the sRGB transfer function (what a PNG shows). Infinite for identical images.
-pub fn psnr(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>) -> f64 {
-    let to = |c: f32| f64::from(gbuffer::linear_to_srgb(c));
-    let mse = a
-        .pixels()
-        .iter()
-        .zip(b.pixels())
-        .map(|(p, q)| (0..3).map(|c| (to(p[c]) - to(q[c])).powi(2)).sum::<f64>())
-        .sum::<f64>()
-        / (a.pixels().len() * 3).max(1) as f64;
-    if mse == 0.0 {
-        f64::INFINITY
-    } else {
-        -10.0 * mse.log10()
-    }
-}
+pub use gbuffer::psnr;
 
 #[cfg(test)]
 mod tests {

@@ -356,3 +356,22 @@ pub fn shared_fixtures() -> Option<PathBuf> {
     };
     dir.is_dir().then(|| dir.canonicalize().unwrap_or(dir))
 }
+
+/// The view `views.json` (shipped with this crate) gives for a scene file without a camera, by
+/// file name: e.g. inside the Sponza atrium rather than the framing view from outside.
+pub fn preset_view(path: &Path, scene: &Scene) -> Option<Camera> {
+    #[derive(serde::Deserialize)]
+    struct View {
+        eye: [f32; 3],
+        target: [f32; 3],
+        fov_deg: f32,
+    }
+    let views: std::collections::HashMap<String, serde_json::Value> =
+        serde_json::from_str(include_str!("views.json")).ok()?;
+    let view: View =
+        serde_json::from_value(views.get(path.file_name()?.to_str()?)?.clone()).ok()?;
+    let mut camera = Camera::look_at(Vec3::from(view.eye), Vec3::from(view.target));
+    camera.fov_y = view.fov_deg.to_radians();
+    camera.fit_planes(scene.bounds());
+    Some(camera)
+}

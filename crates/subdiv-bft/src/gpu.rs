@@ -455,19 +455,28 @@ impl GpuSubdivider {
     }
 
     /// Reads back M¹ positions and normals (tests).
-    pub fn read_m1(&self, gpu: &Gpu) -> Result<(Vec<Vec3>, Vec<Vec3>), SubdivError> {
+    pub fn read_m1(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<(Vec<Vec3>, Vec<Vec3>), SubdivError> {
         Ok((
-            read_vec3(gpu, &self.m1_positions, self.m1_count)?,
-            read_vec3(gpu, &self.m1_normals, self.m1_count)?,
+            read_vec3(device, queue, &self.m1_positions, self.m1_count)?,
+            read_vec3(device, queue, &self.m1_normals, self.m1_count)?,
         ))
     }
 
     /// Reads back a level's mesh (tests, the `subdivide` command).
-    pub fn read_level(&self, gpu: &Gpu, level: &GpuLevel) -> Result<Refined, SubdivError> {
-        let indices = transfer::read_buffer(&gpu.device, &gpu.queue, &level.indices)?;
+    pub fn read_level(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        level: &GpuLevel,
+    ) -> Result<Refined, SubdivError> {
+        let indices = transfer::read_buffer(device, queue, &level.indices)?;
         Ok(Refined {
-            positions: read_vec3(gpu, &level.positions, level.vertex_count)?,
-            normals: read_vec3(gpu, &level.normals, level.vertex_count)?,
+            positions: read_vec3(device, queue, &level.positions, level.vertex_count)?,
+            normals: read_vec3(device, queue, &level.normals, level.vertex_count)?,
             indices: bytemuck::pod_collect_to_vec::<u8, u32>(&indices)
                 [..level.index_count as usize]
                 .to_vec(),
@@ -475,8 +484,13 @@ impl GpuSubdivider {
     }
 }
 
-fn read_vec3(gpu: &Gpu, buffer: &wgpu::Buffer, count: u32) -> Result<Vec<Vec3>, SubdivError> {
-    let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, buffer)?;
+fn read_vec3(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    count: u32,
+) -> Result<Vec<Vec3>, SubdivError> {
+    let bytes = transfer::read_buffer(device, queue, buffer)?;
     let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
     Ok(v[..count as usize]
         .iter()
@@ -498,7 +512,7 @@ pub fn run(
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     g.encode(&mut encoder, &out, None);
     gpu.queue.submit([encoder.finish()]);
-    g.read_level(gpu, &out)
+    g.read_level(&gpu.device, &gpu.queue, &out)
 }
 
 /// Uploads, computes screen-space factors for `view` on the GPU, runs the adaptive
@@ -521,5 +535,8 @@ pub fn run_adaptive(
     g.encode_screen_factors(&mut encoder, &a, None);
     g.encode_adaptive(&mut encoder, &a, None);
     gpu.queue.submit([encoder.finish()]);
-    Ok((g.read_adaptive(gpu, &a)?, g.read_factors(gpu, &a)?))
+    Ok((
+        g.read_adaptive(&gpu.device, &gpu.queue, &a)?,
+        g.read_factors(&gpu.device, &gpu.queue, &a)?,
+    ))
 }

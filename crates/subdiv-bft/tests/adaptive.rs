@@ -313,8 +313,8 @@ fn adaptive_cpu_equals_gpu() {
             g.encode_initial(&mut encoder, None);
             g.encode_adaptive(&mut encoder, &a, None);
             gpu.queue.submit([encoder.finish()]);
-            let got = g.read_adaptive(gpu, &a).expect("read");
-            let (p1, n1) = g.read_m1(gpu).expect("M1");
+            let got = g.read_adaptive(&gpu.device, &gpu.queue, &a).expect("read");
+            let (p1, n1) = g.read_m1(&gpu.device, &gpu.queue).expect("M1");
             let s_max = 1 << (max_level - 1);
             let (cp, cn) = sub.patches.evaluate_adaptive(bft, &f, s_max, &p1, &n1);
             let want = sub.patches.triangulate_adaptive(&f, s_max);
@@ -354,9 +354,11 @@ fn adaptive_cpu_equals_gpu() {
         g.encode_initial(&mut encoder, None);
         g.encode_screen_factors(&mut encoder, &a, None);
         gpu.queue.submit([encoder.finish()]);
-        let (p1, _) = g.read_m1(gpu).expect("M1");
+        let (p1, _) = g.read_m1(&gpu.device, &gpu.queue).expect("M1");
         let want = screen_factors(&sub.m1, &p1, &view, 1 << (max_level - 1));
-        let got = g.read_factors(gpu, &a).expect("factors");
+        let got = g
+            .read_factors(&gpu.device, &gpu.queue, &a)
+            .expect("factors");
         assert!(
             want.iter().any(|&f| f > 0.5 && f < max_level as f32 - 1.0),
             "{want:?}"

@@ -56,7 +56,7 @@ fn initial_and_main_step_cpu_equals_gpu() {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             g.encode(&mut encoder, &out, None);
             gpu.queue.submit([encoder.finish()]);
-            let (p1, n1) = g.read_m1(gpu).expect("read M1");
+            let (p1, n1) = g.read_m1(&gpu.device, &gpu.queue).expect("read M1");
             let (cp1, cn1) = sub.initial_step(&mesh.positions).expect("initial step");
             let cp1: Vec<Vec3> = cp1.iter().map(|p| p.as_vec3()).collect();
             let cn1: Vec<Vec3> = cn1.iter().map(|p| p.as_vec3()).collect();
@@ -68,7 +68,9 @@ fn initial_and_main_step_cpu_equals_gpu() {
                 NORMAL_TOLERANCE,
                 true,
             );
-            let got = g.read_level(gpu, &out).expect("read level");
+            let got = g
+                .read_level(&gpu.device, &gpu.queue, &out)
+                .expect("read level");
             // Main step from the GPU's own M¹ (so only the evaluation is compared).
             let s = sub.segments(level).expect("segments");
             let (cp, cn) = sub.patches.evaluate(bft, s, &p1, &n1);
@@ -186,7 +188,7 @@ fn animated_control_mesh_needs_no_rebuild() {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         g.encode(&mut encoder, &out, None);
         gpu.queue.submit([encoder.finish()]);
-        let got = g.read_level(gpu, &out).expect("read");
+        let got = g.read_level(&gpu.device, &gpu.queue, &out).expect("read");
         let want = sub.evaluate_cpu(bft, &moved, 3).expect("cpu");
         compare(
             &format!("frame {frame}"),

@@ -3,7 +3,7 @@
 //! index buffer and their count to `DrawIndexedIndirect` arguments, so a frame's tessellation
 //! never goes through the CPU.
 
-use ::gpu::{Gpu, PassTimer, transfer};
+use ::gpu::{PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 
 use super::{ADAPTIVE_STORAGE_BUFFERS, GpuSubdivider, WORKGROUP, empty, pass, read_vec3, storage};
@@ -224,20 +224,30 @@ impl GpuSubdivider {
     }
 
     /// Reads back the factors (tests).
-    pub fn read_factors(&self, gpu: &Gpu, adaptive: &GpuAdaptive) -> Result<Vec<f32>, SubdivError> {
-        let bytes = transfer::read_buffer(&gpu.device, &gpu.queue, &adaptive.factors)?;
+    pub fn read_factors(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        adaptive: &GpuAdaptive,
+    ) -> Result<Vec<f32>, SubdivError> {
+        let bytes = transfer::read_buffer(device, queue, &adaptive.factors)?;
         Ok(bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)[..self.edge_count as usize].to_vec())
     }
 
     /// Reads back the adaptive mesh: the whole vertex layout (unused slots hold whatever was
     /// there) and the triangles the kernel wrote, in the order the patches appended them.
-    pub fn read_adaptive(&self, gpu: &Gpu, adaptive: &GpuAdaptive) -> Result<Refined, SubdivError> {
-        let args = transfer::read_buffer(&gpu.device, &gpu.queue, &adaptive.draw_args)?;
+    pub fn read_adaptive(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        adaptive: &GpuAdaptive,
+    ) -> Result<Refined, SubdivError> {
+        let args = transfer::read_buffer(device, queue, &adaptive.draw_args)?;
         let count = bytemuck::pod_collect_to_vec::<u8, u32>(&args)[0] as usize;
-        let indices = transfer::read_buffer(&gpu.device, &gpu.queue, &adaptive.indices)?;
+        let indices = transfer::read_buffer(device, queue, &adaptive.indices)?;
         Ok(Refined {
-            positions: read_vec3(gpu, &adaptive.positions, adaptive.vertex_capacity)?,
-            normals: read_vec3(gpu, &adaptive.normals, adaptive.vertex_capacity)?,
+            positions: read_vec3(device, queue, &adaptive.positions, adaptive.vertex_capacity)?,
+            normals: read_vec3(device, queue, &adaptive.normals, adaptive.vertex_capacity)?,
             indices: bytemuck::pod_collect_to_vec::<u8, u32>(&indices)[..count].to_vec(),
         })
     }

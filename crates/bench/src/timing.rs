@@ -4,7 +4,8 @@ use glam::Vec3;
 use gpu::Gpu;
 use scene::Camera;
 
-use crate::{PassTiming, RenderError, gpu::GpuRenderer};
+/// The warm-up every timing of this harness does before measuring (stated in each report).
+pub const WARM_UP_RULE: &str = "at least 10 frames and 300 ms of back-to-back work";
 
 /// The ManyLoDs benchmark's light (`manylod-bench`, `manylod-cuts`) at `angle` radians along
 /// its orbit: a spot light high in the scene pointing down, circling the vertical axis through
@@ -60,22 +61,6 @@ pub fn time_named<E>(
     Ok(by_name)
 }
 
-/// Per pass name, the per-frame GPU milliseconds of `frames` frames of `renderer`
-/// ([`time_named`]).
-pub fn time_passes(
-    gpu: &Gpu,
-    renderer: &mut GpuRenderer,
-    camera: &Camera,
-    ambient: Vec3,
-    frames: u32,
-) -> Result<Vec<(String, Vec<f64>)>, RenderError> {
-    time_named(frames, || {
-        let timings: Vec<PassTiming> =
-            renderer.time_frame(&gpu.device, &gpu.queue, camera, ambient)?;
-        Ok(timings.into_iter().map(|t| (t.name, t.ms)).collect())
-    })
-}
-
 /// Per-frame GPU ms of the passes `record` encodes (summed over the frame's passes; with
 /// `span`, from the first pass's begin to the last one's end, which also counts commands
 /// recorded between passes such as buffer clears), after [`warm_then_time`]'s warm-up.
@@ -85,7 +70,7 @@ pub fn time_encoded(
     frames: u32,
     span: bool,
     record: &dyn Fn(&mut wgpu::CommandEncoder, &gpu::PassTimer),
-) -> Result<gpu::bench::Stat, gpu::GpuError> {
+) -> Result<crate::Stat, gpu::GpuError> {
     let frame = || -> Result<f64, gpu::GpuError> {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         record(&mut encoder, timer);
@@ -97,7 +82,7 @@ pub fn time_encoded(
             _ => times.iter().map(|t| t.ms).sum(),
         })
     };
-    Ok(gpu::bench::Stat::of(warm_then_time(frames, frame)?))
+    Ok(crate::Stat::of(warm_then_time(frames, frame)?))
 }
 
 /// Per frame, the sum of the passes named in `names`.

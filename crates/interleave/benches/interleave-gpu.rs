@@ -13,13 +13,10 @@
 use std::{fmt::Write as _, path::PathBuf};
 
 use anyhow::{Context, Result, bail};
+use bench::{Header, Stat};
 use clap::Parser;
 use gbuffer::Image;
-use gpu::{
-    Gpu, PassTimer,
-    bench::{Header, Stat},
-    transfer, wgpu,
-};
+use gpu::{Gpu, PassTimer, transfer, wgpu};
 use interleave::{
     Block, Blur, BlurVariant, Pattern, SplitLayout, SplitVariant, Thresholds,
     cpu::SubsetLight,
@@ -271,10 +268,10 @@ fn name((w, h): (u32, u32)) -> String {
 }
 
 fn main() -> Result<()> {
-    let args = Args::parse();
+    let args = Args::parse_from(bench::args());
     let gpu = Gpu::from_env()?;
     println!("adapter: {}", gpu.describe());
-    gpu::bench::require_hardware(&gpu, args.allow_software)?;
+    bench::require_hardware(&gpu, args.allow_software)?;
     let bench = Bench {
         gpu: &gpu,
         frames: args.frames,

@@ -10,8 +10,9 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
+use bench::Stat;
 use clap::Parser;
-use gpu::{Gpu, PassTimer, bench::Stat};
+use gpu::{Gpu, PassTimer};
 use manylod::{
     Bsh, ManyLodError, View,
     gpu::{Compaction, CutKind, GpuIsm, GpuManyLod, GpuRefit},
@@ -71,7 +72,7 @@ struct Setup {
 
 #[derive(Serialize)]
 struct Report {
-    header: gpu::bench::Header,
+    header: bench::Header,
     frames: u32,
     /// Mean VPL move per frame, fraction of the scene's diagonal.
     vpl_move: f32,
@@ -93,7 +94,7 @@ fn animation(scene: &Scene, bvh: &Bvh, count: usize) -> Result<(Vec<Vec<View>>, 
     let lift = 1e-3 * diagonal;
     let sets = (0..CYCLE)
         .map(|f| {
-            let spot = pipeline::bench::orbiting_spot(&bounds, (f as f32 * 10.0).to_radians());
+            let spot = bench::orbiting_spot(&bounds, (f as f32 * 10.0).to_radians());
             Ok(vpl::generate(
                 scene,
                 bvh,
@@ -126,7 +127,7 @@ type Record<'a> =
     dyn Fn(&mut GpuManyLod, &mut wgpu::CommandEncoder, &PassTimer) -> Result<(), ManyLodError> + 'a;
 
 /// Per-frame GPU times of the passes `record` encodes for each frame of `views` in turn
-/// (the views of frame `f` uploaded first; `pipeline::bench::time_named`).
+/// (the views of frame `f` uploaded first; `bench::time_named`).
 fn time_animation(
     gpu: &Gpu,
     timer: &PassTimer,
@@ -136,7 +137,7 @@ fn time_animation(
     record: &Record<'_>,
 ) -> Result<Vec<(String, Vec<f64>)>> {
     let mut frame = 0usize;
-    pipeline::bench::time_named(frames, || -> Result<Vec<(String, f64)>> {
+    bench::time_named(frames, || -> Result<Vec<(String, f64)>> {
         m.set_views(&gpu.queue, &views[frame % views.len()])?;
         frame += 1;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -188,7 +189,7 @@ fn gpu_manylod(
             };
             m.encode_cut(&mut encoder, kind, None);
             gpu.queue.submit([encoder.finish()]);
-            match m.read_cut(gpu) {
+            match m.read_cut(&gpu.device, &gpu.queue) {
                 Err(ManyLodError::Capacity { .. }) => {
                     overflowed = true;
                     // The next frame cannot start from an overflowed cut.
@@ -253,13 +254,13 @@ fn variant_row(
         }
         Variant::InPlace(c) => m.encode_inplace(e, c, Some(t)),
     })?;
-    let total = Stat::of(pipeline::bench::per_frame_sum(
+    let total = Stat::of(bench::per_frame_sum(
         &by_name,
         &["cut", "splat", "in-place"],
     ));
     let (cut_size, culled, processed, iterations) = match variant {
         Variant::Cut(_) => {
-            let c = m.read_cut(gpu)?;
+            let c = m.read_cut(&gpu.device, &gpu.queue)?;
             (
                 c.node_views.len() as u64,
                 c.culled,
@@ -268,7 +269,7 @@ fn variant_row(
             )
         }
         Variant::InPlace(_) => {
-            m.read_atlas(gpu)?;
+            m.read_atlas(&gpu.device, &gpu.queue)?;
             (0, 0, 0, 0)
         }
     };
@@ -293,11 +294,11 @@ fn variant_row(
 }
 
 fn main() -> Result<()> {
-    let args = Args::parse();
+    let args = Args::parse_from(bench::args());
     let gpu = Gpu::from_env()?;
-    gpu::bench::require_hardware(&gpu, args.allow_software)?;
+    bench::require_hardware(&gpu, args.allow_software)?;
     println!("adapter: {}", gpu.describe());
-    let path = pipeline::bench_scene_path(args.scene.as_deref())?;
+    let path = bench::bench_scene_path(args.scene.as_deref())?;
     let scene = Scene::load(&path)?;
     let bvh = Bvh::build(&scene);
     let diagonal = scene.bounds().diagonal();
@@ -318,10 +319,9 @@ fn main() -> Result<()> {
             let mut m = gpu_manylod(&gpu, &bsh, &views_1k, epsilon, diagonal)?;
             if epsilon == 1.0 {
                 let refit = GpuRefit::new(&gpu.device, &m, &bsh, &s, &positions, &indices)?;
-                let refit_stat =
-                    pipeline::bench::time_encoded(&gpu, &timer, args.frames, false, &|e, t| {
-                        refit.encode(e, Some(t));
-                    })?;
+                let refit_stat = bench::time_encoded(&gpu, &timer, args.frames, false, &|e, t| {
+                    refit.encode(e, Some(t));
+                })?;
                 println!(
                     "{points} points: build {build_cpu_ms:.0} ms (CPU), refit {:.3} ms",
                     refit_stat.median_ms
@@ -390,7 +390,7 @@ fn main() -> Result<()> {
         }
     }
 
-    let header = gpu::bench::Header::new(&gpu);
+    let header = bench::Header::new(&gpu);
     let mut md = header.markdown(
         "Many-view LoD cuts, ManyLoDs (Holländer 2013 §3.5–3.7)",
         args.frames,
@@ -460,5 +460,5 @@ fn main() -> Result<()> {
         rows,
     };
     let stem = report.header.file_stem("manylod-");
-    pipeline::bench::write_report(&args.out, &stem, &report, &md)
+    bench::write_report(&args.out, &stem, &report, &md)
 }

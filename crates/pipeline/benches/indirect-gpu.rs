@@ -8,17 +8,19 @@
 
 use std::path::PathBuf;
 
+mod common;
+
 use anyhow::Result;
+use bench::Stat;
+use bench::{Quality, per_frame_sum, quality};
 use clap::Parser;
+use common::time_passes;
 use glam::Vec3;
-use gpu::{Gpu, bench::Stat};
+use gpu::Gpu;
 use interleave::{Blur, BlurVariant, Pattern, SplitVariant};
 use pipeline::{
-    Quality,
-    bench::{per_frame_sum, time_passes},
     gpu::GpuRenderer,
     indirect::{IndirectConfig, Interleaving, vpl},
-    quality,
 };
 use scene::{Bvh, Scene};
 use serde::Serialize;
@@ -79,7 +81,7 @@ struct QualityRow {
 
 #[derive(Serialize)]
 struct Report {
-    header: gpu::bench::Header,
+    header: bench::Header,
     frames: u32,
     scene: String,
     camera: String,
@@ -105,13 +107,13 @@ fn config(
 }
 
 fn main() -> Result<()> {
-    let args = Args::parse();
+    let args = Args::parse_from(bench::args());
     let gpu = Gpu::from_env()?;
     println!("adapter: {}", gpu.describe());
-    gpu::bench::require_hardware(&gpu, args.allow_software)?;
-    let path = pipeline::bench_scene_path(args.scene.as_deref())?;
+    bench::require_hardware(&gpu, args.allow_software)?;
+    let path = bench::bench_scene_path(args.scene.as_deref())?;
     let scene = Scene::load(&path)?;
-    let camera = pipeline::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
+    let camera = scene::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
     let (lights, emissive, lit_by) = vpl::primary_lights(&scene);
     println!(
         "scene: {} ({} triangles), VPLs from {lit_by}",
@@ -221,9 +223,9 @@ fn main() -> Result<()> {
             }
         }
     }
-    let (scene, camera) = pipeline::bench::scene_labels(&path, &camera);
+    let (scene, camera) = bench::scene_labels(&path, &camera);
     let report = Report {
-        header: gpu::bench::Header::new(&gpu),
+        header: bench::Header::new(&gpu),
         frames: args.frames,
         scene,
         camera,
@@ -231,7 +233,7 @@ fn main() -> Result<()> {
         quality: qualities,
     };
     let stem = report.header.file_stem("indirect-");
-    pipeline::bench::write_report(&args.out, &stem, &report, &markdown(&report))?;
+    bench::write_report(&args.out, &stem, &report, &markdown(&report))?;
     Ok(())
 }
 

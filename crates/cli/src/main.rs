@@ -389,8 +389,15 @@ fn render_ssaa(
         ..Default::default()
     };
     let lights = pipeline::validate_lights(lights)?;
-    let mut renderer =
-        adaptive_ssaa::gpu::SsaaRenderer::new(&gpu, scene, &lights, width, height, &config)?;
+    let mut renderer = adaptive_ssaa::gpu::SsaaRenderer::new(
+        &gpu.device,
+        &gpu.queue,
+        scene,
+        &lights,
+        width,
+        height,
+        &config,
+    )?;
     renderer.set_camera(&gpu.queue, camera)?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     renderer.encode_gbuffer(&mut encoder, None);
@@ -400,14 +407,14 @@ fn render_ssaa(
         renderer.ssaa.encode_full(&mut encoder, None);
     }
     gpu.queue.submit([encoder.finish()]);
-    let image = renderer.ssaa.read_output(&gpu)?;
+    let image = renderer.ssaa.read_output(&gpu.device, &gpu.queue)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     image.write_png(&args.out.join("render.png"))?;
     image.write_exr(&args.out.join("render.exr"))?;
     println!("device:  GPU {}", gpu.describe());
     if args.adaptive {
-        let counts = renderer.ssaa.read_counts(&gpu)?;
+        let counts = renderer.ssaa.read_counts(&gpu.device, &gpu.queue)?;
         let n = m * m;
         adaptive_ssaa::cpu::sample_heatmap(&counts, n)
             .write_png(&args.out.join("ssaa-samples.png"))?;
@@ -541,7 +548,7 @@ fn main() -> Result<()> {
 
     let mut camera = match (&scene.camera, &args.scene) {
         (None, Some(path)) => {
-            pipeline::preset_view(path, &scene).unwrap_or_else(|| scene.camera_or_framed())
+            scene::preset_view(path, &scene).unwrap_or_else(|| scene.camera_or_framed())
         }
         _ => scene.camera_or_framed(),
     };
@@ -928,7 +935,7 @@ fn write_shadow_atlas(
 ) -> Result<()> {
     let m = shadows.manylod();
     let (w, h) = m.layout().size();
-    let atlas = m.read_atlas(gpu)?;
+    let atlas = m.read_atlas(&gpu.device, &gpu.queue)?;
     let pixels: Vec<[f32; 4]> = atlas
         .iter()
         .map(|&word| {

@@ -12,10 +12,11 @@ use std::path::{Path, PathBuf};
 use adaptive_ssaa::gpu::SsaaRenderer;
 use adaptive_ssaa::{GeometricMetric, Resolve, SsaaConfig};
 use anyhow::{Context, Result};
+use bench::Stat;
 use clap::Parser;
 use gbuffer::Image;
 use glam::Vec3;
-use gpu::{Gpu, PassTimer, bench::Stat};
+use gpu::{Gpu, PassTimer};
 use scene::{Light, Scene};
 use serde::Serialize;
 
@@ -67,7 +68,7 @@ struct Row {
 
 #[derive(Serialize)]
 struct Report {
-    header: gpu::bench::Header,
+    header: bench::Header,
     frames: u32,
     stall: u32,
     gbuffer: Vec<(String, u32, u32, u32, Stat)>,
@@ -85,7 +86,7 @@ fn scenes(quick: bool) -> Result<Vec<(String, Scene, scene::Camera)>> {
         m.base_color_texture.get_or_insert(checker);
     }
     let camera =
-        pipeline::preset_view(&sponza_path, &sponza).unwrap_or_else(|| sponza.camera_or_framed());
+        scene::preset_view(&sponza_path, &sponza).unwrap_or_else(|| sponza.camera_or_framed());
     let mut out = vec![("sponza".to_string(), sponza, camera)];
     if !quick {
         let helmet = Scene::load(&fixtures.join("gltf/DamagedHelmet/DamagedHelmet.glb"))?;
@@ -112,9 +113,7 @@ fn time(
     frames: u32,
     record: &dyn Fn(&mut wgpu::CommandEncoder, &PassTimer),
 ) -> Result<Stat> {
-    Ok(pipeline::bench::time_encoded(
-        gpu, timer, frames, false, record,
-    )?)
+    Ok(bench::time_encoded(gpu, timer, frames, false, record)?)
 }
 
 /// Heat colour of the absolute error (max over channels of sRGB values), full scale at `max`.
@@ -135,9 +134,9 @@ fn error_heatmap(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>, max: f32) -> Result<I
 }
 
 fn main() -> Result<()> {
-    let args = Args::parse();
+    let args = Args::parse_from(bench::args());
     let gpu = Gpu::from_env()?;
-    if let Err(e) = gpu::bench::require_hardware(&gpu, args.allow_software) {
+    if let Err(e) = bench::require_hardware(&gpu, args.allow_software) {
         anyhow::bail!("{e}");
     }
     println!("adapter: {}", gpu.describe());
@@ -175,7 +174,8 @@ fn main() -> Result<()> {
                     m,
                     ..Default::default()
                 };
-                let mut r = SsaaRenderer::new(&gpu, &scene, &lights, w, h, &base)?;
+                let mut r =
+                    SsaaRenderer::new(&gpu.device, &gpu.queue, &scene, &lights, w, h, &base)?;
                 r.set_camera(&gpu.queue, &camera)?;
                 let g = time(&gpu, &timer, args.frames, &|e, t| {
                     r.encode_gbuffer(e, Some(t))
@@ -195,13 +195,13 @@ fn main() -> Result<()> {
                     let full_ms = time(&gpu, &timer, args.frames, &|e, t| {
                         r.ssaa.encode_full(e, Some(t))
                     })?;
-                    let full = r.ssaa.read_output(&gpu)?;
+                    let full = r.ssaa.read_output(&gpu.device, &gpu.queue)?;
                     let mut row = |method: &str,
                                    ms: Stat,
                                    image: &Image<[f32; 4]>,
                                    samples: f64,
                                    shaded: f64| {
-                        let q = pipeline::quality(&full, image);
+                        let q = bench::quality(&full, image);
                         let row = Row {
                             scene: name.clone(),
                             width: w,
@@ -233,13 +233,19 @@ fn main() -> Result<()> {
                     let first_ms = time(&gpu, &timer, args.frames, &|e, t| {
                         r.ssaa.encode_first(e, Some(t))
                     })?;
-                    let first = r.ssaa.read_first(&gpu)?;
+                    let first = r.ssaa.read_first(&gpu.device, &gpu.queue)?;
                     row("1 sample", first_ms, &first, one, one);
                     let fxaa_ms = time(&gpu, &timer, args.frames, &|e, t| {
                         r.ssaa.encode_first(e, Some(t));
                         r.ssaa.encode_fxaa(e, Some(t));
                     })?;
-                    row("FXAA", fxaa_ms, &r.ssaa.read_output(&gpu)?, one, one);
+                    row(
+                        "FXAA",
+                        fxaa_ms,
+                        &r.ssaa.read_output(&gpu.device, &gpu.queue)?,
+                        one,
+                        one,
+                    );
                     for (label, metric, shading, resolve, scale) in &methods {
                         let swept = *scale != 1.0;
                         if swept && (stall != 1 || w != sizes[0].0) {
@@ -266,9 +272,9 @@ fn main() -> Result<()> {
                         let ms =
                             time(&gpu, &timer, args.frames, &|e, t| r.ssaa.encode(e, Some(t)))?;
                         let out = adaptive_ssaa::cpu::Output {
-                            image: r.ssaa.read_output(&gpu)?,
-                            first: r.ssaa.read_first(&gpu)?,
-                            counts: r.ssaa.read_counts(&gpu)?,
+                            image: r.ssaa.read_output(&gpu.device, &gpu.queue)?,
+                            first: r.ssaa.read_first(&gpu.device, &gpu.queue)?,
+                            counts: r.ssaa.read_counts(&gpu.device, &gpu.queue)?,
                         };
                         row(label, ms, &out.image, out.sample_fraction(m), out.shaded(m));
                         let pictures = (name == "sponza"
@@ -286,7 +292,7 @@ fn main() -> Result<()> {
             }
         }
     }
-    let header = gpu::bench::Header::new(&gpu);
+    let header = bench::Header::new(&gpu);
     let mut md = header.markdown("Adaptive supersampling (Holländer 2013 §4.3)", args.frames);
     md.push_str(&format!(
         "\nGPU time of the shading passes after the shared supersampled G-buffer (median of {} frames); \
@@ -328,7 +334,7 @@ fn main() -> Result<()> {
         rows,
     };
     let stem = report.header.file_stem("adaptive-ssaa-");
-    pipeline::bench::write_report(&args.out, &stem, &report, &md)
+    bench::write_report(&args.out, &stem, &report, &md)
 }
 
 fn write_pictures(

@@ -9,16 +9,14 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
+use bench::{Header, Stat};
 use clap::Parser;
 use gbuffer::{
     Frame,
     gpu::{GBufferPass, GBufferTargets, GpuScene},
 };
 use glam::Vec3;
-use gpu::{
-    Gpu, PassTimer,
-    bench::{Header, Stat},
-};
+use gpu::{Gpu, PassTimer};
 use scene::{Camera, Scene};
 use serde::Serialize;
 
@@ -152,11 +150,11 @@ fn bench_gbuffer(
 
 fn main() -> Result<()> {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let args = Args::parse();
+    let args = Args::parse_from(bench::args());
     let gpu = Gpu::from_env()?;
     println!("adapter: {}", gpu.describe());
-    gpu::bench::require_hardware(&gpu, args.allow_software)?;
-    let path = pipeline::bench_scene_path(args.scene.as_deref())?;
+    bench::require_hardware(&gpu, args.allow_software)?;
+    let path = bench::bench_scene_path(args.scene.as_deref())?;
     let scene = Scene::load(&path)?;
     // Inside the atrium, along its long axis, looking at the far arcades.
     let camera = Camera {

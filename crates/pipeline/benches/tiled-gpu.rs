@@ -8,14 +8,15 @@
 
 use std::path::PathBuf;
 
+mod common;
+
 use anyhow::Result;
+use bench::Stat;
+use bench::per_frame_sum;
 use clap::Parser;
-use gpu::{Gpu, bench::Stat};
-use pipeline::{
-    DEFAULT_AMBIENT, ShadingConfig, ShadingMethod,
-    bench::{per_frame_sum, time_passes},
-    gpu::GpuRenderer,
-};
+use common::time_passes;
+use gpu::Gpu;
+use pipeline::{DEFAULT_AMBIENT, ShadingConfig, ShadingMethod, gpu::GpuRenderer};
 use scene::{Camera, Light, Scene};
 use serde::Serialize;
 
@@ -72,7 +73,7 @@ struct TestRow {
 
 #[derive(Serialize)]
 struct Report {
-    header: gpu::bench::Header,
+    header: bench::Header,
     frames: u32,
     scene: String,
     camera: String,
@@ -109,13 +110,13 @@ fn measure(
 }
 
 fn main() -> Result<()> {
-    let args = Args::parse();
+    let args = Args::parse_from(bench::args());
     let gpu = Gpu::from_env()?;
     println!("adapter: {}", gpu.describe());
-    gpu::bench::require_hardware(&gpu, args.allow_software)?;
-    let path = pipeline::bench_scene_path(args.scene.as_deref())?;
+    bench::require_hardware(&gpu, args.allow_software)?;
+    let path = bench::bench_scene_path(args.scene.as_deref())?;
     let scene = Scene::load(&path)?;
-    let camera = pipeline::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
+    let camera = scene::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
     println!(
         "scene: {} ({} triangles)",
         path.display(),
@@ -200,9 +201,9 @@ fn main() -> Result<()> {
         }
     }
 
-    let (scene, camera) = pipeline::bench::scene_labels(&path, &camera);
+    let (scene, camera) = bench::scene_labels(&path, &camera);
     let report = Report {
-        header: gpu::bench::Header::new(&gpu),
+        header: bench::Header::new(&gpu),
         frames: args.frames,
         scene,
         camera,
@@ -210,7 +211,7 @@ fn main() -> Result<()> {
         tests: rows,
     };
     let stem = report.header.file_stem("tiled-shading-");
-    pipeline::bench::write_report(&args.out, &stem, &report, &markdown(&report))?;
+    bench::write_report(&args.out, &stem, &report, &markdown(&report))?;
     Ok(())
 }
 

@@ -11,8 +11,9 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
+use bench::Stat;
 use clap::Parser;
-use gpu::{Gpu, PassTimer, bench::Stat};
+use gpu::{Gpu, PassTimer};
 use serde::Serialize;
 use subdiv_bft::{
     BftSet, DEFAULT_LEVEL, MAX_VALENCE, Subdivider, gpu::GpuSubdivider, obj::ObjMesh,
@@ -68,7 +69,7 @@ struct AdaptiveRow {
 
 #[derive(Serialize)]
 struct Report {
-    header: gpu::bench::Header,
+    header: bench::Header,
     frames: u32,
     table_level: u32,
     table_megabytes: f64,
@@ -78,9 +79,9 @@ struct Report {
 }
 
 fn main() -> Result<()> {
-    let args = Args::parse();
+    let args = Args::parse_from(bench::args());
     let gpu = Gpu::from_env()?;
-    if let Err(e) = gpu::bench::require_hardware(&gpu, args.allow_software) {
+    if let Err(e) = bench::require_hardware(&gpu, args.allow_software) {
         anyhow::bail!("{e}");
     }
     println!("adapter: {}", gpu.describe());
@@ -104,29 +105,26 @@ fn main() -> Result<()> {
         g.set_positions(&gpu.queue, &mesh.positions_f32())?;
         for level in levels {
             let out = g.level(&gpu.device, &sub, level)?;
-            let initial =
-                pipeline::bench::time_encoded(&gpu, &timer, args.frames, false, &|e, t| {
-                    g.encode_initial(e, Some(t));
-                })?;
-            let evaluate =
-                pipeline::bench::time_encoded(&gpu, &timer, args.frames, false, &|e, t| {
-                    g.encode_evaluate(e, &out, Some(t));
-                })?;
-            let clear_baseline =
-                pipeline::bench::time_encoded(&gpu, &timer, args.frames, true, &|e, t| {
-                    let pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some("start"),
-                        timestamp_writes: t.compute_pass("clear"),
-                    });
-                    drop(pass);
-                    e.clear_buffer(&out.positions, 0, None);
-                    e.clear_buffer(&out.normals, 0, None);
-                    let pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some("end"),
-                        timestamp_writes: t.compute_pass("clear end"),
-                    });
-                    drop(pass);
-                })?;
+            let initial = bench::time_encoded(&gpu, &timer, args.frames, false, &|e, t| {
+                g.encode_initial(e, Some(t));
+            })?;
+            let evaluate = bench::time_encoded(&gpu, &timer, args.frames, false, &|e, t| {
+                g.encode_evaluate(e, &out, Some(t));
+            })?;
+            let clear_baseline = bench::time_encoded(&gpu, &timer, args.frames, true, &|e, t| {
+                let pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("start"),
+                    timestamp_writes: t.compute_pass("clear"),
+                });
+                drop(pass);
+                e.clear_buffer(&out.positions, 0, None);
+                e.clear_buffer(&out.normals, 0, None);
+                let pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("end"),
+                    timestamp_writes: t.compute_pass("clear end"),
+                });
+                drop(pass);
+            })?;
             let vertices = out.vertex_count as usize;
             let triangles = out.index_count as usize / 3;
             let per_s = |ms: f64, n: usize| n as f64 / (ms * 1e-3);
@@ -164,7 +162,7 @@ fn main() -> Result<()> {
             )?);
         }
     }
-    let header = gpu::bench::Header::new(&gpu);
+    let header = bench::Header::new(&gpu);
     let mut md = header.markdown(
         "Loop subdivision with basis-function tables (Holländer 2013 §2.3)",
         args.frames,
@@ -236,7 +234,7 @@ fn main() -> Result<()> {
         adaptive,
     };
     let stem = report.header.file_stem("subdiv-bft-");
-    pipeline::bench::write_report(&args.out, &stem, &report, &md)
+    bench::write_report(&args.out, &stem, &report, &md)
 }
 
 /// Adaptive rows of one mesh: screen-space factors for 4, 2 and 1 pixel edges.
@@ -258,7 +256,7 @@ fn bench_adaptive(
     let view_proj = scene::Camera::framing(bounds).view_projection(1920.0 / 1080.0);
     let a = g.adaptive(&gpu.device, sub, max_level)?;
     let uniform = g.level(&gpu.device, sub, max_level)?;
-    let uniform_max = pipeline::bench::time_encoded(gpu, timer, frames, false, &|e, t| {
+    let uniform_max = bench::time_encoded(gpu, timer, frames, false, &|e, t| {
         g.encode_evaluate(e, &uniform, Some(t));
     })?;
     let mut rows = Vec::new();
@@ -271,13 +269,13 @@ fn bench_adaptive(
                 target_pixels,
             },
         )?;
-        let factors = pipeline::bench::time_encoded(gpu, timer, frames, false, &|e, t| {
+        let factors = bench::time_encoded(gpu, timer, frames, false, &|e, t| {
             g.encode_screen_factors(e, &a, Some(t));
         })?;
-        let evaluate = pipeline::bench::time_encoded(gpu, timer, frames, false, &|e, t| {
+        let evaluate = bench::time_encoded(gpu, timer, frames, false, &|e, t| {
             g.encode_adaptive(e, &a, Some(t));
         })?;
-        let out = g.read_adaptive(gpu, &a)?;
+        let out = g.read_adaptive(&gpu.device, &gpu.queue, &a)?;
         let written = out.indices.len() / 3;
         let drawn = out.without_collapsed().indices.len() / 3;
         println!(

@@ -74,13 +74,13 @@ fn pick(views: &[View], axis: Vec3) -> Option<View> {
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    let path = pipeline::bench_scene_path(args.scene.as_deref())?;
+    let path = bench::bench_scene_path(args.scene.as_deref())?;
     let scene = Scene::load(&path)?;
     let bvh = Bvh::build(&scene);
     let bounds = scene.bounds();
     let (center, extent, diagonal) = (bounds.center(), bounds.max - bounds.min, bounds.diagonal());
     // The benchmark's spot light at frame 0.
-    let spot = pipeline::bench::orbiting_spot(&bounds, 0.0);
+    let spot = bench::orbiting_spot(&bounds, 0.0);
     let set = vpl::generate(
         &scene,
         &bvh,

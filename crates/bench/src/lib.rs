@@ -1,0 +1,216 @@
+//! The shared harness of the GPU benchmark programs (`crates/*/benches/*-gpu.rs`, run by
+//! `cargo xtask bench`): timing statistics and the warm-up rule ([`timing`]), the adapter and
+//! SM-clock header every report under `docs/bench/` starts with, the software-adapter refusal,
+//! image quality against a reference, the benchmark scene. Not published.
+
+use std::sync::OnceLock;
+
+use serde::Serialize;
+
+use gpu::Gpu;
+
+pub mod timing;
+
+pub use timing::{
+    WARM_UP_RULE, orbiting_spot, per_frame_sum, scene_labels, time_encoded, time_named,
+    warm_then_time, write_report,
+};
+
+/// Median and minimum of a set of timings.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Stat {
+    /// Median, ms.
+    pub median_ms: f64,
+    /// Minimum, ms.
+    pub min_ms: f64,
+}
+
+impl Stat {
+    /// Statistics of `v` (at least one value; an empty list gives NaN).
+    pub fn of(mut v: Vec<f64>) -> Self {
+        v.sort_by(f64::total_cmp);
+        Self {
+            median_ms: v.get(v.len() / 2).copied().unwrap_or(f64::NAN),
+            min_ms: v.first().copied().unwrap_or(f64::NAN),
+        }
+    }
+}
+
+/// The program's arguments without the `--bench` that `cargo bench` passes to every bench
+/// target: what the benchmark programs parse.
+pub fn args() -> impl Iterator<Item = String> {
+    std::env::args().filter(|a| a != "--bench")
+}
+
+/// Today's date (UTC) as YYYY-MM-DD, from the Unix clock (Hinnant's civil-from-days).
+pub fn today() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let z = (secs / 86_400) as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    format!("{:04}-{m:02}-{d:02}", yoe + era * 400 + i64::from(m <= 2))
+}
+
+/// A benchmark refused to run on a software rasterizer.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "{0} is a software rasterizer: its times are not GPU performance (pass --allow-software to measure anyway)"
+)]
+pub struct SoftwareAdapter(pub String);
+
+/// Fails on a software rasterizer unless `allow_software`. Every benchmark calls it first;
+/// it also records the SM clock before any work ([`Header`]).
+pub fn require_hardware(gpu: &Gpu, allow_software: bool) -> Result<(), SoftwareAdapter> {
+    clock_before();
+    if gpu.is_software() && !allow_software {
+        return Err(SoftwareAdapter(gpu.info.name.clone()));
+    }
+    Ok(())
+}
+
+/// Who measured and when: the first fields of every report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Header {
+    /// YYYY-MM-DD.
+    pub date: String,
+    /// Adapter name.
+    pub adapter: String,
+    /// wgpu backend.
+    pub backend: String,
+    /// Driver name.
+    pub driver: String,
+    /// Driver version.
+    pub driver_info: String,
+    /// Discrete, integrated, CPU, ...
+    pub device_type: String,
+    /// SM clock (MHz, `nvidia-smi`) when the benchmark started, before any GPU work.
+    pub sm_clock_before_mhz: Option<u32>,
+    /// SM clock (MHz) when the header was made, after the measurements.
+    pub sm_clock_after_mhz: Option<u32>,
+}
+
+/// The current SM clock in MHz from `nvidia-smi` (first GPU), where it is present.
+pub fn sm_clock_mhz() -> Option<u32> {
+    let out = std::process::Command::new("nvidia-smi")
+        .args(["--query-gpu=clocks.sm", "--format=csv,noheader,nounits"])
+        .output()
+        .ok()?;
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .next()?
+        .trim()
+        .parse()
+        .ok()
+}
+
+fn clock_before() -> Option<u32> {
+    static BEFORE: OnceLock<Option<u32>> = OnceLock::new();
+    *BEFORE.get_or_init(sm_clock_mhz)
+}
+
+impl Header {
+    /// The header for `gpu`, dated today.
+    pub fn new(gpu: &Gpu) -> Self {
+        let i = &gpu.info;
+        Self {
+            date: today(),
+            adapter: i.name.clone(),
+            backend: format!("{:?}", i.backend),
+            driver: i.driver.clone(),
+            driver_info: i.driver_info.clone(),
+            device_type: format!("{:?}", i.device_type),
+            sm_clock_before_mhz: clock_before(),
+            sm_clock_after_mhz: sm_clock_mhz(),
+        }
+    }
+
+    /// `<prefix><adapter-slug>-<date>`: the report's file name without extension.
+    pub fn file_stem(&self, prefix: &str) -> String {
+        let slug: String = self
+            .adapter
+            .to_lowercase()
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+            .collect();
+        let slug = slug
+            .split('-')
+            .filter(|s| !s.is_empty())
+            .collect::<Vec<_>>()
+            .join("-");
+        format!("{prefix}{slug}-{}", self.date)
+    }
+
+    /// The Markdown title and the adapter/driver/date/clock/timing lines.
+    pub fn markdown(&self, title: &str, frames: u32) -> String {
+        let clock =
+            |c: Option<u32>| c.map_or("not read (no nvidia-smi)".into(), |c| format!("{c} MHz"));
+        format!(
+            "# {title} on {} ({})\n\n- Date: {}\n- Adapter: {} ({}, {})\n- Driver: {} {}\n- SM clock: {} before, {} after the measurements\n- Timing: GPU timestamp queries, median (and minimum) of {frames} frames after a warm-up of {WARM_UP_RULE}\n\n",
+            self.adapter,
+            self.backend,
+            self.date,
+            self.adapter,
+            self.device_type,
+            self.backend,
+            self.driver,
+            self.driver_info,
+            clock(self.sm_clock_before_mhz),
+            clock(self.sm_clock_after_mhz),
+        )
+    }
+}
+
+/// The scene a benchmark runs on: `path`, or else the shared fixtures' Dabrovic Sponza.
+pub fn bench_scene_path(path: Option<&std::path::Path>) -> anyhow::Result<std::path::PathBuf> {
+    use anyhow::Context;
+    Ok(match path {
+        Some(p) => p.to_path_buf(),
+        None => scene::shared_fixtures()
+            .context("../shared/fixtures not found; pass --scene")?
+            .join("sponza/dabrovic/sponza.gltf"),
+    })
+}
+
+/// Image error against a reference, on what a PNG shows (RGB clamped to \[0, 1\], sRGB).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Quality {
+    /// Root-mean-square error.
+    pub rmse: f64,
+    /// Peak signal-to-noise ratio, dB ([`gbuffer::psnr`]).
+    pub psnr: f64,
+    /// Mean of the FLIP error map (LDR FLIP, 67 pixels per degree; 0 = identical, 1 = maximal).
+    pub flip_mean: f64,
+}
+
+/// [`Quality`] of `test` against `reference` (same size).
+pub fn quality(reference: &gbuffer::Image<[f32; 4]>, test: &gbuffer::Image<[f32; 4]>) -> Quality {
+    let psnr = gbuffer::psnr(reference, test);
+    let rmse = 10f64.powf(-psnr / 20.0);
+    let srgb8 = |img: &gbuffer::Image<[f32; 4]>| -> Vec<u8> {
+        img.pixels()
+            .iter()
+            .flat_map(|p| {
+                [0, 1, 2]
+                    .map(|c| (gbuffer::linear_to_srgb(p[c].clamp(0.0, 1.0)) * 255.0).round() as u8)
+            })
+            .collect()
+    };
+    let (w, h) = (reference.width(), reference.height());
+    let map = nv_flip::flip(
+        nv_flip::FlipImageRgb8::with_data(w, h, &srgb8(reference)),
+        nv_flip::FlipImageRgb8::with_data(w, h, &srgb8(test)),
+        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
+    );
+    Quality {
+        rmse,
+        psnr,
+        flip_mean: f64::from(nv_flip::FlipPool::from_image(&map).mean()),
+    }
+}
