@@ -8,6 +8,8 @@
 //! - `cargo xtask bench [ARGS]`: runs every GPU benchmark (the `*-gpu` bench targets beside
 //!   their crates, on the `deferred-bench` harness; reports under docs/bench/) with `ARGS`,
 //!   then the CPU criterion benches.
+//! - `cargo xtask bench-bins [DIR]`: builds every GPU benchmark and copies its executable to
+//!   `DIR/<name>` (default `.gpu-bin`), to carry to a machine without Rust (the lent GPU).
 //! - `cargo xtask package-check`: packages every library crate (`cargo package --no-verify`),
 //!   unpacks `deferred-interleave` and `deferred-tiled-shading` with the toolkit crates they
 //!   depend on, and builds and runs a throwaway crate outside the workspace that depends on the
@@ -126,8 +128,9 @@ fn main() -> Result<()> {
                 "--benches",
                 "--examples",
             ]))?;
-            for (package, example) in targets("example", "-embed")? {
-                run(cargo().args(["run", "--release", "-p", &package, "--example", &example]))?;
+            // The workspace build's executables: `cargo run -p` would rebuild with other features.
+            for (_, example) in targets("example", "-embed")? {
+                run(&mut Command::new(workspace_root().join("target/release/examples").join(&example)))?;
             }
             Ok(())
         }
@@ -146,6 +149,10 @@ fn main() -> Result<()> {
                 }
             }
             run(criterion.args(["--", "--quick"]))
+        }
+        "bench-bins" => {
+            let dir = PathBuf::from(rest.first().map_or(".gpu-bin", String::as_str));
+            bench_bins(&dir)
         }
         "package-check" => package_check(),
         "bft" => run(cargo()
@@ -178,7 +185,7 @@ fn main() -> Result<()> {
                 .arg("fixtures/subdiv"))
         }
         _ => bail!(
-            "usage: cargo xtask test [CARGO TEST ARGS] | cargo xtask package-check | cargo xtask bench [BENCH ARGS: --frames N, --out DIR, --allow-software] | cargo xtask bft [--level L] [--max-valence N] [-o FILE] | cargo xtask subdiv-fixtures"
+            "usage: cargo xtask test [CARGO TEST ARGS] | cargo xtask package-check | cargo xtask bench-bins [DIR] | cargo xtask bench [BENCH ARGS: --frames N, --out DIR, --allow-software] | cargo xtask bft [--level L] [--max-valence N] [-o FILE] | cargo xtask subdiv-fixtures"
         ),
     }
 }
@@ -350,5 +357,31 @@ fn package_check() -> Result<()> {
     eprintln!(
         "xtask: package-check passed: a crate outside the workspace built and ran the packaged kernels"
     );
+    Ok(())
+}
+
+/// Builds the `*-gpu` benchmarks and copies each executable to `dir/<bench name>`.
+fn bench_bins(dir: &Path) -> Result<()> {
+    let mut cmd = cargo();
+    cmd.args(["bench", "--no-run", "--message-format=json"]);
+    for (package, bench) in targets("bench", "-gpu")? {
+        cmd.args(["-p", &package, "--bench", &bench]);
+    }
+    eprintln!("xtask: running {cmd:?}");
+    let out = cmd.output().context("cargo bench --no-run")?;
+    if !out.status.success() {
+        bail!("building the benchmarks failed:\n{}", String::from_utf8_lossy(&out.stderr));
+    }
+    std::fs::create_dir_all(dir)?;
+    for line in String::from_utf8_lossy(&out.stdout).lines() {
+        let Ok(msg) = serde_json::from_str::<serde_json::Value>(line) else { continue };
+        let is_bench = msg["target"]["kind"].as_array().is_some_and(|k| k.iter().any(|k| k == "bench"));
+        if let (true, Some(name), Some(exe)) = (is_bench, msg["target"]["name"].as_str(), msg["executable"].as_str())
+            && name.ends_with("-gpu")
+        {
+            std::fs::copy(exe, dir.join(name)).with_context(|| format!("copying {exe}"))?;
+            eprintln!("xtask: {} -> {}", exe, dir.join(name).display());
+        }
+    }
     Ok(())
 }
