@@ -130,7 +130,11 @@ fn main() -> Result<()> {
             ]))?;
             // The workspace build's executables: `cargo run -p` would rebuild with other features.
             for (_, example) in targets("example", "-embed")? {
-                run(&mut Command::new(workspace_root().join("target/release/examples").join(&example)))?;
+                run(&mut Command::new(
+                    workspace_root()
+                        .join("target/release/examples")
+                        .join(&example),
+                ))?;
             }
             Ok(())
         }
@@ -370,14 +374,24 @@ fn bench_bins(dir: &Path) -> Result<()> {
     eprintln!("xtask: running {cmd:?}");
     let out = cmd.output().context("cargo bench --no-run")?;
     if !out.status.success() {
-        bail!("building the benchmarks failed:\n{}", String::from_utf8_lossy(&out.stderr));
+        bail!(
+            "building the benchmarks failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
     }
     std::fs::create_dir_all(dir)?;
     for line in String::from_utf8_lossy(&out.stdout).lines() {
-        let Ok(msg) = serde_json::from_str::<serde_json::Value>(line) else { continue };
-        let is_bench = msg["target"]["kind"].as_array().is_some_and(|k| k.iter().any(|k| k == "bench"));
-        if let (true, Some(name), Some(exe)) = (is_bench, msg["target"]["name"].as_str(), msg["executable"].as_str())
-            && name.ends_with("-gpu")
+        let Ok(msg) = serde_json::from_str::<serde_json::Value>(line) else {
+            continue;
+        };
+        let is_bench = msg["target"]["kind"]
+            .as_array()
+            .is_some_and(|k| k.iter().any(|k| k == "bench"));
+        if let (true, Some(name), Some(exe)) = (
+            is_bench,
+            msg["target"]["name"].as_str(),
+            msg["executable"].as_str(),
+        ) && name.ends_with("-gpu")
         {
             std::fs::copy(exe, dir.join(name)).with_context(|| format!("copying {exe}"))?;
             eprintln!("xtask: {} -> {}", exe, dir.join(name).display());

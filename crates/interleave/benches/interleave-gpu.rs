@@ -31,7 +31,7 @@ struct Args {
     /// Output folder for the reports.
     #[arg(long, default_value = "docs/bench")]
     out: PathBuf,
-    /// Timed frames per measurement (after 10 warm-up frames).
+    /// Timed frames per measurement (after the harness warm-up: ≥ 10 frames and ≥ 300 ms of work).
     #[arg(long, default_value_t = 50, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// Write the report even on a software rasterizer (its times are not GPU performance).
@@ -132,23 +132,27 @@ impl Bench<'_> {
     ) -> Result<(Stat, Vec<(String, f64)>)> {
         let mut totals = Vec::new();
         let mut per_pass: Vec<(String, Vec<f64>)> = Vec::new();
-        for frame in 0..self.frames + 10 {
+        let frames = bench::warm_then_time(self.frames, || -> Result<Vec<gpu::PassTime>> {
             let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
             record(&mut encoder, &self.timer);
             self.timer.resolve(&mut encoder);
             self.gpu.queue.submit([encoder.finish()]);
             let times = self.timer.read(&self.gpu.device, &self.gpu.queue)?;
-            let (Some(first), Some(last)) = (times.first(), times.last()) else {
+            if times.is_empty() {
                 bail!("the adapter has no timestamp queries");
+            }
+            Ok(times)
+        })?;
+        for times in frames {
+            let (Some(first), Some(last)) = (times.first(), times.last()) else {
+                continue;
             };
-            if frame >= 10 {
-                totals.push(last.end_ms() - first.start_ms);
-                for (i, t) in times.iter().enumerate() {
-                    if per_pass.len() <= i {
-                        per_pass.push((t.name.clone(), Vec::new()));
-                    }
-                    per_pass[i].1.push(t.ms);
+            totals.push(last.end_ms() - first.start_ms);
+            for (i, t) in times.iter().enumerate() {
+                if per_pass.len() <= i {
+                    per_pass.push((t.name.clone(), Vec::new()));
                 }
+                per_pass[i].1.push(t.ms);
             }
         }
         Ok((

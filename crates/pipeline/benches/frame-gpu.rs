@@ -30,7 +30,7 @@ struct Args {
     /// Output folder for the reports.
     #[arg(long, default_value = "docs/bench")]
     out: PathBuf,
-    /// Timed frames per measurement (after 10 warm-up frames).
+    /// Timed frames per measurement (after the harness warm-up: ≥ 10 frames and ≥ 300 ms of work).
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// Write the report even on a software rasterizer (its times are not GPU performance).
@@ -91,7 +91,7 @@ fn bench_gbuffer(
     let (src, dst) = (copy("copy src"), copy("copy dst"));
     let timer = PassTimer::new(device, 6);
     let (mut g, mut c, mut k, mut z) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for i in 0..frames + 10 {
+    let measured = bench::warm_then_time(frames, || -> Result<Vec<gpu::PassTime>> {
         let mut encoder = device.create_command_encoder(&Default::default());
         GBufferPass::encode_clear(&mut encoder, &targets, timer.render_pass("clear"));
         pass.encode(
@@ -123,13 +123,14 @@ fn bench_gbuffer(
         if t.len() != 6 {
             bail!("the adapter has no timestamp queries; nothing to measure");
         }
-        if i >= 10 {
-            c.push(t[0].ms);
-            g.push(t[1].ms);
-            // From the begin of the marker pass before the copy to the end of the one after it.
-            k.push(t[3].end_ms() - t[2].start_ms);
-            z.push(t[5].end_ms() - t[4].start_ms);
-        }
+        Ok(t)
+    })?;
+    for t in measured {
+        c.push(t[0].ms);
+        g.push(t[1].ms);
+        // From the begin of the marker pass before the copy to the end of the one after it.
+        k.push(t[3].end_ms() - t[2].start_ms);
+        z.push(t[5].end_ms() - t[4].start_ms);
     }
     let (g, c, k, z) = (Stat::of(g), Stat::of(c), Stat::of(k), Stat::of(z));
     Ok(GBufferResult {
