@@ -231,17 +231,7 @@ fn metadata() -> Result<serde_json::Value> {
 
 /// Library crates of the workspace that publish: (package name, manifest folder).
 fn library_packages() -> Result<Vec<(String, PathBuf)>> {
-    let out = cargo()
-        .args(["metadata", "--no-deps", "--format-version", "1"])
-        .output()
-        .context("cargo metadata")?;
-    if !out.status.success() {
-        bail!(
-            "cargo metadata failed: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-    }
-    let meta: serde_json::Value = serde_json::from_slice(&out.stdout)?;
+    let meta = metadata()?;
     let mut packages = Vec::new();
     for p in meta["packages"].as_array().into_iter().flatten() {
         let publishes = !p["publish"].as_array().is_some_and(Vec::is_empty);

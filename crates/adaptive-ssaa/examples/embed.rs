@@ -1,20 +1,17 @@
 //! `adaptive-ssaa` inside an application that owns its wgpu device: render the textured
 //! checkerboard with 4×4 adaptive supersampling in the application's own encoder, then with
 //! full supersampling, and check that the adaptive image is close at fewer samples.
+//!
+//! The application creates its own device: wgpu's default limits plus what the crate states
+//! it needs (`device_needs()`).
 
 use adaptive_ssaa::{SsaaConfig, gpu::SsaaRenderer};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    // The application's device: wgpu's default limits plus what the crate states it needs.
-    let needs = adaptive_ssaa::device_needs();
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_features: needs.features,
-        required_limits: needs.limits,
-        ..Default::default()
-    }))?;
+    let adapter =
+        pollster::block_on(wgpu::Instance::default().request_adapter(&Default::default()))?;
+    let (device, queue) =
+        pollster::block_on(adapter.request_device(&adaptive_ssaa::device_needs().descriptor()))?;
 
     let scene = scene::checkerboard();
     let lights = tiled_shading::gpu_lights(&scene.lights)?;

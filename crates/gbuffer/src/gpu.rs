@@ -55,6 +55,15 @@ impl GpuMaterial {
     }
 }
 
+/// How a compute kernel binds [`GBufferTextures`] (read with `textureLoad`): linear depth,
+/// normal, albedo, material — the order of their bindings in every shading kernel.
+pub const GBUFFER_BINDINGS: [Binding; 4] = [
+    Binding::TextureUnfilterable,
+    Binding::TextureUint,
+    Binding::TextureUnfilterable,
+    Binding::TextureUint,
+];
+
 /// The five G-buffer textures of one resolution (see the layout table in the crate docs).
 #[derive(Clone)]
 pub struct GBufferTargets {

@@ -54,6 +54,17 @@ impl DeviceNeeds {
         }
     }
 
+    /// A device descriptor requesting exactly these features and limits: what an application
+    /// embedding a crate passes to `Adapter::request_device`.
+    pub fn descriptor(&self) -> wgpu::DeviceDescriptor<'static> {
+        wgpu::DeviceDescriptor {
+            label: None,
+            required_features: self.features,
+            required_limits: self.limits.clone(),
+            ..Default::default()
+        }
+    }
+
     /// [`DeviceNeeds::check`] against `device`.
     pub fn check_device(&self, device: &wgpu::Device) -> Result<(), GpuError> {
         self.check(device.features(), &device.limits())

@@ -1,21 +1,18 @@
 //! `interleave` inside an application that owns its wgpu device: split a 4×4-interleaved
 //! G-buffer channel on the GPU, in the application's own encoder, and check it against the CPU
 //! reference.
+//!
+//! The application creates its own device: wgpu's default limits plus what the crate states
+//! it needs (`device_needs()`).
 
 use gbuffer::Image;
 use interleave::{Pattern, SplitLayout, SplitVariant, gpu::Splitter};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    // The application's device: wgpu's default limits plus what the crate states it needs.
-    let needs = interleave::device_needs();
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_features: needs.features,
-        required_limits: needs.limits,
-        ..Default::default()
-    }))?;
+    let adapter =
+        pollster::block_on(wgpu::Instance::default().request_adapter(&Default::default()))?;
+    let (device, queue) =
+        pollster::block_on(adapter.request_device(&interleave::device_needs().descriptor()))?;
 
     // Any size works, also sizes that are not multiples of the pattern.
     let (width, height) = (50, 37);

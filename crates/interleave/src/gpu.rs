@@ -73,37 +73,10 @@ fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
 }
 
-/// A texture a kernel reads (`TEXTURE_BINDING`).
-fn check_input(
-    what: &str,
-    t: &wgpu::Texture,
-    size: (u32, u32),
-    format: wgpu::TextureFormat,
-) -> Result<(), InterleaveError> {
-    Ok(kernel::check_texture(
-        what,
-        t,
-        size,
-        format,
-        wgpu::TextureUsages::TEXTURE_BINDING,
-    )?)
-}
-
-/// A texture a kernel writes (`STORAGE_BINDING`).
-fn check_output(
-    what: &str,
-    t: &wgpu::Texture,
-    size: (u32, u32),
-    format: wgpu::TextureFormat,
-) -> Result<(), InterleaveError> {
-    Ok(kernel::check_texture(
-        what,
-        t,
-        size,
-        format,
-        wgpu::TextureUsages::STORAGE_BINDING,
-    )?)
-}
+/// Usage of a texture a kernel reads.
+const READ: wgpu::TextureUsages = wgpu::TextureUsages::TEXTURE_BINDING;
+/// Usage of a texture a kernel writes.
+const WRITE: wgpu::TextureUsages = wgpu::TextureUsages::STORAGE_BINDING;
 
 fn groups(size: (u32, u32), workgroup: u32) -> (u32, u32) {
     (size.0.div_ceil(workgroup), size.1.div_ceil(workgroup))
@@ -338,8 +311,14 @@ impl Splitter {
         image: &wgpu::Texture,
         split: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
-        check_input("image", image, self.image_size(), self.format)?;
-        check_output("split texture", split, self.split_size(), self.format)?;
+        kernel::check_texture("image", image, self.image_size(), self.format, READ)?;
+        kernel::check_texture(
+            "split texture",
+            split,
+            self.split_size(),
+            self.format,
+            WRITE,
+        )?;
         self.passes(
             device,
             &self.split_pipelines,
@@ -355,8 +334,8 @@ impl Splitter {
         split: &wgpu::Texture,
         image: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
-        check_input("split texture", split, self.split_size(), self.format)?;
-        check_output("image", image, self.image_size(), self.format)?;
+        kernel::check_texture("split texture", split, self.split_size(), self.format, READ)?;
+        kernel::check_texture("image", image, self.image_size(), self.format, WRITE)?;
         self.passes(
             device,
             &self.gather_pipelines,
@@ -488,18 +467,20 @@ impl DiscontinuityPass {
         discontinuities: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
         let size = (linear_depth.width(), linear_depth.height());
-        check_input(
+        kernel::check_texture(
             "linear depth",
             linear_depth,
             size,
             gbuffer::LINEAR_DEPTH_FORMAT,
+            READ,
         )?;
-        check_input("normals", normals, size, gbuffer::NORMAL_FORMAT)?;
-        check_output(
+        kernel::check_texture("normals", normals, size, gbuffer::NORMAL_FORMAT, READ)?;
+        kernel::check_texture(
             "discontinuity buffer",
             discontinuities,
             size,
             DISCONTINUITY_FORMAT,
+            WRITE,
         )?;
         let (d, nrm, out) = (view(linear_depth), view(normals), view(discontinuities));
         Ok(pass(
@@ -606,16 +587,17 @@ impl BlurPass {
         output: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
         let size = (irradiance.width(), irradiance.height());
-        check_input("irradiance", irradiance, size, IRRADIANCE_FORMAT)?;
-        check_input(
+        kernel::check_texture("irradiance", irradiance, size, IRRADIANCE_FORMAT, READ)?;
+        kernel::check_texture(
             "discontinuity buffer",
             discontinuities,
             size,
             DISCONTINUITY_FORMAT,
+            READ,
         )?;
-        check_input("blur scratch", scratch, size, IRRADIANCE_FORMAT)?;
-        check_output("blur scratch", scratch, size, IRRADIANCE_FORMAT)?;
-        check_output("blur output", output, size, IRRADIANCE_FORMAT)?;
+        kernel::check_texture("blur scratch", scratch, size, IRRADIANCE_FORMAT, READ)?;
+        kernel::check_texture("blur scratch", scratch, size, IRRADIANCE_FORMAT, WRITE)?;
+        kernel::check_texture("blur output", output, size, IRRADIANCE_FORMAT, WRITE)?;
         let disc = view(discontinuities);
         let [h, v] = &self.params;
         let one = |name: &str, from: &wgpu::Texture, to: &wgpu::Texture, params: &wgpu::Buffer| {
@@ -708,9 +690,15 @@ impl SubsetShading {
         textures: [&wgpu::Texture; 3],
     ) -> Result<Passes, InterleaveError> {
         let [depth, normals, irradiance] = textures;
-        check_input("linear depth", depth, size, gbuffer::LINEAR_DEPTH_FORMAT)?;
-        check_input("normals", normals, size, gbuffer::NORMAL_FORMAT)?;
-        check_output("irradiance", irradiance, size, IRRADIANCE_FORMAT)?;
+        kernel::check_texture(
+            "linear depth",
+            depth,
+            size,
+            gbuffer::LINEAR_DEPTH_FORMAT,
+            READ,
+        )?;
+        kernel::check_texture("normals", normals, size, gbuffer::NORMAL_FORMAT, READ)?;
+        kernel::check_texture("irradiance", irradiance, size, IRRADIANCE_FORMAT, WRITE)?;
         let (d, nrm, out) = (view(depth), view(normals), view(irradiance));
         let l = &self.layout;
         Ok(pass(

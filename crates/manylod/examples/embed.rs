@@ -1,6 +1,9 @@
 //! `manylod` inside an application that owns its wgpu device: find the many-view cut of a
 //! surfel hierarchy for 16 paraboloid views on the GPU, in the application's own encoder, and
 //! check it against the CPU reference.
+//!
+//! The application creates its own device: wgpu's default limits plus what the crate states
+//! it needs (`device_needs()`).
 
 use glam::Vec3;
 use manylod::{
@@ -10,16 +13,10 @@ use manylod::{
 };
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    // The application's device: wgpu's default limits plus what the crate states it needs.
-    let needs = manylod::device_needs();
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_features: needs.features,
-        required_limits: needs.limits,
-        ..Default::default()
-    }))?;
+    let adapter =
+        pollster::block_on(wgpu::Instance::default().request_adapter(&Default::default()))?;
+    let (device, queue) =
+        pollster::block_on(adapter.request_device(&manylod::device_needs().descriptor()))?;
 
     // A floor with a wall, 2^12 surfels, a hierarchy, and 16 views above the floor.
     let p = [

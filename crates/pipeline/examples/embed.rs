@@ -1,20 +1,18 @@
 //! The renderer inside an application that owns its wgpu device: render the Cornell box into
 //! the renderer's output texture with the application's own encoder, copy it into a texture
 //! of the application, and check that the box is lit.
+//!
+//! The application creates its own device: wgpu's default limits plus what the crate states
+//! it needs (`device_needs()`).
 
 use pipeline::gpu::{GpuRenderer, RADIANCE_FORMAT, read_radiance};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The application's device: wgpu's default limits plus what the renderer states it needs.
-    let needs = pipeline::device_needs();
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_features: needs.features,
-        required_limits: needs.limits,
-        ..Default::default()
-    }))?;
+    let adapter =
+        pollster::block_on(wgpu::Instance::default().request_adapter(&Default::default()))?;
+    let (device, queue) =
+        pollster::block_on(adapter.request_device(&pipeline::device_needs().descriptor()))?;
 
     // new: upload and pipelines once; set_camera and resize only rebind; encode only records.
     let scene = scene::cornell_box();

@@ -251,6 +251,13 @@ impl GpuRenderer {
         if let Some(camera) = &self.camera {
             bound.set_camera(queue, camera);
         }
+        self.shading_bound = bound;
+        self.bind_composition(device);
+        Ok(())
+    }
+
+    /// Rebinds the composition to the current targets and indirect stage.
+    fn bind_composition(&mut self, device: &wgpu::Device) {
         let indirect = match &self.indirect {
             Some((stage, _, _)) => stage.output(),
             None => [&self.no_indirect[0], &self.no_indirect[1]],
@@ -265,8 +272,6 @@ impl GpuRenderer {
             &self.radiance,
             indirect,
         );
-        self.shading_bound = bound;
-        Ok(())
     }
 
     /// Switches the light accumulation to `config` (brute force, tiled, tiled with normal
@@ -373,17 +378,8 @@ impl GpuRenderer {
             set,
             self.vpl_shadows.as_ref(),
         )?;
-        self.composition_group = composition_group(
-            device,
-            &self.composition,
-            &self.ambient,
-            &self.scene.materials,
-            &self.targets,
-            [&self.direct[0], &self.direct[1]],
-            &self.radiance,
-            stage.output(),
-        );
         self.indirect = Some((stage, *config, set.clone()));
+        self.bind_composition(device);
         Ok(())
     }
 

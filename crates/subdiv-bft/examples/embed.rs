@@ -1,20 +1,17 @@
 //! `subdiv-bft` inside an application that owns its wgpu device: Loop-subdivide an octahedron
 //! to level 3 on the GPU with basis-function tables, in the application's own encoder, and
 //! check the vertices against the CPU reference.
+//!
+//! The application creates its own device: wgpu's default limits plus what the crate states
+//! it needs (`device_needs()`).
 
 use subdiv_bft::{BftSet, Subdivider, TriMesh, gpu::GpuSubdivider};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    // The application's device: wgpu's default limits plus what the crate states it needs.
-    let needs = subdiv_bft::device_needs();
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_features: needs.features,
-        required_limits: needs.limits,
-        ..Default::default()
-    }))?;
+    let adapter =
+        pollster::block_on(wgpu::Instance::default().request_adapter(&Default::default()))?;
+    let (device, queue) =
+        pollster::block_on(adapter.request_device(&subdiv_bft::device_needs().descriptor()))?;
 
     // A control mesh and the tables (level 3, valences up to 8).
     let p = [

@@ -1,21 +1,18 @@
 //! `tiled-shading` inside an application that owns its wgpu device: accumulate 256 point
 //! lights over a G-buffer with tiled normal-cone culling into the application's own output
 //! textures, and check the result against the CPU reference.
+//!
+//! The application creates its own device: wgpu's default limits plus what the crate states
+//! it needs (`device_needs()`).
 
 use gbuffer::gpu::UploadedGBuffer;
 use tiled_shading::{Method, ShadingConfig, gpu::LightShading};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    // The application's device: wgpu's default limits plus what the crate states it needs.
-    let needs = tiled_shading::device_needs();
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let adapter = pollster::block_on(instance.request_adapter(&Default::default()))?;
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        required_features: needs.features,
-        required_limits: needs.limits,
-        ..Default::default()
-    }))?;
+    let adapter =
+        pollster::block_on(wgpu::Instance::default().request_adapter(&Default::default()))?;
+    let (device, queue) =
+        pollster::block_on(adapter.request_device(&tiled_shading::device_needs().descriptor()))?;
 
     // A G-buffer (here from the CPU rasteriser) and lights.
     let scene = scene::spheres_on_plane(3);

@@ -21,7 +21,8 @@
 use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
 use ::gpu::shader::Specialisation;
 use ::gpu::{Gpu, GpuError, PassTimer, transfer};
-use gbuffer::{Frame, GBuffer, Image, gpu::GBufferTextures, gpu::UploadedGBuffer};
+use gbuffer::gpu::{GBUFFER_BINDINGS, GBufferTextures, UploadedGBuffer};
+use gbuffer::{Frame, GBuffer, Image};
 use glam::{Vec3, Vec4};
 use scene::Camera;
 
@@ -124,17 +125,10 @@ impl LightShading {
                 "shade_tiles",
             )
         };
-        let mut bindings = vec![
-            Binding::Uniform,
-            Binding::Uniform,
-            Binding::StorageRead,
-            Binding::TextureUnfilterable,
-            Binding::TextureUint,
-            Binding::TextureUnfilterable,
-            Binding::TextureUint,
-            Binding::StorageTexture(ACCUMULATION_FORMAT),
-            Binding::StorageTexture(ACCUMULATION_FORMAT),
-        ];
+        // Frame, params, lights; the G-buffer; diffuse and specular outputs; lists (tiled).
+        let mut bindings = vec![Binding::Uniform, Binding::Uniform, Binding::StorageRead];
+        bindings.extend(GBUFFER_BINDINGS);
+        bindings.extend([Binding::StorageTexture(ACCUMULATION_FORMAT); 2]);
         if config.method != Method::BruteForce {
             bindings.extend([Binding::Storage, Binding::Storage]);
         }

@@ -24,7 +24,7 @@ use ::gpu::kernel::{Binding, Kernel, Passes, Workgroups};
 use ::gpu::{Gpu, PassTimer, transfer, wgpu};
 use gbuffer::{
     Frame, GBuffer, Image,
-    gpu::{GBufferTextures, UploadedGBuffer},
+    gpu::{GBUFFER_BINDINGS, GBufferTextures, UploadedGBuffer},
 };
 use half::f16;
 use interleave::{
@@ -57,21 +57,15 @@ const USAGE: wgpu::TextureUsages = wgpu::TextureUsages::TEXTURE_BINDING
     .union(wgpu::TextureUsages::COPY_SRC)
     .union(wgpu::TextureUsages::COPY_DST);
 
-/// `vpl_shading.wgsl`: frame, params, VPLs; linear depth, normal, albedo, material; diffuse and
-/// specular outputs; shadow atlas and its parameters.
-const VPL_SHADING_BINDINGS: [Binding; 11] = [
-    Binding::Uniform,
-    Binding::Uniform,
-    Binding::StorageRead,
-    Binding::TextureUnfilterable,
-    Binding::TextureUint,
-    Binding::TextureUnfilterable,
-    Binding::TextureUint,
-    Binding::StorageTexture(IRRADIANCE_FORMAT),
-    Binding::StorageTexture(IRRADIANCE_FORMAT),
-    Binding::StorageRead,
-    Binding::Uniform,
-];
+/// `vpl_shading.wgsl`: frame, params, VPLs; the G-buffer; diffuse and specular outputs;
+/// shadow atlas and its parameters.
+fn vpl_shading_bindings() -> Vec<Binding> {
+    let mut bindings = vec![Binding::Uniform, Binding::Uniform, Binding::StorageRead];
+    bindings.extend(GBUFFER_BINDINGS);
+    bindings.extend([Binding::StorageTexture(IRRADIANCE_FORMAT); 2]);
+    bindings.extend([Binding::StorageRead, Binding::Uniform]);
+    bindings
+}
 
 fn irradiance(device: &wgpu::Device, label: &str, (w, h): (u32, u32)) -> wgpu::Texture {
     transfer::texture_2d(device, label, w, h, IRRADIANCE_FORMAT, USAGE)
@@ -149,7 +143,7 @@ impl IndirectStage {
             Interleaving::Fused => "shade_fused",
             _ => "shade_split",
         };
-        let kernel = Kernel::new(device, &module, entry, &VPL_SHADING_BINDINGS, &constants);
+        let kernel = Kernel::new(device, &module, entry, &vpl_shading_bindings(), &constants);
         let shading = |name: &str, g: [&wgpu::Texture; 4], out: [&wgpu::Texture; 2]| {
             let views = g.map(view);
             let outs = out.map(view);
