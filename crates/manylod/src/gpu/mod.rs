@@ -24,17 +24,23 @@
 //! let atlas = m.read_atlas(&gpu.device, &gpu.queue)?;
 //! # Ok::<(), manylod::ManyLodError>(())
 //! ```
+//!
+//! Modules follow the WGSL files: the refit in `gpu/refit.rs`, the ISM baseline in `gpu/ism.rs`; the
+//! cut, splat and in-place kernels share [`GpuManyLod`]'s buffers and live here.
 
+use crate::{
+    AtlasLayout, Bsh, Cut, ManyLodError, Node, NodeView, View,
+    cut::{CULLED, CutProblem},
+};
 use ::gpu::kernel::{Binding, Dispatch, Kernel, Passes, Workgroups};
 use ::gpu::{PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
 
-use crate::{
-    AtlasLayout, Bsh, Cut, ManyLodError, Node, NodeView, Surfel, View,
-    cut::{CULLED, CutProblem},
-    surfels::check_mesh,
-};
+mod ism;
+mod refit;
+
+pub use ism::GpuIsm;
+pub use refit::GpuRefit;
 
 /// Which cut a frame computes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,23 +92,6 @@ struct AtlasParams {
     cut_slot: u32,
     far: f32,
     _pad: [u32; 3],
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct RefitParams {
-    first: u32,
-    count: u32,
-    leaves: u32,
-    leaf_radius: f32,
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct GpuSurfel {
-    s: f32,
-    t: f32,
-    triangle: u32,
 }
 
 // `cut.wgsl` modes and counter slots.
@@ -600,234 +589,5 @@ impl GpuManyLod {
     ) -> Result<Vec<Node>, ManyLodError> {
         let bytes = transfer::read_buffer(device, queue, &self.nodes)?;
         Ok(bytemuck::cast_slice(&bytes).to_vec())
-    }
-}
-
-/// The GPU refit (§3.5.3): surfels evaluated on the deformed mesh into the leaves, then one
-/// `merge` dispatch per level, bottom-up, into [`GpuManyLod::nodes`].
-pub struct GpuRefit {
-    leaves: Kernel,
-    merge: Kernel,
-    /// Mesh positions (`vec4<f32>`, `COPY_DST`): rewrite them after deformation.
-    pub positions: wgpu::Buffer,
-    leaves_bind: wgpu::BindGroup,
-    /// One bind group per level `l = depth − 1 … 0` with its node count.
-    levels: Vec<(wgpu::BindGroup, u32)>,
-    leaf_count: u32,
-    vertex_count: usize,
-}
-
-impl GpuRefit {
-    /// Sets up the refit of `m`'s nodes for `bsh` built over `surfels` of the mesh
-    /// `positions`/`indices`.
-    pub fn new(
-        device: &wgpu::Device,
-        m: &GpuManyLod,
-        bsh: &Bsh,
-        surfels: &[Surfel],
-        positions: &[Vec3],
-        indices: &[u32],
-    ) -> Result<Self, ManyLodError> {
-        check_mesh(positions, indices)?;
-        if surfels.len() != bsh.leaf_count() || m.depth != bsh.depth {
-            return Err(ManyLodError::Mismatch(format!(
-                "{} surfels for a tree of {} leaves",
-                surfels.len(),
-                bsh.leaf_count()
-            )));
-        }
-        let triangles = (indices.len() / 3) as u32;
-        if let Some(k) = surfels.iter().position(|s| s.triangle >= triangles) {
-            return Err(ManyLodError::Mismatch(format!(
-                "surfel {k}: triangle out of range"
-            )));
-        }
-        let module = crate::SHADERS.module(device, "refit.wgsl")?;
-        use Binding::{Storage as Rw, StorageRead as R, Uniform as U};
-        // refit.wgsl: nodes, refit parameters, surfels, order, positions, indices.
-        let leaves = Kernel::new(device, &module, "leaves", &[Rw, U, R, R, R, R], &[]);
-        let merge = Kernel::new(device, &module, "merge", &[Rw, U], &[]);
-        let gpu_surfels: Vec<GpuSurfel> = surfels
-            .iter()
-            .map(|s| GpuSurfel {
-                s: s.s,
-                t: s.t,
-                triangle: s.triangle,
-            })
-            .collect();
-        let storage = |label, bytes: &[u8]| {
-            transfer::buffer_init(device, label, bytes, STORAGE).map_err(ManyLodError::from)
-        };
-        let surfel_buffer = storage("manylod surfels", bytemuck::cast_slice(&gpu_surfels))?;
-        let order = storage("manylod order", bytemuck::cast_slice(&bsh.order))?;
-        let position_buffer = storage(
-            "manylod positions",
-            bytemuck::cast_slice(&transfer::vec4s(positions, 1.0)),
-        )?;
-        let index_buffer = storage("manylod indices", bytemuck::cast_slice(indices))?;
-        let n = bsh.leaf_count() as u32;
-        let params = |first: u32, count: u32| {
-            uniform(
-                device,
-                "manylod refit",
-                bytemuck::bytes_of(&RefitParams {
-                    first,
-                    count,
-                    leaves: n,
-                    leaf_radius: bsh.leaf_radius,
-                }),
-            )
-        };
-        let leaf_params = params(n - 1, n)?;
-        let leaves_bind = leaves.bind_buffers(
-            device,
-            &[
-                &m.nodes,
-                &leaf_params,
-                &surfel_buffer,
-                &order,
-                &position_buffer,
-                &index_buffer,
-            ],
-        );
-        let levels = (0..bsh.depth)
-            .rev()
-            .map(|l| {
-                let p = params((1 << l) - 1, 1 << l)?;
-                Ok((merge.bind_buffers(device, &[&m.nodes, &p]), 1u32 << l))
-            })
-            .collect::<Result<Vec<_>, ManyLodError>>()?;
-        Ok(Self {
-            leaves,
-            merge,
-            positions: position_buffer,
-            leaves_bind,
-            levels,
-            leaf_count: n,
-            vertex_count: positions.len(),
-        })
-    }
-
-    /// Uploads deformed mesh positions (same vertex count).
-    pub fn set_positions(
-        &self,
-        queue: &wgpu::Queue,
-        positions: &[Vec3],
-    ) -> Result<(), ManyLodError> {
-        if positions.len() != self.vertex_count {
-            return Err(ManyLodError::Mismatch(format!(
-                "{} positions for a mesh of {}",
-                positions.len(),
-                self.vertex_count
-            )));
-        }
-        if let Some(index) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(ManyLodError::NonFinite {
-                what: "position",
-                index,
-            });
-        }
-        queue.write_buffer(
-            &self.positions,
-            0,
-            bytemuck::cast_slice(&transfer::vec4s(positions, 1.0)),
-        );
-        Ok(())
-    }
-
-    /// Records the refit (one pass, timed as `refit`).
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        let (x, y) = groups(self.leaf_count);
-        let mut dispatches = vec![
-            self.leaves
-                .dispatch(&self.leaves_bind, Workgroups::Direct([x, y, 1])),
-        ];
-        dispatches.extend(self.levels.iter().map(|(bind, count)| {
-            let (x, y) = groups(*count);
-            self.merge.dispatch(bind, Workgroups::Direct([x, y, 1]))
-        }));
-        Passes::new()
-            .pass("refit", dispatches)
-            .encode(encoder, timer);
-    }
-}
-
-/// The imperfect-shadow-map baseline on the GPU ([`crate::splat::ism`]): a fixed list of
-/// random points per view splatted into [`GpuManyLod::atlas`] by the same splat kernel.
-pub struct GpuIsm {
-    bind: wgpu::BindGroup,
-    count: u32,
-}
-
-impl GpuIsm {
-    /// Uploads the ISM points `nodes` and their node-views `list` for the views of `m`.
-    pub fn new(
-        device: &wgpu::Device,
-        m: &GpuManyLod,
-        nodes: &[Node],
-        list: &[NodeView],
-    ) -> Result<Self, ManyLodError> {
-        if let Some(bad) = list
-            .iter()
-            .find(|nv| nv.node as usize >= nodes.len() || nv.view >= m.view_count)
-        {
-            return Err(ManyLodError::Mismatch(format!(
-                "ISM node-view {bad:?} outside {} points × {} views",
-                nodes.len(),
-                m.view_count
-            )));
-        }
-        let storage = |label, bytes: &[u8]| {
-            transfer::buffer_init(device, label, bytes, STORAGE).map_err(ManyLodError::from)
-        };
-        let node_buffer = storage("ism points", bytemuck::cast_slice(nodes))?;
-        let raw: Vec<[u32; 2]> = list.iter().map(|nv| [nv.node, nv.view]).collect();
-        let list_buffer = storage("ism list", bytemuck::cast_slice(&raw))?;
-        let mut counts = [0u32; 16];
-        counts[CUT_SLOTS[0] as usize] = list.len() as u32;
-        let counters = storage("ism counters", bytemuck::cast_slice(&counts))?;
-        let (w, _) = m.layout.size();
-        let params = uniform(
-            device,
-            "ism atlas",
-            bytemuck::bytes_of(&AtlasParams {
-                width: w,
-                tile: m.layout.tile,
-                columns: m.layout.columns,
-                cut_slot: CUT_SLOTS[0],
-                far: m.layout.far,
-                _pad: [0; 3],
-            }),
-        )?;
-        let bind = m.splat.bind_buffers(
-            device,
-            &[
-                &node_buffer,
-                &m.views,
-                &params,
-                &counters,
-                &list_buffer,
-                &m.atlas,
-            ],
-        );
-        Ok(Self {
-            bind,
-            count: list.len() as u32,
-        })
-    }
-
-    /// Records clearing `m`'s atlas and splatting the ISM points into it (one pass, `ism`).
-    pub fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        m: &GpuManyLod,
-        timer: Option<&PassTimer>,
-    ) {
-        let (x, y) = groups(self.count);
-        let dispatches = vec![
-            m.clear_dispatch(),
-            m.splat.dispatch(&self.bind, Workgroups::Direct([x, y, 1])),
-        ];
-        Passes::new().pass("ism", dispatches).encode(encoder, timer);
     }
 }
