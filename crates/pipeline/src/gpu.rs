@@ -102,13 +102,10 @@ fn composition_group(
 pub struct GpuRenderer {
     gbuffer_pass: GBufferPass,
     scene: GpuScene,
-    targets: GBufferTargets,
-    radiance: wgpu::Texture,
+    sized: SizedTargets,
     lights: Vec<GpuLight>,
     shading: LightShading,
     shading_bound: BoundShading,
-    direct: [wgpu::Texture; 2],
-    no_indirect: [wgpu::Texture; 2],
     composition: Kernel,
     composition_group: wgpu::BindGroup,
     ambient: wgpu::Buffer,
@@ -194,13 +191,10 @@ impl GpuRenderer {
         Ok(Self {
             gbuffer_pass,
             scene: gpu_scene,
-            targets: sized.targets,
-            radiance: sized.radiance,
+            sized,
             lights: gpu_lights,
             shading,
             shading_bound,
-            direct: sized.direct,
-            no_indirect: sized.no_indirect,
             composition,
             composition_group,
             ambient,
@@ -234,18 +228,12 @@ impl GpuRenderer {
     /// Rebinds the light accumulation and the composition to the current targets, lights,
     /// camera and indirect stage.
     fn rebind(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), RenderError> {
-        let sized = SizedTargets {
-            targets: self.targets.clone(),
-            radiance: self.radiance.clone(),
-            direct: self.direct.clone(),
-            no_indirect: self.no_indirect.clone(),
-        };
         let mut bound = Self::bind_shading(
             device,
             queue,
             &self.shading,
             &self.gbuffer_pass,
-            &sized,
+            &self.sized,
             &self.lights,
         )?;
         if let Some(camera) = &self.camera {
@@ -260,16 +248,16 @@ impl GpuRenderer {
     fn bind_composition(&mut self, device: &wgpu::Device) {
         let indirect = match &self.indirect {
             Some((stage, _, _)) => stage.output(),
-            None => [&self.no_indirect[0], &self.no_indirect[1]],
+            None => [&self.sized.no_indirect[0], &self.sized.no_indirect[1]],
         };
         self.composition_group = composition_group(
             device,
             &self.composition,
             &self.ambient,
             &self.scene.materials,
-            &self.targets,
-            [&self.direct[0], &self.direct[1]],
-            &self.radiance,
+            &self.sized.targets,
+            [&self.sized.direct[0], &self.sized.direct[1]],
+            &self.sized.radiance,
             indirect,
         );
     }
@@ -307,7 +295,7 @@ impl GpuRenderer {
     /// Sets the camera of the following frames (validated: finite, positive field of view).
     pub fn set_camera(&mut self, queue: &wgpu::Queue, camera: &Camera) -> Result<(), RenderError> {
         gbuffer::validate_camera(camera)?;
-        let frame = Frame::new(camera, self.targets.width, self.targets.height);
+        let frame = Frame::new(camera, self.sized.targets.width, self.sized.targets.height);
         self.gbuffer_pass.write_frame(queue, &frame);
         self.shading_bound.set_camera(queue, camera);
         self.camera = Some(*camera);
@@ -329,10 +317,7 @@ impl GpuRenderer {
         height: u32,
     ) -> Result<(), RenderError> {
         let sized = SizedTargets::new(device, width, height)?;
-        self.targets = sized.targets;
-        self.radiance = sized.radiance;
-        self.direct = sized.direct;
-        self.no_indirect = sized.no_indirect;
+        self.sized = sized;
         if let Some((_, config, set)) = self.indirect.take() {
             self.set_indirect(device, &config, &set)?;
         }
@@ -345,7 +330,7 @@ impl GpuRenderer {
 
     /// The frame size.
     pub fn size(&self) -> (u32, u32) {
-        (self.targets.width, self.targets.height)
+        (self.sized.targets.width, self.sized.targets.height)
     }
 
     /// The light accumulation stage.
@@ -373,7 +358,7 @@ impl GpuRenderer {
         let stage = IndirectStage::new(
             device,
             self.gbuffer_pass.frame_buffer(),
-            (&self.targets).into(),
+            (&self.sized.targets).into(),
             config,
             set,
             self.vpl_shadows.as_ref(),
@@ -412,13 +397,13 @@ impl GpuRenderer {
 
     /// The G-buffer targets (read them back with [`GBufferTargets::read`] after a frame).
     pub fn targets(&self) -> &GBufferTargets {
-        &self.targets
+        &self.sized.targets
     }
 
     /// The frame's linear radiance ([`RADIANCE_FORMAT`], `TEXTURE_BINDING | COPY_SRC`): sample,
     /// copy or tone-map it into a surface after submitting [`GpuRenderer::encode`].
     pub fn output(&self) -> &wgpu::Texture {
-        &self.radiance
+        &self.sized.radiance
     }
 
     /// Records one frame into `encoder`, each pass timed (read with
@@ -431,7 +416,7 @@ impl GpuRenderer {
         self.gbuffer_pass.encode_with_prepass(
             encoder,
             &self.scene,
-            &self.targets,
+            &self.sized.targets,
             self.timer.render_pass("z-prepass"),
             self.timer.render_pass("gbuffer"),
         );
@@ -502,7 +487,7 @@ impl GpuRenderer {
     ) -> Result<Rendered, RenderError> {
         let timings = self.time_frame(device, queue, camera, ambient)?;
         Ok(Rendered {
-            image: read_radiance(device, queue, &self.radiance)?,
+            image: read_radiance(device, queue, &self.sized.radiance)?,
             timings,
         })
     }
