@@ -2,14 +2,17 @@
 //!
 //! - `cargo xtask test [ARGS]`: makes sure a Vulkan driver exists (installs Mesa's software
 //!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found), then runs the
-//!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`), builds
-//!   every benchmark and example, and runs every `*-embed` example (each crate in a device
-//!   the example creates itself at `wgpu::Limits::default()` plus the crate's stated needs).
+//!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`), runs every
+//!   benchmark once (`cargo test --bench "*"`: the GPU benches' run-once mode at reduced sizes on
+//!   any adapter, criterion's test mode), builds every example, and runs every `*-embed`
+//!   example (each crate in a device the example creates itself at `wgpu::Limits::default()`
+//!   plus the crate's stated needs).
 //! - `cargo xtask bench [ARGS]`: runs every GPU benchmark (the `*-gpu` bench targets beside
 //!   their crates, on the `deferred-bench` harness; reports under docs/bench/) with `ARGS`,
 //!   then the CPU criterion benches.
 //! - `cargo xtask bench-bins [DIR]`: builds every GPU benchmark and copies its executable to
 //!   `DIR/<name>` (default `.gpu-bin`), to carry to a machine without Rust (the lent GPU).
+//!   Start them there with `--bench` (without it they run once at reduced sizes, as in tests).
 //! - `cargo xtask package-check`: packages every library crate (`cargo package --no-verify`),
 //!   unpacks `deferred-interleave` and `deferred-tiled-shading` with the toolkit crates they
 //!   depend on, and builds and runs a throwaway crate outside the workspace that depends on the
@@ -120,14 +123,10 @@ fn main() -> Result<()> {
             run(cargo()
                 .args(["test", "--workspace", "--release"])
                 .args(&rest))?;
-            // Benchmarks and examples build on every run, so they cannot rot unseen.
-            run(cargo().args([
-                "build",
-                "--release",
-                "--workspace",
-                "--benches",
-                "--examples",
-            ]))?;
+            // Every benchmark runs once (GPU benches in their run-once mode, criterion benches
+            // in its test mode) and every example builds, so none can rot unseen.
+            run(cargo().args(["test", "--release", "--workspace", "--bench", "*"]))?;
+            run(cargo().args(["build", "--release", "--workspace", "--examples"]))?;
             // The workspace build's executables: `cargo run -p` would rebuild with other features.
             for (_, example) in targets("example", "-embed")? {
                 run(&mut Command::new(

@@ -141,17 +141,18 @@ fn main() -> Result<()> {
     }
     println!("adapter: {}", gpu.describe());
     let timer = PassTimer::new(&gpu.device, 16);
-    let sizes: &[(u32, u32)] = if args.quick {
+    let quick = args.quick || bench::run_once();
+    let sizes: &[(u32, u32)] = if quick {
         &[(1024, 768)]
     } else {
         &[(1024, 768), (1920, 1080)]
     };
-    let ms_list: &[u32] = if args.quick { &[4] } else { &[2, 3, 4] };
-    let stalls: &[u32] = if args.quick { &[1] } else { &[1, STALL] };
+    let ms_list: &[u32] = if quick { &[4] } else { &[2, 3, 4] };
+    let stalls: &[u32] = if quick { &[1] } else { &[1, STALL] };
     let nd = Some(GeometricMetric::NormalDepth);
     let mut methods: Vec<(String, Option<GeometricMetric>, bool, Resolve, f32)> =
         vec![("ND+shading".into(), nd, true, Resolve::Loop, 1.0)];
-    if !args.quick {
+    if !quick {
         methods.push(("ND+shading sorted".into(), nd, true, Resolve::Sorted, 1.0));
         methods.extend(
             GeometricMetric::ALL
@@ -166,9 +167,9 @@ fn main() -> Result<()> {
     );
     let mut rows = Vec::new();
     let mut gbuffer_times = Vec::new();
-    for (name, scene, camera) in scenes(args.quick)? {
+    for (name, scene, camera) in scenes(quick)? {
         let lights = lights(&scene)?;
-        for &(w, h) in sizes {
+        for (w, h) in sizes.iter().copied().map(bench::size) {
             for &m in ms_list {
                 let base = SsaaConfig {
                     m,
@@ -282,7 +283,7 @@ fn main() -> Result<()> {
                             && m == 4
                             && stall == 1
                             && label == "ND+shading")
-                            || (args.quick && label == "ND+shading");
+                            || (quick && label == "ND+shading");
                         if let (Some(dir), true) = (&args.images, pictures) {
                             write_pictures(dir, &name, m, &full, &out)?;
                         }
@@ -334,7 +335,7 @@ fn main() -> Result<()> {
         rows,
     };
     let stem = report.header.file_stem("adaptive-ssaa-");
-    bench::write_report(&args.out, &stem, &report, &md)
+    bench::write_report(&bench::out_dir(&args.out), &stem, &report, &md)
 }
 
 fn write_pictures(

@@ -42,6 +42,48 @@ pub fn args() -> impl Iterator<Item = String> {
     std::env::args().filter(|a| a != "--bench")
 }
 
+/// Run-once mode: the program was started without `--bench`, as `cargo test --benches` (and
+/// so `cargo xtask test` in CI) starts it, the convention criterion and wgpu's benches follow.
+/// Every measurement then runs one frame without warm-up at [`size`]d-down resolutions on any
+/// adapter, software included, and the report goes to a temporary folder ([`out_dir`]): the
+/// benchmark's code paths are exercised so it cannot rot, and nothing it prints is a
+/// measurement. `cargo bench` and `cargo xtask bench` pass `--bench`; pass it yourself when
+/// you start a benchmark executable directly.
+pub fn run_once() -> bool {
+    static RUN_ONCE: OnceLock<bool> = OnceLock::new();
+    *RUN_ONCE.get_or_init(|| {
+        let once = !std::env::args().any(|a| a == "--bench");
+        if once {
+            eprintln!(
+                "run-once mode (no --bench argument): one frame per measurement at reduced sizes; \
+                 the times are not measurements"
+            );
+        }
+        once
+    })
+}
+
+/// `(width, height)`, or in [run-once mode](run_once) an eighth of it rounded down to a
+/// multiple of 24 (at least 24), which every interleave pattern of the benchmarks divides.
+pub fn size((width, height): (u32, u32)) -> (u32, u32) {
+    let reduce = |v: u32| (v / 8 / 24).max(1) * 24;
+    if run_once() {
+        (reduce(width), reduce(height))
+    } else {
+        (width, height)
+    }
+}
+
+/// Where the reports go: `out`, or in [run-once mode](run_once) a folder under the system's
+/// temporary directory, so that a test run never overwrites a measured report.
+pub fn out_dir(out: &std::path::Path) -> std::path::PathBuf {
+    if run_once() {
+        std::env::temp_dir().join("deferred-bench-run-once")
+    } else {
+        out.to_path_buf()
+    }
+}
+
 /// Today's date (UTC) as YYYY-MM-DD, from the Unix clock (Hinnant's civil-from-days).
 pub fn today() -> String {
     let secs = std::time::SystemTime::now()
@@ -69,7 +111,7 @@ pub struct SoftwareAdapter(pub String);
 /// it also records the SM clock before any work ([`Header`]).
 pub fn require_hardware(gpu: &Gpu, allow_software: bool) -> Result<(), SoftwareAdapter> {
     clock_before();
-    if gpu.is_software() && !allow_software {
+    if gpu.is_software() && !allow_software && !run_once() {
         return Err(SoftwareAdapter(gpu.info.name.clone()));
     }
     Ok(())

@@ -28,11 +28,15 @@ pub fn orbiting_spot(bounds: &scene::Aabb, angle: f32) -> scene::Light {
 
 /// Runs `frame` for a warm-up of at least 10 frames and 300 ms of back-to-back work, so that
 /// the GPU has left the idle clocks it drops to while the CPU prepares a configuration, then
-/// `frames` more times, and returns those frames' results.
+/// `frames` more times, and returns those frames' results ([run-once mode](crate::run_once):
+/// one frame, no warm-up).
 pub fn warm_then_time<T, E>(
     frames: u32,
     mut frame: impl FnMut() -> Result<T, E>,
 ) -> Result<Vec<T>, E> {
+    if crate::run_once() {
+        return frame().map(|t| vec![t]);
+    }
     let start = std::time::Instant::now();
     let mut warm = 0;
     while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {

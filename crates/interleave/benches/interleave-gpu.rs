@@ -287,7 +287,7 @@ fn main() -> Result<()> {
     let mut copy = Vec::new();
     let mut sweep = Vec::new();
     let mut split = Vec::new();
-    for size in [(1024, 1024), SIZES[0], SIZES[1]] {
+    for size in [(1024, 1024), SIZES[0], SIZES[1]].map(bench::size) {
         let image = bench.random_texture("gbuffer", size, FORMAT)?;
         let copy_ms = bench.copy(&image)?;
         // The 1×1 pattern's one-pass split is an identity copy through a compute kernel.
@@ -392,7 +392,7 @@ fn main() -> Result<()> {
     }
 
     // 3: blur (Table 2) and discontinuity buffer.
-    let (w, h) = (1280, 1024);
+    let (w, h) = bench::size((1280, 1024));
     let (depth, normals) = scene_gbuffer(w, h)?;
     let depth_t = upload_image(
         &gpu.device,
@@ -445,7 +445,7 @@ fn main() -> Result<()> {
 
     // 4: split + shade + gather against the fused indirection.
     let mut shading = Vec::new();
-    for size in SIZES {
+    for size in SIZES.map(bench::size) {
         let (depth, normals) = scene_gbuffer(size.0, size.1)?;
         let depth_t = upload_image(
             &gpu.device,
@@ -533,7 +533,7 @@ fn main() -> Result<()> {
         discontinuity,
         shading,
     };
-    write_report(&args.out, &report)
+    write_report(&bench::out_dir(&args.out), &report)
 }
 
 /// Figure 5: two-pass split time against block side, one line per pattern.

@@ -169,7 +169,7 @@ fn main() -> Result<()> {
     let pass = GBufferPass::new(&gpu.device)?;
     let gpu_scene = GpuScene::upload(&gpu.device, &gpu.queue, &scene, &pass)?;
     let mut results = Vec::new();
-    for size in [(1920, 1080), (3840, 2160)] {
+    for size in [(1920, 1080), (3840, 2160)].map(bench::size) {
         let r = bench_gbuffer(&gpu, &scene, &gpu_scene, &pass, &camera, size, args.frames)?;
         println!(
             "gbuffer {}x{}: {:.3} ms (min {:.3}); clear {:.3} ms; copy {:.3} ms; ×{:.2} clear, ×{:.2} copy; z-prepass path {:.3} ms (×{:.2})",
@@ -200,7 +200,7 @@ fn main() -> Result<()> {
         frames: args.frames,
         gbuffer: results,
     };
-    write_report(&args.out, &report)
+    write_report(&bench::out_dir(&args.out), &report)
 }
 
 fn write_report(dir: &std::path::Path, r: &Report) -> Result<()> {

@@ -123,14 +123,14 @@ fn main() -> Result<()> {
     let bvh = Bvh::build(&scene);
     let bounds = scene.bounds();
 
-    let (sizes, counts, patterns) = if args.quick {
+    let (sizes, counts, patterns) = if args.quick || bench::run_once() {
         (&SIZES[..1], &VPLS[..1], &PATTERNS[..1])
     } else {
         (&SIZES[..], &VPLS[..], &PATTERNS[..])
     };
     let mut rows = Vec::new();
     let mut qualities = Vec::new();
-    for &(w, h) in sizes {
+    for (w, h) in sizes.iter().copied().map(bench::size) {
         // Indirect light only: no direct lights, no ambient (the direct sun would hide errors).
         let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, &scene, &[], w, h)?;
         for &count in counts {
@@ -233,7 +233,12 @@ fn main() -> Result<()> {
         quality: qualities,
     };
     let stem = report.header.file_stem("indirect-");
-    bench::write_report(&args.out, &stem, &report, &markdown(&report))?;
+    bench::write_report(
+        &bench::out_dir(&args.out),
+        &stem,
+        &report,
+        &markdown(&report),
+    )?;
     Ok(())
 }
 

@@ -122,14 +122,14 @@ fn main() -> Result<()> {
         path.display(),
         scene.triangle_count()
     );
-    let (sizes, counts, tests) = if args.quick {
+    let (sizes, counts, tests) = if args.quick || bench::run_once() {
         (&SIZES[..1], &LIGHTS[..1], &TESTS[..1])
     } else {
         (&SIZES[..], &LIGHTS[..], &TESTS[..])
     };
 
     let mut sweep = Vec::new();
-    for &(w, h) in sizes {
+    for (w, h) in sizes.iter().copied().map(bench::size) {
         let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, &scene, &[], w, h)?;
         for &count in counts {
             let lights = scene::scatter_point_lights(scene.bounds(), count, 1);
@@ -163,7 +163,7 @@ fn main() -> Result<()> {
     for &(test, behind) in tests {
         let walls = scene::thesis_walls(behind);
         let cam = walls.camera.unwrap_or_else(|| walls.camera_or_framed());
-        for &(w, h) in &TEST_SIZES {
+        for (w, h) in TEST_SIZES.map(bench::size) {
             let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, &walls, &[], w, h)?;
             for frustum_culling in [true, false] {
                 let all = pipeline::validate_lights(&walls.lights)?;
@@ -211,7 +211,12 @@ fn main() -> Result<()> {
         tests: rows,
     };
     let stem = report.header.file_stem("tiled-shading-");
-    bench::write_report(&args.out, &stem, &report, &markdown(&report))?;
+    bench::write_report(
+        &bench::out_dir(&args.out),
+        &stem,
+        &report,
+        &markdown(&report),
+    )?;
     Ok(())
 }
 

@@ -94,10 +94,12 @@ fn main() -> Result<()> {
     let timer = PassTimer::new(&gpu.device, 8);
     let mut rows = Vec::new();
     let mut adaptive = Vec::new();
+    // Run-once mode (a test, not a measurement) stops at level 2.
+    let top = |level: u32| if bench::run_once() { 2 } else { level };
     for (name, file, levels) in [
-        ("fandisk", "subdiv/fandisk.obj", 2..=5),
-        ("spot", "subdiv/spot/spot_triangulated.obj", 2..=5),
-        ("bunny", "stanford/stanford-bunny.obj", 2..=4),
+        ("fandisk", "subdiv/fandisk.obj", 2..=top(5)),
+        ("spot", "subdiv/spot/spot_triangulated.obj", 2..=top(5)),
+        ("bunny", "stanford/stanford-bunny.obj", 2..=top(4)),
     ] {
         let mesh = ObjMesh::read(&fixtures.join(file))?.into_mesh()?;
         let sub = Subdivider::new(&mesh.topology, &bft)?;
@@ -234,7 +236,7 @@ fn main() -> Result<()> {
         adaptive,
     };
     let stem = report.header.file_stem("subdiv-bft-");
-    bench::write_report(&args.out, &stem, &report, &md)
+    bench::write_report(&bench::out_dir(&args.out), &stem, &report, &md)
 }
 
 /// Adaptive rows of one mesh: screen-space factors for 4, 2 and 1 pixel edges.
@@ -247,13 +249,14 @@ fn bench_adaptive(
     sub: &Subdivider,
     g: &GpuSubdivider,
 ) -> Result<Vec<AdaptiveRow>> {
-    let max_level = 6;
-    let viewport = (1920, 1080);
+    let max_level = if bench::run_once() { 3 } else { 6 };
+    let viewport = bench::size((1920, 1080));
     let bounds = mesh
         .positions_f32()
         .iter()
         .fold(scene::Aabb::EMPTY, |b, &p| b.grow(p));
-    let view_proj = scene::Camera::framing(bounds).view_projection(1920.0 / 1080.0);
+    let view_proj =
+        scene::Camera::framing(bounds).view_projection(viewport.0 as f32 / viewport.1 as f32);
     let a = g.adaptive(&gpu.device, sub, max_level)?;
     let uniform = g.level(&gpu.device, sub, max_level)?;
     let uniform_max = bench::time_encoded(gpu, timer, frames, false, &|e, t| {
