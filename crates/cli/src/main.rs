@@ -9,15 +9,13 @@ use std::path::PathBuf;
 use anyhow::{Context, Result, bail};
 use clap::Parser;
 use glam::Vec3;
-use interleave::{Block, Blur, BlurVariant, Pattern, SplitVariant};
-use pipeline::{
-    DEFAULT_AMBIENT, PassTiming, Rendered,
-    indirect::{
-        IndirectConfig, IndirectStages, Interleaving,
-        shadows::{ShadowConfig, VplShadows},
-        vpl,
-    },
+use instant_radiosity::{
+    IndirectConfig, IndirectStages, Interleaving,
+    shadows::{ShadowConfig, VplShadows},
+    vpl,
 };
+use interleave::{Block, Blur, BlurVariant, Pattern, SplitVariant};
+use pipeline::{DEFAULT_AMBIENT, PassTiming, Rendered};
 use scene::{Light, Scene};
 
 /// Deferred shading of point, spot, hemispherical and directional lights, with optional
@@ -931,7 +929,7 @@ impl From<ShadowMode> for VplShadows {
 fn write_shadow_atlas(
     args: &Args,
     gpu: &gpu::Gpu,
-    shadows: &pipeline::indirect::shadows::VplShadowMaps,
+    shadows: &instant_radiosity::shadows::VplShadowMaps,
 ) -> Result<()> {
     let m = shadows.manylod();
     let (w, h) = m.layout().size();

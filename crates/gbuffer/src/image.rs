@@ -143,6 +143,36 @@ impl Image<[f32; 4]> {
         })
     }
 
+    /// Writes `expected.png` (`self`), `actual.png` and `difference.png` (10× the absolute
+    /// difference, RGBA) into `dir`, creating it: what a failed image comparison leaves to
+    /// look at. Returns `dir` as text for the failure message; a failed write says why there.
+    pub fn write_comparison(&self, actual: &Self, dir: &Path) -> String {
+        let diff = self
+            .data
+            .iter()
+            .zip(&actual.data)
+            .map(|(a, b)| [0, 1, 2, 3].map(|c| ((a[c] - b[c]).abs() * 10.0).min(1.0)))
+            .collect();
+        let write = || -> Result<(), String> {
+            std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+            let diff = Image::from_vec(self.width, self.height, diff).map_err(|e| e.to_string())?;
+            for (file, image) in [
+                ("expected", self),
+                ("actual", actual),
+                ("difference", &diff),
+            ] {
+                image
+                    .write_png(&dir.join(format!("{file}.png")))
+                    .map_err(|e| e.to_string())?;
+            }
+            Ok(())
+        };
+        match write() {
+            Ok(()) => dir.display().to_string(),
+            Err(e) => format!("{} (not written: {e})", dir.display()),
+        }
+    }
+
     /// Writes linear RGBA as a 32-bit float OpenEXR file.
     pub fn write_exr(&self, path: &Path) -> Result<(), ImageError> {
         let w = self.width as usize;

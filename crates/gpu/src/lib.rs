@@ -25,7 +25,7 @@ mod timer;
 pub mod transfer;
 
 pub use device::{DeviceNeeds, Gpu, OPTIONAL_FEATURES, test_device};
-pub use timer::{PassTime, PassTimer};
+pub use timer::{PassTime, PassTimer, PassTiming};
 pub use wgpu;
 
 /// Everything that can go wrong while talking to the GPU.

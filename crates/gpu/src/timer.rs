@@ -22,6 +22,16 @@ impl PassTime {
     }
 }
 
+/// Time one pass of a frame took, as renderers report it: GPU timestamps on a GPU path, wall
+/// clock on a CPU path.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassTiming {
+    /// Pass name.
+    pub name: String,
+    /// Milliseconds.
+    pub ms: f64,
+}
+
 /// Records a begin and an end timestamp around each named pass and reports milliseconds.
 ///
 /// When the device lacks `TIMESTAMP_QUERY` the timer is disabled: the pass hooks return

@@ -17,11 +17,9 @@ use clap::Parser;
 use common::time_passes;
 use glam::Vec3;
 use gpu::Gpu;
+use instant_radiosity::{IndirectConfig, Interleaving, vpl};
 use interleave::{Blur, BlurVariant, Pattern, SplitVariant};
-use pipeline::{
-    gpu::GpuRenderer,
-    indirect::{IndirectConfig, Interleaving, vpl},
-};
+use pipeline::gpu::GpuRenderer;
 use scene::{Bvh, Scene};
 use serde::Serialize;
 

@@ -13,14 +13,14 @@ use anyhow::Result;
 use bench::Stat;
 use clap::Parser;
 use gpu::{Gpu, PassTimer};
+use instant_radiosity::{
+    shadows::{scene_mesh, vpl_atlas, vpl_views},
+    vpl,
+};
 use manylod::{
     Bsh, ManyLodError, View,
     gpu::{Compaction, CutKind, GpuIsm, GpuManyLod, GpuRefit},
     splat, surfels,
-};
-use pipeline::indirect::{
-    shadows::{scene_mesh, vpl_atlas, vpl_views},
-    vpl,
 };
 use scene::{Bvh, Scene};
 use serde::Serialize;

@@ -12,11 +12,11 @@ use anyhow::{Context, Result};
 use clap::Parser;
 use gbuffer::Image;
 use glam::{Mat4, Vec3, Vec4Swizzles};
-use manylod::{Bsh, CutProblem, View, bsh::level, cut, surfels};
-use pipeline::indirect::{
+use instant_radiosity::{
     shadows::{scene_mesh, vpl_views},
     vpl,
 };
+use manylod::{Bsh, CutProblem, View, bsh::level, cut, surfels};
 use rayon::prelude::*;
 use scene::{Bvh, Scene};
 

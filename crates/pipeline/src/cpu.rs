@@ -8,8 +8,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 use scene::{Camera, Light, Scene};
 
-use crate::indirect::{IndirectConfig, IndirectStages, vpl::VplSet};
 use crate::{PassTiming, RenderError, Rendered, ShadingConfig};
+use instant_radiosity::{IndirectConfig, IndirectStages, vpl::VplSet};
 
 pub use tiled_shading::lighting::{
     distance_attenuation, light_incidence, reflect_light, shade_light,
@@ -111,7 +111,7 @@ pub fn render_indirect(
         t,
     );
     let stages = indirect
-        .map(|(config, set)| crate::indirect::cpu::indirect(&gb, &frame, set, config))
+        .map(|(config, set)| instant_radiosity::cpu::indirect(&gb, &frame, set, config))
         .transpose()?;
     if let Some(stages) = &stages {
         timings.extend(stages.timings.iter().cloned());

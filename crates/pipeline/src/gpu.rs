@@ -12,13 +12,13 @@ use glam::{Vec3, Vec4};
 use scene::{Camera, Light, Scene};
 use wgpu::util::DeviceExt;
 
-use crate::indirect::{
+use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
+use instant_radiosity::{
     IndirectConfig,
-    gpu::IndirectStage,
+    gpu::{BoundIndirect, IndirectStage},
     shadows::{ShadowConfig, VplShadowMaps, VplShadows},
     vpl::VplSet,
 };
-use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
 use tiled_shading::gpu::{ACCUMULATION_FORMAT, BoundShading, LightShading};
 
 fn view(t: &wgpu::Texture) -> wgpu::TextureView {
@@ -110,9 +110,20 @@ pub struct GpuRenderer {
     composition_group: wgpu::BindGroup,
     ambient: wgpu::Buffer,
     camera: Option<Camera>,
-    indirect: Option<(IndirectStage, IndirectConfig, VplSet)>,
+    indirect: Option<Indirect>,
     vpl_shadows: Option<VplShadowMaps>,
     timer: PassTimer,
+}
+
+/// The indirect stage as the renderer holds it: its pipelines for the frame size, their
+/// binding to the G-buffer and VPLs, the output textures the composition reads, and what it
+/// was made from (to rebuild it on a resize).
+struct Indirect {
+    stage: IndirectStage,
+    bound: BoundIndirect,
+    outputs: [wgpu::Texture; 2],
+    config: IndirectConfig,
+    set: VplSet,
 }
 
 /// Textures of one frame size: G-buffer targets, radiance, direct light, no indirect light.
@@ -247,7 +258,7 @@ impl GpuRenderer {
     /// Rebinds the composition to the current targets and indirect stage.
     fn bind_composition(&mut self, device: &wgpu::Device) {
         let indirect = match &self.indirect {
-            Some((stage, _, _)) => stage.output(),
+            Some(i) => [&i.outputs[0], &i.outputs[1]],
             None => [&self.sized.no_indirect[0], &self.sized.no_indirect[1]],
         };
         self.composition_group = composition_group(
@@ -318,7 +329,7 @@ impl GpuRenderer {
     ) -> Result<(), RenderError> {
         let sized = SizedTargets::new(device, width, height)?;
         self.sized = sized;
-        if let Some((_, config, set)) = self.indirect.take() {
+        if let Some(Indirect { config, set, .. }) = self.indirect.take() {
             self.set_indirect(device, &config, &set)?;
         }
         self.rebind(device, queue)?;
@@ -355,15 +366,23 @@ impl GpuRenderer {
         config: &IndirectConfig,
         set: &VplSet,
     ) -> Result<(), RenderError> {
-        let stage = IndirectStage::new(
+        let stage = IndirectStage::new(device, config, self.size())?;
+        let outputs = stage.output_textures(device);
+        let bound = stage.bind(
             device,
             self.gbuffer_pass.frame_buffer(),
             (&self.sized.targets).into(),
-            config,
             set,
             self.vpl_shadows.as_ref(),
+            outputs.each_ref(),
         )?;
-        self.indirect = Some((stage, *config, set.clone()));
+        self.indirect = Some(Indirect {
+            stage,
+            bound,
+            outputs,
+            config: *config,
+            set: set.clone(),
+        });
         self.bind_composition(device);
         Ok(())
     }
@@ -390,9 +409,10 @@ impl GpuRenderer {
         self.vpl_shadows.as_ref()
     }
 
-    /// The indirect stage, if one was set.
-    pub fn indirect(&self) -> Option<&IndirectStage> {
-        self.indirect.as_ref().map(|(stage, _, _)| stage)
+    /// The bound indirect stage, if one was set (read its stages back with
+    /// [`BoundIndirect::read`] after a frame).
+    pub fn indirect(&self) -> Option<&BoundIndirect> {
+        self.indirect.as_ref().map(|i| &i.bound)
     }
 
     /// The G-buffer targets (read them back with [`GBufferTargets::read`] after a frame).
@@ -427,8 +447,8 @@ impl GpuRenderer {
         }
         self.shading
             .encode(&self.shading_bound, encoder, Some(&self.timer));
-        if let Some((stage, _, _)) = &self.indirect {
-            stage.encode(encoder, Some(&self.timer));
+        if let Some(i) = &self.indirect {
+            i.stage.encode(&i.bound, encoder, Some(&self.timer));
         }
         let (w, h) = self.size();
         Passes::one(

@@ -20,7 +20,6 @@
 
 pub mod cpu;
 pub mod gpu;
-pub mod indirect;
 
 use gbuffer::Image;
 use glam::Vec3;
@@ -34,31 +33,25 @@ pub use tiled_shading::{GpuLight, Method as ShadingMethod, ShadingConfig};
 /// This crate's WGSL (`shaders/pipeline/`, carried into the package by the `shaders` link).
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "pipeline",
-    imports: [gbuffer::SHADERS, tiled_shading::SHADERS, manylod::SHADERS],
+    imports: [gbuffer::SHADERS],
     files: [
         "composition.wgsl",
-        "vpl_shading.wgsl",
     ],
 );
 
 /// What this crate's kernels need of a device: what every stage it composes needs.
 pub fn device_needs() -> ::gpu::DeviceNeeds {
     gbuffer::device_needs()
-        .and(&interleave::device_needs())
+        .and(&instant_radiosity::device_needs())
         .and(&tiled_shading::device_needs())
         .and(&adaptive_ssaa::device_needs())
         .and(&subdiv_bft::device_needs())
         .and(&manylod::device_needs())
 }
 
-/// Time one pass of a frame took.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PassTiming {
-    /// Pass name (`z-prepass` (GPU only), `gbuffer`, `light accumulation`, `composition`).
-    pub name: String,
-    /// Milliseconds: GPU timestamps on the GPU path, wall clock on the CPU path.
-    pub ms: f64,
-}
+/// Time one pass of a frame took (`z-prepass` (GPU only), `gbuffer`, `light accumulation`,
+/// `composition`, the indirect stages): GPU timestamps on the GPU path, wall clock on the CPU.
+pub use ::gpu::PassTiming;
 
 /// A rendered frame: linear radiance (alpha 1 where a surface is, 0 elsewhere) and timings.
 pub struct Rendered {
@@ -77,26 +70,9 @@ pub enum RenderError {
     /// A GPU resource could not be created or read.
     #[error(transparent)]
     Gpu(#[from] ::gpu::GpuError),
-    /// A bad interleaving pattern, blur, threshold or texture for the indirect stage.
+    /// The indirect-light stage failed (configuration, VPLs, visibility).
     #[error(transparent)]
-    Interleave(#[from] interleave::InterleaveError),
-    /// VPL generation failed.
-    #[error(transparent)]
-    Vpl(#[from] indirect::vpl::VplError),
-    /// The VPL shadow maps failed (ManyLoDs).
-    #[error(transparent)]
-    ManyLod(#[from] manylod::ManyLodError),
-    /// The VPL set has another number of subsets than the pattern has sub-buffers.
-    #[error("the VPLs come in {vpl_subsets} subsets but the pattern has {sub_buffers} sub-buffers")]
-    Subsets {
-        /// Subsets of the VPL set.
-        vpl_subsets: u32,
-        /// Sub-buffers n·m.
-        sub_buffers: u32,
-    },
-    /// The VPL clamp distance is negative or not finite.
-    #[error("the VPL clamp distance must be finite and >= 0, got {0}")]
-    Clamp(f32),
+    Indirect(#[from] instant_radiosity::IndirectError),
     /// The light accumulation failed (tile size, light buffer, GPU).
     #[error(transparent)]
     Shading(tiled_shading::ShadingError),

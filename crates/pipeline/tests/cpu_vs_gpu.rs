@@ -4,8 +4,17 @@ use glam::Vec3;
 use pipeline::{DEFAULT_AMBIENT, cpu, gpu::GpuRenderer, psnr};
 use scene::Light;
 
-mod common;
-use common::write_failure;
+/// Expected, actual and difference images of a failed comparison, under cargo's test folder.
+fn write_failure(
+    name: &str,
+    expected: &gbuffer::Image<[f32; 4]>,
+    actual: &gbuffer::Image<[f32; 4]>,
+) -> String {
+    expected.write_comparison(
+        actual,
+        &std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join(name),
+    )
+}
 
 fn check(name: &str, scene: &scene::Scene, lights: &[Light], w: u32, h: u32) {
     let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
@@ -115,7 +124,7 @@ fn energy_is_additive_over_lights() {
 /// against the CPU frame: ≥ 40 dB, and the indirect passes are timed under their names.
 #[test]
 fn cornell_box_with_indirect_light_gpu_matches_cpu() {
-    use pipeline::indirect::{IndirectConfig, vpl};
+    use instant_radiosity::{IndirectConfig, vpl};
     let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
         return;
     };

@@ -13,8 +13,8 @@ use manylod::{
 };
 use scene::Scene;
 
-use super::vpl::VplSet;
-use crate::RenderError;
+use crate::IndirectError;
+use crate::vpl::VplSet;
 
 /// Which VPL shadow maps the indirect light uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -83,7 +83,7 @@ impl VplShadowMaps {
         set: &VplSet,
         mode: VplShadows,
         config: &ShadowConfig,
-    ) -> Result<Self, RenderError> {
+    ) -> Result<Self, IndirectError> {
         let (positions, indices) = scene_mesh(scene);
         let count = 1usize << config.points_log2.min(26);
         let s = surfels::sample(&positions, &indices, count, 1)?;
@@ -162,7 +162,7 @@ impl VplShadowMaps {
 /// Stand-ins for the shading's shadow bindings when no shadow maps are used (visibility 1).
 pub fn disabled_bindings(
     device: &wgpu::Device,
-) -> Result<(wgpu::Buffer, wgpu::Buffer), RenderError> {
+) -> Result<(wgpu::Buffer, wgpu::Buffer), IndirectError> {
     let atlas = transfer::buffer(device, "no vpl shadows", 16, wgpu::BufferUsages::STORAGE)?;
     let params = transfer::buffer_init(
         device,

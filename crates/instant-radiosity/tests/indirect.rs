@@ -5,17 +5,12 @@ use std::f64::consts::PI;
 
 use gbuffer::{Frame, GBuffer, Image, normal::unpack_octahedral, position};
 use glam::{Vec3, Vec4};
-use interleave::{Block, Blur, BlurVariant, Pattern, SplitVariant};
-use pipeline::{
-    RenderError,
-    indirect::{
-        IndirectConfig, IndirectStages, Interleaving, cpu, gpu as igpu,
-        vpl::{self, VplConfig, VplError, VplSet},
-    },
+use instant_radiosity::{
+    IndirectConfig, IndirectError, IndirectStages, Interleaving, cpu, gpu as igpu,
+    vpl::{self, VplConfig, VplError, VplSet},
 };
+use interleave::{Block, Blur, BlurVariant, Pattern, SplitVariant};
 use scene::{Bvh, Camera, Light, Material, Mesh, Scene};
-
-mod common;
 
 fn quad(name: &str, corners: [Vec3; 4], material: u32) -> Mesh {
     let mut mesh = Mesh {
@@ -319,7 +314,7 @@ fn bad_configurations_are_errors() {
     c.pattern = Pattern { n: 2, m: 2 };
     assert!(matches!(
         cpu::indirect(&gb, &frame, &set, &c),
-        Err(RenderError::Subsets {
+        Err(IndirectError::Subsets {
             vpl_subsets: 16,
             sub_buffers: 4
         })
@@ -328,7 +323,7 @@ fn bad_configurations_are_errors() {
     c.clamp_distance = f32::NAN;
     assert!(matches!(
         cpu::indirect(&gb, &frame, &set, &c),
-        Err(RenderError::Clamp(_))
+        Err(IndirectError::Clamp(_))
     ));
     let mut c = config(&s, (4, 4), Interleaving::Fused, None);
     c.blur = Some(Blur {
@@ -337,7 +332,7 @@ fn bad_configurations_are_errors() {
     });
     assert!(matches!(
         cpu::indirect(&gb, &frame, &set, &c),
-        Err(RenderError::Interleave(_))
+        Err(IndirectError::Interleave(_))
     ));
 }
 
@@ -358,7 +353,7 @@ fn pattern_1x1_is_the_reference() {
         let c = config(&s, (1, 1), interleaving, None);
         let actual = cpu::indirect(&gb, &frame, &set, &c).expect("1x1");
         assert!(actual.diffuse == expected.diffuse && actual.specular == expected.specular);
-        if let Some(gpu) = gpu::test_device(&pipeline::device_needs()) {
+        if let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) {
             let g_ref = igpu::run(gpu, &gb, &frame, &set, &reference).expect("gpu reference");
             let g = igpu::run(gpu, &gb, &frame, &set, &c).expect("gpu 1x1");
             assert!(g.diffuse == g_ref.diffuse && g.specular == g_ref.specular);
@@ -423,7 +418,7 @@ fn each_pixel_sums_its_own_subset() {
     ] {
         let c = config(&s, (n, m), interleaving, None);
         check("cpu", &cpu::indirect(&gb, &frame, &set, &c).expect("cpu"));
-        if let Some(gpu) = gpu::test_device(&pipeline::device_needs()) {
+        if let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) {
             check("gpu", &igpu::run(gpu, &gb, &frame, &set, &c).expect("gpu"));
         }
     }
@@ -475,7 +470,7 @@ fn flat_plane_mean_matches_the_reference() {
 /// floor of 2⁻¹² of the image's maximum.
 #[test]
 fn gpu_indirect_stage_matches_cpu() {
-    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
+    let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) else {
         return;
     };
     let mut s = scene::cornell_box();
@@ -518,8 +513,75 @@ fn gpu_indirect_stage_matches_cpu() {
             assert!(
                 err <= 2f32.powi(-8),
                 "{interleaving:?} {what}: relative error {err}; images in {}",
-                common::write_failure(&format!("indirect-{what}"), w, g)
+                w.write_comparison(
+                    g,
+                    &std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+                        .join(format!("indirect-{what}"))
+                )
             );
         }
     }
+}
+
+/// `bind` checks what the caller gives it: outputs of another size or format, a G-buffer of
+/// another size and a VPL set of another subset count are errors naming the input, not wgpu
+/// validation panics later.
+#[test]
+fn bind_rejects_mismatched_inputs() {
+    let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) else {
+        return;
+    };
+    let d = &gpu.device;
+    let s = scene::cornell_box();
+    let cam = s.camera_or_framed();
+    let (frame, gb) = frame_and_gbuffer(&s, &cam, 32, 24);
+    let uploaded = gbuffer::gpu::UploadedGBuffer::new(d, &gpu.queue, &gb, &frame).expect("upload");
+    let c = config(&s, (4, 4), Interleaving::Fused, fast(5));
+    let set = vpls(&s, 64, 16, 0);
+    let stage = igpu::IndirectStage::new(d, &c, (32, 24)).expect("stage");
+    let good = stage.output_textures(d);
+    let bind = |outputs: [&gpu::wgpu::Texture; 2], set: &VplSet| {
+        stage
+            .bind(d, &uploaded.frame, uploaded.textures(), set, None, outputs)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    };
+    assert_eq!(bind(good.each_ref(), &set), Ok(()));
+    let small = igpu::IndirectStage::new(d, &c, (16, 12))
+        .expect("stage")
+        .output_textures(d);
+    let e = bind([&small[0], &good[1]], &set).expect_err("16×12 output");
+    assert!(
+        e.contains("indirect diffuse output") && e.contains("16×12"),
+        "{e}"
+    );
+    let rgba8 = gpu::transfer::texture_2d(
+        d,
+        "rgba8",
+        32,
+        24,
+        gpu::wgpu::TextureFormat::Rgba8Unorm,
+        gpu::wgpu::TextureUsages::STORAGE_BINDING,
+    );
+    let e = bind([&good[0], &rgba8], &set).expect_err("Rgba8 output");
+    assert!(
+        e.contains("indirect specular output") && e.contains("format"),
+        "{e}"
+    );
+    let e = bind(good.each_ref(), &vpls(&s, 64, 4, 0)).expect_err("4 subsets");
+    assert!(e.contains("4 subsets"), "{e}");
+    let other = igpu::IndirectStage::new(d, &c, (40, 24)).expect("stage");
+    let outputs = other.output_textures(d);
+    let e = other
+        .bind(
+            d,
+            &uploaded.frame,
+            uploaded.textures(),
+            &set,
+            None,
+            outputs.each_ref(),
+        )
+        .map(|_| ())
+        .expect_err("32×24 G-buffer for a 40×24 stage");
+    assert!(e.to_string().contains("G-buffer linear depth"), "{e}");
 }

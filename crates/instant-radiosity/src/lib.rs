@@ -3,10 +3,13 @@
 //! shading with no shadow map of one VPL subset per sub-buffer (SNSM), gather (BG),
 //! discontinuity buffer (DB), edge-aware blur (B), then composition with the albedo and the
 //! direct light. [`Interleaving::Reference`] is the non-interleaved frame where every pixel
-//! shades every VPL.
+//! shades every VPL. VPLs come from light paths traced on the CPU ([`vpl`]); their visibility
+//! on the GPU comes from ManyLoD cuts or imperfect shadow maps ([`shadows`], Holländer 2013
+//! §3.6). The CPU twin is [`cpu::indirect`], the GPU stage [`gpu::IndirectStage`]
+//! (`new` → `bind` of the caller's G-buffer views → `encode`).
 //!
 //! ```
-//! use pipeline::indirect::{IndirectConfig, vpl};
+//! use instant_radiosity::{IndirectConfig, vpl};
 //! let scene = scene::cornell_box();
 //! let camera = scene.camera_or_framed();
 //! let gb = gbuffer::cpu::rasterize(&scene, &camera, 64, 48)?.gbuffer;
@@ -18,7 +21,7 @@
 //!     seed: 1,
 //!     emissive: false,
 //! })?;
-//! let stages = pipeline::indirect::cpu::indirect(&gb, &frame, &set, &config)?;
+//! let stages = instant_radiosity::cpu::indirect(&gb, &frame, &set, &config)?;
 //! let (diffuse, _specular) = stages.result();
 //! assert_eq!(diffuse.width(), 64);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -33,7 +36,53 @@ use gbuffer::Image;
 use interleave::{Blur, BlurVariant, Pattern, SplitVariant, Thresholds};
 use scene::Aabb;
 
-use crate::RenderError;
+/// This crate's WGSL (`shaders/instant-radiosity/`, carried into the package by the `shaders`
+/// link).
+pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
+    "instant-radiosity",
+    imports: [gbuffer::SHADERS, tiled_shading::SHADERS, manylod::SHADERS],
+    files: ["vpl_shading.wgsl"],
+);
+
+/// What this crate's kernels need of a device: the interleaving passes' and the VPL
+/// visibility's (ManyLoDs) needs.
+pub fn device_needs() -> ::gpu::DeviceNeeds {
+    gbuffer::device_needs()
+        .and(&interleave::device_needs())
+        .and(&tiled_shading::device_needs())
+        .and(&manylod::device_needs())
+}
+
+/// Errors of the indirect-light stage.
+#[derive(Debug, thiserror::Error)]
+pub enum IndirectError {
+    /// The G-buffer could not be made or uploaded.
+    #[error(transparent)]
+    GBuffer(#[from] gbuffer::GBufferError),
+    /// A GPU resource could not be created, bound or read.
+    #[error(transparent)]
+    Gpu(#[from] ::gpu::GpuError),
+    /// A bad interleaving pattern, blur, threshold or texture.
+    #[error(transparent)]
+    Interleave(#[from] interleave::InterleaveError),
+    /// VPL generation failed, or a VPL set does not fit the stage.
+    #[error(transparent)]
+    Vpl(#[from] vpl::VplError),
+    /// The VPL shadow maps failed (ManyLoDs).
+    #[error(transparent)]
+    ManyLod(#[from] manylod::ManyLodError),
+    /// The VPL set has another number of subsets than the pattern has sub-buffers.
+    #[error("the VPLs come in {vpl_subsets} subsets but the pattern has {sub_buffers} sub-buffers")]
+    Subsets {
+        /// Subsets of the VPL set.
+        vpl_subsets: u32,
+        /// Sub-buffers n·m.
+        sub_buffers: u32,
+    },
+    /// The VPL clamp distance is negative or not finite.
+    #[error("the VPL clamp distance must be finite and >= 0, got {0}")]
+    Clamp(f32),
+}
 
 /// How the shading is interleaved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -107,7 +156,19 @@ impl IndirectConfig {
     /// Checks the configuration against a VPL set: valid pattern, blur, thresholds and clamp,
     /// and as many VPL subsets as sub-buffers (any subset count for the reference, which
     /// shades them all).
-    pub fn validate(&self, set: &vpl::VplSet) -> Result<(), RenderError> {
+    pub fn validate(&self, set: &vpl::VplSet) -> Result<(), IndirectError> {
+        self.validate_alone()?;
+        if self.interleaving != Interleaving::Reference && set.subsets != self.pattern.count() {
+            return Err(IndirectError::Subsets {
+                vpl_subsets: set.subsets,
+                sub_buffers: self.pattern.count(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Checks the configuration on its own: valid pattern, blur, thresholds and clamp.
+    pub fn validate_alone(&self) -> Result<(), IndirectError> {
         Pattern::new(self.pattern.n, self.pattern.m)?;
         if let Some(blur) = &self.blur {
             blur.validate()?;
@@ -117,13 +178,7 @@ impl IndirectConfig {
             variant.validate(self.pattern)?;
         }
         if !(self.clamp_distance.is_finite() && self.clamp_distance >= 0.0) {
-            return Err(RenderError::Clamp(self.clamp_distance));
-        }
-        if self.interleaving != Interleaving::Reference && set.subsets != self.pattern.count() {
-            return Err(RenderError::Subsets {
-                vpl_subsets: set.subsets,
-                sub_buffers: self.pattern.count(),
-            });
+            return Err(IndirectError::Clamp(self.clamp_distance));
         }
         Ok(())
     }
@@ -168,7 +223,7 @@ pub struct IndirectStages {
     pub blurred: Option<[Image<[f32; 4]>; 2]>,
     /// Wall-clock time of each stage on the CPU path (empty when read back from the GPU,
     /// whose renderer times the passes with timestamps).
-    pub timings: Vec<crate::PassTiming>,
+    pub timings: Vec<::gpu::PassTiming>,
 }
 
 impl IndirectStages {

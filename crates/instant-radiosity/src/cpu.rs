@@ -1,4 +1,4 @@
-//! CPU reference of the indirect stage (rayon), mirroring `shaders/pipeline/vpl_shading.wgsl`
+//! CPU reference of the indirect stage (rayon), mirroring `shaders/instant-radiosity/vpl_shading.wgsl`
 //! and the `interleave` kernels it composes.
 
 use std::f32::consts::FRAC_1_PI;
@@ -9,8 +9,10 @@ use glam::Vec3;
 use interleave::{SplitLayout, SplitVariant};
 use rayon::prelude::*;
 
-use super::{IndirectConfig, IndirectStages, Interleaving, vpl::GpuVpl, vpl::VplSet};
-use crate::{PassTiming, RenderError, cpu::reflect_light};
+use crate::IndirectError;
+use crate::{IndirectConfig, IndirectStages, Interleaving, vpl::GpuVpl, vpl::VplSet};
+use gpu::PassTiming;
+use tiled_shading::lighting::reflect_light;
 
 /// The clamped intensity of `vpl` towards `p` and the direction to it (`vpl_intensity`):
 /// `Φ/π · max(−n_q·l, 0) / max(d², clamp²)`.
@@ -102,7 +104,7 @@ fn split_gbuffer(
     gb: &GBuffer,
     layout: &SplitLayout,
     variant: SplitVariant,
-) -> Result<GBuffer, RenderError> {
+) -> Result<GBuffer, IndirectError> {
     use interleave::cpu::split;
     Ok(GBuffer {
         depth: split(&gb.depth, layout, variant)?,
@@ -120,7 +122,7 @@ pub fn indirect(
     frame: &Frame,
     set: &VplSet,
     config: &IndirectConfig,
-) -> Result<IndirectStages, RenderError> {
+) -> Result<IndirectStages, IndirectError> {
     config.validate(set)?;
     let (w, h) = (gb.width(), gb.height());
     let layout = SplitLayout::new(w, h, config.shading_pattern())?;

@@ -1,9 +1,11 @@
-//! The indirect stage on the GPU: pipelines and textures are built once for a G-buffer, a
-//! configuration and a VPL count; [`IndirectStage::encode`] records BS → SNSM → BG → DB → B,
-//! each pass timed under its Table 3 name, with no read-back in between.
+//! The indirect stage on the GPU in three phases: [`IndirectStage::new`] builds the pipelines
+//! of a configuration and frame size, [`IndirectStage::bind`] binds them to the caller's
+//! G-buffer, VPLs and output textures, [`IndirectStage::encode`] records BS → SNSM → BG → DB →
+//! B into the caller's encoder, each pass timed under its Table 3 name, with no read-back in
+//! between.
 //!
 //! ```no_run
-//! use pipeline::indirect::{IndirectConfig, gpu::run, vpl};
+//! use instant_radiosity::{IndirectConfig, gpu::run, vpl};
 //! # let gpu = gpu::Gpu::from_env()?;
 //! let scene = scene::cornell_box();
 //! let camera = scene.camera_or_framed();
@@ -20,7 +22,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use ::gpu::kernel::{Binding, Kernel, Passes, Workgroups};
+use ::gpu::kernel::{Binding, Kernel, Passes, Workgroups, check_texture};
 use ::gpu::{Gpu, PassTimer, transfer, wgpu};
 use gbuffer::{
     Frame, GBuffer, Image,
@@ -35,12 +37,12 @@ use interleave::{
     },
 };
 
-use super::{
+use crate::IndirectError;
+use crate::{
     IndirectConfig, IndirectStages, Interleaving,
     shadows::{VplShadowMaps, disabled_bindings},
     vpl::VplSet,
 };
-use crate::RenderError;
 
 /// Uniform block of `vpl_shading.wgsl`.
 #[repr(C)]
@@ -75,8 +77,21 @@ fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
 }
 
-/// The indirect-light stage for one G-buffer.
+/// The indirect-light stage's pipelines for one configuration and frame size (phase `new`).
 pub struct IndirectStage {
+    config: IndirectConfig,
+    layout: SplitLayout,
+    size: (u32, u32),
+    shading: Kernel,
+    /// Split/gather passes of the linear depth, normal, albedo and irradiance formats.
+    splitters: Option<[Splitter; 4]>,
+    discontinuity: Option<DiscontinuityPass>,
+    blur: Option<BlurPass>,
+}
+
+/// The stage bound to one G-buffer, VPL set and pair of output textures (phase `bind`): the
+/// recorded passes, the VPL buffer and the intermediate textures.
+pub struct BoundIndirect {
     passes: Passes,
     vpls: wgpu::Buffer,
     params: wgpu::Buffer,
@@ -86,50 +101,19 @@ pub struct IndirectStage {
     shaded_diffuse: wgpu::Texture,
     gathered: [wgpu::Texture; 2],
     discontinuities: Option<wgpu::Texture>,
-    blurred: Option<[wgpu::Texture; 2]>,
+    outputs: [wgpu::Texture; 2],
 }
 
 impl IndirectStage {
-    /// Builds the passes reading `gbuffer` and the camera uniform `frame` (a
-    /// [`gbuffer::Frame`]), shading the VPLs of `set` as `config` says, with visibility from
-    /// `shadows` (built for the same VPLs) if given.
+    /// Builds the pipelines of `config` for frames of `size` (width, height). The VPL count
+    /// is not part of the pipelines: any set of `config.subsets()` subsets binds.
     pub fn new(
         device: &wgpu::Device,
-        frame: &wgpu::Buffer,
-        gbuffer: GBufferTextures<'_>,
         config: &IndirectConfig,
-        set: &VplSet,
-        shadows: Option<&VplShadowMaps>,
-    ) -> Result<Self, RenderError> {
-        config.validate(set)?;
-        let disabled;
-        let (shadow_atlas, shadow_params) = match shadows {
-            Some(s) => s.bindings(),
-            None => {
-                disabled = disabled_bindings(device)?;
-                (&disabled.0, &disabled.1)
-            }
-        };
-        let size = (gbuffer.linear_depth.width(), gbuffer.linear_depth.height());
+        size: (u32, u32),
+    ) -> Result<Self, IndirectError> {
+        config.validate_alone()?;
         let layout = SplitLayout::new(size.0, size.1, config.shading_pattern())?;
-        let split_size = (layout.split_width(), layout.split_height());
-        let vpls = transfer::buffer_init(
-            device,
-            "vpls",
-            bytemuck::cast_slice(&set.gpu()),
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        )?;
-        let params = transfer::buffer_init(
-            device,
-            "vpl shading params",
-            bytemuck::bytes_of(&ShadingParams {
-                per_subset: config.per_invocation(set),
-                scale: config.scale(set),
-                clamp_squared: config.clamp_distance * config.clamp_distance,
-                _pad: 0,
-            }),
-            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        )?;
         let module = crate::SHADERS.module(device, "vpl_shading.wgsl")?;
         let constants = [
             ("width", f64::from(size.0)),
@@ -143,12 +127,107 @@ impl IndirectStage {
             Interleaving::Fused => "shade_fused",
             _ => "shade_split",
         };
-        let kernel = Kernel::new(device, &module, entry, &vpl_shading_bindings(), &constants);
+        let shading = Kernel::new(device, &module, entry, &vpl_shading_bindings(), &constants);
+        let splitters = match config.interleaving {
+            Interleaving::Split(variant) => {
+                let splitter = |format| Splitter::new(device, &layout, variant, format);
+                Some([
+                    splitter(gbuffer::LINEAR_DEPTH_FORMAT)?,
+                    splitter(gbuffer::NORMAL_FORMAT)?,
+                    splitter(gbuffer::ALBEDO_FORMAT)?,
+                    splitter(IRRADIANCE_FORMAT)?,
+                ])
+            }
+            Interleaving::Fused | Interleaving::Reference => None,
+        };
+        let (discontinuity, blur) = match config.applied_blur() {
+            Some(blur) => (
+                Some(DiscontinuityPass::new(device, &config.thresholds)?),
+                Some(BlurPass::new(device, &blur)?),
+            ),
+            None => (None, None),
+        };
+        Ok(Self {
+            config: *config,
+            layout,
+            size,
+            shading,
+            splitters,
+            discontinuity,
+            blur,
+        })
+    }
+
+    /// Two output textures the stage can write (diffuse, specular; [`IRRADIANCE_FORMAT`],
+    /// sampled and copied from): the convenience beside [`IndirectStage::bind`]'s caller-owned
+    /// outputs.
+    pub fn output_textures(&self, device: &wgpu::Device) -> [wgpu::Texture; 2] {
+        ["indirect diffuse", "indirect specular"].map(|label| irradiance(device, label, self.size))
+    }
+
+    /// Binds the stage to the camera uniform `frame` (a [`gbuffer::Frame`]), `gbuffer`, the
+    /// VPLs of `set` (visible through `shadows`, built for the same VPLs, if given) and the
+    /// caller's `outputs` (diffuse, specular: the stage's size, [`IRRADIANCE_FORMAT`], storage
+    /// binding), allocating the intermediate textures. A G-buffer or output of another size
+    /// or format, or a set of another subset count, is an `Err`.
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        frame: &wgpu::Buffer,
+        gbuffer: GBufferTextures<'_>,
+        set: &VplSet,
+        shadows: Option<&VplShadowMaps>,
+        outputs: [&wgpu::Texture; 2],
+    ) -> Result<BoundIndirect, IndirectError> {
+        let config = &self.config;
+        config.validate(set)?;
+        let size = self.size;
+        check_texture(
+            "G-buffer linear depth",
+            gbuffer.linear_depth,
+            size,
+            gbuffer::LINEAR_DEPTH_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        )?;
+        for (what, texture) in ["indirect diffuse output", "indirect specular output"]
+            .into_iter()
+            .zip(outputs)
+        {
+            check_texture(
+                what,
+                texture,
+                size,
+                IRRADIANCE_FORMAT,
+                wgpu::TextureUsages::STORAGE_BINDING,
+            )?;
+        }
+        let disabled;
+        let (shadow_atlas, shadow_params) = match shadows {
+            Some(s) => s.bindings(),
+            None => {
+                disabled = disabled_bindings(device)?;
+                (&disabled.0, &disabled.1)
+            }
+        };
+        let layout = &self.layout;
+        let split_size = (layout.split_width(), layout.split_height());
+        let vpls = transfer::buffer_init(
+            device,
+            "vpls",
+            bytemuck::cast_slice(&set.gpu()),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        )?;
+        let params = transfer::buffer_init(
+            device,
+            "vpl shading params",
+            bytemuck::bytes_of(&shading_params(config, set)),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        )?;
         let shading = |name: &str, g: [&wgpu::Texture; 4], out: [&wgpu::Texture; 2]| {
             let views = g.map(view);
             let outs = out.map(view);
             let tv = wgpu::BindingResource::TextureView;
-            let group = kernel.bind(
+            let group = self.shading.bind(
                 device,
                 &[
                     frame.as_entire_binding(),
@@ -165,25 +244,24 @@ impl IndirectStage {
                 ],
             );
             let workgroups = Workgroups::covering(split_size.0, split_size.1, 8);
-            Passes::one(name, &kernel.pipeline, vec![group], workgroups)
+            Passes::one(name, &self.shading.pipeline, vec![group], workgroups)
         };
-        let gathered = [
-            irradiance(device, "indirect diffuse", size),
-            irradiance(device, "indirect specular", size),
-        ];
+        // Without a blur the gathered light is the output; with one, the blur writes it.
+        let gathered = match self.blur {
+            Some(_) => [
+                irradiance(device, "indirect diffuse", size),
+                irradiance(device, "indirect specular", size),
+            ],
+            None => outputs.map(Clone::clone),
+        };
         let g = [
             gbuffer.linear_depth,
             gbuffer.normal,
             gbuffer.albedo,
             gbuffer.material,
         ];
-        let (mut passes, split_normal, shaded_diffuse) = match config.interleaving {
-            Interleaving::Split(variant) => {
-                let splitter = |format| Splitter::new(device, &layout, variant, format);
-                let r32f = splitter(gbuffer::LINEAR_DEPTH_FORMAT)?;
-                let r32u = splitter(gbuffer::NORMAL_FORMAT)?;
-                let rgba8 = splitter(gbuffer::ALBEDO_FORMAT)?;
-                let half = splitter(IRRADIANCE_FORMAT)?;
+        let (mut passes, split_normal, shaded_diffuse) = match &self.splitters {
+            Some([r32f, r32u, rgba8, half]) => {
                 let split = [
                     r32f.split_texture(device, "split linear depth"),
                     r32u.split_texture(device, "split normal"),
@@ -209,7 +287,7 @@ impl IndirectStage {
                 let [diffuse, _] = shaded;
                 (bs.then(snsm).then(bg), Some(normal), diffuse)
             }
-            Interleaving::Fused | Interleaving::Reference => {
+            None => {
                 let name = if config.interleaving == Interleaving::Fused {
                     "SNSM"
                 } else {
@@ -219,8 +297,8 @@ impl IndirectStage {
                 (passes, None, gathered[0].clone())
             }
         };
-        let (discontinuities, blurred) = match config.applied_blur() {
-            Some(blur) => {
+        let discontinuities = match (&self.discontinuity, &self.blur) {
+            (Some(dbp), Some(bp)) => {
                 let db = transfer::texture_2d(
                     device,
                     "discontinuity buffer",
@@ -229,27 +307,21 @@ impl IndirectStage {
                     DISCONTINUITY_FORMAT,
                     USAGE,
                 );
-                let dbp = DiscontinuityPass::new(device, &config.thresholds)?;
                 passes = passes.then(
                     dbp.bind(device, gbuffer.linear_depth, gbuffer.normal, &db)?
                         .named("DB"),
                 );
-                let bp = BlurPass::new(device, &blur)?;
                 let scratch = irradiance(device, "blur scratch", size);
-                let out = [
-                    irradiance(device, "blurred indirect diffuse", size),
-                    irradiance(device, "blurred indirect specular", size),
-                ];
                 passes = passes.then(
-                    bp.bind(device, &gathered[0], &db, &scratch, &out[0])?
-                        .then(bp.bind(device, &gathered[1], &db, &scratch, &out[1])?)
+                    bp.bind(device, &gathered[0], &db, &scratch, outputs[0])?
+                        .then(bp.bind(device, &gathered[1], &db, &scratch, outputs[1])?)
                         .named("B"),
                 );
-                (Some(db), Some(out))
+                Some(db)
             }
-            None => (None, None),
+            _ => None,
         };
-        Ok(Self {
+        Ok(BoundIndirect {
             passes,
             vpls,
             params,
@@ -259,43 +331,49 @@ impl IndirectStage {
             shaded_diffuse,
             gathered,
             discontinuities,
-            blurred,
+            outputs: outputs.map(Clone::clone),
         })
     }
 
-    /// Records the stage; with a timer, each pass is timed under its stage name (BS, SNSM,
-    /// BG, DB, B, or "shading (reference)").
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        self.passes.encode(encoder, timer);
+    /// Records the bound stage; with a timer, each pass is timed under its stage name (BS,
+    /// SNSM, BG, DB, B, or "shading (reference)").
+    pub fn encode(
+        &self,
+        bound: &BoundIndirect,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&PassTimer>,
+    ) {
+        bound.passes.encode(encoder, timer);
     }
+}
 
+fn shading_params(config: &IndirectConfig, set: &VplSet) -> ShadingParams {
+    ShadingParams {
+        per_subset: config.per_invocation(set),
+        scale: config.scale(set),
+        clamp_squared: config.clamp_distance * config.clamp_distance,
+        _pad: 0,
+    }
+}
+
+impl BoundIndirect {
     /// Replaces the VPLs by another set of the same size and subset count (e.g. after the
     /// lights moved).
-    pub fn set_vpls(&self, queue: &wgpu::Queue, set: &VplSet) -> Result<(), RenderError> {
+    pub fn set_vpls(&self, queue: &wgpu::Queue, set: &VplSet) -> Result<(), IndirectError> {
         self.config.validate(set)?;
         if set.vpls.len() != self.vpl_count {
-            return Err(RenderError::Vpl(super::vpl::VplError::Count {
+            return Err(IndirectError::Vpl(crate::vpl::VplError::Count {
                 count: set.vpls.len(),
                 subsets: set.subsets,
             }));
         }
         queue.write_buffer(&self.vpls, 0, bytemuck::cast_slice(&set.gpu()));
-        let params = ShadingParams {
-            per_subset: self.config.per_invocation(set),
-            scale: self.config.scale(set),
-            clamp_squared: self.config.clamp_distance * self.config.clamp_distance,
-            _pad: 0,
-        };
-        queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+        queue.write_buffer(
+            &self.params,
+            0,
+            bytemuck::bytes_of(&shading_params(&self.config, set)),
+        );
         Ok(())
-    }
-
-    /// The diffuse and specular indirect light the composition reads (blurred if blurring).
-    pub fn output(&self) -> [&wgpu::Texture; 2] {
-        match &self.blurred {
-            Some([d, s]) => [d, s],
-            None => [&self.gathered[0], &self.gathered[1]],
-        }
     }
 
     /// Reads every stage's texture back (after the encoded work was submitted).
@@ -303,8 +381,8 @@ impl IndirectStage {
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-    ) -> Result<IndirectStages, RenderError> {
-        let irr = |t: &wgpu::Texture| -> Result<Image<[f32; 4]>, RenderError> {
+    ) -> Result<IndirectStages, IndirectError> {
+        let irr = |t: &wgpu::Texture| -> Result<Image<[f32; 4]>, IndirectError> {
             Ok(download_image::<[f16; 4]>(device, queue, t)?.map(|p| p.map(f16::to_f32)))
         };
         Ok(IndirectStages {
@@ -321,8 +399,8 @@ impl IndirectStage {
                 .as_ref()
                 .map(|t| download_image(device, queue, t))
                 .transpose()?,
-            blurred: match &self.blurred {
-                Some([d, s]) => Some([irr(d)?, irr(s)?]),
+            blurred: match self.discontinuities {
+                Some(_) => Some([irr(&self.outputs[0])?, irr(&self.outputs[1])?]),
                 None => None,
             },
             timings: Vec::new(),
@@ -338,18 +416,20 @@ pub fn run(
     frame: &Frame,
     set: &VplSet,
     config: &IndirectConfig,
-) -> Result<IndirectStages, RenderError> {
+) -> Result<IndirectStages, IndirectError> {
     let uploaded = UploadedGBuffer::new(&gpu.device, &gpu.queue, gb, frame)?;
-    let stage = IndirectStage::new(
+    let stage = IndirectStage::new(&gpu.device, config, (gb.width(), gb.height()))?;
+    let outputs = stage.output_textures(&gpu.device);
+    let bound = stage.bind(
         &gpu.device,
         &uploaded.frame,
         uploaded.textures(),
-        config,
         set,
         None,
+        outputs.each_ref(),
     )?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    stage.encode(&mut encoder, None);
+    stage.encode(&bound, &mut encoder, None);
     gpu.queue.submit([encoder.finish()]);
-    stage.read(&gpu.device, &gpu.queue)
+    bound.read(&gpu.device, &gpu.queue)
 }

@@ -13,14 +13,14 @@
 //! flux and one group, scaled by `subsets`, estimates it too.
 //!
 //! ```
-//! use pipeline::indirect::vpl::{VplConfig, generate};
+//! use instant_radiosity::vpl::{VplConfig, generate};
 //! let scene = scene::cornell_box();
 //! let bvh = scene::Bvh::build(&scene);
 //! let config = VplConfig { count: 256, subsets: 16, seed: 7, emissive: false };
 //! let set = generate(&scene, &bvh, &scene.lights, &config)?;
 //! assert_eq!(set.vpls.len(), 256);
 //! assert_eq!(set.per_subset, 16);
-//! # Ok::<(), pipeline::indirect::vpl::VplError>(())
+//! # Ok::<(), instant_radiosity::vpl::VplError>(())
 //! ```
 
 use std::f32::consts::PI;
@@ -44,7 +44,7 @@ pub struct Vpl {
     pub flux: Vec3,
 }
 
-/// A VPL as the shaders see it (WGSL `Vpl` in `pipeline/vpl_shading.wgsl`).
+/// A VPL as the shaders see it (WGSL `Vpl` in `instant-radiosity/vpl_shading.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuVpl {
@@ -483,8 +483,8 @@ pub fn generate(
             subsets,
         });
     }
-    crate::validate_lights(lights).map_err(|e| match e {
-        crate::RenderError::InvalidLight { index, .. } => VplError::InvalidLight(index),
+    tiled_shading::gpu_lights(lights).map_err(|e| match e {
+        tiled_shading::ShadingError::InvalidLight { index, .. } => VplError::InvalidLight(index),
         _ => VplError::InvalidLight(0),
     })?;
     let bounds = scene.bounds();
