@@ -17,15 +17,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let lights = tiled_shading::gpu_lights(&scene.lights)?;
     let (w, h) = (160, 120);
     // new: upload and pipelines once; set_camera writes a buffer; encode only records.
-    let mut ssaa = SsaaRenderer::new(
-        &device,
-        &queue,
-        &scene,
-        &lights,
-        w,
-        h,
-        &SsaaConfig::default(),
-    )?;
+    let mut ssaa =
+        SsaaRenderer::new(&device, &queue, &scene, &lights, w, h, &SsaaConfig::default())?;
     ssaa.set_camera(&queue, &scene.camera_or_framed())?;
     let render = |full: bool| {
         let mut encoder = device.create_command_encoder(&Default::default());
@@ -45,11 +38,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let share =
         samples.pixels().iter().map(|&c| f64::from(c)).sum::<f64>() / (16.0 * f64::from(w * h));
     let psnr = gbuffer::psnr(&full, &adaptive);
-    assert!(
-        share < 1.0 && psnr > 30.0,
-        "{:.0} % of the samples, PSNR {psnr:.1} dB",
-        share * 100.0
-    );
+    assert!(share < 1.0 && psnr > 30.0, "{:.0} % of the samples, PSNR {psnr:.1} dB", share * 100.0);
     println!(
         "adaptive 4×4 on {}: {:.0} % of the samples, PSNR {psnr:.1} dB against full SSAA",
         adapter.get_info().name,

@@ -20,26 +20,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frame = gbuffer::Frame::new(&camera, width, height);
     let uploaded = gbuffer::gpu::UploadedGBuffer::new(&device, &queue, &gb, &frame)?;
     let config = IndirectConfig::new(scene.bounds());
-    let vpls = vpl::VplConfig {
-        count: 256,
-        subsets: config.subsets(),
-        seed: 1,
-        emissive: false,
-    };
+    let vpls = vpl::VplConfig { count: 256, subsets: config.subsets(), seed: 1, emissive: false };
     let set = vpl::generate(&scene, &scene::Bvh::build(&scene), &scene.lights, &vpls)?;
 
     // new: pipelines once; bind: the caller's G-buffer, VPLs and outputs; encode: only records.
     let stage = IndirectStage::new(&device, &config, (width, height))?;
     let outputs = stage.output_textures(&device);
     let textures = uploaded.textures();
-    let bound = stage.bind(
-        &device,
-        &uploaded.frame,
-        textures,
-        &set,
-        None,
-        outputs.each_ref(),
-    )?;
+    let bound = stage.bind(&device, &uploaded.frame, textures, &set, None, outputs.each_ref())?;
     let mut encoder = device.create_command_encoder(&Default::default());
     stage.encode(&bound, &mut encoder, None);
     queue.submit([encoder.finish()]);
@@ -47,13 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let gpu = bound.read(&device, &queue)?;
     let cpu = instant_radiosity::cpu::indirect(&gb, &frame, &set, &config)?;
     let db = gbuffer::psnr(cpu.result().0, gpu.result().0);
-    assert!(
-        db > 50.0,
-        "GPU indirect light differs from the CPU reference: {db:.1} dB"
-    );
-    println!(
-        "indirect light of 256 VPLs on {}: {db:.1} dB",
-        adapter.get_info().name
-    );
+    assert!(db > 50.0, "GPU indirect light differs from the CPU reference: {db:.1} dB");
+    println!("indirect light of 256 VPLs on {}: {db:.1} dB", adapter.get_info().name);
     Ok(())
 }

@@ -11,11 +11,7 @@ use glam::Vec3;
 use interleave::{Blur, BlurVariant, Pattern, SplitLayout, SplitVariant, Thresholds, cpu};
 
 fn main() -> anyhow::Result<()> {
-    let out = PathBuf::from(
-        std::env::args()
-            .nth(1)
-            .unwrap_or_else(|| "docs/images".into()),
-    );
+    let out = PathBuf::from(std::env::args().nth(1).unwrap_or_else(|| "docs/images".into()));
     std::fs::create_dir_all(&out)?;
     let (w, h) = (640, 480);
     let scene = scene::spheres_on_plane(12);

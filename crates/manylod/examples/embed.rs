@@ -41,27 +41,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     queue.submit([encoder.finish()]);
 
     let mut got = gpu.read_cut(&device, &queue)?.node_views;
-    let problem = CutProblem {
-        bsh: &bsh,
-        views: &views,
-        epsilon,
-    };
+    let problem = CutProblem { bsh: &bsh, views: &views, epsilon };
     let mut want = cut::basic(&problem)?.node_views;
     (got.sort_unstable(), want.sort_unstable());
     // Hardware asin/atan2 may decide a few node-views at ε the other way (≤ 0.1 %).
-    let differ = got
-        .iter()
-        .filter(|nv| want.binary_search(nv).is_err())
-        .count();
-    assert!(
-        differ * 1000 <= want.len(),
-        "{differ} of {} node-views differ",
-        want.len()
-    );
+    let differ = got.iter().filter(|nv| want.binary_search(nv).is_err()).count();
+    assert!(differ * 1000 <= want.len(), "{differ} of {} node-views differ", want.len());
     let name = adapter.get_info().name;
-    println!(
-        "cut of {} node-views, 16 views, on {name}: {differ} differ from the CPU",
-        got.len()
-    );
+    println!("cut of {} node-views, 16 views, on {name}: {differ} differ from the CPU", got.len());
     Ok(())
 }

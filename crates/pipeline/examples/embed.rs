@@ -21,11 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     renderer.resize(&device, &queue, 256, 256)?;
     let mine = device.create_texture(&wgpu::TextureDescriptor {
         label: Some("application's copy"),
-        size: wgpu::Extent3d {
-            width: 256,
-            height: 256,
-            depth_or_array_layers: 1,
-        },
+        size: wgpu::Extent3d { width: 256, height: 256, depth_or_array_layers: 1 },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -35,30 +31,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     });
     let mut encoder = device.create_command_encoder(&Default::default());
     renderer.encode(&mut encoder);
-    encoder.copy_texture_to_texture(
-        renderer.output().as_image_copy(),
-        mine.as_image_copy(),
-        mine.size(),
-    );
+    let (from, to) = (renderer.output().as_image_copy(), mine.as_image_copy());
+    encoder.copy_texture_to_texture(from, to, mine.size());
     queue.submit([encoder.finish()]);
 
     let image = read_radiance(&device, &queue, &mine)?;
-    let lit = image
-        .pixels()
-        .iter()
-        .filter(|p| p[0] + p[1] + p[2] > 0.05)
-        .count();
-    assert!(
-        lit * 2 > image.pixels().len(),
-        "only {lit} of {} pixels are lit",
-        image.pixels().len()
-    );
+    let lit = image.pixels().iter().filter(|p| p[0] + p[1] + p[2] > 0.05).count();
+    let total = image.pixels().len();
+    assert!(lit * 2 > total, "only {lit} of {total} pixels are lit");
     for t in renderer.timings(&device, &queue)? {
         println!("{:>24}: {:.3} ms", t.name, t.ms);
     }
-    println!(
-        "Cornell box at 256×256 on {}: {lit} lit pixels",
-        adapter.get_info().name
-    );
+    println!("Cornell box at 256×256 on {}: {lit} lit pixels", adapter.get_info().name);
     Ok(())
 }

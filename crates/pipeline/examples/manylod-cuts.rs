@@ -85,12 +85,7 @@ fn main() -> Result<()> {
         &scene,
         &bvh,
         &[spot],
-        &vpl::VplConfig {
-            count: 256,
-            subsets: 1,
-            seed: 1,
-            emissive: false,
-        },
+        &vpl::VplConfig { count: 256, subsets: 1, seed: 1, emissive: false },
     )?;
     let candidates = vpl_views(&set, TILE, 1e-3 * diagonal);
     let views: Vec<View> = [Vec3::Y, Vec3::X, Vec3::Z]
@@ -101,16 +96,8 @@ fn main() -> Result<()> {
     let (positions, indices) = scene_mesh(&scene);
     let s = surfels::sample(&positions, &indices, args.points, 1)?;
     let (p, n) = surfels::evaluate(&s, &positions, &indices);
-    let bsh = Bsh::build(
-        &p,
-        &n,
-        surfels::disc_radius(&positions, &indices, args.points),
-    )?;
-    let problem = CutProblem {
-        bsh: &bsh,
-        views: &views,
-        epsilon: args.epsilon,
-    };
+    let bsh = Bsh::build(&p, &n, surfels::disc_radius(&positions, &indices, args.points))?;
+    let problem = CutProblem { bsh: &bsh, views: &views, epsilon: args.epsilon };
     let cut = problem.flag_culled(&cut::basic(&problem)?.node_views);
 
     // Overview camera: from one end of the scene, above the floor, looking down the length.
@@ -130,14 +117,8 @@ fn main() -> Result<()> {
     let camera = proj * look;
     let leaf_start = bsh.leaf_count() - 1;
     // The colour ramp spans the levels of the drawn cut nodes.
-    let drawn_levels = cut
-        .iter()
-        .filter(|nv| nv.node & cut::CULLED == 0)
-        .map(|nv| level(nv.node));
-    let levels = (
-        drawn_levels.clone().min().unwrap_or(0),
-        drawn_levels.max().unwrap_or(0),
-    );
+    let drawn_levels = cut.iter().filter(|nv| nv.node & cut::CULLED == 0).map(|nv| level(nv.node));
+    let levels = (drawn_levels.clone().min().unwrap_or(0), drawn_levels.max().unwrap_or(0));
     let focal = h as f32 * 0.5 / (0.5 * FOV_Y).to_radians().tan();
 
     let panels: Vec<Image<[f32; 4]>> = (0..views.len() as u32)
@@ -149,16 +130,7 @@ fn main() -> Result<()> {
                 let (lo, hi) = bsh.leaf_range(nv.node & !cut::CULLED);
                 cover[lo..hi].fill(nv.node);
             }
-            panel(
-                &bsh,
-                leaf_start,
-                &cover,
-                camera,
-                eye,
-                (w, h, focal),
-                levels,
-                &views[v as usize],
-            )
+            panel(&bsh, leaf_start, &cover, camera, eye, (w, h, focal), levels, &views[v as usize])
         })
         .collect();
     let gap = 8;
@@ -175,14 +147,9 @@ fn main() -> Result<()> {
     out.write_png(&file)?;
     for (k, v) in views.iter().enumerate() {
         let count = cut.iter().filter(|nv| nv.view == k as u32).count();
-        let culled = cut
-            .iter()
-            .filter(|nv| nv.view == k as u32 && nv.node & cut::CULLED != 0)
-            .count();
-        println!(
-            "view {k} at {:?}: {count} cut node-views ({culled} culled)",
-            v.eye()
-        );
+        let culled =
+            cut.iter().filter(|nv| nv.view == k as u32 && nv.node & cut::CULLED != 0).count();
+        println!("view {k} at {:?}: {count} cut node-views ({culled} culled)", v.eye());
     }
     println!("wrote {}", file.display());
     Ok(())
@@ -206,11 +173,7 @@ fn panel(
         let c = camera * p.extend(1.0);
         (c.w > 0.0).then(|| {
             let ndc = c.xyz() / c.w;
-            (
-                (ndc.x * 0.5 + 0.5) * w as f32,
-                (0.5 - ndc.y * 0.5) * h as f32,
-                ndc.z,
-            )
+            ((ndc.x * 0.5 + 0.5) * w as f32, (0.5 - ndc.y * 0.5) * h as f32, ndc.z)
         })
     };
     for (k, &node) in cover.iter().enumerate() {

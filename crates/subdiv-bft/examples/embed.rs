@@ -22,9 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         [0.0, 0.0, 1.0],
         [0.0, 0.0, -1.0],
     ];
-    let faces = [
-        0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5,
-    ];
+    let faces = [0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5];
     let mesh = TriMesh::from_f32(&p, &faces)?;
     let bft = BftSet::build(3, 8)?;
     let sub = Subdivider::new(&mesh.topology, &bft)?;
@@ -39,16 +37,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let got = gpu.read_level(&device, &queue, &level)?;
     let want = sub.evaluate_cpu(&bft, &mesh.positions_f32(), 3)?;
-    let worst = got
-        .positions
-        .iter()
-        .zip(&want.positions)
-        .map(|(a, b)| a.distance(*b))
-        .fold(0.0, f32::max);
-    assert!(
-        worst < 1e-5,
-        "GPU vertices differ from the CPU reference by {worst}"
-    );
+    let worst =
+        got.positions.iter().zip(&want.positions).map(|(a, b)| a.distance(*b)).fold(0.0, f32::max);
+    assert!(worst < 1e-5, "GPU vertices differ from the CPU reference by {worst}");
     println!(
         "level 3: {} triangles on {}, max vertex difference {worst:.1e}",
         got.indices.len() / 3,

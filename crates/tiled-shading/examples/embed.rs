@@ -24,21 +24,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let uploaded = UploadedGBuffer::new(&device, &queue, &gb, &frame)?;
 
     // new: the pipeline once; bind: G-buffer, the caller's outputs, a light buffer; encode.
-    let config = ShadingConfig {
-        method: Method::TiledCones,
-        ..Default::default()
-    };
+    let config = ShadingConfig { method: Method::TiledCones, ..Default::default() };
     let shading = LightShading::new(&device, &config)?;
     let outputs = LightShading::output_textures(&device, w, h);
     let outputs = [&outputs[0], &outputs[1]];
-    let mut bound = shading.bind(
-        &device,
-        &uploaded.frame,
-        uploaded.textures(),
-        outputs,
-        lights.len(),
-        false,
-    )?;
+    let (frame_uniform, textures) = (&uploaded.frame, uploaded.textures());
+    let mut bound = shading.bind(&device, frame_uniform, textures, outputs, lights.len(), false)?;
     bound.set_lights(&queue, &lights)?;
     bound.set_camera(&queue, &camera);
     let mut encoder = device.create_command_encoder(&Default::default());
@@ -47,20 +38,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let [diffuse, _] = tiled_shading::gpu::read_outputs(&device, &queue, outputs)?;
     let cpu = tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &config)?;
-    let worst = diffuse
-        .pixels()
-        .iter()
-        .zip(cpu.diffuse.pixels())
-        .map(|(g, c)| (*g - *c).abs().max_element())
-        .fold(0.0, f32::max);
-    assert!(
-        worst < 1e-3,
-        "GPU differs from the CPU reference by {worst}"
-    );
-    println!(
-        "{} lights, tiled with normal cones on {}: max difference {worst:.1e}",
-        lights.len(),
-        adapter.get_info().name
-    );
+    let pairs = diffuse.pixels().iter().zip(cpu.diffuse.pixels());
+    let worst = pairs.map(|(g, c)| (*g - *c).abs().max_element()).fold(0.0, f32::max);
+    assert!(worst < 1e-3, "GPU differs from the CPU reference by {worst}");
+    let name = adapter.get_info().name;
+    println!("{} lights, tiled with normal cones on {name}: max error {worst:.1e}", lights.len());
     Ok(())
 }
