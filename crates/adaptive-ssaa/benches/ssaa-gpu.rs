@@ -23,15 +23,8 @@ use serde::Serialize;
 /// Benchmarks adaptive supersampling against full supersampling, one sample and FXAA.
 #[derive(Parser, Debug)]
 struct Args {
-    /// Report folder.
-    #[arg(long, default_value = "docs/bench")]
-    out: PathBuf,
-    /// Timed frames per configuration (after ≥ 10 warm-up frames and ≥ 300 ms of work).
-    #[arg(long, default_value_t = 10)]
-    frames: u32,
-    /// Run on a software adapter too (its timings are not GPU performance).
-    #[arg(long)]
-    allow_software: bool,
+    #[command(flatten)]
+    options: bench::Options,
     /// Sponza at 1024×768, m = 4, no stall, ND + shading and the sweep only (a tuning run).
     #[arg(long)]
     quick: bool,
@@ -135,11 +128,8 @@ fn error_heatmap(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>, max: f32) -> Result<I
 
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
-    let gpu = Gpu::from_env()?;
-    if let Err(e) = bench::require_hardware(&gpu, args.allow_software) {
-        anyhow::bail!("{e}");
-    }
-    println!("adapter: {}", gpu.describe());
+    let gpu = args.options.gpu()?;
+    let frames = args.options.frames(10);
     let timer = PassTimer::new(&gpu.device, 16);
     let quick = args.quick || bench::run_once();
     let sizes: &[(u32, u32)] = if quick {
@@ -178,9 +168,7 @@ fn main() -> Result<()> {
                 let mut r =
                     SsaaRenderer::new(&gpu.device, &gpu.queue, &scene, &lights, w, h, &base)?;
                 r.set_camera(&gpu.queue, &camera)?;
-                let g = time(&gpu, &timer, args.frames, &|e, t| {
-                    r.encode_gbuffer(e, Some(t))
-                })?;
+                let g = time(&gpu, &timer, frames, &|e, t| r.encode_gbuffer(e, Some(t)))?;
                 println!(
                     "{name} {w}×{h} m={m}: supersampled G-buffer {:.3} ms",
                     g.median_ms
@@ -193,9 +181,8 @@ fn main() -> Result<()> {
                 for &stall in stalls {
                     let config = SsaaConfig { stall, ..base };
                     r.ssaa.set_config(&gpu.queue, &config)?;
-                    let full_ms = time(&gpu, &timer, args.frames, &|e, t| {
-                        r.ssaa.encode_full(e, Some(t))
-                    })?;
+                    let full_ms =
+                        time(&gpu, &timer, frames, &|e, t| r.ssaa.encode_full(e, Some(t)))?;
                     let full = r.ssaa.read_output(&gpu.device, &gpu.queue)?;
                     let mut row = |method: &str,
                                    ms: Stat,
@@ -231,12 +218,12 @@ fn main() -> Result<()> {
                     };
                     row("full SSAA", full_ms, &full, 1.0, 1.0);
                     let one = f64::from(m * m).recip();
-                    let first_ms = time(&gpu, &timer, args.frames, &|e, t| {
+                    let first_ms = time(&gpu, &timer, frames, &|e, t| {
                         r.ssaa.encode_first(e, Some(t))
                     })?;
                     let first = r.ssaa.read_first(&gpu.device, &gpu.queue)?;
                     row("1 sample", first_ms, &first, one, one);
-                    let fxaa_ms = time(&gpu, &timer, args.frames, &|e, t| {
+                    let fxaa_ms = time(&gpu, &timer, frames, &|e, t| {
                         r.ssaa.encode_first(e, Some(t));
                         r.ssaa.encode_fxaa(e, Some(t));
                     })?;
@@ -270,8 +257,7 @@ fn main() -> Result<()> {
                             ..config
                         };
                         r.ssaa.set_config(&gpu.queue, &config)?;
-                        let ms =
-                            time(&gpu, &timer, args.frames, &|e, t| r.ssaa.encode(e, Some(t)))?;
+                        let ms = time(&gpu, &timer, frames, &|e, t| r.ssaa.encode(e, Some(t)))?;
                         let out = adaptive_ssaa::cpu::Output {
                             image: r.ssaa.read_output(&gpu.device, &gpu.queue)?,
                             first: r.ssaa.read_first(&gpu.device, &gpu.queue)?,
@@ -294,13 +280,13 @@ fn main() -> Result<()> {
         }
     }
     let header = bench::Header::new(&gpu);
-    let mut md = header.markdown("Adaptive supersampling (Holländer 2013 §4.3)", args.frames);
+    let mut md = header.markdown("Adaptive supersampling (Holländer 2013 §4.3)", frames);
     md.push_str(&format!(
         "\nGPU time of the shading passes after the shared supersampled G-buffer (median of {} frames); \
          'stalled' runs the light loop {STALL}× per sample. Speed-up, MSE/PSNR (sRGB in [0, 1]) and FLIP \
          against full supersampling of the same run. Samples: Σk / (m²·pixels); shaded: shading \
          evaluations / full SSAA's (S plus k for every pixel with k > 1).\n\n",
-        args.frames
+        frames
     ));
     md.push_str("## Supersampled G-buffer\n\n| scene | size | m | ms |\n|---|---|---|---|\n");
     for (s, w, h, m, g) in &gbuffer_times {
@@ -329,13 +315,13 @@ fn main() -> Result<()> {
     }
     let report = Report {
         header,
-        frames: args.frames,
+        frames: frames,
         stall: STALL,
         gbuffer: gbuffer_times,
         rows,
     };
-    let stem = report.header.file_stem("adaptive-ssaa-");
-    bench::write_report(&bench::out_dir(&args.out), &stem, &report, &md)
+    args.options
+        .write_report(&report.header, "adaptive-ssaa-", &report, &md)
 }
 
 fn write_pictures(

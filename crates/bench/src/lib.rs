@@ -209,15 +209,80 @@ impl Header {
     }
 }
 
-/// The scene a benchmark runs on: `path`, or else the shared fixtures' Dabrovic Sponza.
-pub fn bench_scene_path(path: Option<&std::path::Path>) -> anyhow::Result<std::path::PathBuf> {
-    use anyhow::Context;
-    Ok(match path {
-        Some(p) => p.to_path_buf(),
-        None => scene::shared_fixtures()
-            .context("../shared/fixtures not found; pass --scene")?
-            .join("sponza/dabrovic/sponza.gltf"),
-    })
+/// The options every GPU benchmark program takes (`#[command(flatten)]` into its own).
+#[derive(clap::Args, Debug)]
+pub struct Options {
+    /// Report folder.
+    #[arg(long, default_value = "docs/bench")]
+    pub out: std::path::PathBuf,
+    /// Timed frames per measurement, after the warm-up (default: the benchmark's own).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub frames: Option<u32>,
+    /// Measure on a software adapter too (its timings are not GPU performance).
+    #[arg(long)]
+    pub allow_software: bool,
+}
+
+impl Options {
+    /// `--frames`, or the benchmark's `default`.
+    pub fn frames(&self, default: u32) -> u32 {
+        self.frames.unwrap_or(default)
+    }
+
+    /// The GPU to measure on ([`Gpu::from_env`]), printed; a software adapter is refused
+    /// without `--allow-software` ([`require_hardware`]).
+    pub fn gpu(&self) -> anyhow::Result<Gpu> {
+        clock_before();
+        let gpu = Gpu::from_env()?;
+        println!("adapter: {}", gpu.describe());
+        require_hardware(&gpu, self.allow_software)?;
+        Ok(gpu)
+    }
+
+    /// Writes `report` and its `markdown` as `<prefix><adapter>-<date>.{json,md}` into the
+    /// report folder ([`out_dir`]).
+    pub fn write_report(
+        &self,
+        header: &Header,
+        prefix: &str,
+        report: &impl Serialize,
+        markdown: &str,
+    ) -> anyhow::Result<()> {
+        write_report(
+            &out_dir(&self.out),
+            &header.file_stem(prefix),
+            report,
+            markdown,
+        )
+    }
+}
+
+/// The scene option of the benchmarks that render one.
+#[derive(clap::Args, Debug)]
+pub struct SceneOption {
+    /// Scene (default: ../shared/fixtures/sponza/dabrovic/sponza.gltf).
+    #[arg(long)]
+    pub scene: Option<std::path::PathBuf>,
+}
+
+impl SceneOption {
+    /// The scene's path (`--scene`, or else the shared fixtures' Dabrovic Sponza).
+    pub fn path(&self) -> anyhow::Result<std::path::PathBuf> {
+        use anyhow::Context;
+        Ok(match &self.scene {
+            Some(p) => p.clone(),
+            None => scene::shared_fixtures()
+                .context("../shared/fixtures not found; pass --scene")?
+                .join("sponza/dabrovic/sponza.gltf"),
+        })
+    }
+
+    /// The scene's path and the scene, loaded.
+    pub fn load(&self) -> anyhow::Result<(std::path::PathBuf, scene::Scene)> {
+        let path = self.path()?;
+        let scene = scene::Scene::load(&path)?;
+        Ok((path, scene))
+    }
 }
 
 /// Image error against a reference, on what a PNG shows (RGB clamped to \[0, 1\], sRGB).

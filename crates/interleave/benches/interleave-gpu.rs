@@ -10,7 +10,7 @@
 //!    discontinuity buffer.
 //! 4. What splitting buys: split + shade + gather against the fused indirection of §3.1.
 
-use std::{fmt::Write as _, path::PathBuf};
+use std::fmt::Write as _;
 
 use anyhow::{Context, Result, bail};
 use bench::{Header, Stat};
@@ -28,15 +28,8 @@ use serde::Serialize;
 #[derive(Parser, Debug)]
 #[command(version, about)]
 struct Args {
-    /// Output folder for the reports.
-    #[arg(long, default_value = "docs/bench")]
-    out: PathBuf,
-    /// Timed frames per measurement (after the harness warm-up: ≥ 10 frames and ≥ 300 ms of work).
-    #[arg(long, default_value_t = 50, value_parser = clap::value_parser!(u32).range(1..))]
-    frames: u32,
-    /// Write the report even on a software rasterizer (its times are not GPU performance).
-    #[arg(long)]
-    allow_software: bool,
+    #[command(flatten)]
+    options: bench::Options,
 }
 
 const SIZES: [(u32, u32); 2] = [(1920, 1080), (3840, 2160)];
@@ -273,12 +266,11 @@ fn name((w, h): (u32, u32)) -> String {
 
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
-    let gpu = Gpu::from_env()?;
-    println!("adapter: {}", gpu.describe());
-    bench::require_hardware(&gpu, args.allow_software)?;
+    let gpu = args.options.gpu()?;
+    let frames = args.options.frames(50);
     let bench = Bench {
         gpu: &gpu,
-        frames: args.frames,
+        frames: frames,
         timer: PassTimer::new(&gpu.device, 16),
     };
     let device = &gpu.device;
@@ -525,7 +517,7 @@ fn main() -> Result<()> {
 
     let report = Report {
         header: Header::new(&gpu),
-        frames: args.frames,
+        frames: frames,
         copy,
         split,
         sweep,
@@ -533,7 +525,7 @@ fn main() -> Result<()> {
         discontinuity,
         shading,
     };
-    write_report(&bench::out_dir(&args.out), &report)
+    write_report(&bench::out_dir(&args.options.out), &report)
 }
 
 /// Figure 5: two-pass split time against block side, one line per pattern.

@@ -6,8 +6,6 @@
 //! measured in the same run: a pass that only clears and stores the same five targets (the
 //! pass's unavoidable write traffic), and a buffer-to-buffer copy of as many bytes.
 
-use std::path::PathBuf;
-
 use anyhow::{Context, Result, bail};
 use bench::{Header, Stat};
 use clap::Parser;
@@ -24,18 +22,10 @@ use serde::Serialize;
 #[derive(Parser, Debug)]
 #[command(version, about)]
 struct Args {
-    /// Scene for the G-buffer benchmark (default: sponza/dabrovic/sponza.gltf in ../shared/fixtures).
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// Output folder for the reports.
-    #[arg(long, default_value = "docs/bench")]
-    out: PathBuf,
-    /// Timed frames per measurement (after the harness warm-up: ≥ 10 frames and ≥ 300 ms of work).
-    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
-    frames: u32,
-    /// Write the report even on a software rasterizer (its times are not GPU performance).
-    #[arg(long)]
-    allow_software: bool,
+    #[command(flatten)]
+    scene: bench::SceneOption,
+    #[command(flatten)]
+    options: bench::Options,
 }
 
 #[derive(Serialize)]
@@ -152,11 +142,9 @@ fn bench_gbuffer(
 fn main() -> Result<()> {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let args = Args::parse_from(bench::args());
-    let gpu = Gpu::from_env()?;
-    println!("adapter: {}", gpu.describe());
-    bench::require_hardware(&gpu, args.allow_software)?;
-    let path = bench::bench_scene_path(args.scene.as_deref())?;
-    let scene = Scene::load(&path)?;
+    let gpu = args.options.gpu()?;
+    let frames = args.options.frames(100);
+    let (path, scene) = args.scene.load()?;
     // Inside the atrium, along its long axis, looking at the far arcades.
     let camera = Camera {
         eye: Vec3::new(-13.0, 2.0, 0.0),
@@ -170,7 +158,7 @@ fn main() -> Result<()> {
     let gpu_scene = GpuScene::upload(&gpu.device, &gpu.queue, &scene, &pass)?;
     let mut results = Vec::new();
     for size in [(1920, 1080), (3840, 2160)].map(bench::size) {
-        let r = bench_gbuffer(&gpu, &scene, &gpu_scene, &pass, &camera, size, args.frames)?;
+        let r = bench_gbuffer(&gpu, &scene, &gpu_scene, &pass, &camera, size, frames)?;
         println!(
             "gbuffer {}x{}: {:.3} ms (min {:.3}); clear {:.3} ms; copy {:.3} ms; ×{:.2} clear, ×{:.2} copy; z-prepass path {:.3} ms (×{:.2})",
             r.width,
@@ -197,10 +185,10 @@ fn main() -> Result<()> {
             camera.eye.to_array(),
             camera.target.to_array()
         ),
-        frames: args.frames,
+        frames: frames,
         gbuffer: results,
     };
-    write_report(&bench::out_dir(&args.out), &report)
+    write_report(&bench::out_dir(&args.options.out), &report)
 }
 
 fn write_report(dir: &std::path::Path, r: &Report) -> Result<()> {

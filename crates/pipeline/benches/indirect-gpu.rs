@@ -6,8 +6,6 @@
 //! reference (RMSE, PSNR, FLIP mean; blur on and off). Writes `indirect-<adapter>-<date>.md`
 //! and `.json` under `--out`.
 
-use std::path::PathBuf;
-
 mod common;
 
 use anyhow::Result;
@@ -16,28 +14,19 @@ use bench::{Quality, per_frame_sum, quality};
 use clap::Parser;
 use common::time_passes;
 use glam::Vec3;
-use gpu::Gpu;
 use instant_radiosity::{IndirectConfig, Interleaving, vpl};
 use interleave::{Blur, BlurVariant, Pattern, SplitVariant};
 use pipeline::gpu::GpuRenderer;
-use scene::{Bvh, Scene};
+use scene::Bvh;
 use serde::Serialize;
 
 /// Benchmarks the interleaved indirect pipeline against the non-interleaved reference.
 #[derive(Parser, Debug)]
 struct Args {
-    /// Scene (default: ../shared/fixtures/sponza/dabrovic/sponza.gltf).
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// Report folder.
-    #[arg(long, default_value = "docs/bench")]
-    out: PathBuf,
-    /// Timed frames per configuration (after ≥ 10 warm-up frames and ≥ 300 ms of work).
-    #[arg(long, default_value_t = 10)]
-    frames: u32,
-    /// Run on a software adapter too (its timings are not GPU performance).
-    #[arg(long)]
-    allow_software: bool,
+    #[command(flatten)]
+    scene: bench::SceneOption,
+    #[command(flatten)]
+    options: bench::Options,
     /// Only the first size, VPL count and pattern (a smoke test).
     #[arg(long)]
     quick: bool,
@@ -106,11 +95,9 @@ fn config(
 
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
-    let gpu = Gpu::from_env()?;
-    println!("adapter: {}", gpu.describe());
-    bench::require_hardware(&gpu, args.allow_software)?;
-    let path = bench::bench_scene_path(args.scene.as_deref())?;
-    let scene = Scene::load(&path)?;
+    let gpu = args.options.gpu()?;
+    let frames = args.options.frames(10);
+    let (path, scene) = args.scene.load()?;
     let camera = scene::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
     let (lights, emissive, lit_by) = vpl::primary_lights(&scene);
     println!(
@@ -157,7 +144,7 @@ fn main() -> Result<()> {
                 let reference_ms = match &reference_ms {
                     Some(v) => v.clone(),
                     None => {
-                        let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, args.frames)?;
+                        let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, frames)?;
                         let v = per_frame_sum(&t, &["shading (reference)"]);
                         reference_ms = Some(v.clone());
                         v
@@ -192,7 +179,7 @@ fn main() -> Result<()> {
                 ] {
                     let c = config(bounds, pattern, interleaving, true);
                     renderer.set_indirect(&gpu.device, &c, &set)?;
-                    let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, args.frames)?;
+                    let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, frames)?;
                     let indirect = Stat::of(per_frame_sum(&t, &INDIRECT));
                     let reference_shading = Stat::of(reference_ms.clone());
                     let speedup = reference_shading.median_ms / indirect.median_ms;
@@ -224,19 +211,14 @@ fn main() -> Result<()> {
     let (scene, camera) = bench::scene_labels(&path, &camera);
     let report = Report {
         header: bench::Header::new(&gpu),
-        frames: args.frames,
+        frames: frames,
         scene,
         camera,
         rows,
         quality: qualities,
     };
-    let stem = report.header.file_stem("indirect-");
-    bench::write_report(
-        &bench::out_dir(&args.out),
-        &stem,
-        &report,
-        &markdown(&report),
-    )?;
+    args.options
+        .write_report(&report.header, "indirect-", &report, &markdown(&report))?;
     Ok(())
 }
 

@@ -7,8 +7,6 @@
 //! at ε = 1 and 4.
 //! Writes `manylod-<adapter>-<date>.{md,json}`.
 
-use std::path::PathBuf;
-
 use anyhow::Result;
 use bench::Stat;
 use clap::Parser;
@@ -28,18 +26,10 @@ use serde::Serialize;
 /// Benchmarks ManyLoDs cuts and splats.
 #[derive(Parser, Debug)]
 struct Args {
-    /// Scene (default: ../shared/fixtures/sponza/dabrovic/sponza.gltf).
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// Report folder.
-    #[arg(long, default_value = "docs/bench")]
-    out: PathBuf,
-    /// Timed frames per configuration (after ≥ 10 warm-up frames and ≥ 300 ms of work).
-    #[arg(long, default_value_t = 36)]
-    frames: u32,
-    /// Run on a software adapter too (its timings are not GPU performance).
-    #[arg(long)]
-    allow_software: bool,
+    #[command(flatten)]
+    scene: bench::SceneOption,
+    #[command(flatten)]
+    options: bench::Options,
 }
 
 const TILE: u32 = 32;
@@ -295,11 +285,9 @@ fn variant_row(
 
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
-    let gpu = Gpu::from_env()?;
-    bench::require_hardware(&gpu, args.allow_software)?;
-    println!("adapter: {}", gpu.describe());
-    let path = bench::bench_scene_path(args.scene.as_deref())?;
-    let scene = Scene::load(&path)?;
+    let gpu = args.options.gpu()?;
+    let frames = args.options.frames(36);
+    let (path, scene) = args.scene.load()?;
     let bvh = Bvh::build(&scene);
     let diagonal = scene.bounds().diagonal();
     let (positions, indices) = scene_mesh(&scene);
@@ -321,7 +309,7 @@ fn main() -> Result<()> {
             let mut m = gpu_manylod(&gpu, &bsh, &views_1k, epsilon, diagonal)?;
             if epsilon == 1.0 {
                 let refit = GpuRefit::new(&gpu.device, &m, &bsh, &s, &positions, &indices)?;
-                let refit_stat = bench::time_encoded(&gpu, &timer, args.frames, false, &|e, t| {
+                let refit_stat = bench::time_encoded(&gpu, &timer, frames, false, &|e, t| {
                     refit.encode(e, Some(t));
                 })?;
                 println!(
@@ -336,14 +324,7 @@ fn main() -> Result<()> {
             }
             for variant in variants(&m, true) {
                 rows.push(variant_row(
-                    &gpu,
-                    &timer,
-                    args.frames,
-                    &views_1k,
-                    &mut m,
-                    points,
-                    epsilon,
-                    variant,
+                    &gpu, &timer, frames, &views_1k, &mut m, points, epsilon, variant,
                 )?);
             }
             if epsilon == 1.0 {
@@ -352,7 +333,7 @@ fn main() -> Result<()> {
                     splat::ism(&bsh.nodes[n - 1..], views_1k[0].len(), 8192, 3)?;
                 let ism = GpuIsm::new(&gpu.device, &m, &ism_points, &list)?;
                 let by_name =
-                    time_animation(&gpu, &timer, args.frames, &views_1k, &mut m, &|m, e, t| {
+                    time_animation(&gpu, &timer, frames, &views_1k, &mut m, &|m, e, t| {
                         ism.encode(e, m, Some(t));
                         Ok(())
                     })?;
@@ -380,14 +361,7 @@ fn main() -> Result<()> {
             let mut m = gpu_manylod(&gpu, &bsh, &views_4k, epsilon, diagonal)?;
             for variant in variants(&m, false) {
                 rows.push(variant_row(
-                    &gpu,
-                    &timer,
-                    args.frames,
-                    &views_4k,
-                    &mut m,
-                    points,
-                    epsilon,
-                    variant,
+                    &gpu, &timer, frames, &views_4k, &mut m, points, epsilon, variant,
                 )?);
             }
         }
@@ -396,7 +370,7 @@ fn main() -> Result<()> {
     let header = bench::Header::new(&gpu);
     let mut md = header.markdown(
         "Many-view LoD cuts, ManyLoDs (Holländer 2013 §3.5–3.7)",
-        args.frames,
+        frames,
     );
     md.push_str(&format!(
         "\nScene: {} ({} triangles). VPLs from a spot light pointing down from high in the scene and \
@@ -414,7 +388,7 @@ fn main() -> Result<()> {
             .map_or_else(String::new, |f| f.to_string_lossy().into_owned()),
         scene.triangle_count(),
         100.0 * moved,
-        args.frames
+        frames
     ));
     for s in &setups {
         md.push_str(&format!(
@@ -455,13 +429,13 @@ fn main() -> Result<()> {
     }
     let report = Report {
         header,
-        frames: args.frames,
+        frames: frames,
         vpl_move: moved,
         scene: path.display().to_string(),
         triangles: scene.triangle_count(),
         setups,
         rows,
     };
-    let stem = report.header.file_stem("manylod-");
-    bench::write_report(&bench::out_dir(&args.out), &stem, &report, &md)
+    args.options
+        .write_report(&report.header, "manylod-", &report, &md)
 }

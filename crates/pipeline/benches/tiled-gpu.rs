@@ -6,8 +6,6 @@
 //! brute force measured in the same run as the baseline. Writes `tiled-shading-<adapter>-<date>`
 //! `.md` and `.json` under `--out`.
 
-use std::path::PathBuf;
-
 mod common;
 
 use anyhow::Result;
@@ -17,24 +15,16 @@ use clap::Parser;
 use common::time_passes;
 use gpu::Gpu;
 use pipeline::{DEFAULT_AMBIENT, ShadingConfig, ShadingMethod, gpu::GpuRenderer};
-use scene::{Camera, Light, Scene};
+use scene::{Camera, Light};
 use serde::Serialize;
 
 /// Benchmarks brute-force, tiled, tiled + normal-cone and clustered light accumulation.
 #[derive(Parser, Debug)]
 struct Args {
-    /// Scene of the light-count sweep (default: ../shared/fixtures/sponza/dabrovic/sponza.gltf).
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// Report folder.
-    #[arg(long, default_value = "docs/bench")]
-    out: PathBuf,
-    /// Timed frames per configuration (after ≥ 10 warm-up frames and ≥ 300 ms of work).
-    #[arg(long, default_value_t = 10)]
-    frames: u32,
-    /// Run on a software adapter too (its timings are not GPU performance).
-    #[arg(long)]
-    allow_software: bool,
+    #[command(flatten)]
+    scene: bench::SceneOption,
+    #[command(flatten)]
+    options: bench::Options,
     /// Only the smallest size and light count, and test 1 (a smoke test).
     #[arg(long)]
     quick: bool,
@@ -111,11 +101,9 @@ fn measure(
 
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
-    let gpu = Gpu::from_env()?;
-    println!("adapter: {}", gpu.describe());
-    bench::require_hardware(&gpu, args.allow_software)?;
-    let path = bench::bench_scene_path(args.scene.as_deref())?;
-    let scene = Scene::load(&path)?;
+    let gpu = args.options.gpu()?;
+    let frames = args.options.frames(10);
+    let (path, scene) = args.scene.load()?;
     let camera = scene::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
     println!(
         "scene: {} ({} triangles)",
@@ -136,7 +124,7 @@ fn main() -> Result<()> {
             renderer.set_lights(&gpu.device, &gpu.queue, &lights)?;
             let mut brute = f64::NAN;
             for method in ShadingMethod::ALL {
-                let (ms, mean_list) = measure(&gpu, &mut renderer, &camera, method, args.frames)?;
+                let (ms, mean_list) = measure(&gpu, &mut renderer, &camera, method, frames)?;
                 if method == ShadingMethod::BruteForce {
                     brute = ms.median_ms;
                 }
@@ -177,7 +165,7 @@ fn main() -> Result<()> {
                 };
                 renderer.set_lights(&gpu.device, &gpu.queue, &sent)?;
                 for method in ShadingMethod::ALL {
-                    let (ms, mean_list) = measure(&gpu, &mut renderer, &cam, method, args.frames)?;
+                    let (ms, mean_list) = measure(&gpu, &mut renderer, &cam, method, frames)?;
                     println!(
                         "test {test} {w}x{h} {:>4}/{} lights{} {method:<12} {:>8.3} ms",
                         sent.len(),
@@ -204,16 +192,15 @@ fn main() -> Result<()> {
     let (scene, camera) = bench::scene_labels(&path, &camera);
     let report = Report {
         header: bench::Header::new(&gpu),
-        frames: args.frames,
+        frames: frames,
         scene,
         camera,
         sweep,
         tests: rows,
     };
-    let stem = report.header.file_stem("tiled-shading-");
-    bench::write_report(
-        &bench::out_dir(&args.out),
-        &stem,
+    args.options.write_report(
+        &report.header,
+        "tiled-shading-",
         &report,
         &markdown(&report),
     )?;

@@ -18,14 +18,13 @@ use instant_radiosity::{
 };
 use manylod::{Bsh, CutProblem, View, bsh::level, cut, surfels};
 use rayon::prelude::*;
-use scene::{Bvh, Scene};
+use scene::Bvh;
 
 /// Draws three VPL views' cuts.
 #[derive(Parser, Debug)]
 struct Args {
-    /// Scene (default: ../shared/fixtures/sponza/dabrovic/sponza.gltf).
-    #[arg(long)]
-    scene: Option<PathBuf>,
+    #[command(flatten)]
+    scene: bench::SceneOption,
     /// Output folder.
     #[arg(long, default_value = "out")]
     out: PathBuf,
@@ -74,8 +73,7 @@ fn pick(views: &[View], axis: Vec3) -> Option<View> {
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    let path = bench::bench_scene_path(args.scene.as_deref())?;
-    let scene = Scene::load(&path)?;
+    let (_, scene) = args.scene.load()?;
     let bvh = Bvh::build(&scene);
     let bounds = scene.bounds();
     let (center, extent, diagonal) = (bounds.center(), bounds.max - bounds.min, bounds.diagonal());

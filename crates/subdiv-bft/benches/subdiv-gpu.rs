@@ -8,8 +8,6 @@
 //! metric and the adaptive main step, against the uniform level 6 in the same run. Writes
 //! `subdiv-bft-<adapter>-<date>.{md,json}`.
 
-use std::path::PathBuf;
-
 use anyhow::{Context, Result};
 use bench::Stat;
 use clap::Parser;
@@ -22,15 +20,8 @@ use subdiv_bft::{
 /// Benchmarks GPU Loop subdivision with basis-function tables.
 #[derive(Parser, Debug)]
 struct Args {
-    /// Report folder.
-    #[arg(long, default_value = "docs/bench")]
-    out: PathBuf,
-    /// Timed frames per configuration (after ≥ 10 warm-up frames and ≥ 300 ms of work).
-    #[arg(long, default_value_t = 20)]
-    frames: u32,
-    /// Run on a software adapter too (its timings are not GPU performance).
-    #[arg(long)]
-    allow_software: bool,
+    #[command(flatten)]
+    options: bench::Options,
 }
 
 #[derive(Serialize)]
@@ -80,11 +71,8 @@ struct Report {
 
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
-    let gpu = Gpu::from_env()?;
-    if let Err(e) = bench::require_hardware(&gpu, args.allow_software) {
-        anyhow::bail!("{e}");
-    }
-    println!("adapter: {}", gpu.describe());
+    let gpu = args.options.gpu()?;
+    let frames = args.options.frames(20);
     let fixtures = scene::shared_fixtures().context("../shared/fixtures not found")?;
     let bft = BftSet::cached(
         &BftSet::default_path(DEFAULT_LEVEL, MAX_VALENCE),
@@ -107,13 +95,13 @@ fn main() -> Result<()> {
         g.set_positions(&gpu.queue, &mesh.positions_f32())?;
         for level in levels {
             let out = g.level(&gpu.device, &sub, level)?;
-            let initial = bench::time_encoded(&gpu, &timer, args.frames, false, &|e, t| {
+            let initial = bench::time_encoded(&gpu, &timer, frames, false, &|e, t| {
                 g.encode_initial(e, Some(t));
             })?;
-            let evaluate = bench::time_encoded(&gpu, &timer, args.frames, false, &|e, t| {
+            let evaluate = bench::time_encoded(&gpu, &timer, frames, false, &|e, t| {
                 g.encode_evaluate(e, &out, Some(t));
             })?;
-            let clear_baseline = bench::time_encoded(&gpu, &timer, args.frames, true, &|e, t| {
+            let clear_baseline = bench::time_encoded(&gpu, &timer, frames, true, &|e, t| {
                 let pass = e.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("start"),
                     timestamp_writes: t.compute_pass("clear"),
@@ -153,21 +141,13 @@ fn main() -> Result<()> {
             });
         }
         if name != "bunny" {
-            adaptive.extend(bench_adaptive(
-                &gpu,
-                &timer,
-                args.frames,
-                name,
-                &mesh,
-                &sub,
-                &g,
-            )?);
+            adaptive.extend(bench_adaptive(&gpu, &timer, frames, name, &mesh, &sub, &g)?);
         }
     }
     let header = bench::Header::new(&gpu);
     let mut md = header.markdown(
         "Loop subdivision with basis-function tables (Holländer 2013 §2.3)",
-        args.frames,
+        frames,
     );
     md.push_str(&format!(
         "\nTables: level {} ({}×{} segments per M¹ patch), {} configurations, {:.2} MB. GPU times \
@@ -184,7 +164,7 @@ fn main() -> Result<()> {
         bft.segments(),
         bft.tables.len(),
         bft.weight_bytes() as f64 / 1e6,
-        args.frames
+        frames
     ));
     for r in &rows {
         md.push_str(&format!(
@@ -228,15 +208,15 @@ fn main() -> Result<()> {
     }
     let report = Report {
         header,
-        frames: args.frames,
+        frames: frames,
         table_level: bft.level,
         table_megabytes: bft.weight_bytes() as f64 / 1e6,
         tables: bft.tables.len(),
         rows,
         adaptive,
     };
-    let stem = report.header.file_stem("subdiv-bft-");
-    bench::write_report(&bench::out_dir(&args.out), &stem, &report, &md)
+    args.options
+        .write_report(&report.header, "subdiv-bft-", &report, &md)
 }
 
 /// Adaptive rows of one mesh: screen-space factors for 4, 2 and 1 pixel edges.
