@@ -20,7 +20,7 @@ use gpu::{Gpu, PassTimer, transfer, wgpu};
 use interleave::{
     Block, Blur, BlurVariant, Pattern, SplitLayout, SplitVariant, Thresholds,
     cpu::SubsetLight,
-    gpu::{BlurPass, DiscontinuityPass, Passes, Splitter, SubsetShading, upload_image},
+    gpu::{BlurPass, DiscontinuityPass, Passes, Splitter, SubsetShading, upload_depth_normals},
 };
 use serde::Serialize;
 
@@ -386,20 +386,7 @@ fn main() -> Result<()> {
     // 3: blur (Table 2) and discontinuity buffer.
     let (w, h) = bench::size((1280, 1024));
     let (depth, normals) = scene_gbuffer(w, h)?;
-    let depth_t = upload_image(
-        &gpu.device,
-        &gpu.queue,
-        "linear depth",
-        &depth,
-        gbuffer::LINEAR_DEPTH_FORMAT,
-    )?;
-    let normal_t = upload_image(
-        &gpu.device,
-        &gpu.queue,
-        "normals",
-        &normals,
-        gbuffer::NORMAL_FORMAT,
-    )?;
+    let [depth_t, normal_t] = upload_depth_normals(&gpu.device, &gpu.queue, &depth, &normals)?;
     let disc_pass = DiscontinuityPass::new(device, &Thresholds::default())?;
     let disc = bench.texture(
         "discontinuities",
@@ -439,20 +426,7 @@ fn main() -> Result<()> {
     let mut shading = Vec::new();
     for size in SIZES.map(bench::size) {
         let (depth, normals) = scene_gbuffer(size.0, size.1)?;
-        let depth_t = upload_image(
-            &gpu.device,
-            &gpu.queue,
-            "linear depth",
-            &depth,
-            gbuffer::LINEAR_DEPTH_FORMAT,
-        )?;
-        let normal_t = upload_image(
-            &gpu.device,
-            &gpu.queue,
-            "normals",
-            &normals,
-            gbuffer::NORMAL_FORMAT,
-        )?;
+        let [depth_t, normal_t] = upload_depth_normals(&gpu.device, &gpu.queue, &depth, &normals)?;
         let d = bench.texture(
             "discontinuities",
             size,

@@ -48,6 +48,28 @@ pub fn upload_image<T: Pod>(
     )?)
 }
 
+/// Uploads a G-buffer's linear depth and octahedral normals (same size) into textures of
+/// the G-buffer's formats: what the discontinuity buffer and the subset shading read.
+pub fn upload_depth_normals(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    linear_depth: &Image<f32>,
+    normals: &Image<u32>,
+) -> Result<[wgpu::Texture; 2], InterleaveError> {
+    let (w, h) = (linear_depth.width(), linear_depth.height());
+    crate::cpu::check_size("normal image", normals, w, h)?;
+    Ok([
+        upload_image(
+            device,
+            queue,
+            "linear depth",
+            linear_depth,
+            gbuffer::LINEAR_DEPTH_FORMAT,
+        )?,
+        upload_image(device, queue, "normals", normals, gbuffer::NORMAL_FORMAT)?,
+    ])
+}
+
 /// Reads `texture` back into an image of texels `T` (of the format's texel size).
 pub fn download_image<T: Pod>(
     device: &wgpu::Device,
@@ -116,27 +138,8 @@ pub fn run_discontinuity(
     normals: &Image<u32>,
     thresholds: &Thresholds,
 ) -> Result<Image<[u8; 4]>, InterleaveError> {
-    crate::cpu::check_size(
-        "normal image",
-        normals,
-        linear_depth.width(),
-        linear_depth.height(),
-    )?;
+    let [depth, nrm] = upload_depth_normals(&gpu.device, &gpu.queue, linear_depth, normals)?;
     let pass = DiscontinuityPass::new(&gpu.device, thresholds)?;
-    let depth = upload_image(
-        &gpu.device,
-        &gpu.queue,
-        "linear depth",
-        linear_depth,
-        gbuffer::LINEAR_DEPTH_FORMAT,
-    )?;
-    let nrm = upload_image(
-        &gpu.device,
-        &gpu.queue,
-        "normals",
-        normals,
-        gbuffer::NORMAL_FORMAT,
-    )?;
     let out = transfer::texture_2d(
         &gpu.device,
         "discontinuities",
@@ -212,23 +215,9 @@ pub fn run_shading(
     shading: Shading,
 ) -> Result<Image<[f32; 4]>, InterleaveError> {
     crate::cpu::check_size("linear depth", linear_depth, layout.width, layout.height)?;
-    crate::cpu::check_size("normal image", normals, layout.width, layout.height)?;
     let device = &gpu.device;
     let shade = SubsetShading::new(device, layout, lights)?;
-    let depth = upload_image(
-        &gpu.device,
-        &gpu.queue,
-        "linear depth",
-        linear_depth,
-        gbuffer::LINEAR_DEPTH_FORMAT,
-    )?;
-    let nrm = upload_image(
-        &gpu.device,
-        &gpu.queue,
-        "normals",
-        normals,
-        gbuffer::NORMAL_FORMAT,
-    )?;
+    let [depth, nrm] = upload_depth_normals(device, &gpu.queue, linear_depth, normals)?;
     let out = BlurPass::irradiance_texture(device, "irradiance", layout.width, layout.height);
     let passes = match shading {
         Shading::Fused => shade.shade_fused(device, &depth, &nrm, &out)?,
