@@ -2,7 +2,7 @@
 // The supersampled G-buffer of adaptive supersampling (Holländer 2013 §4.3.3): the vertex
 // stage of `gbuffer.wgsl`, but instead of albedo the fragment stage stores the texture
 // coordinates and their derivatives per sample step, so the texture is looked up when a sample
-// is shaded (`ssaa.wgsl`, §4.3.4). The material word carries the material id, whose texture
+// is shaded (`shade.wgsl`, §4.3.4). The material word carries the material id, whose texture
 // layer the shading reads from the material table.
 
 struct TexcoordOut {

@@ -16,7 +16,7 @@
 //!    ordered-dither index matrix ([`dither_matrix`], Figure 4.7, §4.3.2) and averaged.
 //!
 //! The CPU reference is [`cpu`]; the GPU kernels ([`gpu`]) are one render pass (the
-//! supersampled G-buffer) and compute passes of `shaders/adaptive-ssaa/ssaa.wgsl`.
+//! supersampled G-buffer) and compute passes, one WGSL file per stage under `shaders/adaptive-ssaa/` (`shade`, `evaluate`, `sort`, `fxaa` over `common.wgsl`).
 //!
 //! ```no_run
 //! use adaptive_ssaa::{GeometricMetric, SsaaConfig};
@@ -48,8 +48,12 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "adaptive-ssaa",
     imports: [gbuffer::SHADERS, tiled_shading::SHADERS],
     files: [
+        "common.wgsl",
+        "evaluate.wgsl",
+        "fxaa.wgsl",
         "gbuffer.wgsl",
-        "ssaa.wgsl",
+        "shade.wgsl",
+        "sort.wgsl",
     ],
 );
 
@@ -299,7 +303,7 @@ impl SsaaConfig {
     }
 }
 
-/// A material as `ssaa.wgsl` sees it (`SsaaMaterial`): the base colour factor, the emission
+/// A material as `common.wgsl` sees it (`SsaaMaterial`): the base colour factor, the emission
 /// and the texture-array layer of the base colour texture (roughness and metallic come from
 /// the G-buffer's material word).
 #[repr(C)]

@@ -1,0 +1,109 @@
+//! A whole scene set up for adaptive supersampling at one size.
+
+use ::gbuffer::Frame;
+use ::gbuffer::gpu::{GBufferPass, GpuScene};
+use ::gpu::{PassTimer, transfer};
+use scene::{Camera, Scene};
+use tiled_shading::GpuLight;
+
+use super::{GpuTextures, SsGBufferPass, SsGBufferTargets, Ssaa, SsaaInputs, TEXTURE_SIZE};
+use crate::{SsaaConfig, SsaaError, SsaaMaterial, TextureArray};
+
+/// A scene set up for adaptive supersampling at one size: G-buffer passes, uploaded scene,
+/// texture array, materials, targets and the [`Ssaa`] passes.
+pub struct SsaaRenderer {
+    gbuffer_pass: GBufferPass,
+    ss_pass: SsGBufferPass,
+    scene: GpuScene,
+    /// The supersampled G-buffer.
+    pub targets: SsGBufferTargets,
+    /// The adaptive supersampling passes.
+    pub ssaa: Ssaa,
+    width: u32,
+    height: u32,
+}
+
+impl SsaaRenderer {
+    /// Uploads `scene` (textures resampled to at most [`TEXTURE_SIZE`]) and builds every pass
+    /// for a `width × height` image.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        lights: &[GpuLight],
+        width: u32,
+        height: u32,
+        config: &SsaaConfig,
+    ) -> Result<Self, SsaaError> {
+        config.validate()?;
+        let (sw, sh) = (width.checked_mul(config.m), height.checked_mul(config.m));
+        let (Some(sw), Some(sh)) = (sw, sh) else {
+            return Err(SsaaError::InvalidSize {
+                width,
+                height,
+                m: config.m,
+            });
+        };
+        if width == 0 || height == 0 || sw > ::gbuffer::MAX_SIZE || sh > ::gbuffer::MAX_SIZE {
+            return Err(SsaaError::InvalidSize {
+                width,
+                height,
+                m: config.m,
+            });
+        }
+        let gbuffer_pass = GBufferPass::new(device)?;
+        let ss_pass = SsGBufferPass::new(device, &gbuffer_pass)?;
+        let gpu_scene = GpuScene::upload(device, queue, scene, &gbuffer_pass)?;
+        let textures = GpuTextures::new(
+            device,
+            queue,
+            &TextureArray::new(scene, TEXTURE_SIZE),
+            config.anisotropy,
+        )?;
+        let materials = transfer::buffer_init(
+            device,
+            "ssaa materials",
+            bytemuck::cast_slice(&SsaaMaterial::of_scene(scene)),
+            wgpu::BufferUsages::STORAGE,
+        )?;
+        let targets = SsGBufferTargets::new(device, sw, sh)?;
+        let inputs = SsaaInputs {
+            frame: gbuffer_pass.frame_buffer(),
+            targets: &targets,
+            textures: &textures,
+            materials: &materials,
+        };
+        let mut ssaa = Ssaa::new(device, &inputs, config, width, height, lights.len())?;
+        ssaa.set_lights(queue, lights)?;
+        Ok(Self {
+            gbuffer_pass,
+            ss_pass,
+            scene: gpu_scene,
+            targets,
+            ssaa,
+            width,
+            height,
+        })
+    }
+
+    /// Writes the camera (frame at the sample resolution, far distance).
+    pub fn set_camera(&mut self, queue: &wgpu::Queue, camera: &Camera) -> Result<(), SsaaError> {
+        ::gbuffer::validate_camera(camera)?;
+        let m = self.ssaa.config().m;
+        self.gbuffer_pass
+            .write_frame(queue, &Frame::new(camera, self.width * m, self.height * m));
+        self.ssaa.set_far(queue, camera.far);
+        Ok(())
+    }
+
+    /// Records the supersampled G-buffer pass.
+    pub fn encode_gbuffer(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
+        self.ss_pass.encode(
+            encoder,
+            &self.gbuffer_pass,
+            &self.scene,
+            &self.targets,
+            timer.and_then(|t| t.render_pass("ss gbuffer")),
+        );
+    }
+}
