@@ -540,7 +540,7 @@ fn bind_rejects_mismatched_inputs() {
     let set = vpls(&s, 64, 16, 0);
     let stage = igpu::IndirectStage::new(d, &c, (32, 24)).expect("stage");
     let good = stage.output_textures(d);
-    let bind = |outputs: [&gpu::wgpu::Texture; 2], set: &VplSet| {
+    let bind = |outputs: [&wgpu::Texture; 2], set: &VplSet| {
         stage
             .bind(d, &uploaded.frame, uploaded.textures(), set, None, outputs)
             .map(|_| ())
@@ -560,8 +560,8 @@ fn bind_rejects_mismatched_inputs() {
         "rgba8",
         32,
         24,
-        gpu::wgpu::TextureFormat::Rgba8Unorm,
-        gpu::wgpu::TextureUsages::STORAGE_BINDING,
+        wgpu::TextureFormat::Rgba8Unorm,
+        wgpu::TextureUsages::STORAGE_BINDING,
     );
     let e = bind([&good[0], &rgba8], &set).expect_err("Rgba8 output");
     assert!(
