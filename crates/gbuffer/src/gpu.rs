@@ -415,59 +415,23 @@ impl GBufferPass {
             &[Binding::Uniform, Binding::Texture, Binding::Sampler],
         );
         let layout = kernel::pipeline_layout(device, "gbuffer", &[&frame_layout, &material_layout]);
-        let target = |format| {
-            Some(wgpu::ColorTargetState {
-                format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        };
         let depth_layout = kernel::pipeline_layout(device, "gbuffer z-prepass", &[&frame_layout]);
         let targets = [
-            target(LINEAR_DEPTH_FORMAT),
-            target(NORMAL_FORMAT),
-            target(ALBEDO_FORMAT),
-            target(MATERIAL_FORMAT),
+            LINEAR_DEPTH_FORMAT,
+            NORMAL_FORMAT,
+            ALBEDO_FORMAT,
+            MATERIAL_FORMAT,
         ];
         // One pipeline shape, three uses: single-pass G-buffer (depth Less, write), z-prepass
         // (depth only), and the G-buffer after a prepass (depth Equal, no write).
         let make = |label, compare, write, fragment: bool| {
-            let full = Self::vertex_attributes();
-            let attributes = if fragment { &full[..] } else { &full[..1] };
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(if fragment { &layout } else { &depth_layout }),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some(if fragment { "vs_main" } else { "vs_depth" }),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: size_of::<GpuVertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes,
-                    })],
-                },
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(write),
-                    depth_compare: Some(compare),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: fragment.then(|| wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            let stages = if fragment {
+                ("vs_main", Some(("fs_main", &targets[..])))
+            } else {
+                ("vs_depth", None)
+            };
+            let layout = if fragment { &layout } else { &depth_layout };
+            scene_pipeline(device, label, layout, &module, stages, (compare, write))
         };
         let pipeline = make("gbuffer", wgpu::CompareFunction::Less, true, true);
         let prepass = make(
@@ -514,11 +478,6 @@ impl GBufferPass {
     /// ([`GBufferPass::draw_scene`]).
     pub fn layouts(&self) -> [&Layout; 2] {
         [&self.frame_layout, &self.material_layout]
-    }
-
-    /// The vertex buffer layout of an uploaded [`GpuScene`] (`vs_main` inputs).
-    pub fn vertex_attributes() -> [wgpu::VertexAttribute; 3] {
-        wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2]
     }
 
     /// Draws `scene` with `pipeline` (built on [`GBufferPass::layouts`] and
@@ -725,4 +684,63 @@ pub fn run_with(
     }
     gpu.queue.submit([encoder.finish()]);
     targets.read(&gpu.device, &gpu.queue)
+}
+
+/// A render pipeline drawing an uploaded [`GpuScene`] into the G-buffer's depth target:
+/// `stages` = (vertex entry, optional (fragment entry, colour target formats)) of `module`,
+/// `depth` = (compare, write). With a fragment stage the vertex stage reads every
+/// [`GpuVertex`] attribute (`vs_main`), without one only the position (a depth-only pass).
+pub fn scene_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (vertex, fragment): (&str, Option<(&str, &[wgpu::TextureFormat])>),
+    (compare, write): (wgpu::CompareFunction, bool),
+) -> wgpu::RenderPipeline {
+    let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
+    let used = if fragment.is_some() {
+        &attributes[..]
+    } else {
+        &attributes[..1]
+    };
+    let targets: Vec<Option<wgpu::ColorTargetState>> = fragment
+        .map_or(&[][..], |(_, formats)| formats)
+        .iter()
+        .map(|&format| Some(format.into()))
+        .collect();
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vertex),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: size_of::<GpuVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: used,
+            })],
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(write),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: fragment.map(|(entry, _)| wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets: &targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
 }

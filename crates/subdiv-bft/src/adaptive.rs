@@ -319,14 +319,7 @@ impl Patches {
                 out
             })
             .collect();
-        let n = self.output_vertex_count(max_segments);
-        let mut positions = vec![Vec3::ZERO; n];
-        let mut normals = vec![Vec3::ZERO; n];
-        for (o, p, q) in per_patch.into_iter().flatten() {
-            positions[o as usize] = p;
-            normals[o as usize] = q;
-        }
-        (positions, normals)
+        crate::patch::scatter(per_patch, self.output_vertex_count(max_segments))
     }
 }
 

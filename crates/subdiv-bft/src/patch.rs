@@ -247,13 +247,7 @@ impl Patches {
                 out
             })
             .collect();
-        let mut positions = vec![Vec3::ZERO; n];
-        let mut normals = vec![Vec3::ZERO; n];
-        for (o, p, q) in per_patch.into_iter().flatten() {
-            positions[o as usize] = p;
-            normals[o as usize] = q;
-        }
-        (positions, normals)
+        scatter(per_patch, n)
     }
 }
 
@@ -324,4 +318,16 @@ pub fn triangle_walk(s: u32) -> Vec<u32> {
         }
     }
     out
+}
+
+/// The `n` output vertices from each patch's `(output index, position, normal)` list (shared
+/// vertices are written by every patch that holds them, with the same values).
+pub(crate) fn scatter(per_patch: Vec<Vec<(u32, Vec3, Vec3)>>, n: usize) -> (Vec<Vec3>, Vec<Vec3>) {
+    let mut positions = vec![Vec3::ZERO; n];
+    let mut normals = vec![Vec3::ZERO; n];
+    for (o, p, q) in per_patch.into_iter().flatten() {
+        positions[o as usize] = p;
+        normals[o as usize] = q;
+    }
+    (positions, normals)
 }

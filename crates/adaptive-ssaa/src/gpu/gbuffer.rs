@@ -1,7 +1,7 @@
 //! The supersampled G-buffer (`shaders/adaptive-ssaa/gbuffer.wgsl`): the G-buffer pass's vertex
 //! stage with a fragment stage that also writes texture coordinates and their derivatives.
 
-use ::gbuffer::gpu::{GBufferPass, GpuScene};
+use ::gbuffer::gpu::{GBufferPass, GpuScene, scene_pipeline};
 use ::gbuffer::{DEPTH_FORMAT, Image, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
 use ::gpu::kernel::{self};
 use ::gpu::{GpuError, transfer};
@@ -104,54 +104,16 @@ impl SsGBufferPass {
         let module = crate::SHADERS.module(device, "gbuffer.wgsl")?;
         let [frame, material] = gbuffer_pass.layouts();
         let layout = kernel::pipeline_layout(device, "ss gbuffer", &[frame, material]);
-        let attributes = GBufferPass::vertex_attributes();
-        let target = |format| {
-            Some(wgpu::ColorTargetState {
-                format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        };
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("ss gbuffer"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: size_of::<::gbuffer::gpu::GpuVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &attributes,
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_texcoord"),
-                compilation_options: Default::default(),
-                targets: &[
-                    target(LINEAR_DEPTH_FORMAT),
-                    target(NORMAL_FORMAT),
-                    target(UV_FORMAT),
-                    target(MATERIAL_FORMAT),
-                    target(UV_GRAD_FORMAT),
-                ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let targets = [
+            LINEAR_DEPTH_FORMAT,
+            NORMAL_FORMAT,
+            UV_FORMAT,
+            MATERIAL_FORMAT,
+            UV_GRAD_FORMAT,
+        ];
+        let stages = ("vs_main", Some(("fs_texcoord", &targets[..])));
+        let depth = (wgpu::CompareFunction::Less, true);
+        let pipeline = scene_pipeline(device, "ss gbuffer", &layout, &module, stages, depth);
         Ok(Self { pipeline })
     }
 

@@ -227,31 +227,16 @@ impl Ssaa {
             (light_capacity * size_of::<GpuLight>()) as u64,
             wgpu::BufferUsages::empty(),
         )?;
-        let first = storage(
-            device,
-            "ssaa first sample",
-            pixels * 16,
-            wgpu::BufferUsages::empty(),
-        )?;
-        let counts = storage(
-            device,
-            "ssaa sample counts",
-            pixels * 4,
-            wgpu::BufferUsages::empty(),
-        )?;
-        let output = storage(
-            device,
-            "ssaa output",
-            pixels * 16,
-            wgpu::BufferUsages::empty(),
-        )?;
-        let sort = storage(device, "ssaa sort", 131 * 4, wgpu::BufferUsages::empty())?;
-        let list = storage(
-            device,
-            "ssaa pixel list",
-            pixels * 4,
-            wgpu::BufferUsages::empty(),
-        )?;
+        let none = wgpu::BufferUsages::empty();
+        let [first, counts, output, sort, list] = [
+            ("ssaa first sample", pixels * 16),
+            ("ssaa sample counts", pixels * 4),
+            ("ssaa output", pixels * 16),
+            ("ssaa sort", 131 * 4),
+            ("ssaa pixel list", pixels * 4),
+        ]
+        .map(|(label, size)| storage(device, label, size, none));
+        let [first, counts, output, sort, list] = [first?, counts?, output?, sort?, list?];
         let args = storage(
             device,
             "ssaa dispatch args",
