@@ -597,56 +597,69 @@ impl GBufferPass {
         clear_depth: bool,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> wgpu::RenderPass<'e> {
-        let views = [
-            &targets.linear_depth,
-            &targets.normal,
-            &targets.albedo,
-            &targets.material,
-        ]
-        .map(|t| t.create_view(&Default::default()));
-        let clears = [0.0, 0.0, 0.0, f64::from(NO_MATERIAL)];
-        let attachments: Vec<_> = views
-            .iter()
-            .zip(clears)
-            .map(|(view, c)| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: c,
-                            g: 0.0,
-                            b: 0.0,
-                            a: 0.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            })
-            .collect();
-        let attachments = if color { &attachments[..] } else { &[] };
-        let depth_view = targets.depth.create_view(&Default::default());
-        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(label),
-            color_attachments: attachments,
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: if clear_depth {
-                        wgpu::LoadOp::Clear(1.0)
-                    } else {
-                        wgpu::LoadOp::Load
-                    },
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        })
+        let colour = [
+            (&targets.linear_depth, 0.0),
+            (&targets.normal, 0.0),
+            (&targets.albedo, 0.0),
+            (&targets.material, f64::from(NO_MATERIAL)),
+        ];
+        let colour = if color { &colour[..] } else { &[] };
+        let depth = (&targets.depth, clear_depth);
+        begin_scene_pass(encoder, label, colour, depth, timestamp_writes)
     }
+}
+
+/// Begins a render pass over `colour` targets, each cleared to its value (red channel; the
+/// G-buffer's material target clears to [`NO_MATERIAL`]), and `depth` = (depth target,
+/// cleared to 1 or else loaded).
+pub fn begin_scene_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    colour: &[(&wgpu::Texture, f64)],
+    (depth, clear_depth): (&wgpu::Texture, bool),
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    let views: Vec<_> = colour
+        .iter()
+        .map(|(t, clear)| (t.create_view(&Default::default()), *clear))
+        .collect();
+    let attachments: Vec<_> = views
+        .iter()
+        .map(|(view, r)| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: *r,
+                        ..wgpu::Color::TRANSPARENT
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        })
+        .collect();
+    let depth_view = depth.create_view(&Default::default());
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &attachments,
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &depth_view,
+            depth_ops: Some(wgpu::Operations {
+                load: if clear_depth {
+                    wgpu::LoadOp::Clear(1.0)
+                } else {
+                    wgpu::LoadOp::Load
+                },
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
 
 /// Convenience for tests and examples: uploads `scene`, renders its G-buffer on `gpu` and

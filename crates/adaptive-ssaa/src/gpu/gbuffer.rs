@@ -1,9 +1,9 @@
 //! The supersampled G-buffer (`shaders/adaptive-ssaa/gbuffer.wgsl`): the G-buffer pass's vertex
 //! stage with a fragment stage that also writes texture coordinates and their derivatives.
 
-use ::gbuffer::gpu::{GBufferPass, GpuScene, scene_pipeline};
+use ::gbuffer::gpu::{GBufferPass, GpuScene, begin_scene_pass, scene_pipeline};
 use ::gbuffer::{DEPTH_FORMAT, Image, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
-use ::gpu::kernel::{self};
+use ::gpu::kernel;
 use ::gpu::{GpuError, transfer};
 
 use crate::cpu::SsGBuffer;
@@ -127,49 +127,15 @@ impl SsGBufferPass {
         targets: &SsGBufferTargets,
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
-        let views = [
+        let colour = [
             (&targets.linear_depth, 0.0),
             (&targets.normal, 0.0),
             (&targets.uv, 0.0),
             (&targets.material, f64::from(::gbuffer::NO_MATERIAL)),
             (&targets.uv_grad, 0.0),
-        ]
-        .map(|(t, clear)| (t.create_view(&Default::default()), clear));
-        let attachments: Vec<_> = views
-            .iter()
-            .map(|(view, clear)| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: *clear,
-                            g: 0.0,
-                            b: 0.0,
-                            a: 0.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            })
-            .collect();
-        let depth_view = targets.depth.create_view(&Default::default());
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("ss gbuffer"),
-            color_attachments: &attachments,
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        ];
+        let depth = (&targets.depth, true);
+        let mut pass = begin_scene_pass(encoder, "ss gbuffer", &colour, depth, timestamp_writes);
         gbuffer_pass.draw_scene(&mut pass, &self.pipeline, scene);
     }
 }
