@@ -128,6 +128,16 @@ fn pixel_samples(i: u32) -> u32 {
     return clamp(counts[i], 1u, params.n);
 }
 
+// Samples of pixel i; a pixel of one sample takes S as its output here (Listing 4.1: those
+// pixels are done after the first sample).
+fn samples_or_first(i: u32) -> u32 {
+    let k = pixel_samples(i);
+    if k == 1u {
+        out_image[i] = first[i];
+    }
+    return k;
+}
+
 
 // Average of the first k samples of p's window in dither order.
 fn average_samples(p: vec2<u32>, k: u32) -> vec4<f32> {

@@ -19,10 +19,8 @@ fn shade_adaptive(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let i = pixel_index(p);
-    let k = pixel_samples(i);
-    if k == 1u {
-        out_image[i] = first[i];
-    } else {
+    let k = samples_or_first(i);
+    if k > 1u {
         out_image[i] = average_samples(p, k);
     }
 }

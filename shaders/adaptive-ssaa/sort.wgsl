@@ -13,10 +13,8 @@ fn sort_count(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let i = pixel_index(p);
-    let k = pixel_samples(i);
-    if k == 1u {
-        out_image[i] = first[i];
-    } else {
+    let k = samples_or_first(i);
+    if k > 1u {
         atomicAdd(&sort[HISTOGRAM + k], 1u);
     }
 }

@@ -257,6 +257,17 @@ impl Options {
     }
 }
 
+/// The options of a benchmark that renders a scene: [`SceneOption`] and [`Options`].
+#[derive(clap::Args, Debug)]
+pub struct SceneArgs {
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub scene: SceneOption,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub options: Options,
+}
+
 /// The scene option of the benchmarks that render one.
 #[derive(clap::Args, Debug)]
 pub struct SceneOption {

@@ -49,6 +49,15 @@ pub fn check_texture_size(
     Ok(())
 }
 
+/// Usage of a compute kernel's output texture: written as storage, then sampled or copied out.
+pub const STORAGE_OUTPUT: wgpu::TextureUsages = wgpu::TextureUsages::STORAGE_BINDING
+    .union(wgpu::TextureUsages::TEXTURE_BINDING)
+    .union(wgpu::TextureUsages::COPY_SRC);
+
+/// [`STORAGE_OUTPUT`] that can also be uploaded into: a texture any kernel of a chain may read
+/// or write, and tests fill and read back.
+pub const STORAGE_ANY: wgpu::TextureUsages = STORAGE_OUTPUT.union(wgpu::TextureUsages::COPY_DST);
+
 /// A 2D texture with one mip level and one sample.
 pub fn texture_2d(
     device: &wgpu::Device,

@@ -54,10 +54,7 @@ struct ShadingParams {
     _pad: u32,
 }
 
-const USAGE: wgpu::TextureUsages = wgpu::TextureUsages::TEXTURE_BINDING
-    .union(wgpu::TextureUsages::STORAGE_BINDING)
-    .union(wgpu::TextureUsages::COPY_SRC)
-    .union(wgpu::TextureUsages::COPY_DST);
+const USAGE: wgpu::TextureUsages = ::gpu::transfer::STORAGE_ANY;
 
 /// `vpl_shading.wgsl`: frame, params, VPLs; the G-buffer; diffuse and specular outputs;
 /// shadow atlas and its parameters.

@@ -23,9 +23,7 @@ use serde::Serialize;
 #[command(version, about)]
 struct Args {
     #[command(flatten)]
-    scene: bench::SceneOption,
-    #[command(flatten)]
-    options: bench::Options,
+    common: bench::SceneArgs,
 }
 
 #[derive(Serialize)]
@@ -142,9 +140,9 @@ fn bench_gbuffer(
 fn main() -> Result<()> {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let args = Args::parse_from(bench::args());
-    let gpu = args.options.gpu()?;
-    let frames = args.options.frames(100);
-    let (path, scene) = args.scene.load()?;
+    let gpu = args.common.options.gpu()?;
+    let frames = args.common.options.frames(100);
+    let (path, scene) = args.common.scene.load()?;
     // Inside the atrium, along its long axis, looking at the far arcades.
     let camera = Camera {
         eye: Vec3::new(-13.0, 2.0, 0.0),
@@ -188,7 +186,7 @@ fn main() -> Result<()> {
         frames: frames,
         gbuffer: results,
     };
-    write_report(&bench::out_dir(&args.options.out), &report)
+    write_report(&bench::out_dir(&args.common.options.out), &report)
 }
 
 fn write_report(dir: &std::path::Path, r: &Report) -> Result<()> {

@@ -24,9 +24,7 @@ use serde::Serialize;
 #[derive(Parser, Debug)]
 struct Args {
     #[command(flatten)]
-    scene: bench::SceneOption,
-    #[command(flatten)]
-    options: bench::Options,
+    common: bench::SceneArgs,
     /// Only the first size, VPL count and pattern (a smoke test).
     #[arg(long)]
     quick: bool,
@@ -95,9 +93,9 @@ fn config(
 
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
-    let gpu = args.options.gpu()?;
-    let frames = args.options.frames(10);
-    let (path, scene) = args.scene.load()?;
+    let gpu = args.common.options.gpu()?;
+    let frames = args.common.options.frames(10);
+    let (path, scene) = args.common.scene.load()?;
     let camera = scene::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
     let (lights, emissive, lit_by) = vpl::primary_lights(&scene);
     println!(
@@ -217,7 +215,8 @@ fn main() -> Result<()> {
         rows,
         quality: qualities,
     };
-    args.options
+    args.common
+        .options
         .write_report(&report.header, "indirect-", &report, &markdown(&report))?;
     Ok(())
 }

@@ -27,9 +27,7 @@ use serde::Serialize;
 #[derive(Parser, Debug)]
 struct Args {
     #[command(flatten)]
-    scene: bench::SceneOption,
-    #[command(flatten)]
-    options: bench::Options,
+    common: bench::SceneArgs,
 }
 
 const TILE: u32 = 32;
@@ -285,9 +283,9 @@ fn variant_row(
 
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
-    let gpu = args.options.gpu()?;
-    let frames = args.options.frames(36);
-    let (path, scene) = args.scene.load()?;
+    let gpu = args.common.options.gpu()?;
+    let frames = args.common.options.frames(36);
+    let (path, scene) = args.common.scene.load()?;
     let bvh = Bvh::build(&scene);
     let diagonal = scene.bounds().diagonal();
     let (positions, indices) = scene_mesh(&scene);
@@ -436,6 +434,7 @@ fn main() -> Result<()> {
         setups,
         rows,
     };
-    args.options
+    args.common
+        .options
         .write_report(&report.header, "manylod-", &report, &md)
 }

@@ -22,9 +22,7 @@ use serde::Serialize;
 #[derive(Parser, Debug)]
 struct Args {
     #[command(flatten)]
-    scene: bench::SceneOption,
-    #[command(flatten)]
-    options: bench::Options,
+    common: bench::SceneArgs,
     /// Only the smallest size and light count, and test 1 (a smoke test).
     #[arg(long)]
     quick: bool,
@@ -101,9 +99,9 @@ fn measure(
 
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
-    let gpu = args.options.gpu()?;
-    let frames = args.options.frames(10);
-    let (path, scene) = args.scene.load()?;
+    let gpu = args.common.options.gpu()?;
+    let frames = args.common.options.frames(10);
+    let (path, scene) = args.common.scene.load()?;
     let camera = scene::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
     println!(
         "scene: {} ({} triangles)",
@@ -198,7 +196,7 @@ fn main() -> Result<()> {
         sweep,
         tests: rows,
     };
-    args.options.write_report(
+    args.common.options.write_report(
         &report.header,
         "tiled-shading-",
         &report,

@@ -145,9 +145,7 @@ impl SizedTargets {
                 width,
                 height,
                 RADIANCE_FORMAT,
-                wgpu::TextureUsages::STORAGE_BINDING
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
+                transfer::STORAGE_OUTPUT,
             ),
             direct: LightShading::output_textures(device, width, height),
             no_indirect: [

@@ -156,9 +156,7 @@ impl LightShading {
                 width,
                 height,
                 ACCUMULATION_FORMAT,
-                wgpu::TextureUsages::STORAGE_BINDING
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
+                transfer::STORAGE_OUTPUT,
             )
         })
     }

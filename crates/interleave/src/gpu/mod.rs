@@ -46,10 +46,7 @@ pub const IRRADIANCE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Fl
 /// the fast blur's bilinear lookups.
 pub const DISCONTINUITY_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
-const USAGE: wgpu::TextureUsages = wgpu::TextureUsages::TEXTURE_BINDING
-    .union(wgpu::TextureUsages::STORAGE_BINDING)
-    .union(wgpu::TextureUsages::COPY_SRC)
-    .union(wgpu::TextureUsages::COPY_DST);
+const USAGE: wgpu::TextureUsages = ::gpu::transfer::STORAGE_ANY;
 
 pub use ::gpu::kernel::Passes;
 
