@@ -1,0 +1,346 @@
+//! The G-buffer pass (`shaders/gbuffer/gbuffer.wgsl`): a render pipeline writing every target
+//! at once (MRT), optionally after a z-prepass; the twin of [`crate::cpu::rasterize`].
+
+use ::gpu::GpuError;
+use ::gpu::kernel::{self, Binding, Layout};
+
+use super::{GBufferTargets, GpuScene, GpuVertex};
+use crate::{
+    ALBEDO_FORMAT, DEPTH_FORMAT, Frame, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, NO_MATERIAL,
+    NORMAL_FORMAT,
+};
+
+/// The G-buffer pass: pipeline and frame uniforms, built once.
+pub struct GBufferPass {
+    pipeline: wgpu::RenderPipeline,
+    prepass: wgpu::RenderPipeline,
+    after_prepass: wgpu::RenderPipeline,
+    frame_layout: Layout,
+    pub(super) material_layout: Layout,
+    pub(super) sampler: wgpu::Sampler,
+    frame: wgpu::Buffer,
+    frame_group: wgpu::BindGroup,
+}
+
+impl GBufferPass {
+    /// Builds the pipeline.
+    pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
+        let module = crate::SHADERS.module(device, "gbuffer.wgsl")?;
+        let frame_layout = Layout::new(
+            device,
+            "gbuffer frame",
+            wgpu::ShaderStages::VERTEX_FRAGMENT,
+            &[Binding::Uniform],
+        );
+        let material_layout = Layout::new(
+            device,
+            "gbuffer material",
+            wgpu::ShaderStages::FRAGMENT,
+            &[Binding::Uniform, Binding::Texture, Binding::Sampler],
+        );
+        let layout = kernel::pipeline_layout(device, "gbuffer", &[&frame_layout, &material_layout]);
+        let depth_layout = kernel::pipeline_layout(device, "gbuffer z-prepass", &[&frame_layout]);
+        let targets = [
+            LINEAR_DEPTH_FORMAT,
+            NORMAL_FORMAT,
+            ALBEDO_FORMAT,
+            MATERIAL_FORMAT,
+        ];
+        // One pipeline shape, three uses: single-pass G-buffer (depth Less, write), z-prepass
+        // (depth only), and the G-buffer after a prepass (depth Equal, no write).
+        let make = |label, compare, write, fragment: bool| {
+            let stages = if fragment {
+                ("vs_main", Some(("fs_main", &targets[..])))
+            } else {
+                ("vs_depth", None)
+            };
+            let layout = if fragment { &layout } else { &depth_layout };
+            scene_pipeline(device, label, layout, &module, stages, (compare, write))
+        };
+        let pipeline = make("gbuffer", wgpu::CompareFunction::Less, true, true);
+        let prepass = make(
+            "gbuffer z-prepass",
+            wgpu::CompareFunction::Less,
+            true,
+            false,
+        );
+        let after_prepass = make(
+            "gbuffer after z-prepass",
+            wgpu::CompareFunction::Equal,
+            false,
+            true,
+        );
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("base colour"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let frame = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame"),
+            size: size_of::<Frame>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let frame_group = frame_layout.bind_buffers(device, &[&frame]);
+        Ok(Self {
+            pipeline,
+            prepass,
+            after_prepass,
+            frame_layout,
+            material_layout,
+            sampler,
+            frame,
+            frame_group,
+        })
+    }
+
+    /// The bind group layouts of the frame uniform (group 0) and of a material (group 1), for
+    /// pipelines that draw the same [`GpuScene`] with another fragment stage
+    /// ([`GBufferPass::draw_scene`]).
+    pub fn layouts(&self) -> [&Layout; 2] {
+        [&self.frame_layout, &self.material_layout]
+    }
+
+    /// Draws `scene` with `pipeline` (built on [`GBufferPass::layouts`] and
+    /// [`GBufferPass::vertex_attributes`]) into an open render pass, binding this pass's frame
+    /// uniform and each draw's material.
+    pub fn draw_scene(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipeline: &wgpu::RenderPipeline,
+        scene: &GpuScene,
+    ) {
+        self.draw(pass, pipeline, scene, true);
+    }
+
+    /// The uniform buffer holding the [`Frame`]; later screen-space passes bind it too.
+    pub fn frame_buffer(&self) -> &wgpu::Buffer {
+        &self.frame
+    }
+
+    /// Writes the camera for the next [`GBufferPass::encode`].
+    pub fn write_frame(&self, queue: &wgpu::Queue, frame: &Frame) {
+        queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(frame));
+    }
+
+    /// Records the G-buffer pass: clears every target and draws the scene.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        targets: &GBufferTargets,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let mut pass = Self::begin(encoder, targets, "gbuffer", true, true, timestamp_writes);
+        self.draw(&mut pass, &self.pipeline, scene, true);
+    }
+
+    /// Records a z-prepass (depth only, Holländer 2013 §4.2) and then the G-buffer pass with
+    /// depth test `Equal`, so each pixel runs the G-buffer fragment shader once. The result
+    /// equals [`GBufferPass::encode`]'s except where two surfaces have exactly equal depth
+    /// (there the last drawn wins instead of the first).
+    pub fn encode_with_prepass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        scene: &GpuScene,
+        targets: &GBufferTargets,
+        prepass_timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+        gbuffer_timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let mut pass = Self::begin(
+            encoder,
+            targets,
+            "gbuffer z-prepass",
+            false,
+            true,
+            prepass_timestamps,
+        );
+        self.draw(&mut pass, &self.prepass, scene, false);
+        drop(pass);
+        let mut pass = Self::begin(
+            encoder,
+            targets,
+            "gbuffer after z-prepass",
+            true,
+            false,
+            gbuffer_timestamps,
+        );
+        self.draw(&mut pass, &self.after_prepass, scene, true);
+    }
+
+    fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipeline: &wgpu::RenderPipeline,
+        scene: &GpuScene,
+        materials: bool,
+    ) {
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &self.frame_group, &[]);
+        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for d in &scene.draws {
+            if materials {
+                pass.set_bind_group(1, &scene.material_groups[d.material], &[]);
+            }
+            pass.draw_indexed(
+                d.first_index..d.first_index + d.index_count,
+                d.base_vertex,
+                0..1,
+            );
+        }
+    }
+
+    /// Records a pass that only clears and stores every target: the write-bandwidth
+    /// baseline the benchmark compares the G-buffer pass against.
+    pub fn encode_clear(
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &GBufferTargets,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        drop(Self::begin(
+            encoder,
+            targets,
+            "gbuffer clear",
+            true,
+            true,
+            timestamp_writes,
+        ));
+    }
+
+    /// Begins a render pass over the depth target and, with `color`, the colour targets
+    /// (cleared); `clear_depth` clears depth, else it is loaded.
+    fn begin<'e>(
+        encoder: &'e mut wgpu::CommandEncoder,
+        targets: &GBufferTargets,
+        label: &str,
+        color: bool,
+        clear_depth: bool,
+        timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) -> wgpu::RenderPass<'e> {
+        let colour = [
+            (&targets.linear_depth, 0.0),
+            (&targets.normal, 0.0),
+            (&targets.albedo, 0.0),
+            (&targets.material, f64::from(NO_MATERIAL)),
+        ];
+        let colour = if color { &colour[..] } else { &[] };
+        let depth = (&targets.depth, clear_depth);
+        begin_scene_pass(encoder, label, colour, depth, timestamp_writes)
+    }
+}
+
+/// Begins a render pass over `colour` targets, each cleared to its value (red channel; the
+/// G-buffer's material target clears to [`NO_MATERIAL`]), and `depth` = (depth target,
+/// cleared to 1 or else loaded).
+pub fn begin_scene_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    colour: &[(&wgpu::Texture, f64)],
+    (depth, clear_depth): (&wgpu::Texture, bool),
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    let views: Vec<_> = colour
+        .iter()
+        .map(|(t, clear)| (t.create_view(&Default::default()), *clear))
+        .collect();
+    let attachments: Vec<_> = views
+        .iter()
+        .map(|(view, r)| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: *r,
+                        ..wgpu::Color::TRANSPARENT
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        })
+        .collect();
+    let depth_view = depth.create_view(&Default::default());
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &attachments,
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &depth_view,
+            depth_ops: Some(wgpu::Operations {
+                load: if clear_depth {
+                    wgpu::LoadOp::Clear(1.0)
+                } else {
+                    wgpu::LoadOp::Load
+                },
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
+}
+
+/// A render pipeline drawing an uploaded [`GpuScene`] into the G-buffer's depth target:
+/// `stages` = (vertex entry, optional (fragment entry, colour target formats)) of `module`,
+/// `depth` = (compare, write). With a fragment stage the vertex stage reads every
+/// [`GpuVertex`] attribute (`vs_main`), without one only the position (a depth-only pass).
+pub fn scene_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (vertex, fragment): (&str, Option<(&str, &[wgpu::TextureFormat])>),
+    (compare, write): (wgpu::CompareFunction, bool),
+) -> wgpu::RenderPipeline {
+    let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
+    let used = if fragment.is_some() {
+        &attributes[..]
+    } else {
+        &attributes[..1]
+    };
+    let targets: Vec<Option<wgpu::ColorTargetState>> = fragment
+        .map_or(&[][..], |(_, formats)| formats)
+        .iter()
+        .map(|&format| Some(format.into()))
+        .collect();
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(vertex),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: size_of::<GpuVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: used,
+            })],
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(write),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: fragment.map(|(entry, _)| wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets: &targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

@@ -1,0 +1,44 @@
+//! Convenience for tests and examples.
+
+use ::gpu::Gpu;
+use ::scene::{Camera, Scene};
+
+use super::{GBufferPass, GBufferTargets, GpuScene};
+use crate::{Frame, GBuffer, GBufferError};
+
+/// Convenience for tests and examples: uploads `scene`, renders its G-buffer on `gpu` and
+/// reads it back.
+pub fn run(
+    gpu: &Gpu,
+    scene: &Scene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+) -> Result<GBuffer, GBufferError> {
+    run_with(gpu, scene, camera, width, height, false)
+}
+
+/// Like [`run`]; with `prepass`, through [`GBufferPass::encode_with_prepass`].
+pub fn run_with(
+    gpu: &Gpu,
+    scene: &Scene,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+    prepass: bool,
+) -> Result<GBuffer, GBufferError> {
+    crate::validate_size(width, height)?;
+    crate::validate_camera(camera)?;
+    let pass = GBufferPass::new(&gpu.device)?;
+    let gpu_scene = GpuScene::upload(&gpu.device, &gpu.queue, scene, &pass)?;
+    let targets = GBufferTargets::new(&gpu.device, width, height)?;
+    pass.write_frame(&gpu.queue, &Frame::new(camera, width, height));
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    if prepass {
+        pass.encode_with_prepass(&mut encoder, &gpu_scene, &targets, None, None);
+    } else {
+        pass.encode(&mut encoder, &gpu_scene, &targets, None);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    targets.read(&gpu.device, &gpu.queue)
+}
