@@ -473,3 +473,24 @@ pub fn check_texture(
         problem,
     })
 }
+
+/// Fails with [`GpuError::Resource`] unless `buffer` holds at least `min_size` bytes and has
+/// `usage`: what a kernel's `bind` checks of each buffer it is given.
+pub fn check_buffer(
+    what: &str,
+    buffer: &wgpu::Buffer,
+    min_size: u64,
+    usage: wgpu::BufferUsages,
+) -> Result<(), GpuError> {
+    let problem = if buffer.size() < min_size {
+        format!("holds {} bytes, {min_size} needed", buffer.size())
+    } else if !buffer.usage().contains(usage) {
+        format!("lacks usage {:?}", usage - buffer.usage())
+    } else {
+        return Ok(());
+    };
+    Err(GpuError::Resource {
+        what: what.to_owned(),
+        problem,
+    })
+}

@@ -232,3 +232,61 @@ fn default_limits_fall_back_to_uniform_evaluation() {
         false,
     );
 }
+
+/// The main step writes into the caller's vertex buffers (`bind_level`): the same vertices as
+/// the buffers `level` allocates; buffers too small or without `STORAGE` are errors that name
+/// the buffer, not wgpu validation panics.
+#[test]
+fn caller_owned_level_buffers_are_checked_and_written() {
+    let Some(gpu) = gpu::test_device(&subdiv_bft::device_needs()) else {
+        return;
+    };
+    let (device, bft, mesh) = (&gpu.device, tables(), bipyramid(6));
+    let sub = Subdivider::new(&mesh.topology, bft).expect("subdivider");
+    let g = GpuSubdivider::new(device, &sub, bft).expect("gpu");
+    g.set_positions(&gpu.queue, &mesh.positions_f32())
+        .expect("positions");
+    let own = g.level(device, &sub, 2).expect("level");
+    let buffer = |size, usage| {
+        device.create_buffer(&gpu::wgpu::BufferDescriptor {
+            label: Some("caller's"),
+            size,
+            usage,
+            mapped_at_creation: false,
+        })
+    };
+    let usage = gpu::wgpu::BufferUsages::STORAGE | gpu::wgpu::BufferUsages::COPY_SRC;
+    let bytes = u64::from(own.vertex_count) * 16;
+    let (positions, normals) = (buffer(bytes, usage), buffer(bytes + 64, usage));
+    let mine = g
+        .bind_level(device, &sub, 2, &positions, &normals)
+        .expect("bind");
+    let mut encoder = device.create_command_encoder(&Default::default());
+    g.encode(&mut encoder, &own, None);
+    g.encode_evaluate(&mut encoder, &mine, None);
+    gpu.queue.submit([encoder.finish()]);
+    let (a, b) = (
+        g.read_level(device, &gpu.queue, &own).expect("read"),
+        g.read_level(device, &gpu.queue, &mine).expect("read"),
+    );
+    assert_eq!(a.positions, b.positions);
+    assert_eq!(a.normals, b.normals);
+    let small = buffer(bytes - 16, usage);
+    let e = g
+        .bind_level(device, &sub, 2, &small, &normals)
+        .err()
+        .expect("too small");
+    assert!(
+        e.to_string().contains("fine positions") && e.to_string().contains("bytes"),
+        "{e}"
+    );
+    let vertex_only = buffer(bytes, gpu::wgpu::BufferUsages::VERTEX);
+    let e = g
+        .bind_level(device, &sub, 2, &positions, &vertex_only)
+        .err()
+        .expect("no STORAGE");
+    assert!(
+        e.to_string().contains("fine normals") && e.to_string().contains("STORAGE"),
+        "{e}"
+    );
+}

@@ -317,28 +317,53 @@ impl GpuSubdivider {
         Ok(())
     }
 
-    /// Output buffers for surface level `level` (1..=L + 1) with the static index buffer of
-    /// `sub`'s patches.
+    /// Allocates the output buffers of `level` (`VERTEX | STORAGE | COPY_SRC | COPY_DST`) and
+    /// binds them ([`GpuSubdivider::bind_level`]).
     pub fn level(
         &self,
         device: &wgpu::Device,
         sub: &Subdivider,
         level: u32,
     ) -> Result<GpuLevel, SubdivError> {
-        let s = sub.segments(level)?;
-        let vertex_count = sub.patches.output_vertex_count(s);
-        let index_count = sub.patches.patches.len() as u64 * u64::from(s * s) * 3;
-        if vertex_count as u64 >= u64::from(u32::MAX) || index_count >= u64::from(u32::MAX) {
-            return Err(SubdivError::TooLarge(format!(
-                "level {level}: {vertex_count} vertices, {index_count} indices exceed 32 bits"
-            )));
-        }
+        let bytes = self.level_size(sub, level)?.0 * 16;
         let out = wgpu::BufferUsages::VERTEX
             | wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;
-        let positions = empty(device, "fine positions", vertex_count as u64 * 16, out)?;
-        let normals = empty(device, "fine normals", vertex_count as u64 * 16, out)?;
+        let positions = empty(device, "fine positions", bytes, out)?;
+        let normals = empty(device, "fine normals", bytes, out)?;
+        self.bind_level(device, sub, level, &positions, &normals)
+    }
+
+    /// Vertices and indices of `level`, checked to fit 32-bit indices.
+    fn level_size(&self, sub: &Subdivider, level: u32) -> Result<(u64, u64), SubdivError> {
+        let s = sub.segments(level)?;
+        let vertex_count = sub.patches.output_vertex_count(s) as u64;
+        let index_count = sub.patches.patches.len() as u64 * u64::from(s * s) * 3;
+        if vertex_count >= u64::from(u32::MAX) || index_count >= u64::from(u32::MAX) {
+            return Err(SubdivError::TooLarge(format!(
+                "level {level}: {vertex_count} vertices, {index_count} indices exceed 32 bits"
+            )));
+        }
+        Ok((vertex_count, index_count))
+    }
+
+    /// Binds the main step of `level` to the caller's vertex buffers `positions` and `normals`
+    /// (each at least 16 bytes per fine vertex, `STORAGE`; add `VERTEX` to draw them), and
+    /// uploads the level's index buffer. Buffers too small or without `STORAGE` are an `Err`.
+    pub fn bind_level(
+        &self,
+        device: &wgpu::Device,
+        sub: &Subdivider,
+        level: u32,
+        positions: &wgpu::Buffer,
+        normals: &wgpu::Buffer,
+    ) -> Result<GpuLevel, SubdivError> {
+        let s = sub.segments(level)?;
+        let (vertex_count, index_count) = self.level_size(sub, level)?;
+        for (what, buffer) in [("fine positions", positions), ("fine normals", normals)] {
+            kernel::check_buffer(what, buffer, vertex_count * 16, wgpu::BufferUsages::STORAGE)?;
+        }
         let indices = transfer::buffer_init(
             device,
             "fine indices",
@@ -349,13 +374,13 @@ impl GpuSubdivider {
         let walk = storage(device, "grid walk", bytemuck::cast_slice(&grid_walk(s)))?;
         let bind = self.evaluate.1.bind_buffers(
             device,
-            &self.evaluate_bindings(&params, &walk, &positions, &normals),
+            &self.evaluate_bindings(&params, &walk, positions, normals),
         );
         Ok(GpuLevel {
             level,
             segments: s,
-            positions,
-            normals,
+            positions: positions.clone(),
+            normals: normals.clone(),
             indices,
             vertex_count: vertex_count as u32,
             index_count: index_count as u32,
