@@ -248,14 +248,14 @@ fn caller_owned_level_buffers_are_checked_and_written() {
         .expect("positions");
     let own = g.level(device, &sub, 2).expect("level");
     let buffer = |size, usage| {
-        device.create_buffer(&gpu::wgpu::BufferDescriptor {
+        device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("caller's"),
             size,
             usage,
             mapped_at_creation: false,
         })
     };
-    let usage = gpu::wgpu::BufferUsages::STORAGE | gpu::wgpu::BufferUsages::COPY_SRC;
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let bytes = u64::from(own.vertex_count) * 16;
     let (positions, normals) = (buffer(bytes, usage), buffer(bytes + 64, usage));
     let mine = g
@@ -280,7 +280,7 @@ fn caller_owned_level_buffers_are_checked_and_written() {
         e.to_string().contains("fine positions") && e.to_string().contains("bytes"),
         "{e}"
     );
-    let vertex_only = buffer(bytes, gpu::wgpu::BufferUsages::VERTEX);
+    let vertex_only = buffer(bytes, wgpu::BufferUsages::VERTEX);
     let e = g
         .bind_level(device, &sub, 2, &positions, &vertex_only)
         .err()
