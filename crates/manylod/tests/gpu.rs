@@ -287,3 +287,55 @@ fn overflow_and_bad_input_are_errors() {
     assert!(GpuManyLod::new(&gpu.device, &bsh, &v, f32::NAN, layout, 1 << 16).is_err());
     assert!(m.set_views(&gpu.queue, &v[1..]).is_err(), "view count");
 }
+
+/// The splat writes into the caller's atlas buffer (`with_atlas`): the same atlas as the one
+/// `new` allocates; a buffer too small or without `STORAGE` is an error naming the atlas.
+#[test]
+fn caller_owned_atlas_is_checked_and_written() {
+    let (bsh, _, _) = tree(1 << 12);
+    let Some((gpu, mut own)) = setup(&bsh, 0.3, 1 << 18) else {
+        return;
+    };
+    let d = &gpu.device;
+    let v = views_in_tiles(0.3, Some(TILE));
+    let layout = own.layout();
+    let (w, h) = layout.size();
+    let buffer = |size, usage| {
+        d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("application's atlas"),
+            size,
+            usage,
+            mapped_at_creation: false,
+        })
+    };
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    let atlas = buffer(u64::from(w * h) * 4, usage);
+    let mut mine = GpuManyLod::with_atlas(d, &bsh, &v, EPSILON, layout, 1 << 18, &atlas)
+        .expect("caller's atlas");
+    let mut encoder = d.create_command_encoder(&Default::default());
+    for m in [&mut own, &mut mine] {
+        m.encode_cut(&mut encoder, CutKind::Basic, None);
+        m.encode_splat(&mut encoder, None);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    let want = own.read_atlas(d, &gpu.queue).expect("atlas");
+    assert_eq!(mine.read_atlas(d, &gpu.queue).expect("atlas"), want);
+    let read = gpu::transfer::read_buffer(d, &gpu.queue, &atlas).expect("read");
+    assert_eq!(bytemuck::cast_slice::<u8, u32>(&read), &want[..]);
+    for (size, usage, words) in [
+        (u64::from(w * h) * 4 - 4, usage, "bytes"),
+        (
+            u64::from(w * h) * 4,
+            wgpu::BufferUsages::COPY_SRC,
+            "STORAGE",
+        ),
+    ] {
+        let e = GpuManyLod::with_atlas(d, &bsh, &v, EPSILON, layout, 1 << 18, &buffer(size, usage))
+            .err()
+            .expect("rejected");
+        assert!(
+            e.to_string().contains("ManyLoD atlas") && e.to_string().contains(words),
+            "{e}"
+        );
+    }
+}

@@ -172,7 +172,7 @@ pub struct GpuManyLod {
 
 impl GpuManyLod {
     /// Uploads `bsh` and `views` (threshold `epsilon`, atlas `layout`) with room for `capacity`
-    /// node-views in each active and cut list.
+    /// node-views in each active and cut list, and allocates the atlas ([`Self::with_atlas`]).
     pub fn new(
         device: &wgpu::Device,
         bsh: &Bsh,
@@ -181,6 +181,32 @@ impl GpuManyLod {
         layout: AtlasLayout,
         capacity: usize,
     ) -> Result<Self, ManyLodError> {
+        let (w, h) = layout.size();
+        let atlas = transfer::buffer(device, "manylod atlas", u64::from(w * h) * 4, STORAGE)?;
+        Self::with_atlas(device, bsh, views, epsilon, layout, capacity, &atlas)
+    }
+
+    /// [`Self::new`] splatting into the caller's `atlas` (at least 4 bytes per atlas pixel of
+    /// `layout`, `STORAGE`; packed depths, row-major): e.g. a buffer the application's shadow
+    /// lookup already binds. A buffer too small or without `STORAGE` is an `Err`.
+    pub fn with_atlas(
+        device: &wgpu::Device,
+        bsh: &Bsh,
+        views: &[View],
+        epsilon: f32,
+        layout: AtlasLayout,
+        capacity: usize,
+        atlas: &wgpu::Buffer,
+    ) -> Result<Self, ManyLodError> {
+        let (w, h) = layout.size();
+        let atlas_pixels = w * h;
+        ::gpu::kernel::check_buffer(
+            "ManyLoD atlas",
+            atlas,
+            u64::from(atlas_pixels) * 4,
+            wgpu::BufferUsages::STORAGE,
+        )?;
+        let atlas = atlas.clone();
         CutProblem {
             bsh,
             views,
@@ -253,14 +279,6 @@ impl GpuManyLod {
         let list = |label| transfer::buffer(device, label, bytes, STORAGE);
         let lists = [list("manylod active 0")?, list("manylod active 1")?];
         let cuts = [list("manylod cut 0")?, list("manylod cut 1")?];
-        let (w, h) = layout.size();
-        let atlas_pixels = w * h;
-        let atlas = transfer::buffer(
-            device,
-            "manylod atlas",
-            u64::from(atlas_pixels) * 4,
-            STORAGE,
-        )?;
         let slot_buffer = |slot: u32| match slot {
             0 | 1 => &lists[slot as usize],
             _ => &cuts[slot as usize - 2],
