@@ -460,3 +460,57 @@ fn bad_input_is_an_error() {
     assert!(cpu::evaluate(&f.inputs(), &SsaaConfig { m: 2, ..four }, &small).is_err());
     assert!(cpu::shade_first(&f.inputs(), &SsaaConfig { m: 3, ..four }).is_err());
 }
+
+/// The resolve writes into the caller's output buffer (`SsaaInputs::output`); a buffer too
+/// small or without `STORAGE` is an error naming it, not a wgpu validation panic.
+#[test]
+fn caller_owned_output_is_checked() {
+    use adaptive_ssaa::gpu::{GpuTextures, SsGBufferTargets, Ssaa, SsaaInputs};
+    let Some(gpu) = gpu::test_device(&adaptive_ssaa::device_needs()) else {
+        return;
+    };
+    let d = &gpu.device;
+    let scene = scene::checkerboard();
+    let config = SsaaConfig::default();
+    let (w, h, m) = (W, H, config.m);
+    let array = TextureArray::new(&scene, TEXTURE_SIZE);
+    let textures = GpuTextures::new(d, &gpu.queue, &array, config.anisotropy).expect("textures");
+    let targets = SsGBufferTargets::new(d, w * m, h * m).expect("targets");
+    let pass = gbuffer::gpu::GBufferPass::new(d).expect("pass");
+    let materials = gpu::transfer::buffer_init(
+        d,
+        "materials",
+        bytemuck::cast_slice(&SsaaMaterial::of_scene(&scene)),
+        wgpu::BufferUsages::STORAGE,
+    )
+    .expect("materials");
+    let buffer = |size, usage| {
+        d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("application's output"),
+            size,
+            usage,
+            mapped_at_creation: false,
+        })
+    };
+    let bytes = u64::from(w * h) * 16;
+    let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    let make = |output: &wgpu::Buffer| {
+        let inputs = SsaaInputs {
+            frame: pass.frame_buffer(),
+            targets: &targets,
+            textures: &textures,
+            materials: &materials,
+            output: Some(output),
+        };
+        Ssaa::new(d, &inputs, &config, w, h, 4)
+    };
+    let mine = buffer(bytes, storage);
+    assert!(make(&mine).expect("caller's output").output() == &mine);
+    for (output, words) in [
+        (buffer(bytes - 16, storage), "bytes"),
+        (buffer(bytes, wgpu::BufferUsages::COPY_SRC), "STORAGE"),
+    ] {
+        let e = make(&output).err().expect("rejected").to_string();
+        assert!(e.contains("SSAA output") && e.contains(words), "{e}");
+    }
+}

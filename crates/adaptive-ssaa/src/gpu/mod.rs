@@ -165,6 +165,9 @@ pub struct SsaaInputs<'a> {
     pub textures: &'a GpuTextures,
     /// The materials ([`SsaaMaterial`] by id).
     pub materials: &'a wgpu::Buffer,
+    /// The caller's output buffer (`w·h` RGBA32F, row-major, `STORAGE`), e.g. one its
+    /// presentation pass reads; `None` allocates one ([`Ssaa::output`]).
+    pub output: Option<&'a wgpu::Buffer>,
 }
 
 impl Ssaa {
@@ -228,15 +231,22 @@ impl Ssaa {
             wgpu::BufferUsages::empty(),
         )?;
         let none = wgpu::BufferUsages::empty();
-        let [first, counts, output, sort, list] = [
+        let [first, counts, sort, list] = [
             ("ssaa first sample", pixels * 16),
             ("ssaa sample counts", pixels * 4),
-            ("ssaa output", pixels * 16),
             ("ssaa sort", 131 * 4),
             ("ssaa pixel list", pixels * 4),
         ]
         .map(|(label, size)| storage(device, label, size, none));
-        let [first, counts, output, sort, list] = [first?, counts?, output?, sort?, list?];
+        let [first, counts, sort, list] = [first?, counts?, sort?, list?];
+        let output = match inputs.output {
+            Some(output) => {
+                let usage = wgpu::BufferUsages::STORAGE;
+                kernel::check_buffer("SSAA output", output, pixels * 16, usage)?;
+                output.clone()
+            }
+            None => storage(device, "ssaa output", pixels * 16, none)?,
+        };
         let args = storage(
             device,
             "ssaa dispatch args",

@@ -72,6 +72,7 @@ impl SsaaRenderer {
             targets: &targets,
             textures: &textures,
             materials: &materials,
+            output: None,
         };
         let mut ssaa = Ssaa::new(device, &inputs, config, width, height, lights.len())?;
         ssaa.set_lights(queue, lights)?;
