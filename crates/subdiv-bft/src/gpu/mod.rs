@@ -2,9 +2,14 @@
 //! entries M⁰ → M¹) then `evaluate.wgsl` (`evaluate`: every patch with the tables, or
 //! `evaluate_adaptive` with per-edge factors, given or computed by `factors.wgsl`). Static
 //! data (entries, patches, tables) is uploaded once; an animated M⁰ only rewrites its position
-//! buffer ([`GpuSubdivider::set_positions`]). Nothing is read back between passes.
+//! buffer ([`GpuSubdivider::set_positions`]). Nothing is read back between passes. One
+//! module per stage: `initial` (M⁰ → M¹), `evaluate` (uniform level, into buffers the
+//! caller may own: [`GpuSubdivider::bind_level`]), `adaptive` (`factors.wgsl` and
+//! `evaluate_adaptive`); test helpers in [`run`].
 
 mod adaptive;
+mod evaluate;
+mod initial;
 pub mod run;
 
 pub use adaptive::{GpuAdaptive, MAX_SEGMENTS};
@@ -15,8 +20,8 @@ use ::gpu::{PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use crate::patch::{grid_walk, inner_count, padded_weights};
-use crate::{BftSet, Refined, SubdivError, Subdivider, bft::grid_count};
+use crate::patch::padded_weights;
+use crate::{BftSet, SubdivError, Subdivider};
 
 /// Uniform block of `evaluate.wgsl` (`Params`).
 #[repr(C)]
@@ -317,157 +322,10 @@ impl GpuSubdivider {
         Ok(())
     }
 
-    /// Allocates the output buffers of `level` (`VERTEX | STORAGE | COPY_SRC | COPY_DST`) and
-    /// binds them ([`GpuSubdivider::bind_level`]).
-    pub fn level(
-        &self,
-        device: &wgpu::Device,
-        sub: &Subdivider,
-        level: u32,
-    ) -> Result<GpuLevel, SubdivError> {
-        let bytes = self.level_size(sub, level)?.0 * 16;
-        let out = wgpu::BufferUsages::VERTEX
-            | wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_SRC
-            | wgpu::BufferUsages::COPY_DST;
-        let positions = empty(device, "fine positions", bytes, out)?;
-        let normals = empty(device, "fine normals", bytes, out)?;
-        self.bind_level(device, sub, level, &positions, &normals)
-    }
-
-    /// Vertices and indices of `level`, checked to fit 32-bit indices.
-    fn level_size(&self, sub: &Subdivider, level: u32) -> Result<(u64, u64), SubdivError> {
-        let s = sub.segments(level)?;
-        let vertex_count = sub.patches.output_vertex_count(s) as u64;
-        let index_count = sub.patches.patches.len() as u64 * u64::from(s * s) * 3;
-        if vertex_count >= u64::from(u32::MAX) || index_count >= u64::from(u32::MAX) {
-            return Err(SubdivError::TooLarge(format!(
-                "level {level}: {vertex_count} vertices, {index_count} indices exceed 32 bits"
-            )));
-        }
-        Ok((vertex_count, index_count))
-    }
-
-    /// Binds the main step of `level` to the caller's vertex buffers `positions` and `normals`
-    /// (each at least 16 bytes per fine vertex, `STORAGE`; add `VERTEX` to draw them), and
-    /// uploads the level's index buffer. Buffers too small or without `STORAGE` are an `Err`.
-    pub fn bind_level(
-        &self,
-        device: &wgpu::Device,
-        sub: &Subdivider,
-        level: u32,
-        positions: &wgpu::Buffer,
-        normals: &wgpu::Buffer,
-    ) -> Result<GpuLevel, SubdivError> {
-        let s = sub.segments(level)?;
-        let (vertex_count, index_count) = self.level_size(sub, level)?;
-        for (what, buffer) in [("fine positions", positions), ("fine normals", normals)] {
-            kernel::check_buffer(what, buffer, vertex_count * 16, wgpu::BufferUsages::STORAGE)?;
-        }
-        let indices = transfer::buffer_init(
-            device,
-            "fine indices",
-            bytemuck::cast_slice(&sub.patches.triangulate(s)),
-            wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_SRC,
-        )?;
-        let params = self.evaluate_params(device, s)?;
-        let walk = storage(device, "grid walk", bytemuck::cast_slice(&grid_walk(s)))?;
-        let bind = self.evaluate.1.bind_buffers(
-            device,
-            &self.evaluate_bindings(&params, &walk, positions, normals),
-        );
-        Ok(GpuLevel {
-            level,
-            segments: s,
-            positions: positions.clone(),
-            normals: normals.clone(),
-            indices,
-            vertex_count: vertex_count as u32,
-            index_count: index_count as u32,
-            bind,
-            groups: self.patch_groups(),
-        })
-    }
-
-    /// Bindings 0–8 of `evaluate.wgsl`, shared by the uniform and the adaptive kernel.
-    fn evaluate_bindings<'a>(
-        &'a self,
-        params: &'a wgpu::Buffer,
-        walk: &'a wgpu::Buffer,
-        positions: &'a wgpu::Buffer,
-        normals: &'a wgpu::Buffer,
-    ) -> Vec<&'a wgpu::Buffer> {
-        vec![
-            params,
-            &self.patches,
-            &self.rings,
-            &self.tables,
-            &self.m1_positions,
-            &self.m1_normals,
-            walk,
-            positions,
-            normals,
-        ]
-    }
-
     /// Workgroups of a dispatch with one per patch (x at most 65 535).
     fn patch_groups(&self) -> (u32, u32) {
         let x = self.patch_count.clamp(1, MAX_GROUPS_X);
         (x, self.patch_count.div_ceil(x).max(1))
-    }
-
-    /// The uniform block of `evaluate.wgsl` for `s` segments (adaptive: the layout's `s_max`).
-    fn evaluate_params(&self, device: &wgpu::Device, s: u32) -> Result<wgpu::Buffer, SubdivError> {
-        let params = EvaluateParams {
-            s,
-            table_segments: 1 << self.table_level,
-            vertex_count: self.m1_count,
-            edge_count: self.edge_count,
-            patch_count: self.patch_count,
-            grid_count: grid_count(s) as u32,
-            inner_count: inner_count(s) as u32,
-        };
-        Ok(transfer::buffer_init(
-            device,
-            "evaluate params",
-            bytemuck::bytes_of(&params),
-            wgpu::BufferUsages::UNIFORM,
-        )?)
-    }
-
-    /// Records the initial step (M⁰ → M¹ positions, then normals).
-    pub fn encode_initial(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        let groups = (self.m1_count.div_ceil(WORKGROUP).max(1), 1);
-        let [counts, normals] = &self.normals_bind;
-        pass(
-            "initial step: positions",
-            &self.refine,
-            &[&self.refine_bind],
-            groups,
-        )
-        .then(pass(
-            "initial step: normals",
-            &self.normals,
-            &[counts, normals],
-            groups,
-        ))
-        .encode(encoder, timer);
-    }
-
-    /// Records the main step for `level` (after [`GpuSubdivider::encode_initial`]).
-    pub fn encode_evaluate(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        level: &GpuLevel,
-        timer: Option<&PassTimer>,
-    ) {
-        pass(
-            "main step: evaluate",
-            &self.evaluate.0,
-            &[&level.bind],
-            level.groups,
-        )
-        .encode(encoder, timer);
     }
 
     /// Records both steps.
@@ -479,35 +337,6 @@ impl GpuSubdivider {
     ) {
         self.encode_initial(encoder, timer);
         self.encode_evaluate(encoder, level, timer);
-    }
-
-    /// Reads back M¹ positions and normals (tests).
-    pub fn read_m1(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<(Vec<Vec3>, Vec<Vec3>), SubdivError> {
-        Ok((
-            read_vec3(device, queue, &self.m1_positions, self.m1_count)?,
-            read_vec3(device, queue, &self.m1_normals, self.m1_count)?,
-        ))
-    }
-
-    /// Reads back a level's mesh (tests, the `subdivide` command).
-    pub fn read_level(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        level: &GpuLevel,
-    ) -> Result<Refined, SubdivError> {
-        let indices = transfer::read_buffer(device, queue, &level.indices)?;
-        Ok(Refined {
-            positions: read_vec3(device, queue, &level.positions, level.vertex_count)?,
-            normals: read_vec3(device, queue, &level.normals, level.vertex_count)?,
-            indices: bytemuck::pod_collect_to_vec::<u8, u32>(&indices)
-                [..level.index_count as usize]
-                .to_vec(),
-        })
     }
 }
 
