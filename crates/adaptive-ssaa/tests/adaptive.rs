@@ -485,12 +485,7 @@ fn caller_owned_output_is_checked() {
     )
     .expect("materials");
     let buffer = |size, usage| {
-        d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("application's output"),
-            size,
-            usage,
-            mapped_at_creation: false,
-        })
+        gpu::transfer::buffer(d, "application's output", size, usage).expect("buffer")
     };
     let bytes = u64::from(w * h) * 16;
     let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;

@@ -300,14 +300,8 @@ fn caller_owned_atlas_is_checked_and_written() {
     let v = views_in_tiles(0.3, Some(TILE));
     let layout = own.layout();
     let (w, h) = layout.size();
-    let buffer = |size, usage| {
-        d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("application's atlas"),
-            size,
-            usage,
-            mapped_at_creation: false,
-        })
-    };
+    let buffer =
+        |size, usage| gpu::transfer::buffer(d, "application's atlas", size, usage).expect("buffer");
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let atlas = buffer(u64::from(w * h) * 4, usage);
     let mut mine = GpuManyLod::with_atlas(d, &bsh, &v, EPSILON, layout, 1 << 18, &atlas)

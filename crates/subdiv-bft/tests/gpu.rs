@@ -247,14 +247,8 @@ fn caller_owned_level_buffers_are_checked_and_written() {
     g.set_positions(&gpu.queue, &mesh.positions_f32())
         .expect("positions");
     let own = g.level(device, &sub, 2).expect("level");
-    let buffer = |size, usage| {
-        device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("caller's"),
-            size,
-            usage,
-            mapped_at_creation: false,
-        })
-    };
+    let buffer =
+        |size, usage| gpu::transfer::buffer(device, "caller's", size, usage).expect("buffer");
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let bytes = u64::from(own.vertex_count) * 16;
     let (positions, normals) = (buffer(bytes, usage), buffer(bytes + 64, usage));
