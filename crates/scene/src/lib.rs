@@ -337,6 +337,18 @@ pub enum SceneErrorKind {
         /// The problem.
         problem: String,
     },
+    /// A file the scene names may not or cannot be read: outside the scene's folder, absolute,
+    /// a URI scheme, not a regular file, larger than declared or allowed.
+    #[error("{reference:?}: {problem}")]
+    Reference {
+        /// The path or URI as the scene writes it.
+        reference: String,
+        /// Why it is not read.
+        problem: String,
+    },
+    /// A file the scene names does not exist (inside the scene's folder).
+    #[error("{0:?}: no such file in the scene's folder")]
+    MissingFile(String),
     /// A texture could not be decoded or is inconsistent.
     #[error("texture {index}: {problem}")]
     Texture {

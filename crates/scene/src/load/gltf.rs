@@ -4,21 +4,45 @@ use std::path::Path;
 
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 
-use crate::{Camera, Light, Material, Mesh, Scene, SceneErrorKind, Texture, light::default_radius};
+use super::folder::{SceneFolder, UNDECLARED_LIMIT};
+use crate::{Camera, Light, Material, Mesh, Scene, SceneErrorKind, light::default_radius};
+
+/// The most bytes a `.gltf`/`.glb` file itself may hold: 4 GiB (GLB's own length field).
+const FILE_LIMIT: u64 = u32::MAX as u64;
 
 pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene, SceneErrorKind> {
-    let (doc, buffers, images) =
-        gltf::import(path).map_err(|e| SceneErrorKind::Gltf(e.to_string()))?;
+    let folder = SceneFolder::of(path)?;
+    let file = std::fs::File::open(path)?;
+    if file.metadata()?.len() > FILE_LIMIT {
+        return Err(SceneErrorKind::Gltf(format!(
+            "larger than {FILE_LIMIT} bytes"
+        )));
+    }
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::Read::take(file, FILE_LIMIT), &mut bytes)?;
+    let gltf::Gltf {
+        document: doc,
+        blob,
+    } = gltf::Gltf::from_slice(&bytes).map_err(|e| SceneErrorKind::Gltf(e.to_string()))?;
+    let buffers = doc
+        .buffers()
+        .map(|b| buffer_data(&folder, &b, blob.as_deref()))
+        .collect::<Result<Vec<_>, _>>()?;
 
     let textures = doc
         .textures()
         .map(|t| {
-            let index = t.source().index();
-            let data = images.get(index).ok_or_else(|| SceneErrorKind::Texture {
-                index,
-                problem: "image missing".into(),
+            let image = t.source();
+            let index = image.index();
+            let name = t.name().or(image.name()).unwrap_or("texture").to_owned();
+            let bytes = image_bytes(&folder, &image, &buffers).map_err(|e| match e {
+                SceneErrorKind::Reference { .. } => e,
+                other => SceneErrorKind::Texture {
+                    index,
+                    problem: other.to_string(),
+                },
             })?;
-            to_rgba8(t.name().unwrap_or("texture").to_owned(), index, data)
+            super::decode_texture(name, index, &bytes)
         })
         .collect::<Result<Vec<_>, _>>()?;
 
@@ -104,12 +128,12 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
 
 fn primitive(
     prim: &gltf::Primitive,
-    buffers: &[gltf::buffer::Data],
+    buffers: &[Vec<u8>],
     world: Mat4,
     name: &str,
     default_material: u32,
 ) -> Result<Mesh, SceneErrorKind> {
-    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
     let missing = |what: &str| SceneErrorKind::InvalidMesh {
         mesh: name.into(),
         problem: format!("{what} missing or unreadable"),
@@ -190,43 +214,55 @@ fn convert_light(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> Light
     }
 }
 
-fn to_rgba8(
-    name: String,
-    index: usize,
-    data: &gltf::image::Data,
-) -> Result<Texture, SceneErrorKind> {
-    use gltf::image::Format;
-    let (w, h) = (data.width, data.height);
-    let n = (w * h) as usize;
-    let px = &data.pixels;
-    let rgba8 = match data.format {
-        Format::R8G8B8A8 => px.clone(),
-        Format::R8G8B8 => px
-            .chunks_exact(3)
-            .flat_map(|c| [c[0], c[1], c[2], 255])
-            .collect(),
-        Format::R8G8 => px
-            .chunks_exact(2)
-            .flat_map(|c| [c[0], c[1], 0, 255])
-            .collect(),
-        Format::R8 => px.iter().flat_map(|&c| [c, c, c, 255]).collect(),
-        other => {
-            return Err(SceneErrorKind::Texture {
-                index,
-                problem: format!("{name}: unsupported pixel format {other:?}"),
-            });
-        }
+/// The bytes of glTF buffer `b`: the GLB's binary chunk or its URI read through `folder`,
+/// holding at least the declared `byteLength` (only those bytes are kept).
+fn buffer_data(
+    folder: &SceneFolder,
+    b: &gltf::Buffer,
+    blob: Option<&[u8]>,
+) -> Result<Vec<u8>, SceneErrorKind> {
+    let declared = b.length();
+    let mut data = match b.source() {
+        gltf::buffer::Source::Bin => blob
+            .ok_or_else(|| {
+                SceneErrorKind::Gltf(format!(
+                    "buffer {} names the GLB binary chunk, which is missing",
+                    b.index()
+                ))
+            })?
+            .to_vec(),
+        gltf::buffer::Source::Uri(uri) => folder.read_uri(uri, declared as u64 + 3)?,
     };
-    if rgba8.len() != n * 4 {
-        return Err(SceneErrorKind::Texture {
-            index,
-            problem: format!("{name}: truncated pixel data"),
-        });
+    if data.len() < declared {
+        return Err(SceneErrorKind::Gltf(format!(
+            "buffer {} declares {declared} bytes but holds {}",
+            b.index(),
+            data.len()
+        )));
     }
-    Ok(Texture {
-        name,
-        width: w,
-        height: h,
-        rgba8,
-    })
+    data.truncate(declared);
+    Ok(data)
+}
+
+/// The encoded bytes (PNG, JPEG) of `image`: a buffer view of `buffers` or a URI read
+/// through `folder`.
+fn image_bytes(
+    folder: &SceneFolder,
+    image: &gltf::Image,
+    buffers: &[Vec<u8>],
+) -> Result<Vec<u8>, SceneErrorKind> {
+    match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let buffer = &buffers[view.buffer().index()];
+            let range = view.offset()..view.offset().saturating_add(view.length());
+            buffer.get(range).map(<[u8]>::to_vec).ok_or_else(|| {
+                SceneErrorKind::Gltf(format!(
+                    "image {} reads past the end of buffer {}",
+                    image.index(),
+                    view.buffer().index()
+                ))
+            })
+        }
+        gltf::image::Source::Uri { uri, .. } => folder.read_uri(uri, UNDECLARED_LIMIT),
+    }
 }

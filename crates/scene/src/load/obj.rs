@@ -4,7 +4,11 @@ use std::path::Path;
 
 use glam::{Vec2, Vec3, Vec4};
 
+use super::folder::{SceneFolder, UNDECLARED_LIMIT};
 use crate::{Material, Mesh, Scene, SceneErrorKind};
+
+/// The most bytes an `.obj` file may hold: 4 GiB.
+const FILE_LIMIT: u64 = u32::MAX as u64;
 
 pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene, SceneErrorKind> {
     let options = tobj::LoadOptions {
@@ -12,9 +16,40 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
         single_index: true,
         ..Default::default()
     };
-    let (models, mtl) =
-        tobj::load_obj(path, &options).map_err(|e| SceneErrorKind::Obj(e.to_string()))?;
-    let dir = path.parent().unwrap_or(Path::new("."));
+    let folder = SceneFolder::of(path)?;
+    let file = std::fs::File::open(path)?;
+    if file.metadata()?.len() > FILE_LIMIT {
+        return Err(SceneErrorKind::Obj(format!(
+            "larger than {FILE_LIMIT} bytes"
+        )));
+    }
+    let mut reader = std::io::BufReader::new(std::io::Read::take(file, FILE_LIMIT));
+    // Material libraries are read through the scene's folder, and checked before tobj parses
+    // them (tobj panics on colour lines with fewer than three numbers).
+    let mtl_problem = std::cell::RefCell::new(None);
+    let (models, mtl) = tobj::load_obj_buf(&mut reader, &options, |mtl_path| {
+        let read = mtl_path
+            .to_str()
+            .ok_or_else(|| SceneErrorKind::Reference {
+                reference: mtl_path.display().to_string(),
+                problem: "not UTF-8".into(),
+            })
+            .and_then(|p| folder.read_path(p, UNDECLARED_LIMIT))
+            .and_then(|bytes| check_mtl(&mtl_path.display().to_string(), &bytes).map(|()| bytes));
+        match read {
+            Ok(bytes) => tobj::load_mtl_buf(&mut &bytes[..]),
+            // A missing library costs the materials (a warning below), anything else fails.
+            Err(SceneErrorKind::MissingFile(_)) => Err(tobj::LoadError::OpenFileFailed),
+            Err(e) => {
+                *mtl_problem.borrow_mut() = Some(e);
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    })
+    .map_err(|e| SceneErrorKind::Obj(e.to_string()))?;
+    if let Some(e) = mtl_problem.into_inner() {
+        return Err(e);
+    }
     let mtl = mtl.unwrap_or_else(|e| {
         log::warn!(
             "{}: materials not loaded ({e}); using the default material",
@@ -27,10 +62,7 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
     for m in &mtl {
         let base_color_texture = match &m.diffuse_texture {
             Some(file) => {
-                let bytes = std::fs::read(dir.join(file)).map_err(|e| SceneErrorKind::Texture {
-                    index: scene.textures.len(),
-                    problem: format!("{file}: {e}"),
-                })?;
+                let bytes = folder.read_path(file, UNDECLARED_LIMIT)?;
                 scene.textures.push(super::decode_texture(
                     file.clone(),
                     scene.textures.len(),
@@ -84,4 +116,30 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
         progress(i + 1, total);
     }
     Ok(scene)
+}
+
+/// Refuses MTL colour statements (`Ka`, `Kd`, `Ks`, `Ke`, `Tf`) without three numbers, naming
+/// the file and line (tobj would panic on them); `Tf`/`K*` spectral and XYZ forms are left to
+/// tobj.
+fn check_mtl(name: &str, bytes: &[u8]) -> Result<(), SceneErrorKind> {
+    for (n, line) in String::from_utf8_lossy(bytes).lines().enumerate() {
+        let mut words = line.split_whitespace();
+        if let Some(key @ ("Ka" | "Kd" | "Ks" | "Ke" | "Tf")) = words.next() {
+            let values: Vec<&str> = words.collect();
+            if matches!(values.first(), Some(&("spectral" | "xyz"))) {
+                continue;
+            }
+            let numbers = values
+                .iter()
+                .filter(|v| v.parse::<f32>().is_ok_and(f32::is_finite));
+            if values.len() < 3 || numbers.count() < 3 {
+                return Err(SceneErrorKind::Obj(format!(
+                    "{name} line {}: {key} needs three finite numbers, got {:?}",
+                    n + 1,
+                    values.join(" ")
+                )));
+            }
+        }
+    }
+    Ok(())
 }
