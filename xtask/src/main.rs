@@ -18,7 +18,7 @@
 //!   depend on, and builds and runs a throwaway crate outside the workspace that depends on the
 //!   unpacked packages (through `[patch.crates-io]`) and runs their `examples/embed.rs`.
 //! - `cargo xtask bft [--level L] [--max-valence N] [-o FILE]`: builds the Loop basis-function
-//!   tables and writes their versioned binary file (default `target/bft/loop-l5-v18.bft`).
+//!   tables and writes their versioned binary file (default `loop-l5-v18.bft` in the user's cache folder, `BftSet::default_path`).
 //! - `cargo xtask subdiv-fixtures`: regenerates `fixtures/subdiv/*.f32`, Loop subdivision of
 //!   the shared closed meshes by MeshLab, checked against trimesh (`xtask/loop_reference.py`).
 

@@ -179,7 +179,7 @@ enum Command {
     },
 }
 
-/// The default basis-function tables (cached under target/bft).
+/// The default basis-function tables (cached in the user's cache folder, `BftSet::default_path`).
 fn bft_tables() -> Result<subdiv_bft::BftSet> {
     use subdiv_bft::{BftSet, DEFAULT_LEVEL, MAX_VALENCE};
     Ok(BftSet::cached(
@@ -223,7 +223,7 @@ fn subdivide_command(
             ObjMesh::write(&fine.positions_f32(), None, &indices)
         }
     };
-    std::fs::write(output, text).with_context(|| format!("{}", output.display()))?;
+    save_text(&text, output)?;
     println!("wrote {}", output.display());
     Ok(())
 }
@@ -408,14 +408,14 @@ fn render_ssaa(
     let image = renderer.ssaa.read_output(&gpu.device, &gpu.queue)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    image.write_png(&args.out.join("render.png"))?;
-    image.write_exr(&args.out.join("render.exr"))?;
+    save_png(&image, &args.out.join("render.png"))?;
+    save_exr(&image, &args.out.join("render.exr"))?;
     println!("device:  GPU {}", gpu.describe());
     if args.adaptive {
         let counts = renderer.ssaa.read_counts(&gpu.device, &gpu.queue)?;
         let n = m * m;
-        adaptive_ssaa::cpu::sample_heatmap(&counts, n)
-            .write_png(&args.out.join("ssaa-samples.png"))?;
+        let samples = adaptive_ssaa::cpu::sample_heatmap(&counts, n);
+        save_png(&samples, &args.out.join("ssaa-samples.png"))?;
         let total: u64 = counts.pixels().iter().map(|&k| u64::from(k)).sum();
         println!(
             "ssaa:    adaptive {m}x{m}, {} + shading metric, {} resolve: {:.1} % of the samples",
@@ -528,7 +528,53 @@ fn load_scene(args: &Args) -> Result<Scene> {
     Ok(scene?)
 }
 
+/// The files this run wrote ([`save_png`], [`save_exr`], [`save_text`]). Every output is
+/// written atomically; when the run fails, the outputs it already wrote are removed again, so a
+/// failed run leaves none of its files behind.
+static WRITTEN: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+fn record(path: &std::path::Path) {
+    if let Ok(mut written) = WRITTEN.lock() {
+        written.push(path.to_owned());
+    }
+}
+
+/// Writes `image` as a PNG at `path` (atomically) and records it as this run's output.
+fn save_png(image: &gbuffer::Image<[f32; 4]>, path: &std::path::Path) -> Result<()> {
+    image.write_png(path)?;
+    record(path);
+    Ok(())
+}
+
+/// Writes `image` as an OpenEXR file at `path` (atomically) and records it.
+fn save_exr(image: &gbuffer::Image<[f32; 4]>, path: &std::path::Path) -> Result<()> {
+    image.write_exr(path)?;
+    record(path);
+    Ok(())
+}
+
+/// Writes `text` at `path` (atomically) and records it.
+fn save_text(text: &str, path: &std::path::Path) -> Result<()> {
+    gbuffer::write_atomically(path, |tmp| {
+        std::fs::write(tmp, text).map_err(|e| e.to_string())
+    })?;
+    record(path);
+    Ok(())
+}
+
 fn main() -> Result<()> {
+    let result = run();
+    if result.is_err()
+        && let Ok(written) = WRITTEN.lock()
+    {
+        for path in written.iter() {
+            let _ = std::fs::remove_file(path);
+        }
+    }
+    result
+}
+
+fn run() -> Result<()> {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
     let args = Args::parse();
     if let Some(Command::Subdivide {
@@ -738,8 +784,8 @@ fn main() -> Result<()> {
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let png = args.out.join("render.png");
     let exr = args.out.join("render.exr");
-    rendered.image.write_png(&png)?;
-    rendered.image.write_exr(&exr)?;
+    save_png(&rendered.image, &png)?;
+    save_exr(&rendered.image, &exr)?;
     if let Some(gb) = &gbuffer {
         dump_stages(&args.out, gb, stages.as_ref())?;
     }
@@ -809,7 +855,10 @@ fn write_heatmap(
         .heatmap_max
         .unwrap_or_else(|| counts.iter().copied().max().unwrap_or(0));
     let path = out.join("heatmap.png");
-    tiled_shading::heatmap(counts, shading, width, height, max.max(1)).write_png(&path)?;
+    save_png(
+        &tiled_shading::heatmap(counts, shading, width, height, max.max(1)),
+        &path,
+    )?;
     println!(
         "heatmap: {} (black 0 → white {max} lights per tile)",
         path.display()
@@ -877,28 +926,28 @@ fn dump_stages(
             [r, m, 0.0, 1.0]
         }
     });
-    depth.write_png(&dir.join("gbuffer-depth.png"))?;
-    normals(&gb.normal).write_png(&dir.join("gbuffer-normal.png"))?;
-    albedo.write_png(&dir.join("gbuffer-albedo.png"))?;
-    material.write_png(&dir.join("gbuffer-roughness-metallic.png"))?;
+    save_png(&depth, &dir.join("gbuffer-depth.png"))?;
+    save_png(&normals(&gb.normal), &dir.join("gbuffer-normal.png"))?;
+    save_png(&albedo, &dir.join("gbuffer-albedo.png"))?;
+    save_png(&material, &dir.join("gbuffer-roughness-metallic.png"))?;
     let Some(s) = stages else {
         return Ok(());
     };
     let opaque = |img: &Image<[f32; 4]>| img.map(|p| [p[0], p[1], p[2], 1.0]);
     let irradiance = |name: &str, img: &Image<[f32; 4]>| -> Result<()> {
-        opaque(img).write_png(&dir.join(format!("{name}.png")))?;
-        opaque(img).write_exr(&dir.join(format!("{name}.exr")))?;
+        save_png(&opaque(img), &dir.join(format!("{name}.png")))?;
+        save_exr(&opaque(img), &dir.join(format!("{name}.exr")))?;
         Ok(())
     };
     if let Some(split) = &s.split_normal {
-        normals(split).write_png(&dir.join("split-normal.png"))?;
+        save_png(&normals(split), &dir.join("split-normal.png"))?;
         irradiance("split-indirect-diffuse", &s.shaded_diffuse)?;
     }
     irradiance("indirect-diffuse", &s.diffuse)?;
     irradiance("indirect-specular", &s.specular)?;
     if let Some(db) = &s.discontinuities {
-        db.map(|p| [0, 1, 2, 3].map(|c| f32::from(p[c]) / 255.0))
-            .write_png(&dir.join("discontinuities.png"))?;
+        let db = db.map(|p| [0, 1, 2, 3].map(|c| f32::from(p[c]) / 255.0));
+        save_png(&db, &dir.join("discontinuities.png"))?;
     }
     if let Some([d, sp]) = &s.blurred {
         irradiance("indirect-diffuse-blurred", d)?;
@@ -943,7 +992,7 @@ fn write_shadow_atlas(
         .collect();
     std::fs::create_dir_all(&args.out)?;
     let path = args.out.join("vpl-shadow-atlas.png");
-    gbuffer::Image::from_vec(w, h, pixels)?.write_png(&path)?;
+    save_png(&gbuffer::Image::from_vec(w, h, pixels)?, &path)?;
     println!("wrote {}", path.display());
     Ok(())
 }

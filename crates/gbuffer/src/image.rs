@@ -130,16 +130,16 @@ impl Image<[f32; 4]> {
             .iter()
             .flat_map(|p| [p[0], p[1], p[2]].map(|c| (linear_to_srgb(c) * 255.0).round() as u8))
             .collect();
-        image::save_buffer(
-            path,
-            &bytes,
-            self.width,
-            self.height,
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| ImageError::Write {
-            path: path.display().to_string(),
-            message: e.to_string(),
+        write_atomically(path, |tmp| {
+            image::save_buffer_with_format(
+                tmp,
+                &bytes,
+                self.width,
+                self.height,
+                image::ExtendedColorType::Rgb8,
+                image::ImageFormat::Png,
+            )
+            .map_err(|e| e.to_string())
         })
     }
 
@@ -176,15 +176,41 @@ impl Image<[f32; 4]> {
     /// Writes linear RGBA as a 32-bit float OpenEXR file.
     pub fn write_exr(&self, path: &Path) -> Result<(), ImageError> {
         let w = self.width as usize;
-        exr::prelude::write_rgba_file(path, w, self.height as usize, |x, y| {
-            let p = self.data[y * w + x];
-            (p[0], p[1], p[2], p[3])
-        })
-        .map_err(|e| ImageError::Write {
-            path: path.display().to_string(),
-            message: e.to_string(),
+        write_atomically(path, |tmp| {
+            exr::prelude::write_rgba_file(tmp, w, self.height as usize, |x, y| {
+                let p = self.data[y * w + x];
+                (p[0], p[1], p[2], p[3])
+            })
+            .map_err(|e| e.to_string())
         })
     }
+}
+
+/// Writes `path` atomically: `write` fills a temporary file beside it, which then replaces
+/// `path` by a rename — a reader never sees a half-written file, a failed write leaves the old
+/// file (or none) and no temporary behind, and a symbolic link at `path` is replaced, not
+/// followed. Errors name `path`.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> Result<(), String>,
+) -> Result<(), ImageError> {
+    let fail = |message: String| ImageError::Write {
+        path: path.display().to_string(),
+        message,
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| fail("not a file path".into()))?
+        .to_string_lossy();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    // A leftover (or planted) temporary is replaced, never written through.
+    let _ = std::fs::remove_file(&tmp);
+    let written = write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+    if let Err(message) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(fail(message));
+    }
+    Ok(())
 }
 
 /// Peak signal-to-noise ratio in dB between two images' RGB, after clamping to \[0, 1\] and

@@ -421,14 +421,30 @@ impl BftSet {
         Ok(Self::from_tables(level, tables))
     }
 
-    /// Default cache file: `target/bft/loop-l{level}-v{max_valence}.bft` under the workspace,
-    /// or `$SUBDIV_BFT_DIR/loop-l{level}-v{max_valence}.bft`.
+    /// Default cache file `loop-l{level}-v{max_valence}.bft` in `$SUBDIV_BFT_DIR`, else in the
+    /// user's cache folder (`$XDG_CACHE_HOME/deferred`, `~/.cache/deferred`,
+    /// `~/Library/Caches/deferred` on macOS, `%LOCALAPPDATA%\deferred` on Windows), else in the
+    /// system's temporary folder: never a path of the machine the crate was built on.
     pub fn default_path(level: u32, max_valence: u8) -> std::path::PathBuf {
-        let dir = std::env::var_os("SUBDIV_BFT_DIR").map_or_else(
-            || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/bft"),
-            std::path::PathBuf::from,
-        );
-        dir.join(format!("loop-l{level}-v{max_valence}.bft"))
+        let var = |name| {
+            std::env::var_os(name)
+                .filter(|v| !v.is_empty())
+                .map(std::path::PathBuf::from)
+        };
+        let cache = var("XDG_CACHE_HOME")
+            .or_else(|| var("LOCALAPPDATA"))
+            .or_else(|| {
+                let home = var("HOME")?;
+                Some(if cfg!(target_os = "macos") {
+                    home.join("Library/Caches")
+                } else {
+                    home.join(".cache")
+                })
+            })
+            .unwrap_or_else(std::env::temp_dir);
+        var("SUBDIV_BFT_DIR")
+            .unwrap_or_else(|| cache.join("deferred"))
+            .join(format!("loop-l{level}-v{max_valence}.bft"))
     }
 
     /// Reads the table file at `path` when it exists and holds this level and valence range;
@@ -448,11 +464,16 @@ impl BftSet {
             }
         }
         let set = Self::build(level, max_valence)?;
+        // Written beside the cache file and renamed into place: a reader never sees half a
+        // table file; a cache that cannot be written only costs the next run the build time.
+        let tmp = path.with_extension(format!("bft.{}.tmp", std::process::id()));
         let written = path
             .parent()
             .map_or(Ok(()), std::fs::create_dir_all)
-            .and_then(|()| std::fs::write(path, set.to_bytes()));
+            .and_then(|()| std::fs::write(&tmp, set.to_bytes()))
+            .and_then(|()| std::fs::rename(&tmp, path));
         if let Err(e) = written {
+            let _ = std::fs::remove_file(&tmp);
             eprintln!("could not cache the tables at {}: {e}", path.display());
         }
         Ok(set)

@@ -1,0 +1,59 @@
+//! The `deferred` program's outputs: written atomically, and a run that fails removes the
+//! outputs it had already written (no half set of files is left that looks like a result).
+
+use std::process::Command;
+
+fn out_folder(name: &str) -> std::path::PathBuf {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("cli-outputs")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("folder");
+    dir
+}
+
+fn deferred(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_deferred"))
+        .args(["--cpu", "--size", "64x48", "--out"])
+        .arg(out)
+        .args(extra)
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .expect("the deferred program runs")
+}
+
+#[test]
+fn a_run_writes_its_outputs_and_nothing_else() {
+    let out = out_folder("ok");
+    let run = deferred(&out, &[]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let mut names: Vec<_> = std::fs::read_dir(&out)
+        .expect("out")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["render.exr", "render.png"]);
+}
+
+#[test]
+fn a_failed_run_removes_the_outputs_it_wrote() {
+    let out = out_folder("fail");
+    // A folder where a later output goes: render.png and render.exr are written first, then
+    // the stage dump fails.
+    std::fs::create_dir_all(out.join("stages/gbuffer-depth.png")).expect("obstacle");
+    let run = deferred(&out, &["--dump-stages"]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "the run should fail");
+    assert!(
+        stderr.contains("gbuffer-depth.png"),
+        "the error names the file: {stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    for partial in ["render.png", "render.exr", "stages/gbuffer-normal.png"] {
+        assert!(!out.join(partial).exists(), "{partial} was left behind");
+    }
+}
