@@ -56,7 +56,12 @@ impl Mesh {
     /// Area-weighted smooth vertex normals from the triangles.
     pub fn compute_normals(&mut self) {
         let mut normals = vec![Vec3::ZERO; self.positions.len()];
+        let n = self.positions.len();
+        // Triangles with an index out of range add nothing here; `validate` reports them.
         for t in self.indices.chunks_exact(3) {
+            if t.iter().any(|&i| i as usize >= n) {
+                continue;
+            }
             let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
             let n = (b - a).cross(c - a);
             for &i in t {

@@ -3,6 +3,9 @@
 //! if the loader read the file it names outside the folder, so a passing case proves the file
 //! was not used.
 
+mod common;
+
+use common::base64;
 use std::path::{Path, PathBuf};
 
 /// A fresh folder `<tmp>/<name>` holding `outside/tri.bin` (a valid triangle buffer) and an
@@ -119,24 +122,6 @@ fn gltf_buffers_inside_the_folder_load_and_are_bounded() {
         .err()
         .expect("a missing buffer");
     assert!(e.contains("no such file"), "{e}");
-}
-
-/// Standard base64 of `bytes` (test-side encoder, independent of the loader's decoder).
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    bytes
-        .chunks(3)
-        .flat_map(|c| {
-            let n = c.iter().fold(0u32, |n, &b| n << 8 | u32::from(b)) << (8 * (3 - c.len()));
-            (0..4).map(move |i| {
-                if i <= c.len() {
-                    A[(n >> (18 - 6 * i) & 63) as usize] as char
-                } else {
-                    '='
-                }
-            })
-        })
-        .collect()
 }
 
 fn load_obj(scene: &Path, obj: &str, mtl: Option<&str>) -> Result<scene::Scene, String> {

@@ -7,6 +7,10 @@ use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use super::folder::{SceneFolder, UNDECLARED_LIMIT};
 use crate::{Camera, Light, Material, Mesh, Scene, SceneErrorKind, light::default_radius};
 
+/// The most node instances a scene may place (a node reached through several parents counts
+/// once per path): 2^20.
+const MAX_NODE_INSTANCES: usize = 1 << 20;
+
 /// The most bytes a `.gltf`/`.glb` file itself may hold: 4 GiB (GLB's own length field).
 const FILE_LIMIT: u64 = u32::MAX as u64;
 
@@ -72,15 +76,35 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
     let Some(gscene) = doc.default_scene().or_else(|| doc.scenes().next()) else {
         return Err(SceneErrorKind::NoMeshes);
     };
-    let mut stack: Vec<(gltf::Node, Mat4)> = gscene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    // Each stack entry carries its ancestors, so a node that is its own ancestor (a cycle,
+    // which glTF forbids) is an error instead of an endless walk; instances are counted, so a
+    // node reused on many levels cannot multiply the scene without bound.
+    let mut stack: Vec<(gltf::Node, Mat4, Vec<usize>)> = gscene
+        .nodes()
+        .map(|n| (n, Mat4::IDENTITY, Vec::new()))
+        .collect();
     let total = doc
         .meshes()
         .map(|m| m.primitives().len())
         .sum::<usize>()
         .max(1);
-    while let Some((node, parent)) = stack.pop() {
+    let mut instances = 0usize;
+    while let Some((node, parent, mut ancestors)) = stack.pop() {
+        if ancestors.contains(&node.index()) {
+            return Err(SceneErrorKind::Gltf(format!(
+                "node {} is its own ancestor (the node hierarchy has a cycle)",
+                node.index()
+            )));
+        }
+        instances += 1;
+        if instances > MAX_NODE_INSTANCES {
+            return Err(SceneErrorKind::Gltf(format!(
+                "the node hierarchy places more than {MAX_NODE_INSTANCES} node instances"
+            )));
+        }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        stack.extend(node.children().map(|c| (c, world)));
+        ancestors.push(node.index());
+        stack.extend(node.children().map(|c| (c, world, ancestors.clone())));
         if let Some(mesh) = node.mesh() {
             for prim in mesh.primitives() {
                 if prim.mode() != gltf::mesh::Mode::Triangles {
