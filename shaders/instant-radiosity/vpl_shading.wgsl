@@ -2,9 +2,10 @@
 // #import gbuffer/normal_encoding.wgsl
 // #import tiled-shading/lighting.wgsl
 // #import manylod/common.wgsl
+// #import interleave/pattern.wgsl
 // SNSM — shading with no shadow map (Segovia 2006 §4.3, §6.2): each pixel sums the diffuse and
 // glossy light reflected from the hemispherical VPLs of its subset, visibility ignored. Twin of
-// `pipeline::indirect::cpu::shade_vpls`.
+// `instant_radiosity::cpu::shade_vpls`.
 //
 // A VPL of flux Φ at q with normal n_q lights p with intensity Φ/π · max(n_q·(p − q)/d, 0)
 // / max(d², clamp²): the clamp bounds the 1/d² singularity of VPLs close to the receiver.
@@ -35,13 +36,6 @@ struct ShadingParams {
     _pad: u32,
 };
 
-override width: u32 = 1u;
-override height: u32 = 1u;
-override n: u32 = 1u;
-override m: u32 = 1u;
-override sub_width: u32 = 1u;
-override sub_height: u32 = 1u;
-
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<uniform> params: ShadingParams;
 @group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
@@ -52,7 +46,7 @@ override sub_height: u32 = 1u;
 @group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(8) var specular_out: texture_storage_2d<rgba16float, write>;
 
-// `pipeline::indirect::shadows::ShadowParams`.
+// `instant_radiosity::shadows::ShadowParams`.
 struct ShadowParams {
     enabled: u32,
     tile: u32,

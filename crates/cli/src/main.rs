@@ -748,16 +748,15 @@ fn run() -> Result<()> {
                 (format!("GPU {}", gpu.describe()), rendered, stages, gbuffer)
             }
             None => {
-                let (rendered, stages) = pipeline::cpu::render_indirect(
+                let inputs = pipeline::cpu::FrameInputs::new(
                     &scene,
                     &camera,
                     &direct_lights,
-                    width,
-                    height,
+                    (width, height),
                     ambient,
-                    &shading,
-                    indirect_ref,
-                )?;
+                );
+                let (rendered, stages) =
+                    pipeline::cpu::render_indirect(&inputs, &shading, indirect_ref)?;
                 if args.heatmap {
                     let gb = gbuffer::cpu::rasterize(&scene, &camera, width, height)?.gbuffer;
                     let frame = gbuffer::Frame::new(&camera, width, height);

@@ -158,8 +158,7 @@ impl PassTimer {
         if names.is_empty() {
             return Ok(Vec::new());
         }
-        let bytes = transfer::read_buffer(device, queue, buffer)?;
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+        let ticks: Vec<u64> = transfer::read_pod(device, queue, buffer)?;
         let period = f64::from(queue.get_timestamp_period());
         let ms = |a: u64, b: u64| b.wrapping_sub(a) as f64 * period * 1e-6;
         Ok(names

@@ -221,6 +221,19 @@ pub fn read_buffer(
     map_and_copy(device, &staging)
 }
 
+/// [`read_buffer`] as values of `T` (copied, so any alignment of the bytes is fine; a
+/// trailing partial value is dropped).
+pub fn read_pod<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+) -> Result<Vec<T>, GpuError> {
+    let bytes = read_buffer(device, queue, buffer)?;
+    let size = size_of::<T>().max(1);
+    let whole = bytes.len() / size * size;
+    Ok(bytemuck::pod_collect_to_vec(&bytes[..whole]))
+}
+
 /// Copies mip 0 of a 2D texture (which needs `COPY_SRC`) back to the CPU with tightly packed
 /// rows. For depth-stencil formats, `aspect` picks the plane (e.g. `DepthOnly`).
 pub fn read_texture(

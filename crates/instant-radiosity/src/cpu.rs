@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use crate::IndirectError;
 use crate::{IndirectConfig, IndirectStages, Interleaving, vpl::GpuVpl, vpl::VplSet};
 use gpu::PassTiming;
-use tiled_shading::lighting::reflect_light;
+use tiled_shading::lighting::{Surface, reflect_light};
 
 /// The clamped intensity of `vpl` towards `p` and the direction to it (`vpl_intensity`):
 /// `Φ/π · max(−n_q·l, 0) / max(d², clamp²)`.
@@ -88,10 +88,18 @@ fn shade(
         let a = gb.albedo.get(tx, ty);
         let albedo = Vec3::new(f32::from(a[0]), f32::from(a[1]), f32::from(a[2])) / 255.0;
         let (roughness, metallic, _) = unpack_material(gb.material.get(tx, ty));
+        let surface = Surface {
+            p,
+            n,
+            v,
+            albedo,
+            roughness,
+            metallic,
+        };
         let first = (subset * inputs.per_subset) as usize;
         for vpl in &inputs.vpls[first..first + inputs.per_subset as usize] {
             let (intensity, l) = vpl_intensity(vpl, p, inputs.clamp_squared);
-            let (d, s) = reflect_light(intensity, l, n, v, albedo, roughness, metallic);
+            let (d, s) = reflect_light(intensity, l, &surface);
             diffuse += d;
             specular += s;
         }

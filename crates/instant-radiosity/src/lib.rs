@@ -40,7 +40,7 @@ use scene::Aabb;
 /// link).
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "instant-radiosity",
-    imports: [gbuffer::SHADERS, tiled_shading::SHADERS, manylod::SHADERS],
+    imports: [gbuffer::SHADERS, tiled_shading::SHADERS, manylod::SHADERS, interleave::SHADERS],
     files: ["vpl_shading.wgsl"],
 );
 

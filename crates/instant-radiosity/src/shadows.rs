@@ -95,7 +95,8 @@ impl VplShadowMaps {
         let layout = vpl_atlas(views.len(), config.tile, diagonal);
         // Cuts hold culled node-views too: Sponza's ε = 2 px cuts are ~8 per micro-view pixel.
         let capacity = views.len() * (config.tile * config.tile) as usize * 24;
-        let manylod = GpuManyLod::new(device, &bsh, &views, config.epsilon, layout, capacity)?;
+        let manylod =
+            GpuManyLod::new(device, &bsh, &views, config.epsilon, layout, capacity, None)?;
         let ism = match mode {
             VplShadows::ManyLod => None,
             VplShadows::Ism => {

@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (epsilon, layout) = (2.0, AtlasLayout::new(views.len(), 32, 8.0));
 
     // new: upload and pipelines once; encode_cut: only records (indirect dispatch, no readback).
-    let mut gpu = GpuManyLod::new(&device, &bsh, &views, epsilon, layout, 1 << 16)?;
+    let mut gpu = GpuManyLod::new(&device, &bsh, &views, epsilon, layout, 1 << 16, None)?;
     let mut encoder = device.create_command_encoder(&Default::default());
     gpu.encode_cut(&mut encoder, CutKind::Basic, None);
     queue.submit([encoder.finish()]);

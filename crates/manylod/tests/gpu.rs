@@ -21,7 +21,7 @@ fn setup(bsh: &Bsh, angle: f32, capacity: usize) -> Option<(&'static gpu::Gpu, G
     let gpu = gpu::test_device(&manylod::device_needs())?;
     let v = views_in_tiles(angle, Some(TILE));
     let layout = AtlasLayout::new(v.len(), TILE, 12.0);
-    let m = GpuManyLod::new(&gpu.device, bsh, &v, EPSILON, layout, capacity).expect("set-up");
+    let m = GpuManyLod::new(&gpu.device, bsh, &v, EPSILON, layout, capacity, None).expect("set-up");
     Some((gpu, m))
 }
 
@@ -283,12 +283,12 @@ fn overflow_and_bad_input_are_errors() {
     let v = views_in_tiles(0.0, Some(TILE));
     let layout = AtlasLayout::new(v.len(), TILE, 12.0);
     let wrong_tiles = views_in_tiles(0.0, Some(16));
-    assert!(GpuManyLod::new(&gpu.device, &bsh, &wrong_tiles, 1.0, layout, 1 << 16).is_err());
-    assert!(GpuManyLod::new(&gpu.device, &bsh, &v, f32::NAN, layout, 1 << 16).is_err());
+    assert!(GpuManyLod::new(&gpu.device, &bsh, &wrong_tiles, 1.0, layout, 1 << 16, None).is_err());
+    assert!(GpuManyLod::new(&gpu.device, &bsh, &v, f32::NAN, layout, 1 << 16, None).is_err());
     assert!(m.set_views(&gpu.queue, &v[1..]).is_err(), "view count");
 }
 
-/// The splat writes into the caller's atlas buffer (`with_atlas`): the same atlas as the one
+/// The splat writes into the caller's atlas buffer (`new(.., Some(atlas))`): the same atlas as the one
 /// `new` allocates; a buffer too small or without `STORAGE` is an error naming the atlas.
 #[test]
 fn caller_owned_atlas_is_checked_and_written() {
@@ -304,7 +304,7 @@ fn caller_owned_atlas_is_checked_and_written() {
         |size, usage| gpu::transfer::buffer(d, "application's atlas", size, usage).expect("buffer");
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let atlas = buffer(u64::from(w * h) * 4, usage);
-    let mut mine = GpuManyLod::with_atlas(d, &bsh, &v, EPSILON, layout, 1 << 18, &atlas)
+    let mut mine = GpuManyLod::new(d, &bsh, &v, EPSILON, layout, 1 << 18, Some(&atlas))
         .expect("caller's atlas");
     let mut encoder = d.create_command_encoder(&Default::default());
     for m in [&mut own, &mut mine] {
@@ -324,9 +324,17 @@ fn caller_owned_atlas_is_checked_and_written() {
             "STORAGE",
         ),
     ] {
-        let e = GpuManyLod::with_atlas(d, &bsh, &v, EPSILON, layout, 1 << 18, &buffer(size, usage))
-            .err()
-            .expect("rejected");
+        let e = GpuManyLod::new(
+            d,
+            &bsh,
+            &v,
+            EPSILON,
+            layout,
+            1 << 18,
+            Some(&buffer(size, usage)),
+        )
+        .err()
+        .expect("rejected");
         assert!(
             e.to_string().contains("ManyLoD atlas") && e.to_string().contains(words),
             "{e}"

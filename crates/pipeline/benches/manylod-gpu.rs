@@ -165,7 +165,7 @@ fn gpu_manylod(
     let mut capacity = views[0].len() * (TILE * TILE) as usize * 4;
     loop {
         let layout = vpl_atlas(views[0].len(), TILE, diagonal);
-        let mut m = GpuManyLod::new(&gpu.device, bsh, &views[0], epsilon, layout, capacity)?;
+        let mut m = GpuManyLod::new(&gpu.device, bsh, &views[0], epsilon, layout, capacity, None)?;
         let mut overflowed = false;
         for (f, v) in views.iter().take(4).enumerate() {
             m.set_views(&gpu.queue, v)?;

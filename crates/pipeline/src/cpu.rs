@@ -12,7 +12,7 @@ use crate::{PassTiming, RenderError, Rendered, ShadingConfig};
 use instant_radiosity::{IndirectConfig, IndirectStages, vpl::VplSet};
 
 pub use tiled_shading::lighting::{
-    distance_attenuation, light_incidence, reflect_light, shade_light,
+    Surface, distance_attenuation, light_incidence, reflect_light, shade_light,
 };
 
 fn albedo_of(p: [u8; 4]) -> Vec3 {
@@ -54,44 +54,54 @@ pub fn composition(
     Image::from_vec(gb.width(), gb.height(), pixels).expect("w × h pixels")
 }
 
-/// Renders a frame on the CPU: rasterize the G-buffer, accumulate lights (tiled, the
-/// default [`ShadingConfig`]), compose.
-pub fn render(
-    scene: &Scene,
-    camera: &Camera,
-    lights: &[Light],
+/// What a CPU frame renders: `scene` seen by `camera` at `width × height`, lit by `lights`
+/// and `ambient`.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameInputs<'a> {
+    scene: &'a Scene,
+    camera: &'a Camera,
+    lights: &'a [Light],
     width: u32,
     height: u32,
     ambient: Vec3,
-) -> Result<Rendered, RenderError> {
-    render_indirect(
-        scene,
-        camera,
-        lights,
-        width,
-        height,
-        ambient,
-        &ShadingConfig::default(),
-        None,
-    )
-    .map(|(r, _)| r)
+}
+
+impl<'a> FrameInputs<'a> {
+    /// `scene` from `camera` at `(width, height)`, lit by `lights` and `ambient`.
+    pub fn new(
+        scene: &'a Scene,
+        camera: &'a Camera,
+        lights: &'a [Light],
+        (width, height): (u32, u32),
+        ambient: Vec3,
+    ) -> Self {
+        Self {
+            scene,
+            camera,
+            lights,
+            width,
+            height,
+            ambient,
+        }
+    }
+}
+
+/// Renders a frame on the CPU: rasterize the G-buffer, accumulate lights (tiled, the
+/// default [`ShadingConfig`]), compose.
+pub fn render(inputs: &FrameInputs<'_>) -> Result<Rendered, RenderError> {
+    render_indirect(inputs, &ShadingConfig::default(), None).map(|(r, _)| r)
 }
 
 /// [`render`] with the light accumulation of `shading`, plus the indirect light of
 /// `indirect`'s VPLs (BS → SNSM → BG → DB → B, timed per stage), added in the composition.
 /// Returns the frame and every indirect stage's image.
-#[allow(clippy::too_many_arguments)]
 pub fn render_indirect(
-    scene: &Scene,
-    camera: &Camera,
-    lights: &[Light],
-    width: u32,
-    height: u32,
-    ambient: Vec3,
+    inputs: &FrameInputs<'_>,
     shading: &ShadingConfig,
     indirect: Option<(&IndirectConfig, &VplSet)>,
 ) -> Result<(Rendered, Option<IndirectStages>), RenderError> {
-    let gpu_lights = crate::validate_lights(lights)?;
+    let (scene, camera, width, height) = (inputs.scene, inputs.camera, inputs.width, inputs.height);
+    let gpu_lights = crate::validate_lights(inputs.lights)?;
     let mut timings = Vec::new();
     let timed = |timings: &mut Vec<PassTiming>, name: &str, t: Instant| {
         timings.push(PassTiming {
@@ -123,7 +133,7 @@ pub fn render_indirect(
         (&direct.diffuse, &direct.specular),
         stages.as_ref().map(IndirectStages::result),
         &emissive,
-        ambient,
+        inputs.ambient,
     );
     timed(&mut timings, "composition", t);
     Ok((Rendered { image, timings }, stages))

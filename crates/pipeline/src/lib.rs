@@ -13,7 +13,8 @@
 //! ```no_run
 //! let scene = scene::cornell_box();
 //! let camera = scene.camera_or_framed();
-//! let out = pipeline::cpu::render(&scene, &camera, &scene.lights, 320, 240, pipeline::DEFAULT_AMBIENT)?;
+//! let inputs = pipeline::cpu::FrameInputs::new(&scene, &camera, &scene.lights, (320, 240), pipeline::DEFAULT_AMBIENT);
+//! let out = pipeline::cpu::render(&inputs)?;
 //! out.image.write_png(std::path::Path::new("cornell.png"))?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```

@@ -1,7 +1,12 @@
 //! The GPU deferred renderer against the CPU reference, and invariants of the shading.
 
 use glam::Vec3;
-use pipeline::{DEFAULT_AMBIENT, cpu, gpu::GpuRenderer, psnr};
+use pipeline::{
+    DEFAULT_AMBIENT,
+    cpu::{self, FrameInputs},
+    gpu::GpuRenderer,
+    psnr,
+};
 use scene::Light;
 
 /// Expected, actual and difference images of a failed comparison, under cargo's test folder.
@@ -21,7 +26,14 @@ fn check(name: &str, scene: &scene::Scene, lights: &[Light], w: u32, h: u32) {
         return;
     };
     let camera = scene.camera_or_framed();
-    let expected = cpu::render(scene, &camera, lights, w, h, DEFAULT_AMBIENT).expect("cpu");
+    let expected = cpu::render(&FrameInputs::new(
+        scene,
+        &camera,
+        lights,
+        (w, h),
+        DEFAULT_AMBIENT,
+    ))
+    .expect("cpu");
     let mut renderer =
         GpuRenderer::new(&gpu.device, &gpu.queue, scene, lights, w, h).expect("gpu renderer");
     let actual = renderer
@@ -77,7 +89,8 @@ fn attenuation_is_exactly_zero_at_and_beyond_the_radius() {
 fn no_lights_leaves_ambient_and_emission_only() {
     let s = scene::cornell_box();
     let camera = s.camera.expect("camera");
-    let out = cpu::render(&s, &camera, &[], 64, 64, Vec3::ZERO).expect("render");
+    let out =
+        cpu::render(&FrameInputs::new(&s, &camera, &[], (64, 64), Vec3::ZERO)).expect("render");
     // Without lights or ambient, only the emissive light opening is non-black.
     let lit = out.image.pixels().iter().filter(|p| p[0] > 0.0).count();
     let emissive = s
@@ -104,7 +117,7 @@ fn energy_is_additive_over_lights() {
     let a: Light = "point:0.2,0.4,0.2,1.0,1,0.5,0.2,0.05".parse().expect("a");
     let b: Light = "point:0.4,0.3,0.4,0.8,0.2,0.5,1,0.05".parse().expect("b");
     let render = |l: &[Light]| {
-        cpu::render(&s, &camera, l, 48, 48, Vec3::ZERO)
+        cpu::render(&FrameInputs::new(&s, &camera, l, (48, 48), Vec3::ZERO))
             .expect("render")
             .image
     };
@@ -144,18 +157,14 @@ fn cornell_box_with_indirect_light_gpu_matches_cpu() {
         },
     )
     .expect("vpls");
+    let inputs = FrameInputs::new(&s, &camera, &s.lights, (w, h), Vec3::ZERO);
     let (expected, _) = cpu::render_indirect(
-        &s,
-        &camera,
-        &s.lights,
-        w,
-        h,
-        Vec3::ZERO,
+        &inputs,
         &pipeline::ShadingConfig::default(),
         Some((&config, &set)),
     )
     .expect("cpu");
-    let direct_only = cpu::render(&s, &camera, &s.lights, w, h, Vec3::ZERO).expect("cpu");
+    let direct_only = cpu::render(&inputs).expect("cpu");
     let mut renderer =
         GpuRenderer::new(&gpu.device, &gpu.queue, &s, &s.lights, w, h).expect("gpu renderer");
     renderer

@@ -8,7 +8,7 @@ use glam::{IVec3, Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use scene::Camera;
 
-use crate::lighting::shade_light;
+use crate::lighting::{Surface, shade_light};
 use crate::{
     CLUSTER_SLICES, GpuLight, LIGHT_DIRECTIONAL, Method, ShadingConfig, ShadingError, Slicing,
 };
@@ -400,18 +400,18 @@ fn shade_pixel(
     let p = gb.albedo.get(x, y);
     let albedo = Vec3::new(f32::from(p[0]), f32::from(p[1]), f32::from(p[2])) / 255.0;
     let (roughness, metallic, _) = unpack_material(gb.material.get(x, y));
+    let surface = Surface {
+        p: s.position,
+        n: s.normal,
+        v,
+        albedo,
+        roughness,
+        metallic,
+    };
     list.iter().filter(|(_, mask)| mask >> slice & 1 == 1).fold(
         (Vec3::ZERO, Vec3::ZERO),
         |(d, sp), &(i, _)| {
-            let (dl, sl) = shade_light(
-                &lights[i as usize],
-                s.position,
-                s.normal,
-                v,
-                albedo,
-                roughness,
-                metallic,
-            );
+            let (dl, sl) = shade_light(&lights[i as usize], &surface);
             (d + dl, sp + sl)
         },
     )

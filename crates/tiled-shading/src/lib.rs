@@ -75,70 +75,59 @@ pub const LIGHT_DIRECTIONAL: u32 = 2;
 
 impl From<&Light> for GpuLight {
     fn from(light: &Light) -> Self {
-        let base = Self {
-            position: [0.0; 3],
-            radius: 1.0,
-            color: [0.0; 3],
-            kind: 0,
-            direction: [0.0, -1.0, 0.0],
-            cos_outer: 0.0,
-            cos_inner: 1.0,
-            _pad: [0; 3],
-        };
-        match *light {
+        let (Light::Point {
+            color, intensity, ..
+        }
+        | Light::Spot {
+            color, intensity, ..
+        }
+        | Light::Hemispherical {
+            color, intensity, ..
+        }
+        | Light::Directional {
+            color, intensity, ..
+        }) = *light;
+        // (kind, position, radius, direction, (inner, outer) cone angles)
+        let (kind, position, radius, direction, cone) = match *light {
             Light::Point {
-                position,
-                color,
-                intensity,
-                radius,
-            } => Self {
-                position: position.to_array(),
-                radius,
-                color: (color * intensity).to_array(),
-                ..base
-            },
+                position, radius, ..
+            } => (0, position, radius, Vec3::NEG_Y, None),
             Light::Spot {
                 position,
                 direction,
-                color,
-                intensity,
                 radius,
                 inner_angle,
                 outer_angle,
-            } => Self {
-                position: position.to_array(),
+                ..
+            } => (
+                1,
+                position,
                 radius,
-                color: (color * intensity).to_array(),
-                kind: 1,
-                direction: direction.to_array(),
-                cos_outer: outer_angle.cos(),
-                cos_inner: inner_angle.cos().max(outer_angle.cos() + 1e-4),
-                ..base
-            },
+                direction,
+                Some((inner_angle, outer_angle)),
+            ),
             Light::Hemispherical {
                 position,
                 direction,
-                color,
-                intensity,
                 radius,
-            } => Self {
-                position: position.to_array(),
-                radius,
-                color: (color * intensity).to_array(),
-                kind: 3,
-                direction: direction.to_array(),
-                ..base
-            },
-            Light::Directional {
-                direction,
-                color,
-                intensity,
-            } => Self {
-                color: (color * intensity).to_array(),
-                kind: LIGHT_DIRECTIONAL,
-                direction: direction.to_array(),
-                ..base
-            },
+                ..
+            } => (3, position, radius, direction, None),
+            Light::Directional { direction, .. } => {
+                (LIGHT_DIRECTIONAL, Vec3::ZERO, 1.0, direction, None)
+            }
+        };
+        let (cos_outer, cos_inner) = cone.map_or((0.0, 1.0), |(inner, outer): (f32, f32)| {
+            (outer.cos(), inner.cos().max(outer.cos() + 1e-4))
+        });
+        Self {
+            position: position.to_array(),
+            radius,
+            color: (color * intensity).to_array(),
+            kind,
+            direction: direction.to_array(),
+            cos_outer,
+            cos_inner,
+            _pad: [0; 3],
         }
     }
 }

@@ -42,36 +42,46 @@ pub fn light_incidence(light: &GpuLight, p: Vec3) -> (Vec3, f32) {
     (l, att)
 }
 
-/// One light's (diffuse, specular) contribution (`shade_light`).
-pub fn shade_light(
-    light: &GpuLight,
-    p: Vec3,
-    n: Vec3,
-    v: Vec3,
-    albedo: Vec3,
-    roughness: f32,
-    metallic: f32,
-) -> (Vec3, Vec3) {
-    let (l, att) = light_incidence(light, p);
+/// A shaded point: position `p`, unit normal `n`, unit direction to the eye `v` and the
+/// G-buffer's material (the arguments of `shade_light`/`reflect_light` after the light).
+#[derive(Clone, Copy, Debug)]
+pub struct Surface {
+    /// World-space position.
+    pub p: Vec3,
+    /// Unit normal.
+    pub n: Vec3,
+    /// Unit direction to the eye.
+    pub v: Vec3,
+    /// Linear base colour.
+    pub albedo: Vec3,
+    /// Perceptual roughness (GGX α = roughness²).
+    pub roughness: f32,
+    /// Metalness (F0 from 0.04 to the albedo).
+    pub metallic: f32,
+}
+
+/// One light's (diffuse, specular) contribution at `s` (`shade_light`).
+pub fn shade_light(light: &GpuLight, s: &Surface) -> (Vec3, Vec3) {
+    let (l, att) = light_incidence(light, s.p);
     if att <= 0.0 {
         return (Vec3::ZERO, Vec3::ZERO);
     }
     let intensity = Vec3::from(light.color) * att;
-    reflect_light(intensity, l, n, v, albedo, roughness, metallic)
+    reflect_light(intensity, l, s)
 }
 
-/// The (diffuse, specular) light reflected towards `v` from light arriving along `l` with
+/// The (diffuse, specular) light reflected towards `s.v` from light arriving along `l` with
 /// attenuated `intensity` (irradiance `intensity · N·L`): Lambert `E/π` and GGX `E·D·V·F`
 /// (`reflect_light`).
-pub fn reflect_light(
-    intensity: Vec3,
-    l: Vec3,
-    n: Vec3,
-    v: Vec3,
-    albedo: Vec3,
-    roughness: f32,
-    metallic: f32,
-) -> (Vec3, Vec3) {
+pub fn reflect_light(intensity: Vec3, l: Vec3, s: &Surface) -> (Vec3, Vec3) {
+    let Surface {
+        n,
+        v,
+        albedo,
+        roughness,
+        metallic,
+        ..
+    } = *s;
     let n_dot_l = n.dot(l).clamp(0.0, 1.0);
     if n_dot_l <= 0.0 {
         return (Vec3::ZERO, Vec3::ZERO);

@@ -13,7 +13,7 @@ use gbuffer::{Frame, Image, unpack_material};
 use glam::{Vec2, Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use tiled_shading::GpuLight;
-use tiled_shading::lighting::shade_light;
+use tiled_shading::lighting::{Surface, shade_light};
 
 pub mod evaluate;
 pub mod fxaa;
@@ -133,9 +133,17 @@ pub fn shade_sample(inp: &ShadingInputs, config: &SsaaConfig, q: [u32; 2], scale
     let albedo = (Vec4::from(material.base_color).xyz() * texel.xyz()).clamp(Vec3::ZERO, Vec3::ONE);
     let p = gbuffer::position::from_view_ray(inp.frame, q[0], q[1], depth);
     let v = (inp.frame.eye.xyz() - p).normalize();
+    let surface = Surface {
+        p,
+        n,
+        v,
+        albedo,
+        roughness,
+        metallic,
+    };
     let (mut diffuse, mut specular) = (Vec3::ZERO, Vec3::ZERO);
     for light in inp.lights {
-        let (d, s) = shade_light(light, p, n, v, albedo, roughness, metallic);
+        let (d, s) = shade_light(light, &surface);
         diffuse += d;
         specular += s;
     }

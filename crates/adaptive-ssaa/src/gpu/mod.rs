@@ -382,11 +382,7 @@ impl Ssaa {
         queue: &wgpu::Queue,
         buffer: &wgpu::Buffer,
     ) -> Result<Image<[f32; 4]>, SsaaError> {
-        let bytes = transfer::read_buffer(device, queue, buffer)?;
-        let texels: Vec<[f32; 4]> = bytemuck::cast_slice::<u8, f32>(&bytes)
-            .chunks_exact(4)
-            .map(|c| [c[0], c[1], c[2], c[3]])
-            .collect();
+        let texels: Vec<[f32; 4]> = transfer::read_pod(device, queue, buffer)?;
         Image::from_vec(self.params.width, self.params.height, texels)
             .map_err(|e| SsaaError::Gpu(GpuError::Readback(e.to_string())))
     }
@@ -415,13 +411,9 @@ impl Ssaa {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Image<u32>, SsaaError> {
-        let bytes = transfer::read_buffer(device, queue, &self.counts)?;
-        Image::from_vec(
-            self.params.width,
-            self.params.height,
-            bytemuck::cast_slice(&bytes).to_vec(),
-        )
-        .map_err(|e| SsaaError::Gpu(GpuError::Readback(e.to_string())))
+        let counts: Vec<u32> = transfer::read_pod(device, queue, &self.counts)?;
+        Image::from_vec(self.params.width, self.params.height, counts)
+            .map_err(|e| SsaaError::Gpu(GpuError::Readback(e.to_string())))
     }
 }
 

@@ -68,7 +68,7 @@ impl GBufferTargets {
             Image::from_vec(
                 self.width,
                 self.height,
-                bytemuck::cast_slice(&bytes).to_vec(),
+                bytemuck::pod_collect_to_vec(&bytes),
             )
             .map_err(|e| GBufferError::Gpu(GpuError::Readback(e.to_string())))
         };

@@ -15,7 +15,7 @@
 //! let bsh = Bsh::build(&points, &normals, 0.01)?;
 //! let views = vec![View::Paraboloid { position: glam::Vec3::Y, normal: -glam::Vec3::Y, size: 32 }];
 //! let layout = AtlasLayout::new(views.len(), 32, 10.0);
-//! let mut m = GpuManyLod::new(&gpu.device, &bsh, &views, 1.0, layout, 1 << 16)?;
+//! let mut m = GpuManyLod::new(&gpu.device, &bsh, &views, 1.0, layout, 1 << 16, None)?;
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
 //! m.encode_cut(&mut encoder, CutKind::Basic, None);
 //! m.encode_splat(&mut encoder, None);
@@ -172,7 +172,10 @@ pub struct GpuManyLod {
 
 impl GpuManyLod {
     /// Uploads `bsh` and `views` (threshold `epsilon`, atlas `layout`) with room for `capacity`
-    /// node-views in each active and cut list, and allocates the atlas ([`Self::with_atlas`]).
+    /// node-views in each active and cut list. The splat writes into the caller's `atlas` when
+    /// given (at least 4 bytes per atlas pixel of `layout`, `STORAGE`; packed depths, row-major:
+    /// e.g. a buffer the application's shadow lookup already binds; a buffer too small or
+    /// without `STORAGE` is an `Err`), else into one allocated here.
     pub fn new(
         device: &wgpu::Device,
         bsh: &Bsh,
@@ -180,33 +183,27 @@ impl GpuManyLod {
         epsilon: f32,
         layout: AtlasLayout,
         capacity: usize,
-    ) -> Result<Self, ManyLodError> {
-        let (w, h) = layout.size();
-        let atlas = transfer::buffer(device, "manylod atlas", u64::from(w * h) * 4, STORAGE)?;
-        Self::with_atlas(device, bsh, views, epsilon, layout, capacity, &atlas)
-    }
-
-    /// [`Self::new`] splatting into the caller's `atlas` (at least 4 bytes per atlas pixel of
-    /// `layout`, `STORAGE`; packed depths, row-major): e.g. a buffer the application's shadow
-    /// lookup already binds. A buffer too small or without `STORAGE` is an `Err`.
-    pub fn with_atlas(
-        device: &wgpu::Device,
-        bsh: &Bsh,
-        views: &[View],
-        epsilon: f32,
-        layout: AtlasLayout,
-        capacity: usize,
-        atlas: &wgpu::Buffer,
+        atlas: Option<&wgpu::Buffer>,
     ) -> Result<Self, ManyLodError> {
         let (w, h) = layout.size();
         let atlas_pixels = w * h;
-        ::gpu::kernel::check_buffer(
-            "ManyLoD atlas",
-            atlas,
-            u64::from(atlas_pixels) * 4,
-            wgpu::BufferUsages::STORAGE,
-        )?;
-        let atlas = atlas.clone();
+        let atlas = match atlas {
+            Some(atlas) => {
+                ::gpu::kernel::check_buffer(
+                    "ManyLoD atlas",
+                    atlas,
+                    u64::from(atlas_pixels) * 4,
+                    wgpu::BufferUsages::STORAGE,
+                )?;
+                atlas.clone()
+            }
+            None => transfer::buffer(
+                device,
+                "manylod atlas",
+                u64::from(atlas_pixels) * 4,
+                STORAGE,
+            )?,
+        };
         CutProblem {
             bsh,
             views,
@@ -542,8 +539,7 @@ impl GpuManyLod {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<u32>, ManyLodError> {
-        let bytes = transfer::read_buffer(device, queue, &self.counters)?;
-        Ok(bytemuck::cast_slice(&bytes).to_vec())
+        Ok(transfer::read_pod(device, queue, &self.counters)?)
     }
 
     fn check_overflow(&self, counters: &[u32], what: &'static str) -> Result<(), ManyLodError> {
@@ -567,8 +563,7 @@ impl GpuManyLod {
         let counters = self.read_counters(device, queue)?;
         self.check_overflow(&counters, "active or cut list")?;
         let n = counters[CUT_SLOTS[self.current] as usize] as usize;
-        let bytes = transfer::read_buffer(device, queue, &self.cuts[self.current])?;
-        let raw: &[[u32; 2]] = bytemuck::cast_slice(&bytes);
+        let raw: Vec<[u32; 2]> = transfer::read_pod(device, queue, &self.cuts[self.current])?;
         Ok(Cut {
             node_views: raw[..n]
                 .iter()
@@ -595,8 +590,7 @@ impl GpuManyLod {
             &self.read_counters(device, queue)?,
             "a cut list or the in-place stack",
         )?;
-        let bytes = transfer::read_buffer(device, queue, &self.atlas)?;
-        Ok(bytemuck::cast_slice(&bytes).to_vec())
+        Ok(transfer::read_pod(device, queue, &self.atlas)?)
     }
 
     /// Reads the node bounds back.
@@ -605,7 +599,6 @@ impl GpuManyLod {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<Node>, ManyLodError> {
-        let bytes = transfer::read_buffer(device, queue, &self.nodes)?;
-        Ok(bytemuck::cast_slice(&bytes).to_vec())
+        Ok(transfer::read_pod(device, queue, &self.nodes)?)
     }
 }

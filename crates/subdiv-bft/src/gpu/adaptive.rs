@@ -230,8 +230,9 @@ impl GpuSubdivider {
         queue: &wgpu::Queue,
         adaptive: &GpuAdaptive,
     ) -> Result<Vec<f32>, SubdivError> {
-        let bytes = transfer::read_buffer(device, queue, &adaptive.factors)?;
-        Ok(bytemuck::pod_collect_to_vec::<u8, f32>(&bytes)[..self.edge_count as usize].to_vec())
+        let mut factors: Vec<f32> = transfer::read_pod(device, queue, &adaptive.factors)?;
+        factors.truncate(self.edge_count as usize);
+        Ok(factors)
     }
 
     /// Reads back the adaptive mesh: the whole vertex layout (unused slots hold whatever was
@@ -242,13 +243,13 @@ impl GpuSubdivider {
         queue: &wgpu::Queue,
         adaptive: &GpuAdaptive,
     ) -> Result<Refined, SubdivError> {
-        let args = transfer::read_buffer(device, queue, &adaptive.draw_args)?;
-        let count = bytemuck::pod_collect_to_vec::<u8, u32>(&args)[0] as usize;
-        let indices = transfer::read_buffer(device, queue, &adaptive.indices)?;
+        let args: Vec<u32> = transfer::read_pod(device, queue, &adaptive.draw_args)?;
+        let mut indices: Vec<u32> = transfer::read_pod(device, queue, &adaptive.indices)?;
+        indices.truncate(args.first().copied().unwrap_or(0) as usize);
         Ok(Refined {
             positions: read_vec3(device, queue, &adaptive.positions, adaptive.vertex_capacity)?,
             normals: read_vec3(device, queue, &adaptive.normals, adaptive.vertex_capacity)?,
-            indices: bytemuck::pod_collect_to_vec::<u8, u32>(&indices)[..count].to_vec(),
+            indices,
         })
     }
 }

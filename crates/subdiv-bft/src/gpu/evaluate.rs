@@ -149,13 +149,12 @@ impl GpuSubdivider {
         queue: &wgpu::Queue,
         level: &GpuLevel,
     ) -> Result<Refined, SubdivError> {
-        let indices = transfer::read_buffer(device, queue, &level.indices)?;
+        let mut indices: Vec<u32> = transfer::read_pod(device, queue, &level.indices)?;
+        indices.truncate(level.index_count as usize);
         Ok(Refined {
             positions: read_vec3(device, queue, &level.positions, level.vertex_count)?,
             normals: read_vec3(device, queue, &level.normals, level.vertex_count)?,
-            indices: bytemuck::pod_collect_to_vec::<u8, u32>(&indices)
-                [..level.index_count as usize]
-                .to_vec(),
+            indices,
         })
     }
 }

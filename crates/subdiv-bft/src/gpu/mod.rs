@@ -346,10 +346,9 @@ fn read_vec3(
     buffer: &wgpu::Buffer,
     count: u32,
 ) -> Result<Vec<Vec3>, SubdivError> {
-    let bytes = transfer::read_buffer(device, queue, buffer)?;
-    let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
-    Ok(v[..count as usize]
-        .iter()
+    let v: Vec<[f32; 4]> = transfer::read_pod(device, queue, buffer)?;
+    Ok(v.iter()
+        .take(count as usize)
         .map(|p| Vec3::new(p[0], p[1], p[2]))
         .collect())
 }

@@ -322,11 +322,10 @@ impl BoundShading {
         if self.brute_force {
             return Ok(None);
         }
-        let bytes = transfer::read_buffer(device, queue, &self.counts)?;
+        let mut counts: Vec<u32> = transfer::read_pod(device, queue, &self.counts)?;
         let (tx, ty) = self.tiles;
-        Ok(Some(
-            bytemuck::cast_slice::<u8, u32>(&bytes)[..(tx * ty) as usize].to_vec(),
-        ))
+        counts.truncate((tx * ty) as usize);
+        Ok(Some(counts))
     }
 
     /// Reads back every tile's list of (light index, slice mask), sorted by light index;
@@ -342,8 +341,7 @@ impl BoundShading {
         if self.params.record_lists == 0 {
             return Ok(None);
         }
-        let bytes = transfer::read_buffer(device, queue, &self.lists)?;
-        let entries: &[[u32; 2]] = bytemuck::cast_slice(&bytes);
+        let entries: Vec<[u32; 2]> = transfer::read_pod(device, queue, &self.lists)?;
         let stride = self.params.list_stride as usize;
         Ok(Some(
             counts
