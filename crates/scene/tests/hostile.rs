@@ -86,3 +86,190 @@ fn a_node_reused_on_many_levels_is_bounded() {
     assert!(e.contains("node instances"), "{e}");
     assert!(start.elapsed().as_secs() < 30, "took {:?}", start.elapsed());
 }
+
+/// The triangle of [`gltf`] with its accessors and buffer views replaced (buffer 0 holds 36
+/// bytes of positions, then indices 0, 1, 2 as u16 and two bytes of padding).
+fn with_accessors(views: &str, accessors: &str, attributes: &str, indices: &str) -> String {
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"uri":"{}","byteLength":44}}],
+"bufferViews":{views},"accessors":{accessors},
+"meshes":[{{"primitives":[{{"attributes":{attributes}{indices}}}]}}],
+"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],"scene":0}}"#,
+        buffer([0, 1, 2])
+    )
+}
+
+const VIEWS: &str = r#"[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":6}]"#;
+const POSITIONS: &str =
+    r#"{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}"#;
+
+#[test]
+fn accessors_of_the_wrong_type_or_size_are_errors() {
+    // (case, accessor 1, what the error says); accessor 0 is POSITION, 1 the one under test,
+    // used as indices unless the case names an attribute.
+    let cases: &[(&str, &str, &str, &str)] = &[
+        (
+            "float indices",
+            r#"{"bufferView":1,"componentType":5126,"count":1,"type":"SCALAR"}"#,
+            "",
+            "must be Scalar",
+        ),
+        (
+            "short indices",
+            r#"{"bufferView":1,"componentType":5122,"count":3,"type":"SCALAR"}"#,
+            "",
+            "must be Scalar",
+        ),
+        (
+            "vec3 indices",
+            r#"{"bufferView":1,"componentType":5123,"count":1,"type":"VEC3"}"#,
+            "",
+            "must be Scalar",
+        ),
+        (
+            "normalized indices",
+            r#"{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR","normalized":true}"#,
+            "",
+            "must not be normalized",
+        ),
+        (
+            "indices longer than the view",
+            r#"{"bufferView":1,"componentType":5123,"count":4,"type":"SCALAR"}"#,
+            "",
+            "reach past the 6 bytes of buffer view 1",
+        ),
+        (
+            "indices past the view by offset",
+            r#"{"bufferView":1,"byteOffset":2,"componentType":5123,"count":3,"type":"SCALAR"}"#,
+            "",
+            "reach past",
+        ),
+        (
+            "a count that wraps",
+            r#"{"bufferView":1,"componentType":5123,"count":4611686018427387907,"type":"SCALAR"}"#,
+            "",
+            "more than the",
+        ),
+        (
+            "two indices",
+            r#"{"bufferView":1,"componentType":5123,"count":2,"type":"SCALAR"}"#,
+            "",
+            "not a multiple of 3",
+        ),
+        (
+            "u32 texture coordinates",
+            r#"{"bufferView":0,"componentType":5125,"count":3,"type":"VEC2"}"#,
+            "TEXCOORD_0",
+            "must be Vec2",
+        ),
+        (
+            "unnormalized u8 texture coordinates",
+            r#"{"bufferView":0,"componentType":5121,"count":3,"type":"VEC2"}"#,
+            "TEXCOORD_0",
+            "must be normalized",
+        ),
+        (
+            "vec2 normals",
+            r#"{"bufferView":0,"componentType":5126,"count":3,"type":"VEC2"}"#,
+            "NORMAL",
+            "must be Vec3",
+        ),
+        (
+            "too few normals",
+            r#"{"bufferView":0,"componentType":5126,"count":2,"type":"VEC3"}"#,
+            "NORMAL",
+            "2 normals for 3 positions",
+        ),
+        (
+            "sparse 2^40 zeros",
+            r#"{"componentType":5126,"count":1099511627776,"type":"VEC3","sparse":{"count":1,"indices":{"bufferView":1,"componentType":5123},"values":{"bufferView":0}}}"#,
+            "NORMAL",
+            "more than the",
+        ),
+        (
+            "sparse index out of range",
+            r#"{"bufferView":0,"componentType":5126,"count":1,"type":"VEC3","sparse":{"count":1,"indices":{"bufferView":1,"byteOffset":4,"componentType":5123},"values":{"bufferView":0}}}"#,
+            "NORMAL",
+            "indices must increase and stay below 1",
+        ),
+    ];
+    for &(case, under_test, attribute, why) in cases {
+        let (attributes, indices) = if attribute.is_empty() {
+            (r#"{"POSITION":0}"#.to_string(), r#","indices":1"#)
+        } else {
+            (format!(r#"{{"POSITION":0,"{attribute}":1}}"#), "")
+        };
+        let text = with_accessors(
+            VIEWS,
+            &format!("[{POSITIONS},{under_test}]"),
+            &attributes,
+            indices,
+        );
+        let e = load(&format!("accessor-{}", case.replace(' ', "-")), &text).expect_err(case);
+        assert!(e.contains(why), "{case}: {e}");
+    }
+    // POSITION itself of a wrong type, and a byteStride smaller than the element.
+    for (case, views, positions, why) in [
+        (
+            "scalar positions",
+            VIEWS,
+            POSITIONS.replace("VEC3", "SCALAR"),
+            "must be Vec3",
+        ),
+        (
+            "mat4 positions",
+            VIEWS,
+            POSITIONS.replace("VEC3", "MAT4"),
+            "must be Vec3",
+        ),
+        (
+            "u8 positions",
+            VIEWS,
+            POSITIONS.replace("5126", "5121"),
+            "must be Vec3",
+        ),
+        (
+            "a stride below the element",
+            r#"[{"buffer":0,"byteLength":36,"byteStride":4},{"buffer":0,"byteOffset":36,"byteLength":6}]"#,
+            POSITIONS.to_string(),
+            "byteStride 4 is smaller than the 12-byte element",
+        ),
+        (
+            "a view past its buffer",
+            r#"[{"buffer":0,"byteLength":36,"byteOffset":12},{"buffer":0,"byteOffset":36,"byteLength":6}]"#,
+            POSITIONS.to_string(),
+            "reaches past the 44 bytes of buffer 0",
+        ),
+    ] {
+        let indices = r#"{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}"#;
+        let text = with_accessors(
+            views,
+            &format!("[{positions},{indices}]"),
+            r#"{"POSITION":0}"#,
+            r#","indices":1"#,
+        );
+        let e = load(&format!("accessor-{}", case.replace(' ', "-")), &text).expect_err(case);
+        assert!(e.contains(why), "{case}: {e}");
+    }
+}
+
+#[test]
+fn sparse_accessors_and_normalized_texture_coordinates_are_read() {
+    // NORMAL: sparse without a buffer view, zeros except element 1 (the u16 at byte 38 of the
+    // buffer), which takes the 12 bytes at offset 12 of view 0: the position (1, 0, 0).
+    let normals = r#"{"componentType":5126,"count":3,"type":"VEC3","sparse":{"count":1,"indices":{"bufferView":1,"byteOffset":2,"componentType":5123},"values":{"bufferView":0,"byteOffset":12}}}"#;
+    // TEXCOORD_0: normalized u16 pairs over the bytes of 1.0f32 (00 00 80 3f) at offset 12.
+    let uvs = r#"{"bufferView":0,"byteOffset":12,"componentType":5123,"count":3,"type":"VEC2","normalized":true}"#;
+    let text = with_accessors(
+        r#"[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":8}]"#,
+        &format!("[{POSITIONS},{normals},{uvs}]"),
+        r#"{"POSITION":0,"NORMAL":1,"TEXCOORD_0":2}"#,
+        "",
+    );
+    let s = load("sparse", &text).expect("a sparse accessor");
+    let mesh = &s.meshes[0];
+    // Zero normals become +Y (`normalize_or`).
+    assert_eq!(mesh.normals[1], scene::glam::Vec3::X);
+    assert_eq!(mesh.normals[0], scene::glam::Vec3::Y);
+    assert_eq!(mesh.uvs[0], scene::glam::Vec2::new(0.0, 16256.0 / 65535.0));
+}

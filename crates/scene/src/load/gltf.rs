@@ -1,9 +1,11 @@
-//! glTF 2.0 (`.gltf` + `.bin` + images, and `.glb`) through the `gltf` crate.
+//! glTF 2.0 (`.gltf` + `.bin` + images, and `.glb`): the document parsed by the `gltf` crate,
+//! buffers, images and accessors read and checked by the toolkit.
 
 use std::path::Path;
 
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 
+use super::accessor;
 use super::folder::{SceneFolder, UNDECLARED_LIMIT};
 use crate::{Camera, Light, Material, Mesh, Scene, SceneErrorKind, light::default_radius};
 
@@ -157,33 +159,78 @@ fn primitive(
     name: &str,
     default_material: u32,
 ) -> Result<Mesh, SceneErrorKind> {
-    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d[..]));
-    let missing = |what: &str| SceneErrorKind::InvalidMesh {
+    use gltf::Semantic;
+    let bad = |problem: String| SceneErrorKind::InvalidMesh {
         mesh: name.into(),
-        problem: format!("{what} missing or unreadable"),
+        problem,
+    };
+    let attribute = |semantic: Semantic, allowed: &accessor::Allowed| {
+        prim.get(&semantic)
+            .map(|a| {
+                accessor::read(
+                    &a,
+                    buffers,
+                    &format!("{semantic:?} of mesh {name:?}"),
+                    allowed,
+                )
+            })
+            .transpose()
+    };
+    let positions: Vec<Vec3> = attribute(Semantic::Positions, &accessor::VEC3_F32)?
+        .ok_or_else(|| bad("no POSITION attribute".into()))?
+        .chunks_exact(3)
+        .map(|p| world.transform_point3(Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32)))
+        .collect();
+    let n = positions.len();
+    let same_count = |what: &str, len: usize| {
+        if len == n {
+            Ok(())
+        } else {
+            Err(bad(format!("{len} {what} for {n} positions")))
+        }
     };
     let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-    let positions: Vec<Vec3> = reader
-        .read_positions()
-        .ok_or_else(|| missing("POSITION"))?
-        .map(|p| world.transform_point3(Vec3::from(p)))
-        .collect();
-    let normals = reader
-        .read_normals()
-        .map(|n| {
-            n.map(|n| (normal_matrix * Vec3::from(n)).normalize_or(Vec3::Y))
+    let normals: Vec<Vec3> = attribute(Semantic::Normals, &accessor::VEC3_F32)?
+        .map(|v| {
+            v.chunks_exact(3)
+                .map(|c| {
+                    (normal_matrix * Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
+                        .normalize_or(Vec3::Y)
+                })
                 .collect()
         })
         .unwrap_or_default();
-    let uvs = reader
-        .read_tex_coords(0)
-        .map(|t| t.into_f32().map(Vec2::from).collect())
+    if !normals.is_empty() {
+        same_count("normals", normals.len())?;
+    }
+    let uvs: Vec<Vec2> = attribute(Semantic::TexCoords(0), &accessor::TEXCOORD)?
+        .map(|v| {
+            v.chunks_exact(2)
+                .map(|c| Vec2::new(c[0] as f32, c[1] as f32))
+                .collect()
+        })
         .unwrap_or_default();
-    let mut indices: Vec<u32> = match reader.read_indices() {
-        Some(i) => i.into_u32().collect(),
-        None => (0..positions.len() as u32).collect(),
+    if !uvs.is_empty() {
+        same_count("texture coordinates", uvs.len())?;
+    }
+    let mut indices: Vec<u32> = match prim.indices() {
+        Some(a) => accessor::read(
+            &a,
+            buffers,
+            &format!("indices of mesh {name:?}"),
+            &accessor::INDICES,
+        )?
+        .into_iter()
+        .map(|i| i as u32)
+        .collect(),
+        None => (0..n as u32).collect(),
     };
-    indices.truncate(indices.len() / 3 * 3);
+    if !indices.len().is_multiple_of(3) {
+        return Err(bad(format!(
+            "{} indices (or vertices) is not a multiple of 3 for a triangle list",
+            indices.len()
+        )));
+    }
     if world.determinant() < 0.0 {
         for t in indices.chunks_exact_mut(3) {
             t.swap(1, 2);

@@ -1,5 +1,6 @@
 //! File loaders. Each returns a scene or the problem, without the path (the caller adds it).
 
+mod accessor;
 mod folder;
 pub mod gltf;
 pub mod obj;
