@@ -269,7 +269,99 @@ fn sparse_accessors_and_normalized_texture_coordinates_are_read() {
     let s = load("sparse", &text).expect("a sparse accessor");
     let mesh = &s.meshes[0];
     // Zero normals become +Y (`normalize_or`).
-    assert_eq!(mesh.normals[1], scene::glam::Vec3::X);
-    assert_eq!(mesh.normals[0], scene::glam::Vec3::Y);
-    assert_eq!(mesh.uvs[0], scene::glam::Vec2::new(0.0, 16256.0 / 65535.0));
+    assert_eq!(mesh.normals[1], glam::Vec3::X);
+    assert_eq!(mesh.normals[0], glam::Vec3::Y);
+    assert_eq!(mesh.uvs[0], glam::Vec2::new(0.0, 16256.0 / 65535.0));
+}
+
+fn load_file(name: &str, text: &[u8]) -> Result<scene::Scene, String> {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("hostile")
+        .join(name);
+    std::fs::create_dir_all(&dir).expect("folder");
+    let file = dir.join(name);
+    std::fs::write(&file, text).expect("file");
+    scene::Scene::load(&file).map_err(|e| e.to_string())
+}
+
+#[test]
+fn obj_and_mtl_errors_name_their_line() {
+    const V: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    let cases = [
+        (
+            format!("{V}f 1\n"),
+            "line 4: a face needs at least three vertices, got 1",
+        ),
+        (
+            format!("{V}f 1 2\n"),
+            "line 4: a face needs at least three vertices, got 2",
+        ),
+        (
+            format!("{V}f 1 2 4\n"),
+            "line 4: face vertex \"4\": position index 4 outside 1..=3",
+        ),
+        (format!("{V}f 1 2 -4\n"), "position index -4 outside 1..=3"),
+        (
+            format!("{V}f 1/1 2/1 3/1\n"),
+            "texture coordinate index 1 outside 1..=0",
+        ),
+        (format!("{V}f 1 2 x\n"), "\"x\" is not an index"),
+        (
+            format!("v 0 0 nan\n{V}f 1 2 3\n"),
+            "line 1: a vertex position needs 3 finite numbers",
+        ),
+        (
+            format!("v 0 0 1e39\n{V}f 1 2 3\n"),
+            "line 1: a vertex position needs 3 finite numbers",
+        ),
+        (
+            format!("{V}vn 0 1\nf 1 2 3\n"),
+            "line 4: a normal needs 3 finite numbers",
+        ),
+        (
+            format!("{V}vt 0.5 inf\nf 1 2 3\n"),
+            "line 4: a texture coordinate needs 1 finite numbers",
+        ),
+    ];
+    for (text, why) in &cases {
+        let e = load_file("t.obj", text.as_bytes()).expect_err(why);
+        assert!(e.contains(why), "{why}: {e}");
+    }
+    let e = load_file("bytes.obj", b"v 0 0 0\n\xff\xfe\n").expect_err("not UTF-8");
+    assert!(e.contains("not UTF-8"), "{e}");
+    // The faces tobj reads after the check are the triangles of the file.
+    let s = load_file(
+        "ok.obj",
+        format!("{V}v 1 1 0\nf 1 2 3 4\nf -4 -3 -2\n").as_bytes(),
+    )
+    .expect("valid OBJ");
+    assert_eq!(s.triangle_count(), 3);
+    for (mtl, why) in [
+        (
+            "newmtl m\nKd nan 0 0\n",
+            "m.mtl line 2: Kd needs three finite numbers",
+        ),
+        (
+            "newmtl m\nKd 0.5\n",
+            "m.mtl line 2: Kd needs three finite numbers",
+        ),
+        (
+            "newmtl m\nNs nan\n",
+            "m.mtl line 2: Ns needs a finite number",
+        ),
+        ("newmtl m\nd\n", "m.mtl line 2: d needs a finite number"),
+    ] {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .join("hostile")
+            .join("mtl");
+        std::fs::create_dir_all(&dir).expect("folder");
+        std::fs::write(dir.join("m.mtl"), mtl).expect("mtl");
+        let obj = dir.join("m.obj");
+        std::fs::write(&obj, format!("mtllib m.mtl\n{V}usemtl m\nf 1 2 3\n")).expect("obj");
+        let e = scene::Scene::load(&obj)
+            .map(|_| ())
+            .expect_err(why)
+            .to_string();
+        assert!(e.contains(why), "{why}: {e}");
+    }
 }

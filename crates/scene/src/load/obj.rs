@@ -23,7 +23,10 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
             "larger than {FILE_LIMIT} bytes"
         )));
     }
-    let mut reader = std::io::BufReader::new(std::io::Read::take(file, FILE_LIMIT));
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::Read::take(file, FILE_LIMIT), &mut bytes)?;
+    check_obj(&bytes)?;
+    let mut reader = &bytes[..];
     // Material libraries are read through the scene's folder, and checked before tobj parses
     // them (tobj panics on colour lines with fewer than three numbers).
     let mtl_problem = std::cell::RefCell::new(None);
@@ -118,9 +121,87 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
     Ok(scene)
 }
 
-/// Refuses MTL colour statements (`Ka`, `Kd`, `Ks`, `Ke`, `Tf`) without three numbers, naming
-/// the file and line (tobj would panic on them); `Tf`/`K*` spectral and XYZ forms are left to
-/// tobj.
+/// Checks what tobj would misread or reject without a line number: `v`/`vn` need three finite
+/// numbers and `vt` one, a face at least three vertices whose references (`v`, `v/vt`,
+/// `v//vn`, `v/vt/vn`, negative = relative) name elements defined before it.
+fn check_obj(bytes: &[u8]) -> Result<(), SceneErrorKind> {
+    let text = std::str::from_utf8(bytes)
+        .map_err(|e| SceneErrorKind::Obj(format!("not UTF-8 text (byte {})", e.valid_up_to())))?;
+    // Defined positions, texture coordinates and normals so far.
+    let mut counts = [0i64; 3];
+    for (n, line) in text.lines().enumerate() {
+        let bad = |problem: String| SceneErrorKind::Obj(format!("line {}: {problem}", n + 1));
+        let line = line.split('#').next().unwrap_or("");
+        let mut words = line.split_whitespace();
+        let Some(key) = words.next() else { continue };
+        let values: Vec<&str> = words.collect();
+        let numbers = |need: usize, what: &str| -> Result<(), SceneErrorKind> {
+            let finite = values
+                .iter()
+                .take_while(|v| v.parse::<f32>().is_ok_and(f32::is_finite))
+                .count();
+            if finite < need || (key != "v" && finite < values.len()) {
+                return Err(bad(format!(
+                    "{what} needs {need} finite numbers, got {:?}",
+                    values.join(" ")
+                )));
+            }
+            Ok(())
+        };
+        match key {
+            "v" => {
+                numbers(3, "a vertex position")?;
+                counts[0] += 1;
+            }
+            "vt" => {
+                numbers(1, "a texture coordinate")?;
+                counts[1] += 1;
+            }
+            "vn" => {
+                numbers(3, "a normal")?;
+                counts[2] += 1;
+            }
+            "f" => {
+                if values.len() < 3 {
+                    return Err(bad(format!(
+                        "a face needs at least three vertices, got {}",
+                        values.len()
+                    )));
+                }
+                for v in &values {
+                    let parts: Vec<&str> = v.split('/').collect();
+                    if parts.len() > 3 || parts[0].is_empty() {
+                        return Err(bad(format!(
+                            "face vertex {v:?} is not v, v/vt, v//vn or v/vt/vn"
+                        )));
+                    }
+                    for (k, part) in parts.iter().enumerate() {
+                        if part.is_empty() {
+                            continue;
+                        }
+                        let count = counts[k];
+                        let i: i64 = part.parse().map_err(|_| {
+                            bad(format!("face vertex {v:?}: {part:?} is not an index"))
+                        })?;
+                        let resolved = if i < 0 { count + i + 1 } else { i };
+                        if resolved < 1 || resolved > count {
+                            return Err(bad(format!(
+                                "face vertex {v:?}: {} index {i} outside 1..={count}",
+                                ["position", "texture coordinate", "normal"][k]
+                            )));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Refuses MTL colour statements (`Ka`, `Kd`, `Ks`, `Ke`, `Tf`) without three finite numbers
+/// (tobj would panic on too few) and scalars (`Ns`, `d`, `Tr`, `Ni`) that are not a finite
+/// number, naming the file and line; `Tf`/`K*` spectral and XYZ forms are left to tobj.
 fn check_mtl(name: &str, bytes: &[u8]) -> Result<(), SceneErrorKind> {
     for (n, line) in String::from_utf8_lossy(bytes).lines().enumerate() {
         let mut words = line.split_whitespace();
@@ -137,6 +218,15 @@ fn check_mtl(name: &str, bytes: &[u8]) -> Result<(), SceneErrorKind> {
                     "{name} line {}: {key} needs three finite numbers, got {:?}",
                     n + 1,
                     values.join(" ")
+                )));
+            }
+        } else if let Some(key @ ("Ns" | "d" | "Tr" | "Ni")) = line.split_whitespace().next() {
+            let value = line.split_whitespace().nth(1);
+            if !value.is_some_and(|v| v.parse::<f32>().is_ok_and(f32::is_finite)) {
+                return Err(SceneErrorKind::Obj(format!(
+                    "{name} line {}: {key} needs a finite number, got {:?}",
+                    n + 1,
+                    value.unwrap_or("")
                 )));
             }
         }
