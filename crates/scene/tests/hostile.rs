@@ -365,3 +365,50 @@ fn obj_and_mtl_errors_name_their_line() {
         assert!(e.contains(why), "{why}: {e}");
     }
 }
+
+#[test]
+fn ply_headers_that_would_panic_or_loop_are_errors() {
+    let body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    let head = |elements: &str| format!("ply\nformat ascii 1.0\n{elements}end_header\n{body}");
+    let vertex = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n";
+    let face = "element face 1\nproperty list uchar int vertex_indices\n";
+    let s = load_file("ok.ply", head(&format!("{vertex}{face}")).as_bytes()).expect("valid PLY");
+    assert_eq!(s.triangle_count(), 1);
+    for (text, why) in [
+        (
+            head(&format!("{vertex}element face 99999999999999999999999\n")),
+            "line 7: a number too large",
+        ),
+        (
+            "ply\nformat ascii 99999999999999999999.0\nend_header\n".to_string(),
+            "line 2: a number too large",
+        ),
+        (
+            head(&format!(
+                "{vertex}{face}element nothing 18446744073709551615\n"
+            )),
+            "is not a number of at most",
+        ),
+        (
+            head(&format!("{vertex}{face}element nothing 3\n")),
+            "line 9: 3 elements without properties",
+        ),
+        (
+            head(&format!(
+                "{vertex}element face 1000\nproperty list uchar int vertex_indices\n"
+            )),
+            "count \"1000\"",
+        ),
+        (
+            "ply\nformat ascii 1.0\nelement vertex 3\n".to_string(),
+            "no end_header",
+        ),
+        (
+            head(&format!("{vertex}{face}")).replace("3 0 1 2", "2 0 1"),
+            "at least three vertices, got 2",
+        ),
+    ] {
+        let e = load_file("bad.ply", text.as_bytes()).expect_err(why);
+        assert!(e.contains(why), "{why}: {e}");
+    }
+}

@@ -163,7 +163,10 @@ fn nan_positions_are_an_error() {
     let p = tmp("nan.obj");
     std::fs::write(&p, "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n").expect("write");
     let e = Scene::load(&p).unwrap_err();
-    assert!(e.to_string().contains("finite numbers") && e.to_string().contains("line 2"), "{e}");
+    assert!(
+        e.to_string().contains("finite numbers") && e.to_string().contains("line 2"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -10,6 +10,71 @@ use ply_rs::{
 
 use crate::{Material, Mesh, Scene, SceneErrorKind};
 
+/// The most bytes a `.ply` file may hold: 4 GiB.
+const FILE_LIMIT: u64 = u32::MAX as u64;
+
+/// The most bytes of a PLY header.
+const HEADER_LIMIT: usize = 1 << 16;
+
+/// Checks the header's element counts before ply-rs reads it (ply-rs panics on a count beyond
+/// `usize` and loops without end on elements without properties): each count must be a
+/// number no larger than the bytes after the header (every element takes at least one byte),
+/// and an element without properties must have none.
+fn check_header(bytes: &[u8]) -> Result<(), SceneErrorKind> {
+    let bad = |line: usize, problem: String| SceneErrorKind::Ply(format!("line {line}: {problem}"));
+    let head = &bytes[..bytes.len().min(HEADER_LIMIT)];
+    let end = head
+        .windows(10)
+        .position(|w| w == b"end_header")
+        .ok_or_else(|| {
+            SceneErrorKind::Ply(format!("no end_header in the first {HEADER_LIMIT} bytes"))
+        })?;
+    let body = (bytes.len() - end) as u64;
+    // (line, count, properties) of the element being declared.
+    let mut elements: Vec<(usize, u64, usize)> = Vec::new();
+    for (n, line) in String::from_utf8_lossy(&head[..end]).lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let key = words.next();
+        // ply-rs parses every digit run of these two lines as a u64 and panics beyond it.
+        if matches!(key, Some("format" | "element"))
+            && line
+                .split(|c: char| !c.is_ascii_digit())
+                .any(|run| !run.is_empty() && run.parse::<u64>().is_err())
+        {
+            return Err(bad(n + 1, format!("a number too large in {line:?}")));
+        }
+        match key {
+            Some("element") => {
+                let (name, count) = (words.next().unwrap_or(""), words.next().unwrap_or(""));
+                let count = count
+                    .parse::<u64>()
+                    .ok()
+                    .filter(|&c| c <= body)
+                    .ok_or_else(|| {
+                        bad(
+                            n + 1,
+                            format!(
+                                "element {name:?} count {count:?} is not a number of at most the \
+                                 {body} bytes after the header"
+                            ),
+                        )
+                    })?;
+                elements.push((n + 1, count, 0));
+            }
+            Some("property") => {
+                if let Some(e) = elements.last_mut() {
+                    e.2 += 1;
+                }
+            }
+            _ => {}
+        }
+    }
+    if let Some(&(line, count, _)) = elements.iter().find(|e| e.1 > 0 && e.2 == 0) {
+        return Err(bad(line, format!("{count} elements without properties")));
+    }
+    Ok(())
+}
+
 fn scalar(p: Option<&Property>) -> Option<f32> {
     Some(match p? {
         Property::Float(v) => *v,
@@ -38,9 +103,16 @@ fn list(p: Option<&Property>) -> Option<Vec<i64>> {
 
 pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene, SceneErrorKind> {
     let file = std::fs::File::open(path)?;
-    let mut reader = std::io::BufReader::new(file);
+    if file.metadata()?.len() > FILE_LIMIT {
+        return Err(SceneErrorKind::Ply(format!(
+            "larger than {FILE_LIMIT} bytes"
+        )));
+    }
+    let mut bytes = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::Read::take(file, FILE_LIMIT), &mut bytes)?;
+    check_header(&bytes)?;
     let ply = Parser::<DefaultElement>::new()
-        .read_ply(&mut reader)
+        .read_ply(&mut &bytes[..])
         .map_err(|e| SceneErrorKind::Ply(e.to_string()))?;
     let bad = |s: &str| SceneErrorKind::Ply(s.to_owned());
     let vertices = ply
@@ -82,6 +154,12 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
     for f in faces {
         let idx = list(f.get("vertex_indices").or(f.get("vertex_index")))
             .ok_or_else(|| bad("face without vertex_indices list"))?;
+        if idx.len() < 3 {
+            return Err(bad(&format!(
+                "a face needs at least three vertices, got {}",
+                idx.len()
+            )));
+        }
         if let Some(i) = idx.iter().find(|&&i| i < 0 || i >= n) {
             return Err(bad(&format!(
                 "face index {i} out of range for {n} vertices"
