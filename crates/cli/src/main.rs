@@ -40,8 +40,9 @@ struct Args {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "1024x768", value_parser = parse_size)]
     size: (u32, u32),
-    /// Replace the scene's lights with N point lights scattered through its bounds (seeded).
-    #[arg(long)]
+    /// Replace the scene's lights with N point lights scattered through its bounds (seeded);
+    /// at most 2^21 (64-byte lights in wgpu's default 128 MiB storage binding).
+    #[arg(long, value_parser = parse_light_count)]
     lights: Option<usize>,
     /// Light accumulation: brute, tiled, tiled-cones (tiled with normal-cone back-face
     /// culling) or clustered.
@@ -75,8 +76,8 @@ struct Args {
     /// Point the camera looks at, X,Y,Z.
     #[arg(long, value_parser = parse_vec3)]
     target: Option<Vec3>,
-    /// Vertical field of view in degrees.
-    #[arg(long)]
+    /// Vertical field of view in degrees, 0.1 to 179.
+    #[arg(long, value_parser = parse_fov)]
     fov: Option<f32>,
     /// Ambient light R,G,B (linear); default 0.03, or 0 with --vpls.
     #[arg(long, value_parser = parse_vec3)]
@@ -86,20 +87,20 @@ struct Args {
     #[arg(long)]
     vpls: Option<usize>,
     /// Interleaved sampling pattern NxM: one VPL subset per sub-buffer.
-    #[arg(long, default_value = "4x4")]
+    #[arg(long, default_value = "4x4", requires = "vpls")]
     pattern: Pattern,
     /// Edge-aware blur kernel size (odd, 5 to 17); 0 turns the blur off.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, requires = "vpls")]
     blur: u32,
     /// Use the plain blur (one fetch per tap) instead of the fast bilinear one.
-    #[arg(long)]
+    #[arg(long, requires = "vpls")]
     plain_blur: bool,
     /// How the shading is interleaved: fused (no split/gather passes), tiled, one-pass or
     /// two-pass (the paper's split → shade → gather).
-    #[arg(long, default_value = "fused")]
+    #[arg(long, default_value = "fused", requires = "vpls")]
     interleaving: String,
     /// Shade every VPL at every pixel (the non-interleaved reference).
-    #[arg(long)]
+    #[arg(long, requires = "vpls")]
     no_interleave: bool,
     /// Render only the indirect light (no direct light, no ambient).
     #[arg(long)]
@@ -109,10 +110,10 @@ struct Args {
     #[arg(long)]
     dump_stages: bool,
     /// Seed of the VPL sampling.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, requires = "vpls")]
     seed: u64,
     /// Distance under which a VPL's 1/d² is clamped (default: 2 % of the scene diagonal).
-    #[arg(long)]
+    #[arg(long, requires = "vpls")]
     vpl_clamp: Option<f32>,
     /// VPL visibility from per-VPL shadow maps in an atlas (GPU only; Holländer 2013 §3.6):
     /// `manylod` (a many-view LoD cut of 2^20 surfels per VPL, incremental after the first frame) or `ism` (imperfect shadow
@@ -484,6 +485,29 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// The most lights `--lights` scatters: 64-byte lights filling wgpu's default 128 MiB storage
+/// binding.
+const MAX_LIGHTS: usize = (128 << 20) / 64;
+
+fn parse_light_count(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if n <= MAX_LIGHTS => Ok(n),
+        _ => Err(format!("expected a light count from 0 to {MAX_LIGHTS}")),
+    }
+}
+
+fn parse_fov(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(d) if (0.1..=179.0).contains(&d) => Ok(d),
+        _ => Err("expected a vertical field of view from 0.1 to 179 degrees".into()),
+    }
+}
+
+/// The most pixels the CPU reference renders: it keeps about 200 bytes per pixel (G-buffer,
+/// per-light sums, indirect stages, the image), so 2^25 pixels (e.g. 8192×4096) stay near
+/// 7 GiB.
+const MAX_CPU_PIXELS: u64 = 1 << 25;
+
 fn parse_vec3(s: &str) -> Result<Vec3, String> {
     let v: Vec<f32> = s
         .split(',')
@@ -748,6 +772,11 @@ fn run() -> Result<()> {
                 (format!("GPU {}", gpu.describe()), rendered, stages, gbuffer)
             }
             None => {
+                if u64::from(width) * u64::from(height) > MAX_CPU_PIXELS {
+                    bail!(
+                        "--size {width}x{height}: the CPU reference renders at most {MAX_CPU_PIXELS} pixels"
+                    );
+                }
                 let inputs = pipeline::cpu::FrameInputs::new(
                     &scene,
                     &camera,

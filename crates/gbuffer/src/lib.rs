@@ -196,22 +196,42 @@ pub enum GBufferError {
     Gpu(#[from] ::gpu::GpuError),
 }
 
-/// Rejects cameras that cannot project (non-finite, eye at the target, field of view
-/// outside (0, π), planes not 0 < near < far < ∞).
+/// Rejects cameras that cannot project (non-finite, eye at the target, up along the view,
+/// field of view outside (0, π), planes not 0 < near < far < ∞), saying which.
 pub fn validate_camera(camera: &Camera) -> Result<(), GBufferError> {
-    let ok = camera.eye.is_finite()
-        && camera.target.is_finite()
-        && camera.up.is_finite()
-        && camera.eye != camera.target
-        && camera.fov_y > 0.0
-        && camera.fov_y < std::f32::consts::PI
-        && camera.near > 0.0
-        && camera.far > camera.near
-        && camera.far.is_finite();
-    if !ok {
-        return Err(GBufferError::InvalidCamera(format!("{camera:?}")));
-    }
-    Ok(())
+    let c = camera;
+    let problem = if !(c.eye.is_finite() && c.target.is_finite() && c.up.is_finite()) {
+        format!(
+            "eye {}, target {} and up {} must be finite",
+            c.eye, c.target, c.up
+        )
+    } else if !(c.target - c.eye).is_finite() || (c.target - c.eye).length_squared() == 0.0 {
+        format!(
+            "eye {} and target {} must be distinct points a finite distance apart",
+            c.eye, c.target
+        )
+    } else if (c.target - c.eye)
+        .normalize()
+        .cross(c.up.normalize_or_zero())
+        .length()
+        < 1e-6
+    {
+        format!("up {} is parallel to the view direction", c.up)
+    } else if !(c.fov_y > 0.0 && c.fov_y < std::f32::consts::PI) {
+        format!(
+            "vertical field of view {}° is outside (0°, 180°)",
+            c.fov_y.to_degrees()
+        )
+    } else if !(c.near > 0.0 && c.far > c.near && c.far.is_finite()) {
+        format!(
+            "clip planes near {} and far {} are not 0 < near < far < ∞ (a scene whose extent \
+             is beyond f32 depth precision also lands here)",
+            c.near, c.far
+        )
+    } else {
+        return Ok(());
+    };
+    Err(GBufferError::InvalidCamera(problem))
 }
 
 /// Rejects image sizes of zero or above [`MAX_SIZE`] on a side.

@@ -81,6 +81,14 @@ pub enum GpuError {
         /// Device limit.
         limit: u64,
     },
+    /// The device could not allocate what a kernel or renderer asked for.
+    #[error("{what}: the device is out of memory ({message})")]
+    OutOfMemory {
+        /// What was being allocated.
+        what: String,
+        /// wgpu's error.
+        message: String,
+    },
     /// Data handed to an upload does not have the size the resource needs.
     #[error("{0}")]
     DataSize(String),

@@ -49,6 +49,26 @@ pub fn check_texture_size(
     Ok(())
 }
 
+/// Runs `allocate` (which creates buffers and textures) inside an out-of-memory error scope:
+/// an allocation the device cannot satisfy is [`GpuError::OutOfMemory`] naming `what`,
+/// instead of wgpu's uncaptured-error panic.
+pub fn allocation<T, E: From<GpuError>>(
+    device: &wgpu::Device,
+    what: &str,
+    allocate: impl FnOnce() -> Result<T, E>,
+) -> Result<T, E> {
+    let scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let result = allocate();
+    match pollster::block_on(scope.pop()) {
+        Some(e) => Err(GpuError::OutOfMemory {
+            what: what.into(),
+            message: e.to_string(),
+        }
+        .into()),
+        None => result,
+    }
+}
+
 /// Usage of a compute kernel's output texture: written as storage, then sampled or copied out.
 pub const STORAGE_OUTPUT: wgpu::TextureUsages = wgpu::TextureUsages::STORAGE_BINDING
     .union(wgpu::TextureUsages::TEXTURE_BINDING)
@@ -209,6 +229,12 @@ pub fn read_buffer(
     queue: &wgpu::Queue,
     buffer: &wgpu::Buffer,
 ) -> Result<Vec<u8>, GpuError> {
+    check_buffer_size(
+        device,
+        "readback",
+        buffer.size(),
+        wgpu::BufferUsages::MAP_READ,
+    )?;
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
         size: buffer.size(),
@@ -257,6 +283,12 @@ pub fn read_texture(
     let row = w * texel;
     let align = u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let padded_row = row.div_ceil(align) * align;
+    check_buffer_size(
+        device,
+        "texture readback",
+        padded_row * h,
+        wgpu::BufferUsages::MAP_READ,
+    )?;
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("texture readback"),
         size: padded_row * h,

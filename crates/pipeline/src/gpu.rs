@@ -137,6 +137,14 @@ struct SizedTargets {
 impl SizedTargets {
     fn new(device: &wgpu::Device, width: u32, height: u32) -> Result<Self, RenderError> {
         transfer::check_texture_size(device, "frame", width, height)?;
+        transfer::allocation(
+            device,
+            &format!("the {width}×{height} frame's targets"),
+            || Self::allocate(device, width, height),
+        )
+    }
+
+    fn allocate(device: &wgpu::Device, width: u32, height: u32) -> Result<Self, RenderError> {
         Ok(Self {
             targets: GBufferTargets::new(device, width, height)?,
             radiance: transfer::texture_2d(

@@ -145,6 +145,10 @@ pub struct TriMesh {
     pub positions: Vec<DVec3>,
 }
 
+/// The most triangles [`TriMesh::subdivide`] produces: 2^26 (32 M vertices of `DVec3` plus
+/// their topology, about 2 GiB).
+pub const MAX_REFINED_TRIANGLES: usize = 1 << 26;
+
 impl TriMesh {
     /// Validates `triangles` (see [`Topology::new`]) and the positions (finite).
     pub fn new(
@@ -184,6 +188,13 @@ impl TriMesh {
 
     /// `levels` recursive Loop steps (the refined, not limit, mesh Mᵏ).
     pub fn subdivide(&self, levels: u32) -> Result<Self, crate::SubdivError> {
+        let triangles = self.topology.triangles.len() as u128;
+        if levels >= 32 || triangles << (2 * levels) > MAX_REFINED_TRIANGLES as u128 {
+            return Err(crate::SubdivError::TooLarge(format!(
+                "level {levels} of {triangles} triangles makes {triangles}·4^{levels}, more than \
+                 the {MAX_REFINED_TRIANGLES} triangles of the CPU reference (about 2 GiB)"
+            )));
+        }
         let mut m = self.clone();
         for _ in 0..levels {
             m = m.step()?;

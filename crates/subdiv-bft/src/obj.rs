@@ -20,6 +20,10 @@ pub struct ObjMesh {
     pub sharpness_tags: usize,
 }
 
+/// The largest coordinate magnitude a control mesh may use: subdivision takes affine
+/// combinations of positions, which stay finite in `f32` well below its 3.4e38.
+pub const MAX_COORDINATE: f64 = 1e30;
+
 impl ObjMesh {
     /// Parses OBJ text.
     pub fn parse(text: &str) -> Result<Self, SubdivError> {
@@ -41,6 +45,12 @@ impl ObjMesh {
                         .collect::<Result<_, _>>()?;
                     if c.len() != 3 {
                         return Err(bad("a vertex needs three coordinates".into()));
+                    }
+                    if let Some(x) = c.iter().find(|x| !(x.abs() <= MAX_COORDINATE)) {
+                        return Err(bad(format!(
+                            "coordinate {x:e} is not a finite number of magnitude at most \
+                             {MAX_COORDINATE:e} (the refined and limit positions are f32)"
+                        )));
                     }
                     m.positions.push(DVec3::new(c[0], c[1], c[2]));
                 }
@@ -105,6 +115,9 @@ impl ObjMesh {
             return Err(bad(format!(
                 "interpolateboundary {b}: only 2 (edge only) is implemented"
             )));
+        }
+        if self.triangles.is_empty() {
+            return Err(bad("no faces: nothing to subdivide".into()));
         }
         TriMesh::new(self.positions, self.triangles)
     }
