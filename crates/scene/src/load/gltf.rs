@@ -26,10 +26,26 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
     }
     let mut bytes = Vec::new();
     std::io::Read::read_to_end(&mut std::io::Read::take(file, FILE_LIMIT), &mut bytes)?;
-    let gltf::Gltf {
-        document: doc,
-        blob,
-    } = gltf::Gltf::from_slice(&bytes).map_err(|e| SceneErrorKind::Gltf(e.to_string()))?;
+    let invalid = |e: gltf::Error| SceneErrorKind::Gltf(e.to_string());
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(&bytes).map_err(invalid)?;
+    let json = document.into_json();
+    // gltf-json's validation indexes the accessors with POSITION unchecked: check it first.
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(a) = prim.attributes.get(&position)
+                && a.value() >= json.accessors.len()
+            {
+                return Err(SceneErrorKind::Gltf(format!(
+                    "mesh {m} primitive {p}: POSITION names accessor {}, of {}",
+                    a.value(),
+                    json.accessors.len()
+                )));
+            }
+        }
+    }
+    let doc = gltf::Document::from_json(json).map_err(invalid)?;
     let buffers = doc
         .buffers()
         .map(|b| buffer_data(&folder, &b, blob.as_deref()))
