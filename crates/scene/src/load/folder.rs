@@ -65,6 +65,19 @@ impl SceneFolder {
                 "absolute paths are not read (a scene reads only inside its folder)",
             ));
         }
+        // `..` that climbs above the folder is refused before the file system is asked, so
+        // nothing outside (not even whether a file exists there) is looked at.
+        let mut depth = 0i64;
+        for c in relative.components() {
+            depth += match c {
+                std::path::Component::Normal(_) => 1,
+                std::path::Component::ParentDir => -1,
+                _ => 0,
+            };
+            if depth < 0 {
+                return Err(refuse("it resolves outside the scene's folder"));
+            }
+        }
         let resolved = self
             .root
             .join(relative)
