@@ -148,8 +148,8 @@ pub enum VplError {
         photons: u64,
     },
     /// A light has non-finite or negative parameters.
-    #[error("light {0} is invalid")]
-    InvalidLight(usize),
+    #[error("light {0}: {1}")]
+    InvalidLight(usize, String),
 }
 
 /// VPLs per subset for a requested total: `round(count / subsets)`, at least 1, so the set
@@ -484,8 +484,10 @@ pub fn generate(
         });
     }
     tiled_shading::gpu_lights(lights).map_err(|e| match e {
-        tiled_shading::ShadingError::InvalidLight { index, .. } => VplError::InvalidLight(index),
-        _ => VplError::InvalidLight(0),
+        tiled_shading::ShadingError::InvalidLight { index, problem } => {
+            VplError::InvalidLight(index, problem)
+        }
+        other => VplError::InvalidLight(0, other.to_string()),
     })?;
     let bounds = scene.bounds();
     let mut emitters: Vec<Emitter> = lights.iter().copied().map(Emitter::Light).collect();

@@ -78,12 +78,12 @@ pub enum RenderError {
     #[error(transparent)]
     Shading(tiled_shading::ShadingError),
     /// A light has non-finite or negative parameters.
-    #[error("light {index} is invalid: {light:?}")]
+    #[error("light {index}: {problem}")]
     InvalidLight {
         /// Index in the light list.
         index: usize,
-        /// The light.
-        light: Light,
+        /// What is wrong, with the values.
+        problem: String,
     },
 }
 
@@ -96,8 +96,8 @@ pub fn validate_lights(lights: &[Light]) -> Result<Vec<GpuLight>, RenderError> {
 impl From<tiled_shading::ShadingError> for RenderError {
     fn from(e: tiled_shading::ShadingError) -> Self {
         match e {
-            tiled_shading::ShadingError::InvalidLight { index, light } => {
-                RenderError::InvalidLight { index, light }
+            tiled_shading::ShadingError::InvalidLight { index, problem } => {
+                RenderError::InvalidLight { index, problem }
             }
             other => RenderError::Shading(other),
         }

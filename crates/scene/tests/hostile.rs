@@ -412,3 +412,19 @@ fn ply_headers_that_would_panic_or_loop_are_errors() {
         assert!(e.contains(why), "{why}: {e}");
     }
 }
+
+#[cfg(unix)]
+#[test]
+fn a_scene_file_that_is_not_a_regular_file_is_refused() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("hostile")
+        .join("device");
+    std::fs::create_dir_all(&dir).expect("folder");
+    let link = dir.join("zero.obj");
+    let _ = std::fs::remove_file(&link);
+    std::os::unix::fs::symlink("/dev/zero", &link).expect("link");
+    let e = scene::Scene::load(&link)
+        .map(|_| ())
+        .expect_err("/dev/zero read as a scene");
+    assert!(e.to_string().contains("not a regular file"), "{e}");
+}

@@ -268,12 +268,12 @@ pub enum ShadingError {
     #[error("tile size must be 8, 16 or 32 pixels, got {0}")]
     TileSize(u32),
     /// A light has non-finite or negative parameters or a non-positive radius.
-    #[error("light {index} is invalid: {light:?}")]
+    #[error("light {index}: {problem}")]
     InvalidLight {
         /// Index in the light list.
         index: usize,
-        /// The light.
-        light: Light,
+        /// What is wrong, with the values.
+        problem: String,
     },
     /// More lights than the buffer made at creation holds.
     #[error("{count} lights do not fit the light buffer made for {capacity}")]
@@ -289,30 +289,39 @@ pub enum ShadingError {
 }
 
 /// Converts lights to their shader form, rejecting NaN/infinite values, negative colours and
-/// non-positive radii.
+/// non-positive radii (the error says which, with the value).
 pub fn gpu_lights(lights: &[Light]) -> Result<Vec<GpuLight>, ShadingError> {
     lights
         .iter()
         .enumerate()
         .map(|(index, light)| {
             let g = GpuLight::from(light);
-            let finite = g
-                .position
-                .iter()
-                .chain(&g.color)
-                .chain(&g.direction)
-                .all(|v| v.is_finite())
-                && g.radius.is_finite()
-                && g.cos_inner.is_finite()
-                && g.cos_outer.is_finite();
-            if finite && g.radius > 0.0 && g.color.iter().all(|&c| c >= 0.0) {
-                Ok(g)
+            let kind = match light {
+                Light::Point { .. } => "point light",
+                Light::Spot { .. } => "spot light",
+                Light::Hemispherical { .. } => "hemispherical light",
+                Light::Directional { .. } => "directional light",
+            };
+            let problem = if !g.position.iter().all(|v| v.is_finite()) {
+                format!("position {:?} is not finite", g.position)
+            } else if !g.direction.iter().all(|v| v.is_finite()) {
+                format!("direction {:?} is not finite", g.direction)
+            } else if !(g.radius.is_finite() && g.radius > 0.0) {
+                format!("radius {} must be positive and finite", g.radius)
+            } else if !g.color.iter().all(|&c| c.is_finite() && c >= 0.0) {
+                format!(
+                    "colour × intensity {:?} must be finite and non-negative",
+                    g.color
+                )
+            } else if !(g.cos_inner.is_finite() && g.cos_outer.is_finite()) {
+                "cone angles are not finite".to_string()
             } else {
-                Err(ShadingError::InvalidLight {
-                    index,
-                    light: *light,
-                })
-            }
+                return Ok(g);
+            };
+            Err(ShadingError::InvalidLight {
+                index,
+                problem: format!("{kind}: {problem}"),
+            })
         })
         .collect()
 }

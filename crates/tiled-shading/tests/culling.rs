@@ -439,6 +439,32 @@ fn bad_input_is_an_error() {
         tiled_shading::gpu_lights(&[bad]),
         Err(ShadingError::InvalidLight { index: 0, .. })
     ));
+    // The message names the light, the parameter and its value (no debug dump).
+    let nan_colour = Light::Point {
+        color: Vec3::new(1.0, f32::NAN, 0.0),
+        radius: 1.0,
+        ..bad
+    };
+    for (light, why) in [
+        (
+            bad,
+            "light 1: point light: radius -1 must be positive and finite",
+        ),
+        (
+            nan_colour,
+            "light 1: point light: colour × intensity [1.0, NaN, 0.0] must be finite",
+        ),
+    ] {
+        let ok = Light::Directional {
+            direction: Vec3::NEG_Y,
+            color: Vec3::ONE,
+            intensity: 1.0,
+        };
+        let e = tiled_shading::gpu_lights(&[ok, light])
+            .expect_err(why)
+            .to_string();
+        assert!(e.contains(why), "{why}: {e}");
+    }
     let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
         return;
     };

@@ -13,19 +13,9 @@ use crate::{Camera, Light, Material, Mesh, Scene, SceneErrorKind, light::default
 /// once per path): 2^20.
 const MAX_NODE_INSTANCES: usize = 1 << 20;
 
-/// The most bytes a `.gltf`/`.glb` file itself may hold: 4 GiB (GLB's own length field).
-const FILE_LIMIT: u64 = u32::MAX as u64;
-
 pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene, SceneErrorKind> {
     let folder = SceneFolder::of(path)?;
-    let file = std::fs::File::open(path)?;
-    if file.metadata()?.len() > FILE_LIMIT {
-        return Err(SceneErrorKind::Gltf(format!(
-            "larger than {FILE_LIMIT} bytes"
-        )));
-    }
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(&mut std::io::Read::take(file, FILE_LIMIT), &mut bytes)?;
+    let bytes = super::read_scene_file(path)?;
     let invalid = |e: gltf::Error| SceneErrorKind::Gltf(e.to_string());
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice_without_validation(&bytes).map_err(invalid)?;

@@ -7,9 +7,6 @@ use glam::{Vec2, Vec3, Vec4};
 use super::folder::{SceneFolder, UNDECLARED_LIMIT};
 use crate::{Material, Mesh, Scene, SceneErrorKind};
 
-/// The most bytes an `.obj` file may hold: 4 GiB.
-const FILE_LIMIT: u64 = u32::MAX as u64;
-
 pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene, SceneErrorKind> {
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -17,14 +14,7 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
         ..Default::default()
     };
     let folder = SceneFolder::of(path)?;
-    let file = std::fs::File::open(path)?;
-    if file.metadata()?.len() > FILE_LIMIT {
-        return Err(SceneErrorKind::Obj(format!(
-            "larger than {FILE_LIMIT} bytes"
-        )));
-    }
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(&mut std::io::Read::take(file, FILE_LIMIT), &mut bytes)?;
+    let bytes = super::read_scene_file(path)?;
     check_obj(&bytes)?;
     let mut reader = &bytes[..];
     // Material libraries are read through the scene's folder, and checked before tobj parses

@@ -10,9 +10,6 @@ use ply_rs::{
 
 use crate::{Material, Mesh, Scene, SceneErrorKind};
 
-/// The most bytes a `.ply` file may hold: 4 GiB.
-const FILE_LIMIT: u64 = u32::MAX as u64;
-
 /// The most bytes of a PLY header.
 const HEADER_LIMIT: usize = 1 << 16;
 
@@ -102,14 +99,7 @@ fn list(p: Option<&Property>) -> Option<Vec<i64>> {
 }
 
 pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene, SceneErrorKind> {
-    let file = std::fs::File::open(path)?;
-    if file.metadata()?.len() > FILE_LIMIT {
-        return Err(SceneErrorKind::Ply(format!(
-            "larger than {FILE_LIMIT} bytes"
-        )));
-    }
-    let mut bytes = Vec::new();
-    std::io::Read::read_to_end(&mut std::io::Read::take(file, FILE_LIMIT), &mut bytes)?;
+    let bytes = super::read_scene_file(path)?;
     check_header(&bytes)?;
     let ply = Parser::<DefaultElement>::new()
         .read_ply(&mut &bytes[..])
