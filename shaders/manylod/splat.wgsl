@@ -11,6 +11,8 @@ struct Atlas {
     // Counter slot holding the cut's length.
     cut_slot: u32,
     far: f32,
+    // Slot of view 0 (batches of views sharing one atlas).
+    first_view: u32,
 }
 
 @group(0) @binding(0) var<storage, read> nodes: array<Node>;
@@ -40,7 +42,8 @@ fn splat_disc(v: u32, n: Node) {
     let tile = i32(atlas_.tile);
     let lo = max(vec2<i32>(ceil(s.center - s.radius - 0.5)), vec2<i32>(0));
     let hi = min(vec2<i32>(floor(s.center + s.radius - 0.5)) + 1, vec2<i32>(tile));
-    let origin = vec2<i32>(i32(v % atlas_.columns), i32(v / atlas_.columns)) * tile;
+    let slot = atlas_.first_view + v;
+    let origin = vec2<i32>(i32(slot % atlas_.columns), i32(slot / atlas_.columns)) * tile;
     for (var y = lo.y; y < hi.y; y++) {
         for (var x = lo.x; x < hi.x; x++) {
             let d = vec2<f32>(f32(x), f32(y)) + 0.5 - s.center;

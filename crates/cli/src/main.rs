@@ -1008,9 +1008,8 @@ fn write_shadow_atlas(
     gpu: &gpu::Gpu,
     shadows: &instant_radiosity::shadows::VplShadowMaps,
 ) -> Result<()> {
-    let m = shadows.manylod();
-    let (w, h) = m.layout().size();
-    let atlas = m.read_atlas(&gpu.device, &gpu.queue)?;
+    let (w, h) = shadows.layout().size();
+    let atlas = shadows.read_atlas(&gpu.device, &gpu.queue)?;
     let pixels: Vec<[f32; 4]> = atlas
         .iter()
         .map(|&word| {

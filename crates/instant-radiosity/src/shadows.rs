@@ -38,10 +38,15 @@ pub struct ShadowConfig {
     pub ism_points: usize,
     /// Depth bias as a fraction of the scene diagonal.
     pub bias: f32,
+    /// The most bytes of one node-view list (ManyLoD's active and cut lists, the ISM list);
+    /// `None`: the device's storage-binding and buffer limits. Views are split into batches
+    /// whose lists fit, all splatting into one atlas, so the atlas is the same either way.
+    pub list_bytes: Option<u64>,
 }
 
 impl Default for ShadowConfig {
-    /// 2^20 surfels, ε = 2 px, 32×32 micro-views, 8 k ISM points, bias 1 % of the diagonal.
+    /// 2^20 surfels, ε = 2 px, 32×32 micro-views, 8 k ISM points, bias 1 % of the diagonal,
+    /// lists as large as the device allows.
     fn default() -> Self {
         Self {
             points_log2: 20,
@@ -49,6 +54,7 @@ impl Default for ShadowConfig {
             tile: 32,
             ism_points: 8192,
             bias: 0.01,
+            list_bytes: None,
         }
     }
 }
@@ -67,16 +73,32 @@ pub struct ShadowParams {
     _pad: u32,
 }
 
-/// The VPL shadow maps on the GPU: the hierarchy, the cut and the atlas (and the ISM points).
-pub struct VplShadowMaps {
+/// Node-views a ManyLoD cut list holds per micro-view pixel: cuts hold culled node-views too,
+/// and Sponza's ε = 2 px cuts are ~8 per pixel.
+const NODE_VIEWS_PER_PIXEL: usize = 24;
+
+/// Bytes of one node-view in a list.
+const NODE_VIEW_BYTES: u64 = 8;
+
+/// One batch of VPL views: its cut (or ISM list) splatting into the shared atlas.
+struct Batch {
     manylod: GpuManyLod,
     ism: Option<GpuIsm>,
+}
+
+/// The VPL shadow maps on the GPU: the hierarchy, the cuts and the atlas (and the ISM points),
+/// in as many batches of views as the device's binding limits need.
+pub struct VplShadowMaps {
+    batches: Vec<Batch>,
+    atlas: wgpu::Buffer,
+    layout: AtlasLayout,
     params: wgpu::Buffer,
     frames: u32,
 }
 
 impl VplShadowMaps {
-    /// Samples `scene`, builds the hierarchy and one paraboloid view per VPL of `set`.
+    /// Samples `scene`, builds the hierarchy and one paraboloid view per VPL of `set`, split
+    /// into batches whose node-view lists fit `config.list_bytes` or the device.
     pub fn new(
         device: &wgpu::Device,
         scene: &Scene,
@@ -93,20 +115,68 @@ impl VplShadowMaps {
         let lift = 1e-3 * diagonal;
         let views = vpl_views(set, config.tile, lift);
         let layout = vpl_atlas(views.len(), config.tile, diagonal);
-        // Cuts hold culled node-views too: Sponza's ε = 2 px cuts are ~8 per micro-view pixel.
-        let capacity = views.len() * (config.tile * config.tile) as usize * 24;
-        let manylod =
-            GpuManyLod::new(device, &bsh, &views, config.epsilon, layout, capacity, None)?;
+        let (width, height) = layout.size();
+        let atlas = transfer::buffer(
+            device,
+            "vpl shadow atlas",
+            u64::from(width) * u64::from(height) * 4,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        )?;
+        let limits = device.limits();
+        let list_bytes = config.list_bytes.unwrap_or(
+            limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size),
+        );
         let ism = match mode {
             VplShadows::ManyLod => None,
             VplShadows::Ism => {
                 let leaves = &bsh.nodes[bsh.leaf_count() - 1..];
                 let per_view = config.ism_points.min(leaves.len());
-                let (points, list) = splat::ism(leaves, views.len(), per_view, 1)?;
-                Some(GpuIsm::new(device, &manylod, &points, &list)?)
+                Some((per_view, splat::ism(leaves, views.len(), per_view, 1)?))
             }
         };
-        let (width, _) = layout.size();
+        // Node-views one view needs in a list: its share of a cut, or its ISM points.
+        let per_view = match &ism {
+            None => (config.tile * config.tile) as usize * NODE_VIEWS_PER_PIXEL,
+            Some((per_view, _)) => *per_view,
+        };
+        let batch_views = (list_bytes / (per_view as u64 * NODE_VIEW_BYTES)).max(1) as usize;
+        let mut batches = Vec::new();
+        for (b, chunk) in views.chunks(batch_views).enumerate() {
+            let first = b * batch_views;
+            let batch_layout = layout.batch(first as u32);
+            // ISM binds no cut lists: ManyLoD's smallest lists suffice.
+            let capacity = match ism {
+                None => chunk.len() * per_view,
+                Some(_) => chunk.len().max(2),
+            };
+            let manylod = GpuManyLod::new(
+                device,
+                &bsh,
+                chunk,
+                config.epsilon,
+                batch_layout,
+                capacity,
+                Some(&atlas),
+            )?;
+            let ism = match &ism {
+                None => None,
+                Some((per_view, (points, list))) => {
+                    let own: Vec<_> = list[first * per_view..(first + chunk.len()) * per_view]
+                        .iter()
+                        .map(|nv| manylod::NodeView {
+                            view: nv.view - first as u32,
+                            ..*nv
+                        })
+                        .collect();
+                    Some(GpuIsm::new(device, &manylod, points, &own)?)
+                }
+            };
+            batches.push(Batch { manylod, ism });
+        }
         let params = ShadowParams {
             enabled: 1,
             tile: layout.tile,
@@ -124,26 +194,29 @@ impl VplShadowMaps {
             wgpu::BufferUsages::UNIFORM,
         )?;
         Ok(Self {
-            manylod,
-            ism,
+            batches,
+            atlas,
+            layout,
             params,
             frames: 0,
         })
     }
 
-    /// Records this frame's shadow maps: the cut (basic on the first frame, incremental after)
-    /// and its splat, or the ISM splat.
+    /// Records this frame's shadow maps, batch after batch (the first clears the atlas): the
+    /// cut (basic on the first frame, incremental after) and its splat, or the ISM splat.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        match &self.ism {
-            Some(ism) => ism.encode(encoder, &self.manylod, timer),
-            None => {
-                let kind = if self.frames == 0 {
-                    CutKind::Basic
-                } else {
-                    CutKind::Incremental
-                };
-                self.manylod.encode_cut(encoder, kind, timer);
-                self.manylod.encode_splat(encoder, timer);
+        for batch in &mut self.batches {
+            match &batch.ism {
+                Some(ism) => ism.encode(encoder, &batch.manylod, timer),
+                None => {
+                    let kind = if self.frames == 0 {
+                        CutKind::Basic
+                    } else {
+                        CutKind::Incremental
+                    };
+                    batch.manylod.encode_cut(encoder, kind, timer);
+                    batch.manylod.encode_splat(encoder, timer);
+                }
             }
         }
         self.frames += 1;
@@ -151,12 +224,32 @@ impl VplShadowMaps {
 
     /// The atlas and parameter buffers the VPL shading binds.
     pub fn bindings(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
-        (&self.manylod.atlas, &self.params)
+        (&self.atlas, &self.params)
     }
 
-    /// The GPU ManyLoDs set-up (for reading the cut or the atlas back).
-    pub fn manylod(&self) -> &GpuManyLod {
-        &self.manylod
+    /// The atlas layout (every VPL's tile).
+    pub fn layout(&self) -> AtlasLayout {
+        self.layout
+    }
+
+    /// How many batches of views the lists were split into (1 where the device's bindings
+    /// hold every view's list).
+    pub fn batch_count(&self) -> usize {
+        self.batches.len()
+    }
+
+    /// Reads the atlas back (row-major packed depths); an error when a batch's lists
+    /// overflowed (the atlas then misses splats).
+    pub fn read_atlas(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<u32>, IndirectError> {
+        let mut atlas = Vec::new();
+        for batch in &self.batches {
+            atlas = batch.manylod.read_atlas(device, queue)?;
+        }
+        Ok(atlas)
     }
 }
 

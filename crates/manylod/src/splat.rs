@@ -27,7 +27,7 @@ pub fn unpack_depth(word: u32) -> f32 {
 }
 
 /// Where views' tiles lie in the atlas: `tile × tile` pixels each, `columns` per row, view `v`
-/// at column `v % columns`, row `v / columns`.
+/// in slot `s = first_view + v`, at column `s % columns`, row `s / columns`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AtlasLayout {
     /// Tile side in pixels.
@@ -38,6 +38,9 @@ pub struct AtlasLayout {
     pub rows: u32,
     /// Distance mapped to depth 1 in paraboloid tiles.
     pub far: f32,
+    /// The slot of this set's view 0: 0, unless the views are split into batches that splat
+    /// into one shared atlas ([`AtlasLayout::batch`]).
+    pub first_view: u32,
 }
 
 impl AtlasLayout {
@@ -49,7 +52,13 @@ impl AtlasLayout {
             columns,
             rows: (views as u32).div_ceil(columns).max(1),
             far,
+            first_view: 0,
         }
+    }
+
+    /// This layout for the batch of views whose view 0 is the atlas's view `first_view`.
+    pub fn batch(self, first_view: u32) -> Self {
+        Self { first_view, ..self }
     }
 
     /// Atlas width and height in pixels.
@@ -59,13 +68,15 @@ impl AtlasLayout {
 
     /// Checks that every view is a `tile × tile` view with a slot, and `far` is positive.
     pub fn check(&self, views: &[View]) -> Result<(), ManyLodError> {
-        if self.tile == 0 || (self.columns as usize) * (self.rows as usize) < views.len() {
+        let slots = (self.columns as usize) * (self.rows as usize);
+        if self.tile == 0 || slots < self.first_view as usize + views.len() {
             return Err(ManyLodError::Mismatch(format!(
-                "an atlas of {}×{} tiles of {} px cannot hold {} views",
+                "an atlas of {}×{} tiles of {} px cannot hold {} views from slot {}",
                 self.columns,
                 self.rows,
                 self.tile,
-                views.len()
+                views.len(),
+                self.first_view
             )));
         }
         if !(self.far.is_finite() && self.far > 0.0) {
@@ -139,9 +150,10 @@ pub fn splat(
     let (w, h) = layout.size();
     let mut atlas = vec![CLEAR; (w * h) as usize];
     for (v, t) in tiles.iter().enumerate() {
+        let slot = layout.first_view + v as u32;
         let (ox, oy) = (
-            (v as u32 % layout.columns) as usize * tile,
-            (v as u32 / layout.columns) as usize * tile,
+            (slot % layout.columns) as usize * tile,
+            (slot / layout.columns) as usize * tile,
         );
         for (y, row) in t.chunks_exact(tile).enumerate() {
             let start = (oy + y) * w as usize + ox;

@@ -441,9 +441,10 @@ fn bad_input_is_an_error() {
     ));
     // The message names the light, the parameter and its value (no debug dump).
     let nan_colour = Light::Point {
+        position: Vec3::ZERO,
         color: Vec3::new(1.0, f32::NAN, 0.0),
+        intensity: 1.0,
         radius: 1.0,
-        ..bad
     };
     for (light, why) in [
         (

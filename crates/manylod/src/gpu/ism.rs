@@ -40,18 +40,10 @@ impl GpuIsm {
         let mut counts = [0u32; 16];
         counts[CUT_SLOTS[0] as usize] = list.len() as u32;
         let counters = storage("ism counters", bytemuck::cast_slice(&counts))?;
-        let (w, _) = m.layout.size();
         let params = uniform(
             device,
             "ism atlas",
-            bytemuck::bytes_of(&AtlasParams {
-                width: w,
-                tile: m.layout.tile,
-                columns: m.layout.columns,
-                cut_slot: CUT_SLOTS[0],
-                far: m.layout.far,
-                _pad: [0; 3],
-            }),
+            bytemuck::bytes_of(&AtlasParams::new(&m.layout, CUT_SLOTS[0])),
         )?;
         let bind = m.splat.bind_buffers(
             device,
@@ -78,10 +70,11 @@ impl GpuIsm {
         timer: Option<&PassTimer>,
     ) {
         let (x, y) = groups(self.count);
-        let dispatches = vec![
-            m.clear_dispatch(),
-            m.splat.dispatch(&self.bind, Workgroups::Direct([x, y, 1])),
-        ];
+        let dispatches: Vec<_> = m
+            .clear_dispatch()
+            .into_iter()
+            .chain([m.splat.dispatch(&self.bind, Workgroups::Direct([x, y, 1]))])
+            .collect();
         Passes::new().pass("ism", dispatches).encode(encoder, timer);
     }
 }

@@ -91,7 +91,23 @@ struct AtlasParams {
     columns: u32,
     cut_slot: u32,
     far: f32,
-    _pad: [u32; 3],
+    first_view: u32,
+    _pad: [u32; 2],
+}
+
+impl AtlasParams {
+    /// `splat.wgsl`'s `Atlas` for `layout`, the cut length in counter `cut_slot`.
+    fn new(layout: &AtlasLayout, cut_slot: u32) -> Self {
+        Self {
+            width: layout.size().0,
+            tile: layout.tile,
+            columns: layout.columns,
+            cut_slot,
+            far: layout.far,
+            first_view: layout.first_view,
+            _pad: [0; 2],
+        }
+    }
 }
 
 // `cut.wgsl` modes and counter slots.
@@ -332,14 +348,7 @@ impl GpuManyLod {
             uniform(
                 device,
                 "manylod atlas",
-                bytemuck::bytes_of(&AtlasParams {
-                    width: w,
-                    tile: layout.tile,
-                    columns: layout.columns,
-                    cut_slot,
-                    far: layout.far,
-                    _pad: [0; 3],
-                }),
+                bytemuck::bytes_of(&AtlasParams::new(&layout, cut_slot)),
             )
         };
         let splat_params = [atlas_params(CUT_SLOTS[0])?, atlas_params(CUT_SLOTS[1])?];
@@ -473,12 +482,15 @@ impl GpuManyLod {
     /// Records the splat of the last cut into the cleared atlas (one pass, timed as `splat`).
     pub fn encode_splat(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
         let c = self.current;
-        let dispatches = vec![
-            self.clear_dispatch(),
-            self.prepare
-                .dispatch(&self.count[c], Workgroups::Direct([1, 1, 1])),
-            self.splat.dispatch(&self.splats[c], self.indirect()),
-        ];
+        let dispatches: Vec<Dispatch> = self
+            .clear_dispatch()
+            .into_iter()
+            .chain([
+                self.prepare
+                    .dispatch(&self.count[c], Workgroups::Direct([1, 1, 1])),
+                self.splat.dispatch(&self.splats[c], self.indirect()),
+            ])
+            .collect();
         Passes::new()
             .pass("splat", dispatches)
             .encode(encoder, timer);
@@ -512,10 +524,11 @@ impl GpuManyLod {
             self.view_count.min(MAX_GROUPS_X),
             self.view_count.div_ceil(MAX_GROUPS_X),
         );
-        let dispatches = vec![
-            self.clear_dispatch(),
-            kernel.dispatch(bind, Workgroups::Direct([x, y, 1])),
-        ];
+        let dispatches: Vec<Dispatch> = self
+            .clear_dispatch()
+            .into_iter()
+            .chain([kernel.dispatch(bind, Workgroups::Direct([x, y, 1]))])
+            .collect();
         Passes::new()
             .pass("in-place", dispatches)
             .encode(encoder, timer);
@@ -523,10 +536,14 @@ impl GpuManyLod {
     }
 
     /// The atlas clear, first dispatch of every splatting pass.
-    fn clear_dispatch(&self) -> Dispatch {
+    /// Clearing the atlas, done by the set holding view 0 only: a later batch of views
+    /// ([`AtlasLayout::batch`]) splats into the atlas that set cleared, so it is encoded first.
+    fn clear_dispatch(&self) -> Option<Dispatch> {
         let (x, y) = groups(self.atlas_pixels);
-        self.clear
-            .dispatch(&self.clear_bind, Workgroups::Direct([x, y, 1]))
+        (self.layout.first_view == 0).then(|| {
+            self.clear
+                .dispatch(&self.clear_bind, Workgroups::Direct([x, y, 1]))
+        })
     }
 
     /// Workgroups the last `prepare` wrote into the dispatch buffer.
