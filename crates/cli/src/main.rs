@@ -82,9 +82,9 @@ struct Args {
     /// Ambient light R,G,B (linear); default 0.03, or 0 with --vpls.
     #[arg(long, value_parser = parse_vec3)]
     ambient: Option<Vec3>,
-    /// Add one-bounce indirect light from about N VPLs (instant radiosity), rounded to a
-    /// multiple of the sub-buffer count.
-    #[arg(long)]
+    /// Add one-bounce indirect light from about N VPLs (instant radiosity, 1 to 16384),
+    /// rounded to a multiple of the sub-buffer count.
+    #[arg(long, value_parser = parse_vpl_count)]
     vpls: Option<usize>,
     /// Interleaved sampling pattern NxM: one VPL subset per sub-buffer.
     #[arg(long, default_value = "4x4", requires = "vpls")]
@@ -493,6 +493,14 @@ fn parse_light_count(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(n) if n <= MAX_LIGHTS => Ok(n),
         _ => Err(format!("expected a light count from 0 to {MAX_LIGHTS}")),
+    }
+}
+
+fn parse_vpl_count(s: &str) -> Result<usize, String> {
+    let max = *vpl::VPL_RANGE.end();
+    match s.trim().parse::<usize>() {
+        Ok(n) if (1..=max).contains(&n) => Ok(n),
+        _ => Err(format!("expected a VPL count from 1 to {max}")),
     }
 }
 

@@ -84,6 +84,10 @@ fn hostile_command_line_values_are_refused() {
         (&["--eye", "0,inf,0"], "three finite numbers"),
         (&["--ambient", "nan,0,0"], "three finite numbers"),
         (&["--blur", "4"], "--vpls"),
+        (
+            &["--vpls", "0", "--cpu"],
+            "expected a VPL count from 1 to 16384",
+        ),
         (&["--pattern", "2x2"], "--vpls"),
         (&["--vpls", "64", "--blur", "4", "--cpu"], "blur"),
         (&["--vpls", "64", "--pattern", "0x3", "--cpu"], "pattern"),
