@@ -639,7 +639,20 @@ fn run() -> Result<()> {
     }
     if args.eye.is_some() || args.target.is_some() {
         camera.fit_planes(scene.bounds());
+        // Looking straight up or down: the default +Y up is along the view, so take −Z.
+        let view = (camera.target - camera.eye).normalize_or_zero();
+        if view.cross(camera.up.normalize_or_zero()).length() < 1e-3 {
+            camera.up = Vec3::NEG_Z;
+        }
     }
+    let camera_source = if args.eye.is_some() || args.target.is_some() || args.fov.is_some() {
+        "the camera of --eye/--target/--fov"
+    } else if scene.camera.is_some() {
+        "the scene file's camera"
+    } else {
+        "the camera framing the scene"
+    };
+    gbuffer::validate_camera(&camera).context(camera_source)?;
     if let Some(level) = args.subdiv {
         subdivide_scene(&mut scene, &args, level, &camera)?;
     }

@@ -96,7 +96,10 @@ fn hostile_command_line_values_are_refused() {
         (&["--scene", "/nonexistent/scene.gltf"], "scene.gltf"),
         (&["--light", "point:0,1,0,-1"], "--light"),
         (&["--indirect-only"], "--indirect-only needs --vpls"),
-        (&["--eye", "0,1,0", "--target", "0,1,0", "--cpu"], "eye"),
+        (
+            &["--eye", "0,1,0", "--target", "0,1,0", "--cpu"],
+            "the camera of --eye/--target/--fov",
+        ),
         (
             &[
                 "subdivide",

@@ -37,6 +37,13 @@ fn a_run_writes_its_outputs_and_nothing_else() {
         .collect();
     names.sort();
     assert_eq!(names, ["render.exr", "render.png"]);
+    // Looking straight down (the default up is along the view): the program picks another up.
+    let down = deferred(&out, &["--eye", "0,5,0", "--target", "0,0,0"]);
+    assert!(
+        down.status.success(),
+        "{}",
+        String::from_utf8_lossy(&down.stderr)
+    );
 }
 
 #[test]

@@ -30,6 +30,10 @@ pub use light::{Light, scatter_point_lights};
 
 use glam::{Vec2, Vec3, Vec4};
 
+/// The largest coordinate magnitude a scene may have: 10^15 (squared distances, which
+/// shading and framing compute, stay finite in `f32`).
+pub const MAX_COORDINATE: f32 = 1e15;
+
 /// A triangle mesh in world space with one material.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
@@ -222,11 +226,20 @@ impl Scene {
             path: path.to_owned(),
             kind,
         };
-        if !path.is_file() {
-            return Err(err(SceneErrorKind::Io(std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                "no such file",
-            ))));
+        match std::fs::metadata(path) {
+            Err(_) => {
+                return Err(err(SceneErrorKind::Io(std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    "no such file",
+                ))));
+            }
+            Ok(meta) if !meta.is_file() => {
+                return Err(err(SceneErrorKind::Reference {
+                    reference: path.display().to_string(),
+                    problem: "not a regular file".into(),
+                }));
+            }
+            Ok(_) => {}
         }
         let ext = path
             .extension()
@@ -258,6 +271,20 @@ impl Scene {
                     problem: format!("material {} does not exist", m.material),
                 });
             }
+        }
+        let b = self.bounds();
+        let reach = b.min.abs().max(b.max.abs()).max_element();
+        if !(reach <= MAX_COORDINATE) {
+            return Err(SceneErrorKind::Extent(format!(
+                "coordinates reach {reach:e}, beyond the ±{MAX_COORDINATE:e} a frame can hold \
+                 (squared distances overflow f32 near 1.8e19)"
+            )));
+        }
+        if (b.max - b.min).max_element() <= 0.0 {
+            return Err(SceneErrorKind::Extent(format!(
+                "every vertex is at {}: the scene has no extent to frame",
+                b.min
+            )));
         }
         for (i, mat) in self.materials.iter().enumerate() {
             if let Some(t) = mat.base_color_texture
@@ -354,6 +381,9 @@ pub enum SceneErrorKind {
     /// A file the scene names does not exist (inside the scene's folder).
     #[error("{0:?}: no such file in the scene's folder")]
     MissingFile(String),
+    /// The scene's coordinates are too large for `f32` rendering, or it has no extent.
+    #[error("{0}")]
+    Extent(String),
     /// A texture could not be decoded or is inconsistent.
     #[error("texture {index}: {problem}")]
     Texture {

@@ -428,3 +428,20 @@ fn a_scene_file_that_is_not_a_regular_file_is_refused() {
         .expect_err("/dev/zero read as a scene");
     assert!(e.to_string().contains("not a regular file"), "{e}");
 }
+
+#[test]
+fn scenes_too_large_or_without_extent_are_errors() {
+    for (text, why) in [
+        (
+            "v 1e30 0 0\nv 0 1e30 0\nv 0 0 1e30\nf 1 2 3\n",
+            "coordinates reach 1e30, beyond the ±1e15",
+        ),
+        (
+            "v 1 1 1\nv 1 1 1\nv 1 1 1\nf 1 2 3\n",
+            "every vertex is at [1, 1, 1]",
+        ),
+    ] {
+        let e = load_file("extent.obj", text.as_bytes()).expect_err(why);
+        assert!(e.contains(why), "{why}: {e}");
+    }
+}
