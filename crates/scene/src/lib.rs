@@ -1,5 +1,6 @@
 //! Scenes for the deferred-rendering toolkit: meshes, materials, cameras and lights, loaders
-//! for glTF 2.0, OBJ and PLY, built-in test scenes, and a triangle BVH for ray queries.
+//! for glTF 2.0, OBJ and PLY, built-in test scenes, a triangle BVH for ray queries, and the
+//! path-traced ground truth ([`reference`]).
 //!
 //! Conventions (DESIGN.md): right-handed, +Y up, a camera looks down its local −Z; radiance
 //! and colours are linear; meshes are stored in world space (node transforms are applied when
@@ -16,6 +17,7 @@ mod bvh;
 mod camera;
 mod light;
 mod load;
+pub mod reference;
 
 use std::path::{Path, PathBuf};
 
