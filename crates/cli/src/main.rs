@@ -26,6 +26,7 @@ use scene::{Light, Scene};
 /// or else by a default sun.
 #[derive(Parser, Debug)]
 #[command(version, about, long_about = None, args_conflicts_with_subcommands = true)]
+#[command(group(clap::ArgGroup::new("seeded").args(["vpls", "reference"]).multiple(true)))]
 struct Args {
     /// A command other than rendering.
     #[command(subcommand)]
@@ -109,8 +110,8 @@ struct Args {
     /// the blur, the discontinuity buffer, the final image.
     #[arg(long)]
     dump_stages: bool,
-    /// Seed of the VPL sampling.
-    #[arg(long, default_value_t = 1, requires = "vpls")]
+    /// Seed of the VPL sampling (with --vpls) or of the path tracer (with --reference).
+    #[arg(long, default_value_t = 1, requires = "seeded")]
     seed: u64,
     /// Distance under which a VPL's 1/d² is clamped (default: 2 % of the scene diagonal).
     #[arg(long, requires = "vpls")]
@@ -138,6 +139,15 @@ struct Args {
     /// With --ssaa --adaptive: how the remaining samples are shaded, loop or sorted.
     #[arg(long, default_value = "loop", requires = "adaptive")]
     ssaa_resolve: adaptive_ssaa::Resolve,
+    /// Render the path-traced ground truth instead, with SPP samples per pixel (CPU;
+    /// `scene::reference`): every light casts shadows, emissive meshes are area lights, light
+    /// interreflects up to --max-bounces times. No ambient term.
+    #[arg(long, value_name = "SPP", value_parser = parse_spp, conflicts_with_all = ["vpls", "ssaa"])]
+    reference: Option<u32>,
+    /// With --reference: bounces after the first surface (0 = direct light only; 1, the
+    /// default, is what one-bounce VPLs approximate).
+    #[arg(long, default_value_t = 1, requires = "reference", value_parser = clap::value_parser!(u32).range(0..=1000))]
+    max_bounces: u32,
     /// Replace every mesh by its Loop subdivision surface at this level (1–6; Holländer 2013
     /// ch. 2: computational entries, then basis-function tables, on the GPU unless --cpu),
     /// with Subdivision Shading normals. Meshes are welded by position first.
@@ -365,6 +375,63 @@ fn flat_shaded(mesh: &subdiv_bft::Refined) -> subdiv_bft::Refined {
     out
 }
 
+/// `--reference SPP [--max-bounces B]`: the path tracer, in batches of samples with a progress
+/// bar; writes render.png and render.exr.
+fn render_reference(
+    args: &Args,
+    scene: &Scene,
+    camera: scene::Camera,
+    lights: &[Light],
+    spp: u32,
+) -> Result<()> {
+    use scene::reference::{PathTracer, ReferenceConfig};
+    let (width, height) = args.size;
+    if u64::from(width) * u64::from(height) > MAX_CPU_PIXELS {
+        bail!("--size {width}x{height}: the CPU reference renders at most {MAX_CPU_PIXELS} pixels");
+    }
+    pipeline::validate_lights(lights)?;
+    let config = ReferenceConfig {
+        max_bounces: args.max_bounces,
+        seed: args.seed,
+        ..ReferenceConfig::default()
+    };
+    let start = std::time::Instant::now();
+    let mut pt = PathTracer::new(scene, camera, width, height, lights, config);
+    let bar = indicatif::ProgressBar::new(u64::from(spp)).with_message("path tracing");
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{spinner} {msg} [{bar:30}] {pos}/{len} spp, {eta} left",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    while pt.samples() < spp {
+        pt.add_samples((spp - pt.samples()).min(4));
+        bar.set_position(u64::from(pt.samples()));
+    }
+    bar.finish_and_clear();
+    let pixels: Vec<[f32; 4]> = pt.image().iter().map(|c| [c.x, c.y, c.z, 1.0]).collect();
+    let image = gbuffer::Image::from_vec(width, height, pixels)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let (png, exr) = (args.out.join("render.png"), args.out.join("render.exr"));
+    save_png(&image, &png)?;
+    save_exr(&image, &exr)?;
+    println!("device:  CPU path tracer (the ground truth, rayon)");
+    println!(
+        "scene:   {} triangles, {} punctual lights + emissive triangles as area lights, {width}x{height}",
+        scene.triangle_count(),
+        lights.len()
+    );
+    println!(
+        "reference: {spp} samples per pixel, {} bounces, seed {} in {:.1} s",
+        args.max_bounces,
+        args.seed,
+        start.elapsed().as_secs_f64()
+    );
+    println!("wrote:   {} and {}", png.display(), exr.display());
+    Ok(())
+}
+
 /// `--ssaa M [--adaptive]`: the supersampled G-buffer and (adaptive) supersampling of the
 /// direct lights on the GPU; writes render.png/.exr and, adaptive, ssaa-samples.png.
 fn render_ssaa(
@@ -501,6 +568,13 @@ fn parse_vpl_count(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(n) if (1..=max).contains(&n) => Ok(n),
         _ => Err(format!("expected a VPL count from 1 to {max}")),
+    }
+}
+
+fn parse_spp(s: &str) -> Result<u32, String> {
+    match s.trim().parse::<u32>() {
+        Ok(n) if (1..=65536).contains(&n) => Ok(n),
+        _ => Err("expected samples per pixel from 1 to 65536".into()),
     }
 }
 
@@ -721,6 +795,18 @@ fn run() -> Result<()> {
         direct_lights
     };
 
+    if let Some(spp) = args.reference {
+        // The true emitters, not the hemispherical stand-ins the rasteriser lights with.
+        let mut reference_lights = if emissive_photons {
+            scene.lights.clone()
+        } else {
+            lights.clone()
+        };
+        if emissive_photons {
+            reference_lights.extend(args.extra_lights.iter().copied());
+        }
+        return render_reference(&args, &scene, camera, &reference_lights, spp);
+    }
     if let Some(m) = args.ssaa {
         return render_ssaa(
             &args,
