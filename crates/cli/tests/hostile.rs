@@ -84,6 +84,10 @@ fn hostile_command_line_values_are_refused() {
         (&["--eye", "0,inf,0"], "three finite numbers"),
         (&["--ambient", "nan,0,0"], "three finite numbers"),
         (&["--blur", "4"], "--vpls"),
+        (&["--reference", "0"], "samples per pixel from 1 to 65536"),
+        (&["--max-bounces", "2"], "--reference"),
+        (&["--reference", "4", "--vpls", "64"], "cannot be used with"),
+        (&["--seed", "3", "--cpu"], "--reference"),
         (
             &["--vpls", "0", "--cpu"],
             "expected a VPL count from 1 to 16384",

@@ -44,6 +44,14 @@ fn a_run_writes_its_outputs_and_nothing_else() {
         "{}",
         String::from_utf8_lossy(&down.stderr)
     );
+    // The path-traced ground truth writes the same two files.
+    let reference = deferred(&out, &["--reference", "4", "--max-bounces", "2"]);
+    assert!(
+        reference.status.success(),
+        "{}",
+        String::from_utf8_lossy(&reference.stderr)
+    );
+    assert!(String::from_utf8_lossy(&reference.stdout).contains("4 samples per pixel, 2 bounces"));
 }
 
 #[test]
