@@ -55,17 +55,23 @@ struct ShadowParams {
     far: f32,
     lift: f32,
     bias: f32,
-    _pad: u32,
+    // Receivers move this many atlas pixels (at their distance) along their normal.
+    normal_offset: f32,
 };
 
 @group(0) @binding(9) var<storage, read> shadow_atlas: array<u32>;
 @group(0) @binding(10) var<uniform> shadow: ShadowParams;
 
-// Visibility of p from VPL k: 1 unless the atlas holds something nearer (depth bias added).
-fn vpl_visibility(k: u32, vpl: Vpl, p: vec3<f32>) -> f32 {
+// Visibility of p (normal n) from VPL k: 1 unless the atlas holds something nearer (depth
+// bias added, p moved off its surface by the normal offset). Twin of
+// `instant_radiosity::shadows::vpl_visibility`.
+fn vpl_visibility(k: u32, vpl: Vpl, receiver: vec3<f32>, n: vec3<f32>) -> f32 {
     if shadow.enabled == 0u {
         return 1.0;
     }
+    let to = receiver - vpl.position;
+    let cos_vpl = max(dot(vpl.normal, normalize(to)), 0.0);
+    let p = receiver + n * (length(to) * 2.0 * (1.0 + cos_vpl) / f32(shadow.tile) * shadow.normal_offset);
     // The paraboloid frame of `manylod::view::paraboloid_frame`.
     let nrm = vpl.normal;
     let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), abs(nrm.z) < 0.9);
@@ -113,7 +119,7 @@ fn shade(texel: vec2<u32>, pixel: vec2<u32>, subset: u32) -> Accumulated {
         let first = subset * params.per_subset;
         for (var k = first; k < first + params.per_subset; k++) {
             var l: vec3<f32>;
-            let intensity = vpl_intensity(vpls[k], p, &l) * vpl_visibility(k, vpls[k], p);
+            let intensity = vpl_intensity(vpls[k], p, &l) * vpl_visibility(k, vpls[k], p, nrm);
             let c = reflect_light(intensity, l, nrm, v, albedo, roughness, metallic);
             sum.diffuse += c.diffuse;
             sum.specular += c.specular;

@@ -10,6 +10,7 @@ use interleave::{SplitLayout, SplitVariant};
 use rayon::prelude::*;
 
 use crate::IndirectError;
+use crate::shadows::{ShadowParams, vpl_visibility};
 use crate::{IndirectConfig, IndirectStages, Interleaving, vpl::GpuVpl, vpl::VplSet};
 use gpu::PassTiming;
 use tiled_shading::lighting::{Surface, reflect_light};
@@ -41,6 +42,9 @@ pub struct ShadingInputs<'a> {
     pub scale: f32,
     /// Square of the clamp distance.
     pub clamp_squared: f32,
+    /// VPL visibility: a shadow-map atlas (read back from [`crate::shadows::VplShadowMaps`])
+    /// and its parameters; `None` shades without visibility (SNSM).
+    pub shadows: Option<(&'a [u32], ShadowParams)>,
 }
 
 /// SNSM on split G-buffer images (`shade_split`): texel (x, y) of the split layout shades the
@@ -97,8 +101,17 @@ fn shade(
             metallic,
         };
         let first = (subset * inputs.per_subset) as usize;
-        for vpl in &inputs.vpls[first..first + inputs.per_subset as usize] {
-            let (intensity, l) = vpl_intensity(vpl, p, inputs.clamp_squared);
+        for (k, vpl) in inputs
+            .vpls
+            .iter()
+            .enumerate()
+            .skip(first)
+            .take(inputs.per_subset as usize)
+        {
+            let (mut intensity, l) = vpl_intensity(vpl, p, inputs.clamp_squared);
+            if let Some((atlas, params)) = &inputs.shadows {
+                intensity *= vpl_visibility(atlas, params, k as u32, vpl, p, n);
+            }
             let (d, s) = reflect_light(intensity, l, &surface);
             diffuse += d;
             specular += s;
@@ -131,6 +144,18 @@ pub fn indirect(
     set: &VplSet,
     config: &IndirectConfig,
 ) -> Result<IndirectStages, IndirectError> {
+    indirect_with_shadows(gb, frame, set, config, None)
+}
+
+/// [`indirect`] with VPL visibility from `shadows` (an atlas read back from
+/// [`crate::shadows::VplShadowMaps::read_atlas`] and its [`crate::shadows::VplShadowMaps::params`]).
+pub fn indirect_with_shadows(
+    gb: &GBuffer,
+    frame: &Frame,
+    set: &VplSet,
+    config: &IndirectConfig,
+    shadows: Option<(&[u32], ShadowParams)>,
+) -> Result<IndirectStages, IndirectError> {
     config.validate(set)?;
     let (w, h) = (gb.width(), gb.height());
     let layout = SplitLayout::new(w, h, config.shading_pattern())?;
@@ -142,6 +167,7 @@ pub fn indirect(
         per_subset: config.per_invocation(set),
         scale: config.scale(set),
         clamp_squared: config.clamp_distance * config.clamp_distance,
+        shadows,
     };
     let mut timings = Vec::new();
     let mut clock = Instant::now();

@@ -14,7 +14,7 @@ use manylod::{
 use scene::Scene;
 
 use crate::IndirectError;
-use crate::vpl::VplSet;
+use crate::vpl::{GpuVpl, VplSet};
 
 /// Which VPL shadow maps the indirect light uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -38,6 +38,9 @@ pub struct ShadowConfig {
     pub ism_points: usize,
     /// Depth bias as a fraction of the scene diagonal.
     pub bias: f32,
+    /// Receivers move off their surface by this many atlas pixels at their distance before
+    /// the lookup (normal-offset shadows): without it, a surface's own splats shadow it.
+    pub normal_offset: f32,
     /// The most bytes of one node-view list (ManyLoD's active and cut lists, the ISM list);
     /// `None`: the device's storage-binding and buffer limits. Views are split into batches
     /// whose lists fit, all splatting into one atlas, so the atlas is the same either way.
@@ -46,7 +49,7 @@ pub struct ShadowConfig {
 
 impl Default for ShadowConfig {
     /// 2^20 surfels, ε = 2 px, 32×32 micro-views, 8 k ISM points, bias 1 % of the diagonal,
-    /// lists as large as the device allows.
+    /// a normal offset of one atlas pixel, lists as large as the device allows.
     fn default() -> Self {
         Self {
             points_log2: 20,
@@ -54,23 +57,79 @@ impl Default for ShadowConfig {
             tile: 32,
             ism_points: 8192,
             bias: 0.01,
+            normal_offset: 1.0,
             list_bytes: None,
         }
     }
 }
 
-/// Uniform block `ShadowParams` of `vpl_shading.wgsl`.
+/// Uniform block `ShadowParams` of `vpl_shading.wgsl`: how the shading finds VPL `k`'s tile.
 #[repr(C)]
-#[derive(Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct ShadowParams {
-    enabled: u32,
-    tile: u32,
-    columns: u32,
-    width: u32,
-    far: f32,
-    lift: f32,
-    bias: f32,
-    _pad: u32,
+    /// 0: no visibility (every VPL sees everything).
+    pub enabled: u32,
+    /// Tile side in pixels.
+    pub tile: u32,
+    /// Tiles per atlas row.
+    pub columns: u32,
+    /// Atlas row length in pixels.
+    pub width: u32,
+    /// Distance mapped to depth 1.
+    pub far: f32,
+    /// How far each view sits off its VPL's surface, along the normal.
+    pub lift: f32,
+    /// Depth bias (fraction of `far`).
+    pub bias: f32,
+    /// Normal offset of receivers, in atlas pixels at their distance.
+    pub normal_offset: f32,
+}
+
+/// Visibility of `p` from VPL `k` in `atlas` (`vpl_visibility` of `vpl_shading.wgsl`): 1 when
+/// no stored depth in its paraboloid tile is nearer than `p` (plus the bias), 0 behind the
+/// VPL's surface or occluded; always 1 when `params` are disabled.
+pub fn vpl_visibility(
+    atlas: &[u32],
+    params: &ShadowParams,
+    k: u32,
+    vpl: &GpuVpl,
+    p: Vec3,
+    n: Vec3,
+) -> f32 {
+    if params.enabled == 0 {
+        return 1.0;
+    }
+    // Normal offset: the receiver moves off its surface by `normal_offset` atlas pixels at its
+    // distance (a paraboloid pixel spans 2·(1 + cos θ)/tile radians), so the splats of its own
+    // surface in its pixel do not shadow it.
+    let to = p - Vec3::from(vpl.position);
+    let cos = Vec3::from(vpl.normal).dot(to.normalize_or_zero()).max(0.0);
+    let p = p + n * (to.length() * 2.0 * (1.0 + cos) / params.tile as f32 * params.normal_offset);
+    // The paraboloid frame of `manylod::view::paraboloid_frame`.
+    let nrm = Vec3::from(vpl.normal);
+    let helper = if nrm.z.abs() < 0.9 { Vec3::Z } else { Vec3::X };
+    let t = helper.cross(nrm).normalize();
+    let b = nrm.cross(t);
+    let d = p - (Vec3::from(vpl.position) + nrm * params.lift);
+    let dist = d.length();
+    let l = Vec3::new(t.dot(d), b.dot(d), nrm.dot(d)) / dist;
+    if l.z <= 0.0 {
+        return 0.0;
+    }
+    let uv = l.truncate() / (1.0 + l.z);
+    let px = ((uv * 0.5 + 0.5) * params.tile as f32)
+        .as_uvec2()
+        .min(glam::UVec2::splat(params.tile - 1));
+    let origin = glam::UVec2::new(k % params.columns, k / params.columns) * params.tile;
+    let word = atlas
+        .get(((origin.y + px.y) * params.width + origin.x + px.x) as usize)
+        .copied()
+        .unwrap_or(u32::MAX);
+    if dist / params.far <= splat::unpack_depth(word) + params.bias {
+        1.0
+    } else {
+        0.0
+    }
 }
 
 /// Node-views a ManyLoD cut list holds per micro-view pixel: cuts hold culled node-views too,
@@ -93,6 +152,7 @@ pub struct VplShadowMaps {
     atlas: wgpu::Buffer,
     layout: AtlasLayout,
     params: wgpu::Buffer,
+    shadow_params: ShadowParams,
     frames: u32,
 }
 
@@ -185,8 +245,9 @@ impl VplShadowMaps {
             far: layout.far,
             lift,
             bias: config.bias,
-            _pad: 0,
+            normal_offset: config.normal_offset,
         };
+        let shadow_params = params;
         let params = transfer::buffer_init(
             device,
             "vpl shadow params",
@@ -198,6 +259,7 @@ impl VplShadowMaps {
             atlas,
             layout,
             params,
+            shadow_params,
             frames: 0,
         })
     }
@@ -225,6 +287,11 @@ impl VplShadowMaps {
     /// The atlas and parameter buffers the VPL shading binds.
     pub fn bindings(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
         (&self.atlas, &self.params)
+    }
+
+    /// What the shading's lookup needs ([`vpl_visibility`]).
+    pub fn params(&self) -> ShadowParams {
+        self.shadow_params
     }
 
     /// The atlas layout (every VPL's tile).

@@ -1,0 +1,204 @@
+//! VPL visibility you can trust: the GPU shading with ManyLoD / ISM shadow maps against its
+//! CPU twin (the same atlas looked up by `shadows::vpl_visibility`), and the atlas's answers
+//! against ray casts from every VPL through the scene's BVH (the ground truth).
+
+use gbuffer::{Frame, Image, position};
+use instant_radiosity::{
+    IndirectConfig, Interleaving, cpu,
+    gpu::IndirectStage,
+    shadows::{ShadowConfig, VplShadowMaps, VplShadows, vpl_visibility},
+    vpl::{self, VplConfig, VplSet},
+};
+use scene::{Bvh, Scene};
+
+const SHADOWS: ShadowConfig = ShadowConfig {
+    points_log2: 16,
+    epsilon: 1.0,
+    tile: 32,
+    ism_points: 4096,
+    bias: 0.01,
+    normal_offset: 1.0,
+    list_bytes: None,
+};
+
+fn set(scene: &Scene, subsets: u32) -> VplSet {
+    let (lights, emissive, _) = vpl::primary_lights(scene);
+    vpl::generate(
+        scene,
+        &Bvh::build(scene),
+        &lights,
+        &VplConfig {
+            count: 64,
+            subsets,
+            seed: 5,
+            emissive,
+        },
+    )
+    .expect("vpls")
+}
+
+/// Shadow maps of `set` for `mode` after one frame, and their atlas.
+fn maps(
+    gpu: &gpu::Gpu,
+    scene: &Scene,
+    set: &VplSet,
+    mode: VplShadows,
+) -> (VplShadowMaps, Vec<u32>) {
+    let mut maps = VplShadowMaps::new(&gpu.device, scene, set, mode, &SHADOWS).expect("maps");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    maps.encode(&mut encoder, None);
+    gpu.queue.submit([encoder.finish()]);
+    let atlas = maps.read_atlas(&gpu.device, &gpu.queue).expect("atlas");
+    (maps, atlas)
+}
+
+fn irradiance_sum(img: &Image<[f32; 4]>) -> f64 {
+    img.pixels()
+        .iter()
+        .map(|p| f64::from(p[0] + p[1] + p[2]))
+        .sum()
+}
+
+#[test]
+fn gpu_shading_with_visibility_matches_its_cpu_twin() {
+    let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) else {
+        return;
+    };
+    let scene = scene::cornell_box();
+    let camera = scene.camera_or_framed();
+    let (w, h) = (64, 48);
+    let gb = gbuffer::cpu::rasterize(&scene, &camera, w, h)
+        .expect("G-buffer")
+        .gbuffer;
+    let frame = Frame::new(&camera, w, h);
+    let config = IndirectConfig {
+        interleaving: Interleaving::Fused,
+        blur: None,
+        ..IndirectConfig::new(scene.bounds())
+    };
+    let set = set(&scene, config.subsets());
+    for mode in [VplShadows::ManyLod, VplShadows::Ism] {
+        let (maps, atlas) = maps(gpu, &scene, &set, mode);
+        let uploaded =
+            gbuffer::gpu::UploadedGBuffer::new(&gpu.device, &gpu.queue, &gb, &frame).expect("gb");
+        let stage = IndirectStage::new(&gpu.device, &config, (w, h)).expect("stage");
+        let outputs = stage.output_textures(&gpu.device);
+        let bound = stage
+            .bind(
+                &gpu.device,
+                &uploaded.frame,
+                uploaded.textures(),
+                &set,
+                Some(&maps),
+                outputs.each_ref(),
+            )
+            .expect("bind");
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        stage.encode(&bound, &mut encoder, None);
+        gpu.queue.submit([encoder.finish()]);
+        let got = bound.read(&gpu.device, &gpu.queue).expect("read");
+        let want =
+            cpu::indirect_with_shadows(&gb, &frame, &set, &config, Some((&atlas, maps.params())))
+                .expect("cpu");
+        let unshadowed = cpu::indirect(&gb, &frame, &set, &config).expect("cpu");
+        // A VPL whose receiver lies exactly at the stored depth may flip between the two
+        // (positions from depth differ in the last bits): pixels, not all, must agree.
+        let (g, c) = (got.diffuse.pixels(), want.diffuse.pixels());
+        let close = g
+            .iter()
+            .zip(c)
+            .filter(|(a, b)| {
+                (0..3).all(|k| (a[k] - b[k]).abs() <= 2f32.powi(-8) * b[k].abs().max(1e-3))
+            })
+            .count();
+        assert!(
+            close as f64 >= 0.99 * g.len() as f64,
+            "{mode:?}: {close} of {} pixels agree",
+            g.len()
+        );
+        let (sg, sc) = (irradiance_sum(&got.diffuse), irradiance_sum(&want.diffuse));
+        assert!((sg - sc).abs() / sc < 1e-3, "{mode:?}: total {sg} vs {sc}");
+        // Visibility removes light: the shadowed image is darker than the unshadowed one.
+        assert!(
+            sc < 0.95 * irradiance_sum(&unshadowed.diffuse),
+            "{mode:?}: no shadows"
+        );
+    }
+}
+
+/// The atlas's visibility of every (G-buffer receiver, VPL) pair against a ray cast from the
+/// VPL, outside a band around contact: pairs whose only occluder lies within the band (3 % of
+/// the scene diagonal: the 1 % depth bias plus the surfel discs) before the receiver are
+/// ambiguous by construction and not counted.
+#[test]
+#[ignore = "not met yet (issue 21): 83 % of pairs agree with a one-pixel normal offset (44 % \
+            without), 95 % wanted; run with --ignored to measure"]
+fn atlas_visibility_agrees_with_ray_casts() {
+    let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) else {
+        return;
+    };
+    let scene = scene::cornell_box();
+    let camera = scene.camera_or_framed();
+    let (w, h) = (48, 36);
+    let gb = gbuffer::cpu::rasterize(&scene, &camera, w, h)
+        .expect("G-buffer")
+        .gbuffer;
+    let frame = Frame::new(&camera, w, h);
+    let set = set(&scene, 16);
+    let bvh = Bvh::build(&scene);
+    let band = 0.03 * scene.bounds().diagonal();
+    let mut rates: Vec<(VplShadows, f64, f64)> = Vec::new();
+    for (mode, need) in [(VplShadows::ManyLod, 0.95), (VplShadows::Ism, 0.95)] {
+        let (maps, atlas) = maps(gpu, &scene, &set, mode);
+        let params = maps.params();
+        let vpls = set.gpu();
+        let (mut agree, mut counted, mut occluded) = (0usize, 0usize, 0usize);
+        // [truth][atlas]: 0 occluded, 1 visible.
+        let mut confusion = [[0usize; 2]; 2];
+        for y in 0..h {
+            for x in 0..w {
+                let depth = gb.linear_depth.get(x, y);
+                if depth <= 0.0 {
+                    continue;
+                }
+                let p = position::from_view_ray(&frame, x, y, depth);
+                for (k, v) in vpls.iter().enumerate() {
+                    let o = glam::Vec3::from(v.position) + glam::Vec3::from(v.normal) * params.lift;
+                    let d = p - o;
+                    // Occluded before the band, clear up to the receiver, or ambiguous.
+                    let before_band = 1.0 - band / d.length();
+                    let truth = if before_band > 0.0 && bvh.any_hit(o, d, before_band) {
+                        false
+                    } else if !bvh.any_hit(o, d, 1.0 - 1e-4) {
+                        true
+                    } else {
+                        continue;
+                    };
+                    // Behind the VPL's hemisphere both say 0 by definition: not informative.
+                    if glam::Vec3::from(v.normal).dot(d) <= 0.0 {
+                        continue;
+                    }
+                    let n = gbuffer::normal::unpack_octahedral(gb.normal.get(x, y));
+                    let atlas_says = vpl_visibility(&atlas, &params, k as u32, v, p, n) > 0.5;
+                    counted += 1;
+                    occluded += usize::from(!truth);
+                    agree += usize::from(atlas_says == truth);
+                    confusion[usize::from(truth)][usize::from(atlas_says)] += 1;
+                }
+            }
+        }
+        let rate = agree as f64 / counted as f64;
+        println!(
+            "{mode:?}: {agree} of {counted} receiver–VPL pairs agree ({:.1} %), {occluded} occluded by ray casts; [truth][atlas] {confusion:?}",
+            100.0 * rate
+        );
+        assert!(
+            occluded > counted / 50,
+            "{mode:?}: the test scene needs occlusion"
+        );
+        rates.push((mode, rate, need));
+    }
+    for (mode, rate, need) in rates {
+        assert!(rate >= need, "{mode:?}: {:.1} % agree", 100.0 * rate);
+    }
+}
