@@ -197,21 +197,10 @@ fn rotation(seed: u64, s: u32) -> [f32; 5] {
     })
 }
 
-/// An orthonormal basis around unit `n` (Duff et al. 2017).
-fn basis(n: Vec3) -> (Vec3, Vec3) {
-    let sign = 1.0f32.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        Vec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
-}
-
 /// Direction around `n` with `cos θ` and azimuth `2π·u`.
 fn around(n: Vec3, cos_theta: f32, u: f32) -> Vec3 {
     let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-    let (t, b) = basis(n);
+    let (t, b) = scene::orthonormal_basis(n);
     let phi = 2.0 * PI * u;
     (t * phi.cos() + b * phi.sin()) * sin_theta + n * cos_theta
 }
@@ -329,7 +318,7 @@ impl Emitter {
             },
             Emitter::Light(Light::Directional { direction, .. }) => {
                 let r = 0.5 * diag;
-                let (t, b) = basis(direction);
+                let (t, b) = scene::orthonormal_basis(direction);
                 let disc =
                     (u[1].sqrt() * r) * (t * (2.0 * PI * u[2]).cos() + b * (2.0 * PI * u[2]).sin());
                 Photon {

@@ -12,19 +12,6 @@ use instant_radiosity::{
 use interleave::{Block, Blur, BlurVariant, Pattern, SplitVariant};
 use scene::{Bvh, Camera, Light, Material, Mesh, Scene};
 
-fn quad(name: &str, corners: [Vec3; 4], material: u32) -> Mesh {
-    let mut mesh = Mesh {
-        name: name.into(),
-        positions: corners.to_vec(),
-        normals: Vec::new(),
-        uvs: vec![glam::Vec2::ZERO; 4],
-        indices: vec![0, 1, 2, 0, 2, 3],
-        material,
-    };
-    mesh.compute_normals();
-    mesh
-}
-
 fn material(name: &str, albedo: f32, roughness: f32) -> Material {
     Material {
         name: name.into(),
@@ -40,7 +27,7 @@ fn material(name: &str, albedo: f32, roughness: f32) -> Material {
 /// them, and a camera under the ceiling looking straight down at the floor.
 fn plane_scene() -> (Scene, Camera) {
     let (a, b) = (-2.0, 2.0);
-    let floor = quad(
+    let floor = Mesh::quad(
         "floor",
         [
             Vec3::new(a, 0.0, a),
@@ -50,7 +37,7 @@ fn plane_scene() -> (Scene, Camera) {
         ],
         0,
     );
-    let ceiling = quad(
+    let ceiling = Mesh::quad(
         "ceiling",
         [
             Vec3::new(a, 1.0, a),
@@ -173,7 +160,7 @@ fn vpl_flux_sums_to_reflected_light_flux() {
         m.emissive = Vec3::ZERO;
     }
     let b = s.bounds();
-    s.meshes.push(quad(
+    s.meshes.push(Mesh::quad(
         "front",
         [
             Vec3::new(b.min.x - 0.1, b.min.y - 0.1, b.min.z),

@@ -32,6 +32,18 @@ pub use light::{Light, scatter_point_lights};
 
 use glam::{Vec2, Vec3, Vec4};
 
+/// Two unit vectors completing unit `n` to a right-handed orthonormal basis, continuous in `n`
+/// (Duff et al. 2017, "Building an orthonormal basis, revisited").
+pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
 /// The largest coordinate magnitude a scene may have: 10^15 (squared distances, which
 /// shading and framing compute, stay finite in `f32`).
 pub const MAX_COORDINATE: f32 = 1e15;
@@ -54,6 +66,21 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// The quad `a b c d` as two triangles with `material`: normals from its winding (counter-
+    /// clockwise seen from the side they point to), zero texture coordinates.
+    pub fn quad(name: &str, corners: [Vec3; 4], material: u32) -> Self {
+        let mut mesh = Self {
+            name: name.into(),
+            positions: corners.to_vec(),
+            normals: Vec::new(),
+            uvs: vec![Vec2::ZERO; 4],
+            indices: vec![0, 1, 2, 0, 2, 3],
+            material,
+        };
+        mesh.compute_normals();
+        mesh
+    }
+
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3

@@ -111,17 +111,6 @@ impl Rng {
     }
 }
 
-/// An orthonormal basis around `n` (Duff et al. 2017).
-fn basis(n: Vec3) -> (Vec3, Vec3) {
-    let sign = 1f32.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        Vec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
-}
-
 /// The surface at a hit, as the BRDF needs it.
 struct Surface {
     p: Vec3,
@@ -196,7 +185,7 @@ impl Surface {
 
     /// A direction drawn from the mixture of the cosine lobe and GGX half vectors.
     fn sample(&self, v: Vec3, rng: &mut Rng, specular: bool) -> Vec3 {
-        let (t, b) = basis(self.n);
+        let (t, b) = crate::orthonormal_basis(self.n);
         let (u1, u2) = (rng.f(), rng.f());
         if rng.f() >= self.specular_probability(specular) {
             let r = u1.sqrt();

@@ -6,20 +6,6 @@ use glam::{Vec3, Vec4};
 use scene::reference::{PathTracer, ReferenceConfig};
 use scene::{Camera, Light, Material, Mesh, Scene};
 
-/// A quad `a b c d` (one mesh, flat normals from its winding).
-fn quad(name: &str, corners: [Vec3; 4], material: u32) -> Mesh {
-    let mut m = Mesh {
-        name: name.into(),
-        positions: corners.to_vec(),
-        normals: Vec::new(),
-        uvs: vec![glam::Vec2::ZERO; 4],
-        indices: vec![0, 1, 2, 0, 2, 3],
-        material,
-    };
-    m.compute_normals();
-    m
-}
-
 fn material(albedo: f32, emissive: f32) -> Material {
     Material {
         name: "m".into(),
@@ -54,7 +40,7 @@ fn closed_box(material: u32) -> Vec<Mesh> {
             if (c[1] - c[0]).cross(c[2] - c[0]).dot(-c[0]) < 0.0 {
                 c.reverse();
             }
-            faces.push(quad("wall", c, material));
+            faces.push(Mesh::quad("wall", c, material));
         }
     }
     faces
@@ -107,7 +93,7 @@ fn the_furnace_converges_to_the_geometric_series() {
 /// looking straight down with a 2° field of view; an optional occluder at height 1.5.
 fn floor_scene(occluder: bool) -> (Scene, Camera, Light) {
     let e = 10.0;
-    let mut meshes = vec![quad(
+    let mut meshes = vec![Mesh::quad(
         "floor",
         [
             Vec3::new(-e, 0.0, -e),
@@ -119,7 +105,7 @@ fn floor_scene(occluder: bool) -> (Scene, Camera, Light) {
     )];
     if occluder {
         let o = 0.5;
-        meshes.push(quad(
+        meshes.push(Mesh::quad(
             "occluder",
             [
                 Vec3::new(-o, 1.5, -o),
