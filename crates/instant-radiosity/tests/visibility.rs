@@ -132,8 +132,8 @@ fn gpu_shading_with_visibility_matches_its_cpu_twin() {
 /// and the silhouette band (rays to points one atlas pixel around the receiver on its
 /// surface disagree). Measured 2026-12-01 on the Cornell box, 64 VPLs: 73 % of the pairs lie
 /// outside both; of those 91.3 % (ManyLoD) and 90.3 % (ISM) agree. Of all pairs outside the
-/// depth band alone, 83 % agree (44 % before the normal offset); with 64×64 maps 92 %, with
-/// 128×128 95 %.
+/// depth band alone, 83 % agree (44 % before the normal offset); with 64×64 maps 91.6 %, with
+/// 128×128 94.7 %.
 #[test]
 #[ignore = "not met yet (issue 21): outside the bands 91 % of pairs agree (ISM 90 %), 95 % \
             wanted; run with --ignored to measure"]
