@@ -230,3 +230,45 @@ pub fn psnr(a: &Image<[f32; 4]>, b: &Image<[f32; 4]>) -> f64 {
         -10.0 * mse.log10()
     }
 }
+
+/// How far an image is from a ground truth (issue 21's measure): over the pixels the truth
+/// lights, emitters (truth luminance above a threshold) excluded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Accuracy {
+    /// Relative mean absolute luminance error: `Σ|L − L*| / Σ L*`.
+    pub error: f64,
+    /// Mean luminance ratio − 1 (positive: too bright).
+    pub bias: f64,
+    /// Pixels compared.
+    pub pixels: usize,
+}
+
+/// [`Accuracy`] of `image` against `truth` (same size; linear RGB, Rec. 709 luminance),
+/// ignoring pixels where the truth is black or brighter than `emitter_luminance`; a
+/// non-finite pixel of `image` counts as black.
+pub fn accuracy(
+    truth: &Image<[f32; 4]>,
+    image: &Image<[f32; 4]>,
+    emitter_luminance: f32,
+) -> Accuracy {
+    let lum = |p: &[f32; 4]| f64::from(0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]);
+    let (mut diff, mut sum_truth, mut sum_image, mut pixels) = (0.0, 0.0, 0.0, 0);
+    for (t, x) in truth.pixels().iter().zip(image.pixels()) {
+        let (lt, lx) = (lum(t), lum(x));
+        if lt <= 0.0 || lt > f64::from(emitter_luminance) {
+            continue;
+        }
+        // A non-finite pixel is wholly wrong, never skipped.
+        let lx = if lx.is_finite() { lx } else { 0.0 };
+        diff += (lx - lt).abs();
+        sum_truth += lt;
+        sum_image += lx;
+        pixels += 1;
+    }
+    let total = sum_truth.max(f64::MIN_POSITIVE);
+    Accuracy {
+        error: diff / total,
+        bias: sum_image / total - 1.0,
+        pixels,
+    }
+}

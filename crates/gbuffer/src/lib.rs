@@ -33,7 +33,9 @@ mod image;
 pub mod normal;
 pub mod position;
 
-pub use image::{Image, ImageError, linear_to_srgb, psnr, srgb_to_linear, write_atomically};
+pub use image::{
+    Accuracy, Image, ImageError, accuracy, linear_to_srgb, psnr, srgb_to_linear, write_atomically,
+};
 
 use glam::{Mat4, Vec4};
 use scene::Camera;
