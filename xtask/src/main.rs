@@ -138,9 +138,18 @@ fn main() -> Result<()> {
             Ok(())
         }
         "bench" => {
+            // `cargo bench` runs each program in its package's folder: the reports go to the
+            // workspace's docs/bench unless --out says otherwise.
+            let out = workspace_root().join("docs/bench");
+            let out_args: Vec<String> = if rest.iter().any(|a| a == "--out") {
+                Vec::new()
+            } else {
+                vec!["--out".into(), out.display().to_string()]
+            };
             for (package, bench) in targets("bench", "-gpu")? {
                 run(cargo()
                     .args(["bench", "-p", &package, "--bench", &bench, "--"])
+                    .args(&out_args)
                     .args(&rest))?;
             }
             // The CPU criterion benches: every other bench target.
