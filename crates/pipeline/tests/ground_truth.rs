@@ -27,14 +27,9 @@ fn vpl_visibility_brings_the_frame_closer_to_the_path_tracer() {
         eprintln!("skipped: no ../shared/fixtures");
         return;
     };
-    let scene =
-        scene::Scene::load(fixtures.join("cornell/CornellBox-Original.obj")).expect("cornell");
-    let mut camera = scene::Camera::look_at(
-        glam::Vec3::new(0.0, 1.0, 3.9),
-        glam::Vec3::new(0.0, 1.0, 0.0),
-    );
-    camera.fov_y = 39.3f32.to_radians();
-    camera.fit_planes(scene.bounds());
+    let path = fixtures.join("cornell/CornellBox-Original.obj");
+    let scene = scene::Scene::load(&path).expect("cornell");
+    let camera = scene::preset_view(&path, &scene).expect("the Cornell view of views.json");
     let (w, h) = (64, 64);
     // Direct light plus one bounce, as the VPLs approximate.
     let mut pt = PathTracer::new(
