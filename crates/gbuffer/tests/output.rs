@@ -68,7 +68,7 @@ fn a_symbolic_link_at_the_output_is_replaced_not_followed() {
 
 #[test]
 fn accuracy_measures_relative_luminance_error_and_bias() {
-    let img = |v: &[[f32; 4]]| gbuffer::Image::from_vec(2, 2, v.to_vec()).expect("2×2");
+    let img = |v: &[[f32; 4]]| Image::from_vec(2, 2, v.to_vec()).expect("2×2");
     let g = [0.5, 0.5, 0.5, 1.0];
     let truth = img(&[g, g, [0.0; 4], [100.0, 100.0, 100.0, 1.0]]);
     let same = gbuffer::accuracy(&truth, &truth, 10.0);

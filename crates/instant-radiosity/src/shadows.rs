@@ -102,14 +102,11 @@ pub fn vpl_visibility(
     // Normal offset: the receiver moves off its surface by `normal_offset` atlas pixels at its
     // distance (a paraboloid pixel spans 2·(1 + cos θ)/tile radians), so the splats of its own
     // surface in its pixel do not shadow it.
-    let to = p - Vec3::from(vpl.position);
-    let cos = Vec3::from(vpl.normal).dot(to.normalize_or_zero()).max(0.0);
-    let p = p + n * (to.length() * 2.0 * (1.0 + cos) / params.tile as f32 * params.normal_offset);
-    // The paraboloid frame of `manylod::view::paraboloid_frame`.
     let nrm = Vec3::from(vpl.normal);
-    let helper = if nrm.z.abs() < 0.9 { Vec3::Z } else { Vec3::X };
-    let t = helper.cross(nrm).normalize();
-    let b = nrm.cross(t);
+    let to = p - Vec3::from(vpl.position);
+    let cos = nrm.dot(to.normalize_or_zero()).max(0.0);
+    let p = p + n * (to.length() * 2.0 * (1.0 + cos) / params.tile as f32 * params.normal_offset);
+    let (t, b) = manylod::view::paraboloid_frame(nrm);
     let d = p - (Vec3::from(vpl.position) + nrm * params.lift);
     let dist = d.length();
     let l = Vec3::new(t.dot(d), b.dot(d), nrm.dot(d)) / dist;
@@ -312,11 +309,10 @@ impl VplShadowMaps {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<u32>, IndirectError> {
-        let mut atlas = Vec::new();
         for batch in &self.batches {
-            atlas = batch.manylod.read_atlas(device, queue)?;
+            batch.manylod.check_lists(device, queue)?;
         }
-        Ok(atlas)
+        Ok(transfer::read_pod(device, queue, &self.atlas)?)
     }
 }
 

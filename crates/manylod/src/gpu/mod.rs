@@ -596,17 +596,26 @@ impl GpuManyLod {
         })
     }
 
-    /// Reads the atlas back (row-major packed depths). Errors when the last cut's lists or the
-    /// in-place stack overflowed (the atlas then misses splats).
+    /// Errors when the last cut's lists or the in-place stack overflowed (the atlas then misses
+    /// splats).
+    pub fn check_lists(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<(), ManyLodError> {
+        self.check_overflow(
+            &self.read_counters(device, queue)?,
+            "a cut list or the in-place stack",
+        )
+    }
+
+    /// Reads the atlas back (row-major packed depths), after [`Self::check_lists`].
     pub fn read_atlas(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<u32>, ManyLodError> {
-        self.check_overflow(
-            &self.read_counters(device, queue)?,
-            "a cut list or the in-place stack",
-        )?;
+        self.check_lists(device, queue)?;
         Ok(transfer::read_pod(device, queue, &self.atlas)?)
     }
 
