@@ -560,6 +560,26 @@ pub fn generate(
     Ok(set)
 }
 
+/// VPLs shot from `scene`'s [`primary_lights`] (and from its emissive triangles where
+/// those lights stand in for them): `count` rounded to whole subsets ([`per_subset`]), with
+/// the rotations of `seed`.
+pub fn generate_from_primary(
+    scene: &Scene,
+    bvh: &Bvh,
+    count: usize,
+    subsets: u32,
+    seed: u64,
+) -> Result<VplSet, VplError> {
+    let (lights, emissive, _) = primary_lights(scene);
+    let config = VplConfig {
+        count: per_subset(count, subsets) as usize * subsets.max(1) as usize,
+        subsets,
+        seed,
+        emissive,
+    };
+    generate(scene, bvh, &lights, &config)
+}
+
 /// The primary lights of a scene, whether photons must also leave its emissive triangles
 /// ([`VplConfig::emissive`]) and a description: the scene's punctual lights; else
 /// hemispherical stand-ins for its emissive meshes ([`area_lights`]); else a default sun.

@@ -4,7 +4,7 @@
 
 use instant_radiosity::{
     shadows::{ShadowConfig, VplShadowMaps, VplShadows},
-    vpl::{self, VplConfig},
+    vpl,
 };
 
 fn atlas(
@@ -15,19 +15,7 @@ fn atlas(
 ) -> (Vec<u32>, usize) {
     let scene = scene::cornell_box();
     let bvh = scene::Bvh::build(&scene);
-    let (lights, emissive, _) = vpl::primary_lights(&scene);
-    let set = vpl::generate(
-        &scene,
-        &bvh,
-        &lights,
-        &VplConfig {
-            count: 48,
-            subsets: 4,
-            seed: 3,
-            emissive,
-        },
-    )
-    .expect("vpls");
+    let set = vpl::generate_from_primary(&scene, &bvh, 48, 4, 3).expect("vpls");
     let config = ShadowConfig {
         points_log2: 14,
         tile: 16,

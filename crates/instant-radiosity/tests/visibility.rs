@@ -7,7 +7,7 @@ use instant_radiosity::{
     IndirectConfig, Interleaving, cpu,
     gpu::IndirectStage,
     shadows::{ShadowConfig, VplShadowMaps, VplShadows, vpl_visibility},
-    vpl::{self, VplConfig, VplSet},
+    vpl::{self, VplSet},
 };
 use scene::{Bvh, Scene};
 
@@ -22,19 +22,7 @@ const SHADOWS: ShadowConfig = ShadowConfig {
 };
 
 fn set(scene: &Scene, subsets: u32) -> VplSet {
-    let (lights, emissive, _) = vpl::primary_lights(scene);
-    vpl::generate(
-        scene,
-        &Bvh::build(scene),
-        &lights,
-        &VplConfig {
-            count: 64,
-            subsets,
-            seed: 5,
-            emissive,
-        },
-    )
-    .expect("vpls")
+    vpl::generate_from_primary(scene, &Bvh::build(scene), 64, subsets, 5).expect("vpls")
 }
 
 /// Shadow maps of `set` for `mode` after one frame, and their atlas.

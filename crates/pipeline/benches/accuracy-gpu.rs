@@ -105,19 +105,10 @@ fn main() -> Result<()> {
     let (w, h) = size;
     let direct_truth = truth(&scene, camera, size, 0, spp)?;
     let bounce_truth = truth(&scene, camera, size, 1, spp)?;
-    let (lights, emissive, _) = vpl::primary_lights(&scene);
+    let (lights, _, _) = vpl::primary_lights(&scene);
     let config = IndirectConfig::new(scene.bounds());
-    let set = vpl::generate(
-        &scene,
-        &scene::Bvh::build(&scene),
-        &lights,
-        &vpl::VplConfig {
-            count: vpl::per_subset(vpls, config.subsets()) as usize * config.subsets() as usize,
-            subsets: config.subsets(),
-            seed: 1,
-            emissive,
-        },
-    )?;
+    let bvh = scene::Bvh::build(&scene);
+    let set = vpl::generate_from_primary(&scene, &bvh, vpls, config.subsets(), 1)?;
     let mut rows = Vec::new();
     let mut measure = |name: &str, visibility: Option<Option<VplShadows>>| -> Result<()> {
         let mut r = GpuRenderer::new(d, q, &scene, &lights, w, h)?;

@@ -97,7 +97,7 @@ fn main() -> Result<()> {
     let frames = args.common.options.frames(10);
     let (path, scene) = args.common.scene.load()?;
     let camera = scene::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
-    let (lights, emissive, lit_by) = vpl::primary_lights(&scene);
+    let (_, _, lit_by) = vpl::primary_lights(&scene);
     println!(
         "scene: {} ({} triangles), VPLs from {lit_by}",
         path.display(),
@@ -121,18 +121,8 @@ fn main() -> Result<()> {
             for &(n, m) in patterns {
                 let pattern = Pattern::new(n, m)?;
                 let subsets = pattern.count();
-                let total = vpl::per_subset(count, subsets) as usize * subsets as usize;
-                let set = vpl::generate(
-                    &scene,
-                    &bvh,
-                    &lights,
-                    &vpl::VplConfig {
-                        count: total,
-                        subsets,
-                        seed: 1,
-                        emissive,
-                    },
-                )?;
+                let set = vpl::generate_from_primary(&scene, &bvh, count, subsets, 1)?;
+                let total = set.vpls.len();
                 let reference = config(bounds, pattern, Interleaving::Reference, false);
                 renderer.set_indirect(&gpu.device, &reference, &set)?;
                 let reference_image = renderer

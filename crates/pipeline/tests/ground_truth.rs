@@ -47,20 +47,10 @@ fn vpl_visibility_brings_the_frame_closer_to_the_path_tracer() {
         pt.image().iter().map(|c| [c.x, c.y, c.z, 1.0]).collect(),
     )
     .expect("truth");
-    let (lights, emissive, _) = vpl::primary_lights(&scene);
+    let (lights, _, _) = vpl::primary_lights(&scene);
     let config = IndirectConfig::new(scene.bounds());
-    let set = vpl::generate(
-        &scene,
-        &scene::Bvh::build(&scene),
-        &lights,
-        &vpl::VplConfig {
-            count: 1024,
-            subsets: config.subsets(),
-            seed: 1,
-            emissive,
-        },
-    )
-    .expect("vpls");
+    let bvh = scene::Bvh::build(&scene);
+    let set = vpl::generate_from_primary(&scene, &bvh, 1024, config.subsets(), 1).expect("vpls");
     let frame = |shadows: Option<VplShadows>| {
         let mut r = GpuRenderer::new(d, q, &scene, &lights, w, h).expect("renderer");
         match shadows {
