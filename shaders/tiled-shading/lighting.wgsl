@@ -25,9 +25,10 @@ struct Light {
     direction: vec3<f32>,
     cos_outer: f32,
     cos_inner: f32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // the light's shadow views (shadows.wgsl); count 0: unshadowed
+    shadow_first: u32,
+    shadow_count: u32,
+    _pad: u32,
 };
 
 // Distance window: 1 at the light, 0 at and beyond its radius.

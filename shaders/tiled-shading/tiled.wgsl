@@ -1,6 +1,7 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
 // #import tiled-shading/lighting.wgsl
+// #import tiled-shading/shadows.wgsl
 // Light accumulation: brute force (`brute_force`, every light at every pixel) and tile-based
 // deferred shading in one compute pass (`shade_tiles`, Ishmukhametov 2013 §2.4.1 after
 // Andersson 2009): one workgroup per screen tile loads its G-buffer pixels, reduces their depth bounds
@@ -268,7 +269,7 @@ fn brute_force(@builtin(global_invocation_id) id: vec3<u32>) {
         let v = normalize(frame.eye.xyz - s.position);
         let m = load_material(id.xy);
         for (var i = 0u; i < params.light_count; i++) {
-            let c = shade_light(lights[i], s.position, s.normal, v, m.albedo, m.roughness, m.metallic);
+            let c = shade_shadowed(lights[i], s.position, s.normal, v, m.albedo, m.roughness, m.metallic);
             diffuse += c.diffuse;
             specular += c.specular;
         }
@@ -415,7 +416,7 @@ fn shade_tiles(
                         let slice = slice_of(s.depth);
                         for (var j = 0u; j < n; j++) {
                             if ((list_mask[j] >> slice) & 1u) == 1u {
-                                let c = shade_light(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic);
+                                let c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic);
                                 diffuse[p] += c.diffuse;
                                 specular[p] += c.specular;
                             }

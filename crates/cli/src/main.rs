@@ -898,7 +898,7 @@ fn run() -> Result<()> {
                     let frame = gbuffer::Frame::new(&camera, width, height);
                     let lights = pipeline::validate_lights(&direct_lights)?;
                     let shaded =
-                        tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &shading)?;
+                        tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &shading, None)?;
                     write_heatmap(&args, &shading, width, height, &shaded.counts)?;
                 }
                 let gbuffer = args

@@ -43,6 +43,8 @@ pub enum Binding {
     TextureDepth,
     /// `texture_2d_array<f32>`, filterable.
     TextureArray,
+    /// `texture_depth_2d_array`.
+    TextureDepthArray,
     /// `texture_storage_2d<format, write>`.
     StorageTexture(wgpu::TextureFormat),
     /// `texture_storage_2d<format, read_write>`.
@@ -97,6 +99,7 @@ impl Binding {
                 S::Float { filterable: true },
                 wgpu::TextureViewDimension::D2Array,
             ),
+            Self::TextureDepthArray => texture(S::Depth, wgpu::TextureViewDimension::D2Array),
             Self::StorageTexture(f) => storage(f, wgpu::StorageTextureAccess::WriteOnly),
             Self::StorageTextureReadWrite(f) => storage(f, wgpu::StorageTextureAccess::ReadWrite),
             Self::Sampler => T::Sampler(wgpu::SamplerBindingType::Filtering),

@@ -261,7 +261,8 @@ pub fn read_pod<T: bytemuck::Pod>(
 }
 
 /// Copies mip 0 of a 2D texture (which needs `COPY_SRC`) back to the CPU with tightly packed
-/// rows. For depth-stencil formats, `aspect` picks the plane (e.g. `DepthOnly`).
+/// rows, every array layer after the one before. For depth-stencil formats, `aspect` picks
+/// the plane (e.g. `DepthOnly`).
 pub fn read_texture(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -280,18 +281,20 @@ pub fn read_texture(
             })?,
     );
     let (w, h) = (u64::from(texture.width()), u64::from(texture.height()));
+    // Rows of every layer: layers are images of `h` rows, one after the other.
+    let rows = h * u64::from(texture.depth_or_array_layers());
     let row = w * texel;
     let align = u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let padded_row = row.div_ceil(align) * align;
     check_buffer_size(
         device,
         "texture readback",
-        padded_row * h,
+        padded_row * rows,
         wgpu::BufferUsages::MAP_READ,
     )?;
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("texture readback"),
-        size: padded_row * h,
+        size: padded_row * rows,
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     });
@@ -315,8 +318,8 @@ pub fn read_texture(
     );
     queue.submit([encoder.finish()]);
     let padded = map_and_copy(device, &staging)?;
-    let mut out = Vec::with_capacity((row * h) as usize);
-    for y in 0..h as usize {
+    let mut out = Vec::with_capacity((row * rows) as usize);
+    for y in 0..rows as usize {
         let start = y * padded_row as usize;
         out.extend_from_slice(&padded[start..start + row as usize]);
     }

@@ -114,7 +114,7 @@ pub fn render_indirect(
     timed(&mut timings, "gbuffer", t);
     let frame = Frame::new(camera, width, height);
     let t = Instant::now();
-    let direct = tiled_shading::cpu::shade(&gb, &frame, camera, &gpu_lights, shading)?;
+    let direct = tiled_shading::cpu::shade(&gb, &frame, camera, &gpu_lights, shading, None)?;
     timed(
         &mut timings,
         &format!("light accumulation ({})", shading.method),

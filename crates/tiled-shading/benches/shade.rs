@@ -21,7 +21,7 @@ fn shade(c: &mut Criterion) {
             tile_size: 16,
         };
         c.bench_function(&format!("shade {method} test 3 320x180"), |b| {
-            b.iter(|| cpu::shade(&gb, &frame, &camera, &lights, &config).expect("shade"))
+            b.iter(|| cpu::shade(&gb, &frame, &camera, &lights, &config, None).expect("shade"))
         });
     }
 }

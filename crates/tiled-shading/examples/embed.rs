@@ -37,7 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     queue.submit([encoder.finish()]);
 
     let [diffuse, _] = tiled_shading::gpu::read_outputs(&device, &queue, outputs)?;
-    let cpu = tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &config)?;
+    let cpu = tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &config, None)?;
     let pairs = diffuse.pixels().iter().zip(cpu.diffuse.pixels());
     let worst = pairs.map(|(g, c)| (*g - *c).abs().max_element()).fold(0.0, f32::max);
     assert!(worst < 1e-3, "GPU differs from the CPU reference by {worst}");

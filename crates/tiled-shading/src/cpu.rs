@@ -8,7 +8,8 @@ use glam::{IVec3, Vec3, Vec4, Vec4Swizzles};
 use rayon::prelude::*;
 use scene::Camera;
 
-use crate::lighting::{Surface, shade_light};
+use crate::lighting::Surface;
+use crate::shadows::{ShadowMaps, shade_shadowed};
 use crate::{
     CLUSTER_SLICES, GpuLight, LIGHT_DIRECTIONAL, Method, ShadingConfig, ShadingError, Slicing,
 };
@@ -311,7 +312,7 @@ pub struct Shaded {
 }
 
 /// Light accumulation with `config.method`: per tile, the bounds, the frustum and the list
-/// of lights that pass [`cull_light`]; then per pixel the sums of [`shade_light`] over the
+/// of lights that pass [`cull_light`]; then per pixel the sums of [`shade_shadowed`] (with `shadows`, else unshadowed) over the
 /// list (over the entries whose mask holds the pixel's slice, when clustered).
 pub fn shade(
     gb: &GBuffer,
@@ -319,6 +320,7 @@ pub fn shade(
     camera: &Camera,
     lights: &[GpuLight],
     config: &ShadingConfig,
+    shadows: Option<&ShadowMaps>,
 ) -> Result<Shaded, ShadingError> {
     config.validate()?;
     let (w, h) = (gb.width(), gb.height());
@@ -357,7 +359,15 @@ pub fn shade(
                 .zip(&samples)
                 .map(|(&(x, y), s)| {
                     let (d, sp) = s.map_or((Vec3::ZERO, Vec3::ZERO), |s| {
-                        shade_pixel(gb, frame, x, y, &s, lights, &list, slicing.slice(s.depth))
+                        shade_pixel(
+                            gb,
+                            frame,
+                            (x, y),
+                            &s,
+                            (lights, shadows),
+                            &list,
+                            slicing.slice(s.depth),
+                        )
                     });
                     (x, y, d, sp)
                 })
@@ -385,14 +395,12 @@ pub fn shade(
 }
 
 /// The (diffuse, specular) sums at one pixel over the list entries that cover its slice.
-#[allow(clippy::too_many_arguments)]
 fn shade_pixel(
     gb: &GBuffer,
     frame: &Frame,
-    x: u32,
-    y: u32,
+    (x, y): (u32, u32),
     s: &Sample,
-    lights: &[GpuLight],
+    (lights, shadows): (&[GpuLight], Option<&ShadowMaps>),
     list: &[(u32, u32)],
     slice: u32,
 ) -> (Vec3, Vec3) {
@@ -411,7 +419,7 @@ fn shade_pixel(
     list.iter().filter(|(_, mask)| mask >> slice & 1 == 1).fold(
         (Vec3::ZERO, Vec3::ZERO),
         |(d, sp), &(i, _)| {
-            let (dl, sl) = shade_light(&lights[i as usize], &surface);
+            let (dl, sl) = shade_shadowed(&lights[i as usize], &surface, shadows);
             (d + dl, sp + sl)
         },
     )

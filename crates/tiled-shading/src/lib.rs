@@ -18,7 +18,7 @@
 //! let frame = gbuffer::Frame::new(&camera, 320, 240);
 //! let lights = scene::scatter_point_lights(scene.bounds(), 256, 7);
 //! let config = ShadingConfig { method: Method::TiledCones, ..Default::default() };
-//! let out = tiled_shading::cpu::shade(&gb, &frame, &camera, &tiled_shading::gpu_lights(&lights)?, &config)?;
+//! let out = tiled_shading::cpu::shade(&gb, &frame, &camera, &tiled_shading::gpu_lights(&lights)?, &config, None)?;
 //! println!("{} light evaluations", out.counts.iter().map(|&c| u64::from(c)).sum::<u64>());
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -26,6 +26,7 @@
 pub mod cpu;
 pub mod gpu;
 pub mod lighting;
+pub mod shadows;
 
 use std::fmt;
 use std::str::FromStr;
@@ -39,6 +40,9 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     imports: [gbuffer::SHADERS],
     files: [
         "lighting.wgsl",
+        "shadow_view.wgsl",
+        "shadows.wgsl",
+        "shadow_raster.wgsl",
         "tiled.wgsl",
     ],
 );
@@ -66,8 +70,12 @@ pub struct GpuLight {
     pub cos_outer: f32,
     /// Cosine of the inner cone angle (spot).
     pub cos_inner: f32,
+    /// First of the light's shadow views ([`shadows::ShadowPlan`]).
+    pub shadow_first: u32,
+    /// Number of its shadow views ([`shadows::NO_SHADOW`]: none, the light is unshadowed).
+    pub shadow_count: u32,
     /// Padding to 64 bytes.
-    pub _pad: [u32; 3],
+    pub _pad: u32,
 }
 
 /// `GpuLight::kind` of a directional light (no position, no radius: never culled).
@@ -127,7 +135,9 @@ impl From<&Light> for GpuLight {
             direction: direction.to_array(),
             cos_outer,
             cos_inner,
-            _pad: [0; 3],
+            shadow_first: 0,
+            shadow_count: shadows::NO_SHADOW,
+            _pad: 0,
         }
     }
 }
@@ -283,6 +293,9 @@ pub enum ShadingError {
         /// Lights the buffer holds.
         capacity: usize,
     },
+    /// Bad shadow-map settings, or more shadow views than the device holds.
+    #[error("shadow maps: {0}")]
+    InvalidShadows(String),
     /// A GPU resource could not be created or read.
     #[error(transparent)]
     Gpu(#[from] ::gpu::GpuError),

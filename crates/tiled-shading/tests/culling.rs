@@ -64,7 +64,7 @@ fn config(method: Method, tile_size: u32) -> ShadingConfig {
 }
 
 fn shade_cpu(c: &Case, config: &ShadingConfig) -> Shaded {
-    cpu::shade(&c.gb, &c.frame, &c.camera, &c.lights, config).expect("cpu shade")
+    cpu::shade(&c.gb, &c.frame, &c.camera, &c.lights, config, None).expect("cpu shade")
 }
 
 fn max_abs(img: &Image<Vec3>) -> f32 {
@@ -425,7 +425,8 @@ fn bad_input_is_an_error() {
             &c.frame,
             &c.camera,
             &c.lights,
-            &config(Method::Tiled, 12)
+            &config(Method::Tiled, 12),
+            None
         ),
         Err(ShadingError::TileSize(12))
     ));

@@ -27,6 +27,21 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
+    /// Draws every triangle, positions only (vertex buffer slot 0, no bind groups), with
+    /// `instances`: for depth-only passes whose pipeline sets its own groups (shadow maps
+    /// draw view `v` as instance `v`).
+    pub fn draw_geometry(&self, pass: &mut wgpu::RenderPass<'_>, instances: std::ops::Range<u32>) {
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
+        for d in &self.draws {
+            pass.draw_indexed(
+                d.first_index..d.first_index + d.index_count,
+                d.base_vertex,
+                instances.clone(),
+            );
+        }
+    }
+
     /// Uploads `scene` (textures as `Rgba8UnormSrgb`, mip 0) for `pass`.
     pub fn upload(
         device: &wgpu::Device,

@@ -19,8 +19,9 @@
 //! ```
 
 pub mod run;
+pub mod shadows;
 
-pub use run::run;
+pub use run::{run, run_shadowed};
 
 use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
 use ::gpu::shader::Specialisation;
@@ -62,11 +63,13 @@ pub struct LightShading {
     config: ShadingConfig,
     pipeline: wgpu::ComputePipeline,
     layout: Layout,
+    shadow_layout: Layout,
 }
 
 /// A [`LightShading`] bound to one G-buffer, its outputs and a light buffer.
 pub struct BoundShading {
     group: wgpu::BindGroup,
+    shadow_group: wgpu::BindGroup,
     params: ShadingParams,
     params_buffer: wgpu::Buffer,
     lights: wgpu::Buffer,
@@ -136,11 +139,13 @@ impl LightShading {
             bindings.extend([Binding::Storage, Binding::Storage]);
         }
         let layout = Layout::compute(device, "light shading", &bindings);
-        let pipeline = kernel::pipeline(device, &module, entry, &[&layout], &[]);
+        let shadow_layout = Layout::compute(device, "shadow lookup", &shadows::LOOKUP_BINDINGS);
+        let pipeline = kernel::pipeline(device, &module, entry, &[&layout, &shadow_layout], &[]);
         Ok(Self {
             config: *config,
             pipeline,
             layout,
+            shadow_layout,
         })
     }
 
@@ -242,6 +247,7 @@ impl LightShading {
         }
         Ok(BoundShading {
             group: self.layout.bind(device, &resources),
+            shadow_group: shadows::stand_in_group(device, &self.shadow_layout)?,
             params,
             params_buffer,
             lights,
@@ -252,6 +258,21 @@ impl LightShading {
             tiles: (tiles_x, tiles_y),
             brute_force,
         })
+    }
+
+    /// Makes `bound` read `maps` for the lights whose `shadow_count` is set (`None`: no
+    /// shadows; every light must then be unshadowed).
+    pub fn bind_shadows(
+        &self,
+        device: &wgpu::Device,
+        bound: &mut BoundShading,
+        maps: Option<&shadows::GpuShadowMaps>,
+    ) -> Result<(), ShadingError> {
+        bound.shadow_group = match maps {
+            Some(m) => m.lookup_group(device, &self.shadow_layout),
+            None => shadows::stand_in_group(device, &self.shadow_layout)?,
+        };
+        Ok(())
     }
 
     /// The pass name in timings: `light accumulation (METHOD)`.
@@ -274,7 +295,7 @@ impl LightShading {
         Passes::one(
             &self.pass_name(),
             &self.pipeline,
-            vec![bound.group.clone()],
+            vec![bound.group.clone(), bound.shadow_group.clone()],
             workgroups,
         )
         .encode(encoder, timer);

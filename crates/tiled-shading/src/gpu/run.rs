@@ -1,13 +1,59 @@
 //! Convenience for tests and examples: upload, run, read back.
 
 use ::gpu::Gpu;
-use gbuffer::gpu::UploadedGBuffer;
+use gbuffer::gpu::{GBufferPass, GpuScene, UploadedGBuffer};
 use gbuffer::{Frame, GBuffer};
-use scene::Camera;
+use scene::{Camera, Scene};
 
+use super::shadows::{GpuShadowMaps, ShadowMapPass};
 use super::{LightShading, read_outputs};
 use crate::cpu::Shaded;
+use crate::shadows::{self, ShadowMapConfig, ShadowMaps};
 use crate::{GpuLight, ShadingConfig, ShadingError};
+
+/// [`run`] with every light shadowed: plans the views ([`shadows::plan`]) of `lights` over
+/// `scene` (the scene `gb` shows), renders the maps on the GPU and returns them read back
+/// with the result and the lights (their shadow views assigned): the GPU twin of
+/// `cpu::shade(…, Some(&maps))`.
+#[allow(clippy::too_many_arguments)]
+pub fn run_shadowed(
+    gpu: &Gpu,
+    scene: &Scene,
+    gb: &GBuffer,
+    frame: &Frame,
+    camera: &Camera,
+    lights: &[GpuLight],
+    config: &ShadingConfig,
+    shadow_config: &ShadowMapConfig,
+) -> Result<(Shaded, ShadowMaps, Vec<GpuLight>), ShadingError> {
+    let (device, queue) = (&gpu.device, &gpu.queue);
+    let aspect = gb.width() as f32 / gb.height() as f32;
+    let layers = device.limits().max_texture_array_layers;
+    let everything = vec![true; lights.len()];
+    let plan = shadows::plan(
+        lights,
+        &everything,
+        camera,
+        aspect,
+        scene.bounds(),
+        shadow_config,
+        layers,
+    )?;
+    let mut lights = lights.to_vec();
+    plan.assign(&mut lights);
+    let pass = ShadowMapPass::new(device)?;
+    let mut maps = pass.bind(device, shadow_config, plan.views.len())?;
+    maps.set_views(queue, &plan.views)?;
+    let gbuffer_pass = GBufferPass::new(device)?;
+    let uploaded = GpuScene::upload(device, queue, scene, &gbuffer_pass).map_err(|e| {
+        ShadingError::InvalidShadows(format!("the scene could not be uploaded: {e}"))
+    })?;
+    let mut encoder = device.create_command_encoder(&Default::default());
+    pass.encode(&maps, &uploaded, &mut encoder, None);
+    queue.submit([encoder.finish()]);
+    let shaded = shade(gpu, gb, frame, camera, &lights, config, Some(&maps))?;
+    Ok((shaded, maps.read(device, queue, &plan.views)?, lights))
+}
 
 /// Uploads `gb`, `frame` and `lights`, runs one light accumulation with `config` and reads
 /// everything back: the GPU twin of [`crate::cpu::shade`] (lists sorted by light index; for
@@ -20,6 +66,18 @@ pub fn run(
     camera: &Camera,
     lights: &[GpuLight],
     config: &ShadingConfig,
+) -> Result<Shaded, ShadingError> {
+    shade(gpu, gb, frame, camera, lights, config, None)
+}
+
+fn shade(
+    gpu: &Gpu,
+    gb: &GBuffer,
+    frame: &Frame,
+    camera: &Camera,
+    lights: &[GpuLight],
+    config: &ShadingConfig,
+    maps: Option<&GpuShadowMaps>,
 ) -> Result<Shaded, ShadingError> {
     let (device, queue) = (&gpu.device, &gpu.queue);
     let uploaded = UploadedGBuffer::new(&gpu.device, &gpu.queue, gb, frame)?;
@@ -36,6 +94,7 @@ pub fn run(
     )?;
     bound.set_lights(queue, lights)?;
     bound.set_camera(queue, camera);
+    stage.bind_shadows(device, &mut bound, maps)?;
     let mut encoder = device.create_command_encoder(&Default::default());
     stage.encode(&bound, &mut encoder, None);
     queue.submit([encoder.finish()]);

@@ -1,0 +1,332 @@
+//! Shadow maps of the direct lights on the GPU ([`crate::shadows`] says what they hold):
+//! `shadow_raster.wgsl` draws the scene's depth into one layer of a `Depth32Float` array per
+//! view, one depth-only render pass per layer; the light accumulation reads them through its
+//! bind group 1 (`shadows.wgsl`, [`super::BoundShading::set_shadows`]).
+//!
+//! ```no_run
+//! use tiled_shading::{gpu::shadows::{GpuShadowMaps, ShadowMapPass}, shadows::{self, ShadowMapConfig}};
+//! # let gpu = gpu::Gpu::from_env()?;
+//! # let (device, queue) = (&gpu.device, &gpu.queue);
+//! let scene = scene::cornell_box();
+//! let camera = scene.camera_or_framed();
+//! let mut lights = tiled_shading::gpu_lights(&scene.lights)?;
+//! let config = ShadowMapConfig::default();
+//! let plan = shadows::plan(&lights, &vec![true; lights.len()], &camera, 1.0, scene.bounds(), &config, 256)?;
+//! plan.assign(&mut lights);
+//! let pass = ShadowMapPass::new(device)?;
+//! let mut maps = pass.bind(device, &config, plan.views.len())?;
+//! maps.set_views(queue, &plan.views)?;
+//! let pass_scene = gbuffer::gpu::GBufferPass::new(device)?;
+//! let gpu_scene = gbuffer::gpu::GpuScene::upload(device, queue, &scene, &pass_scene)?;
+//! let mut encoder = device.create_command_encoder(&Default::default());
+//! pass.encode(&maps, &gpu_scene, &mut encoder, None);
+//! queue.submit([encoder.finish()]);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use ::gpu::kernel::{Binding, Layout};
+use ::gpu::{PassTimer, transfer};
+use gbuffer::gpu::GpuScene;
+
+use crate::ShadingError;
+use crate::shadows::{ShadowMapConfig, ShadowMaps, ShadowView};
+
+/// Format of the shadow-map array.
+pub const SHADOW_FORMAT: wgpu::TextureFormat = gbuffer::DEPTH_FORMAT;
+
+/// Group 1 of the light accumulation (`shadows.wgsl`): views, bias and offset, the depth
+/// array, its sampler.
+pub const LOOKUP_BINDINGS: [Binding; 4] = [
+    Binding::StorageRead,
+    Binding::Uniform,
+    Binding::TextureDepthArray,
+    Binding::SamplerNonFiltering,
+];
+
+/// The depth-only pipeline that renders shadow views (`shadow_raster.wgsl`).
+pub struct ShadowMapPass {
+    pipeline: wgpu::RenderPipeline,
+    layout: Layout,
+}
+
+/// Shadow maps: a depth array of `capacity` layers, the views buffer and the raster pass's
+/// bind group ([`ShadowMapPass::bind`]); the light accumulation binds them with
+/// [`super::LightShading::bind_shadows`].
+pub struct GpuShadowMaps {
+    texture: wgpu::Texture,
+    layers: Vec<wgpu::TextureView>,
+    views: wgpu::Buffer,
+    params: wgpu::Buffer,
+    sampler: wgpu::Sampler,
+    group: wgpu::BindGroup,
+    count: usize,
+    config: ShadowMapConfig,
+}
+
+impl ShadowMapPass {
+    /// Builds the pipeline.
+    pub fn new(device: &wgpu::Device) -> Result<Self, ShadingError> {
+        let module = crate::SHADERS.module(device, "shadow_raster.wgsl")?;
+        let layout = Layout::new(
+            device,
+            "shadow views",
+            wgpu::ShaderStages::VERTEX,
+            &[Binding::StorageRead],
+        );
+        let pipeline_layout = ::gpu::kernel::pipeline_layout(device, "shadow maps", &[&layout]);
+        let pipeline = gbuffer::gpu::scene_pipeline(
+            device,
+            "shadow maps",
+            &pipeline_layout,
+            &module,
+            ("shadow_depth", None),
+            (wgpu::CompareFunction::Less, true),
+        );
+        Ok(Self { pipeline, layout })
+    }
+
+    /// Records one depth pass per view of `maps` (cleared to the far plane, then `scene`
+    /// drawn as that view's instance), timed as one pass `shadow maps` by `timer`.
+    pub fn encode(
+        &self,
+        maps: &GpuShadowMaps,
+        scene: &GpuScene,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&PassTimer>,
+    ) {
+        let timestamps = timer.and_then(|t| t.render_pass("shadow maps"));
+        let last = maps.count.saturating_sub(1);
+        for (v, layer) in maps.layers[..maps.count].iter().enumerate() {
+            // The timer's begin stamp goes to the first pass, its end stamp to the last.
+            let stamps = timestamps
+                .as_ref()
+                .map(|t| wgpu::RenderPassTimestampWrites {
+                    query_set: t.query_set,
+                    beginning_of_pass_write_index: t
+                        .beginning_of_pass_write_index
+                        .filter(|_| v == 0),
+                    end_of_pass_write_index: t.end_of_pass_write_index.filter(|_| v == last),
+                });
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow map"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: layer,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: stamps,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &maps.group, &[]);
+            scene.draw_geometry(&mut pass, v as u32..v as u32 + 1);
+        }
+    }
+}
+
+impl ShadowMapPass {
+    /// Allocates shadow maps of `config.resolution` for `capacity` views (at least one
+    /// layer; no views until [`GpuShadowMaps::set_views`]). More layers than the device's
+    /// `max_texture_array_layers` is an error naming both.
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        config: &ShadowMapConfig,
+        capacity: usize,
+    ) -> Result<GpuShadowMaps, ShadingError> {
+        config.validate()?;
+        let layers = capacity.max(1) as u32;
+        let limits = device.limits();
+        if layers > limits.max_texture_array_layers {
+            return Err(ShadingError::InvalidShadows(format!(
+                "{layers} shadow views exceed the device's {} texture array layers",
+                limits.max_texture_array_layers
+            )));
+        }
+        if config.resolution > limits.max_texture_dimension_2d {
+            return Err(ShadingError::InvalidShadows(format!(
+                "resolution {} exceeds the device's {} texels",
+                config.resolution, limits.max_texture_dimension_2d
+            )));
+        }
+        let texture = transfer::allocation(device, "the shadow maps", || {
+            Ok::<_, ShadingError>(device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("shadow maps"),
+                size: wgpu::Extent3d {
+                    width: config.resolution,
+                    height: config.resolution,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: SHADOW_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            }))
+        })?;
+        let layer_views = (0..layers)
+            .map(|layer| {
+                texture.create_view(&wgpu::TextureViewDescriptor {
+                    label: Some("shadow map layer"),
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: layer,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            })
+            .collect();
+        let views = transfer::buffer(
+            device,
+            "shadow views",
+            u64::from(layers) * size_of::<ShadowView>() as u64,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        )?;
+        let params = transfer::buffer_init(
+            device,
+            "shadow params",
+            bytemuck::cast_slice(&[config.bias, config.normal_offset, 0.0, 0.0]),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("shadow maps"),
+            ..Default::default()
+        });
+        let group = self.layout.bind(device, &[views.as_entire_binding()]);
+        Ok(GpuShadowMaps {
+            texture,
+            layers: layer_views,
+            views,
+            params,
+            sampler,
+            group,
+            count: 0,
+            config: *config,
+        })
+    }
+}
+
+impl GpuShadowMaps {
+    /// Sets the views the next [`ShadowMapPass::encode`] renders (at most the capacity).
+    pub fn set_views(
+        &mut self,
+        queue: &wgpu::Queue,
+        views: &[ShadowView],
+    ) -> Result<(), ShadingError> {
+        if views.len() > self.layers.len() {
+            return Err(ShadingError::InvalidShadows(format!(
+                "{} views do not fit the {} layers made",
+                views.len(),
+                self.layers.len()
+            )));
+        }
+        queue.write_buffer(&self.views, 0, bytemuck::cast_slice(views));
+        self.count = views.len();
+        Ok(())
+    }
+
+    /// Views set.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// The configuration they were made with.
+    pub fn config(&self) -> &ShadowMapConfig {
+        &self.config
+    }
+
+    /// The depth array (`SHADOW_FORMAT`, a layer per view).
+    pub fn texture(&self) -> &wgpu::Texture {
+        &self.texture
+    }
+
+    /// The lookup group ([`LOOKUP_BINDINGS`]) of these maps on `layout`.
+    pub(super) fn lookup_group(&self, device: &wgpu::Device, layout: &Layout) -> wgpu::BindGroup {
+        lookup_group(
+            device,
+            layout,
+            &self.views,
+            &self.params,
+            &self.texture,
+            &self.sampler,
+        )
+    }
+
+    /// Reads the rendered maps back for the CPU lookup ([`crate::shadows::visibility`]),
+    /// with `views` (those given to [`GpuShadowMaps::set_views`]).
+    pub fn read(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        views: &[ShadowView],
+    ) -> Result<ShadowMaps, ShadingError> {
+        let bytes =
+            transfer::read_texture(device, queue, &self.texture, wgpu::TextureAspect::DepthOnly)?;
+        let depth: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
+        Ok(ShadowMaps {
+            views: views.to_vec(),
+            depth,
+            resolution: self.config.resolution,
+            bias: self.config.bias,
+            normal_offset: self.config.normal_offset,
+        })
+    }
+}
+
+/// A lookup group ([`LOOKUP_BINDINGS`]) over `views`, `params` and every layer of `texture`.
+fn lookup_group(
+    device: &wgpu::Device,
+    layout: &Layout,
+    views: &wgpu::Buffer,
+    params: &wgpu::Buffer,
+    texture: &wgpu::Texture,
+    sampler: &wgpu::Sampler,
+) -> wgpu::BindGroup {
+    let array = texture.create_view(&wgpu::TextureViewDescriptor {
+        label: Some("shadow maps"),
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    layout.bind(
+        device,
+        &[
+            views.as_entire_binding(),
+            params.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&array),
+            wgpu::BindingResource::Sampler(sampler),
+        ],
+    )
+}
+
+/// The lookup group of a frame without shadows: one 1×1 layer no light reads.
+pub(super) fn stand_in_group(
+    device: &wgpu::Device,
+    layout: &Layout,
+) -> Result<wgpu::BindGroup, ShadingError> {
+    let texture = transfer::texture_2d(
+        device,
+        "no shadow maps",
+        1,
+        1,
+        SHADOW_FORMAT,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    );
+    let views = transfer::buffer(
+        device,
+        "no shadow views",
+        size_of::<ShadowView>() as u64,
+        wgpu::BufferUsages::STORAGE,
+    )?;
+    let params = transfer::buffer(device, "no shadow params", 16, wgpu::BufferUsages::UNIFORM)?;
+    let sampler = device.create_sampler(&Default::default());
+    Ok(lookup_group(
+        device, layout, &views, &params, &texture, &sampler,
+    ))
+}

@@ -1,0 +1,544 @@
+//! Shadow maps for the direct lights: per light a set of depth views — a spot light one
+//! perspective view (five cube faces around its axis when its cone is wider than
+//! [`MAX_SPOT_VIEW_ANGLE`]), a point light the six faces of a cube, a hemispherical light five
+//! (its back face sees nothing it lights), a directional light cascades fitted to the camera's
+//! view frustum — rendered into one depth array (a layer per view, [`crate::gpu::shadows`]) and
+//! looked up per pixel with a 3×3 tent filter (percentage-closer filtering, Reeves et al. 1987).
+//!
+//! The lookup ([`visibility`], `shadows.wgsl`'s `shadow_visibility`) is the same on the CPU
+//! and the GPU: the receiver moves along its normal by `normal_offset` texels (its footprint
+//! in the map, which removes the self-shadowing of surfaces at grazing angles), is projected
+//! into the view that holds it (the cube face of the largest axis; the first cascade that
+//! contains it), and each of the 4×4 texels under the tent compares the receiver's linear
+//! depth with the stored one plus `bias` texels. The penumbra this filter draws is 3 texels
+//! wide (the tent's support) whatever the light's size: a hard-shadow filter, not a soft
+//! shadow; area lights get their penumbrae from several shadowed points
+//! (`instant_radiosity::vpl::area_lights`, see `docs/shadows.md`).
+
+use glam::{Mat4, Vec3, Vec4Swizzles};
+use scene::{Aabb, Camera, orthonormal_basis};
+
+use crate::{GpuLight, LIGHT_DIRECTIONAL, ShadingError};
+
+/// `GpuLight::shadow_count` of a light without shadows.
+pub const NO_SHADOW: u32 = 0;
+
+/// Widest spot cone (half angle, radians) drawn into one perspective view; wider spots use
+/// five cube faces around their axis.
+pub const MAX_SPOT_VIEW_ANGLE: f32 = 1.0;
+
+/// `GpuLight::kind` of a spot light (`lighting.wgsl`).
+const LIGHT_SPOT: u32 = 1;
+/// `GpuLight::kind` of a hemispherical light.
+const LIGHT_HEMISPHERICAL: u32 = 3;
+
+/// Texels kept around every cube face and cascade for the filter's footprint, so a receiver
+/// inside a face never reads across its edge.
+const MARGIN_TEXELS: f32 = 2.0;
+
+/// One depth view of a light, as `shadows.wgsl` reads it (96 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ShadowView {
+    /// World → clip (depth 0 at `near`, 1 at `far`).
+    pub view_proj: [[f32; 4]; 4],
+    /// The view's axis (unit; the direction it looks along): picks the cube face.
+    pub axis: [f32; 3],
+    /// Near plane distance along the axis.
+    pub near: f32,
+    /// Far plane distance along the axis.
+    pub far: f32,
+    /// 1 for an orthographic view (directional cascades), 0 for a perspective one.
+    pub orthographic: u32,
+    /// World size of a texel: at unit distance along the axis (perspective), or everywhere
+    /// (orthographic).
+    pub texel: f32,
+    /// Padding to 96 bytes.
+    pub _pad: u32,
+}
+
+/// How shadow maps are made and read.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowMapConfig {
+    /// Width and height of every view (texels).
+    pub resolution: u32,
+    /// Cascades per directional light (1–8).
+    pub cascades: u32,
+    /// How far from the camera the cascades reach (`None`: to the far end of the scene's
+    /// bounds as the camera sees them, at most the camera's far plane).
+    pub max_distance: Option<f32>,
+    /// Depth tolerance, in texels of the receiver's footprint.
+    pub bias: f32,
+    /// Receiver offset along its normal, in texels of its footprint.
+    pub normal_offset: f32,
+}
+
+impl Default for ShadowMapConfig {
+    fn default() -> Self {
+        Self {
+            resolution: 1024,
+            cascades: 4,
+            max_distance: None,
+            bias: 1.0,
+            normal_offset: 1.5,
+        }
+    }
+}
+
+impl ShadowMapConfig {
+    /// Rejects a zero or too large resolution, a cascade count outside 1–8 and negative or
+    /// non-finite offsets.
+    pub fn validate(&self) -> Result<(), ShadingError> {
+        let bad = |problem: String| Err(ShadingError::InvalidShadows(problem));
+        if !(8..=16384).contains(&self.resolution) {
+            return bad(format!(
+                "resolution {} must be 8 to 16384 texels",
+                self.resolution
+            ));
+        }
+        if !(1..=8).contains(&self.cascades) {
+            return bad(format!("{} cascades: 1 to 8 are allowed", self.cascades));
+        }
+        for (what, v) in [("bias", self.bias), ("normal offset", self.normal_offset)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(format!("{what} {v} must be finite and non-negative"));
+            }
+        }
+        if let Some(d) = self.max_distance
+            && !(d.is_finite() && d > 0.0)
+        {
+            return bad(format!("cascade distance {d} must be positive and finite"));
+        }
+        Ok(())
+    }
+}
+
+/// Every view of the shadowed lights and which views each light owns.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ShadowPlan {
+    /// The views, one depth-array layer each.
+    pub views: Vec<ShadowView>,
+    /// Per light: (first view, view count); count [`NO_SHADOW`] for an unshadowed light.
+    pub lights: Vec<(u32, u32)>,
+}
+
+impl ShadowPlan {
+    /// Writes each light's views into its `shadow_first` / `shadow_count`.
+    pub fn assign(&self, lights: &mut [GpuLight]) {
+        for (light, &(first, count)) in lights.iter_mut().zip(&self.lights) {
+            light.shadow_first = first;
+            light.shadow_count = count;
+        }
+    }
+}
+
+/// The tangent of half the field of view that keeps [`MARGIN_TEXELS`] around a view whose
+/// useful half-angle has tangent `t`.
+fn with_margin(t: f32, resolution: u32) -> f32 {
+    t / (1.0 - 2.0 * MARGIN_TEXELS / resolution as f32)
+}
+
+/// A square perspective view from `position` along `axis` whose half-angle has tangent
+/// `tan_half`, from `near` to `far`.
+fn perspective(
+    position: Vec3,
+    axis: Vec3,
+    tan_half: f32,
+    (near, far): (f32, f32),
+    resolution: u32,
+) -> ShadowView {
+    let up = if axis.cross(Vec3::Y).length_squared() < 1e-6 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    };
+    let view = glam::camera::rh::view::look_to_mat4(position, axis, up);
+    let proj = glam::camera::rh::proj::directx::perspective(2.0 * tan_half.atan(), 1.0, near, far);
+    ShadowView {
+        view_proj: (proj * view).to_cols_array_2d(),
+        axis: axis.to_array(),
+        near,
+        far,
+        orthographic: 0,
+        texel: 2.0 * tan_half / resolution as f32,
+        _pad: 0,
+    }
+}
+
+/// The cube faces around `axis`: +axis, then the four sides, then −axis.
+fn cube_axes(axis: Vec3) -> [Vec3; 6] {
+    let (t, b) = orthonormal_basis(axis);
+    [axis, t, -t, b, -b, -axis]
+}
+
+/// Cascade `k` of `count` ends at this fraction of the cascaded range: the practical split
+/// scheme (Zhang et al. 2006), half logarithmic, half uniform.
+fn cascade_end(k: u32, count: u32, near: f32, far: f32) -> f32 {
+    let f = (k + 1) as f32 / count as f32;
+    let log = near * (far / near).powf(f);
+    let uniform = near + (far - near) * f;
+    0.5 * (log + uniform)
+}
+
+/// The cascades of a directional light travelling along `direction`: each an orthographic
+/// box around the bounding sphere of one slice of the camera's view frustum (so it does not
+/// change size as the camera turns), its texels snapped to world positions (so shadows do not
+/// shimmer as the camera moves), deep enough to hold every caster in `bounds`.
+fn cascades(
+    direction: Vec3,
+    camera: &Camera,
+    aspect: f32,
+    bounds: Aabb,
+    config: &ShadowMapConfig,
+) -> Vec<ShadowView> {
+    let forward = (camera.target - camera.eye).normalize_or(Vec3::NEG_Z);
+    // The camera's distance to the farthest corner of the scene bounds bounds what it sees.
+    let corners = (0..8).map(|i| {
+        Vec3::new(
+            if i & 1 == 0 {
+                bounds.min.x
+            } else {
+                bounds.max.x
+            },
+            if i & 2 == 0 {
+                bounds.min.y
+            } else {
+                bounds.max.y
+            },
+            if i & 4 == 0 {
+                bounds.min.z
+            } else {
+                bounds.max.z
+            },
+        )
+    });
+    let scene_far = corners
+        .clone()
+        .map(|c| (c - camera.eye).dot(forward))
+        .fold(camera.near, f32::max);
+    let far = config
+        .max_distance
+        .unwrap_or(scene_far)
+        .min(camera.far)
+        .max(camera.near * 2.0);
+    let near = camera.near;
+    let tan_y = (camera.fov_y * 0.5).tan();
+    let tan_x = tan_y * aspect;
+    let view = glam::camera::rh::view::look_to_mat4(
+        Vec3::ZERO,
+        direction,
+        if direction.cross(Vec3::Y).length_squared() < 1e-6 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        },
+    );
+    // Depth range of the casters along the light, from the light-space corners of the bounds.
+    let light_z: Vec<f32> = corners.map(|c| view.transform_point3(c).z).collect();
+    let (z_min, z_max) = light_z
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(lo, hi), &z| (lo.min(z), hi.max(z)));
+    let mut start = near;
+    (0..config.cascades)
+        .map(|k| {
+            let end = cascade_end(k, config.cascades, near, far);
+            // Bounding sphere of the frustum slice [start, end]: centre on the axis.
+            let d2 = 1.0 + tan_x * tan_x + tan_y * tan_y;
+            let centre_t = (0.5 * (start + end) * d2).min(end);
+            let radius = ((end - centre_t).powi(2) + (end * end) * (d2 - 1.0))
+                .max((centre_t - start).powi(2) + (start * start) * (d2 - 1.0))
+                .sqrt();
+            start = end;
+            let radius = with_margin(radius, config.resolution);
+            let centre = view.transform_point3(camera.eye + forward * centre_t);
+            // Snap the centre to whole texels of this cascade.
+            let texel = 2.0 * radius / config.resolution as f32;
+            let snap = |v: f32| (v / texel).round() * texel;
+            let (cx, cy) = (snap(centre.x), snap(centre.y));
+            // Light space looks down −z: near = −z_max, far = −z_min, with a little slack.
+            let slack = 1e-3 * (z_max - z_min).max(1e-3);
+            let (zn, zf) = (-z_max - slack, -z_min + slack);
+            let proj = glam::camera::rh::proj::directx::orthographic(
+                cx - radius,
+                cx + radius,
+                cy - radius,
+                cy + radius,
+                zn,
+                zf,
+            );
+            ShadowView {
+                view_proj: (proj * view).to_cols_array_2d(),
+                axis: direction.to_array(),
+                near: zn,
+                far: zf,
+                orthographic: 1,
+                texel,
+                _pad: 0,
+            }
+        })
+        .collect()
+}
+
+/// The views of `light` (a validated [`GpuLight`]).
+pub fn light_views(
+    light: &GpuLight,
+    camera: &Camera,
+    aspect: f32,
+    bounds: Aabb,
+    config: &ShadowMapConfig,
+) -> Vec<ShadowView> {
+    let direction = Vec3::from(light.direction);
+    if light.kind == LIGHT_DIRECTIONAL {
+        return cascades(direction, camera, aspect, bounds, config);
+    }
+    let position = Vec3::from(light.position);
+    let depth = (light.radius * 1e-3, light.radius);
+    let res = config.resolution;
+    if light.kind == LIGHT_SPOT && light.cos_outer.acos() <= MAX_SPOT_VIEW_ANGLE {
+        let tan = with_margin(light.cos_outer.acos().tan(), res);
+        return vec![perspective(position, direction, tan, depth, res)];
+    }
+    let faces = if light.kind == LIGHT_HEMISPHERICAL || light.kind == LIGHT_SPOT {
+        5
+    } else {
+        6
+    };
+    let tan = with_margin(1.0, res);
+    cube_axes(direction)[..faces]
+        .iter()
+        .map(|&axis| perspective(position, axis, tan, depth, res))
+        .collect()
+}
+
+/// The plan for `lights`, shadowing those `shadowed` says (one flag per light), for
+/// `camera` (directional cascades follow it) over a scene of `bounds`. More views than
+/// `max_views` (the device's texture array layers) is an error naming the count.
+pub fn plan(
+    lights: &[GpuLight],
+    shadowed: &[bool],
+    camera: &Camera,
+    aspect: f32,
+    bounds: Aabb,
+    config: &ShadowMapConfig,
+    max_views: u32,
+) -> Result<ShadowPlan, ShadingError> {
+    config.validate()?;
+    let mut plan = ShadowPlan::default();
+    for (light, &on) in lights
+        .iter()
+        .zip(shadowed.iter().chain(std::iter::repeat(&false)))
+    {
+        if !on {
+            plan.lights.push((0, NO_SHADOW));
+            continue;
+        }
+        let views = light_views(light, camera, aspect, bounds, config);
+        plan.lights
+            .push((plan.views.len() as u32, views.len() as u32));
+        plan.views.extend(views);
+    }
+    if plan.views.len() > max_views as usize {
+        return Err(ShadingError::InvalidShadows(format!(
+            "{} shadow views for {} shadowed lights exceed the device's {max_views} texture \
+             array layers: shadow fewer lights",
+            plan.views.len(),
+            shadowed.iter().filter(|&&s| s).count()
+        )));
+    }
+    Ok(plan)
+}
+
+/// The index (among the light's `count` views) of the view that holds `p`: the cube face of
+/// the largest axis for a cube, the first cascade whose box contains `p` (else the last).
+fn pick_view(light: &GpuLight, views: &[ShadowView], p: Vec3, resolution: u32) -> usize {
+    if light.kind == LIGHT_DIRECTIONAL {
+        let inner = 1.0 - 2.0 * MARGIN_TEXELS / resolution as f32;
+        return views
+            .iter()
+            .position(|v| {
+                let c = Mat4::from_cols_array_2d(&v.view_proj) * p.extend(1.0);
+                c.x.abs() <= inner && c.y.abs() <= inner
+            })
+            .unwrap_or(views.len() - 1);
+    }
+    let w = p - Vec3::from(light.position);
+    let mut best = 0;
+    for (i, v) in views.iter().enumerate() {
+        if w.dot(Vec3::from(v.axis)) > w.dot(Vec3::from(views[best].axis)) {
+            best = i;
+        }
+    }
+    best
+}
+
+/// Shadow maps as the CPU reads them: the views and their depth (one `resolution²` layer
+/// per view, row-major, as rendered on the GPU and read back, or as [`ray_cast_maps`] makes
+/// them).
+#[derive(Clone, Debug)]
+pub struct ShadowMaps {
+    /// The views.
+    pub views: Vec<ShadowView>,
+    /// Depth (0 at near, 1 at far) of every layer.
+    pub depth: Vec<f32>,
+    /// Texels across a layer.
+    pub resolution: u32,
+    /// The configuration's bias and normal offset (texels).
+    pub bias: f32,
+    /// See [`ShadowMapConfig::normal_offset`].
+    pub normal_offset: f32,
+}
+
+/// Linear distance along the view's axis of a stored depth `d`.
+fn linear_depth(v: &ShadowView, d: f32) -> f32 {
+    if v.orthographic == 1 {
+        v.near + d * (v.far - v.near)
+    } else {
+        v.near * v.far / (v.far - d * (v.far - v.near))
+    }
+}
+
+/// Fraction of `light` that reaches `p` (normal `n`) through `maps`: 1 for an unshadowed
+/// light, else the tent-filtered comparison described in the module docs (`shadow_visibility`
+/// in `shadows.wgsl`).
+pub fn visibility(maps: &ShadowMaps, light: &GpuLight, p: Vec3, n: Vec3) -> f32 {
+    if light.shadow_count == NO_SHADOW {
+        return 1.0;
+    }
+    let first = light.shadow_first as usize;
+    let views = &maps.views[first..first + light.shadow_count as usize];
+    let k = pick_view(light, views, p, maps.resolution);
+    visibility_in(maps, &views[k], first + k, light, p, n)
+}
+
+/// [`visibility`] in one chosen view (`layer` of the maps).
+fn visibility_in(
+    maps: &ShadowMaps,
+    v: &ShadowView,
+    layer: usize,
+    light: &GpuLight,
+    p: Vec3,
+    n: Vec3,
+) -> f32 {
+    let axis = Vec3::from(v.axis);
+    let m = Mat4::from_cols_array_2d(&v.view_proj);
+    let distance = if v.orthographic == 1 {
+        1.0
+    } else {
+        (p - Vec3::from(light.position)).dot(axis).max(0.0)
+    };
+    let footprint = v.texel * distance;
+    let q = p + n * (maps.normal_offset * footprint);
+    let clip = m * q.extend(1.0);
+    if clip.w <= 0.0 {
+        return 1.0;
+    }
+    let ndc = clip.xyz() / clip.w;
+    let receiver = linear_depth(v, ndc.z.clamp(0.0, 1.0)) - maps.bias * footprint;
+    let res = maps.resolution as i32;
+    let x = (ndc.x * 0.5 + 0.5) * res as f32 - 0.5;
+    let y = (0.5 - ndc.y * 0.5) * res as f32 - 0.5;
+    let (bx, by) = (x.floor(), y.floor());
+    let (fx, fy) = (x - bx, y - by);
+    let weights = |f: f32| [1.0 - f, 1.0, 1.0, f];
+    let (wx, wy) = (weights(fx), weights(fy));
+    let base = layer * (res * res) as usize;
+    let mut lit = 0.0;
+    for (j, wyj) in wy.iter().enumerate() {
+        let ty = (by as i32 - 1 + j as i32).clamp(0, res - 1);
+        for (i, wxi) in wx.iter().enumerate() {
+            let tx = (bx as i32 - 1 + i as i32).clamp(0, res - 1);
+            let d = maps.depth[base + (ty * res + tx) as usize];
+            if receiver <= linear_depth(v, d) {
+                lit += wxi * wyj;
+            }
+        }
+    }
+    (lit / 9.0).min(1.0)
+}
+
+/// One light's (diffuse, specular) contribution at `s` with its shadow (`shade_shadowed` in
+/// `shadows.wgsl`): [`crate::lighting::shade_light`] scaled by [`visibility`], looked up only
+/// where the light reaches the surface's front.
+pub fn shade_shadowed(
+    light: &GpuLight,
+    s: &crate::lighting::Surface,
+    maps: Option<&ShadowMaps>,
+) -> (Vec3, Vec3) {
+    let (l, att) = crate::lighting::light_incidence(light, s.p);
+    if att <= 0.0 || s.n.dot(l) <= 0.0 {
+        return (Vec3::ZERO, Vec3::ZERO);
+    }
+    let visible = maps.map_or(1.0, |m| visibility(m, light, s.p, s.n));
+    if visible <= 0.0 {
+        return (Vec3::ZERO, Vec3::ZERO);
+    }
+    crate::lighting::reflect_light(Vec3::from(light.color) * (att * visible), l, s)
+}
+
+/// Shadow maps made by casting a ray through the centre of every texel of every view
+/// against `bvh`: the depth a perfect rasteriser would store there (1 where the ray meets
+/// nothing before the far plane). The ground truth of [`crate::gpu::shadows`]'s maps.
+pub fn ray_cast_maps(
+    bvh: &scene::Bvh,
+    views: &[ShadowView],
+    config: &ShadowMapConfig,
+) -> ShadowMaps {
+    use rayon::prelude::*;
+    let res = config.resolution;
+    let depth = views
+        .par_iter()
+        .flat_map_iter(|v| {
+            let inverse = Mat4::from_cols_array_2d(&v.view_proj).inverse();
+            (0..res * res).map(move |t| {
+                let (x, y) = ((t % res) as f32 + 0.5, (t / res) as f32 + 0.5);
+                let ndc_x = 2.0 * x / res as f32 - 1.0;
+                let ndc_y = 1.0 - 2.0 * y / res as f32;
+                let a = inverse.project_point3(Vec3::new(ndc_x, ndc_y, 0.0));
+                let b = inverse.project_point3(Vec3::new(ndc_x, ndc_y, 1.0));
+                let dir = b - a;
+                let length = dir.length();
+                match bvh.closest_hit(a, dir / length, length) {
+                    // `a` lies on the near plane: the hit's distance along the axis is
+                    // `near` plus its advance along the axis; back to stored depth by the
+                    // inverse of `linear_depth`.
+                    Some(hit) => {
+                        let z = v.near + (dir / length * hit.t).dot(Vec3::from(v.axis));
+                        if v.orthographic == 1 {
+                            (z - v.near) / (v.far - v.near)
+                        } else {
+                            v.far / (v.far - v.near) * (1.0 - v.near / z)
+                        }
+                    }
+                    None => 1.0,
+                }
+            })
+        })
+        .collect();
+    ShadowMaps {
+        views: views.to_vec(),
+        depth,
+        resolution: res,
+        bias: config.bias,
+        normal_offset: config.normal_offset,
+    }
+}
+
+/// Whether `p` (normal `n`) sees `light`, by a ray through `bvh` (the ground truth the
+/// shadow maps approximate): from `p` lifted by `lift` along `n` to the light's position, or
+/// against a directional light's direction up to `reach`.
+pub fn ray_visibility(
+    bvh: &scene::Bvh,
+    light: &GpuLight,
+    p: Vec3,
+    n: Vec3,
+    lift: f32,
+    reach: f32,
+) -> bool {
+    let origin = p + n * lift;
+    if light.kind == LIGHT_DIRECTIONAL {
+        return !bvh.any_hit(origin, -Vec3::from(light.direction), reach);
+    }
+    let to = Vec3::from(light.position) - origin;
+    let d = to.length();
+    d <= 0.0 || !bvh.any_hit(origin, to / d, d * (1.0 - 1e-4))
+}

@@ -1,0 +1,268 @@
+//! Shadow maps of the direct lights: the GPU's maps against depth ray-cast through every
+//! texel (ground truth of the rasterisation), the CPU lookup on the read-back maps against the
+//! GPU's shading (CPU twin), the lookup against shadow rays through the BVH (ground truth of
+//! visibility), and the invariants: shadows only remove light, and they do remove it.
+
+use gbuffer::{Frame, GBuffer};
+use glam::Vec3;
+use scene::{Bvh, Camera, Light, Scene};
+use tiled_shading::{
+    GpuLight, Method, ShadingConfig,
+    cpu::{self, Shaded},
+    gpu,
+    lighting::light_incidence,
+    shadows::{self, ShadowMapConfig, ShadowMaps},
+};
+
+/// Spheres on a plane under a point light (six cube faces), a narrow spot (one view), a
+/// wide spot (five faces), a hemispherical light (five faces) and a directional light (four
+/// cascades): every kind of view.
+fn spheres() -> (Scene, Camera, Vec<GpuLight>) {
+    let scene = scene::spheres_on_plane(5);
+    let lights: Vec<Light> = [
+        "point:0.5,2.5,0.5,8,1,0.9,0.8,2",
+        "spot:-1,3,1,0.2,-1,-0.1,8,15,30,0.8,0.9,1,3",
+        "spot:1.5,2,-1,0,-1,0,8,60,80,1,1,1,1",
+        "hemi:0,3,0,0,-1,0,8,1,1,1,2",
+        "dir:0.4,-1,0.3,1,1,1,0.7",
+    ]
+    .iter()
+    .map(|s| s.parse().expect("light"))
+    .collect();
+    let camera = scene.camera_or_framed();
+    (
+        scene,
+        camera,
+        tiled_shading::gpu_lights(&lights).expect("lights"),
+    )
+}
+
+fn gbuffer(scene: &Scene, camera: &Camera, w: u32, h: u32) -> (GBuffer, Frame) {
+    let gb = gbuffer::cpu::rasterize(scene, camera, w, h)
+        .expect("rasterize")
+        .gbuffer;
+    (gb, Frame::new(camera, w, h))
+}
+
+const CONFIG: ShadowMapConfig = ShadowMapConfig {
+    resolution: 256,
+    cascades: 4,
+    max_distance: None,
+    bias: 1.0,
+    normal_offset: 1.5,
+};
+
+fn shaded_gpu(
+    g: &::gpu::Gpu,
+    scene: &Scene,
+    (gb, frame): &(GBuffer, Frame),
+    camera: &Camera,
+    lights: &[GpuLight],
+) -> (Shaded, ShadowMaps, Vec<GpuLight>) {
+    let config = ShadingConfig {
+        method: Method::Tiled,
+        tile_size: 16,
+    };
+    gpu::run_shadowed(g, scene, gb, frame, camera, lights, &config, &CONFIG).expect("shadowed")
+}
+
+#[test]
+fn rasterised_maps_match_depth_ray_cast_through_every_texel() {
+    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+        return;
+    };
+    let (scene, camera, lights) = spheres();
+    let view = gbuffer(&scene, &camera, 64, 48);
+    let (_, maps, _) = shaded_gpu(g, &scene, &view, &camera, &lights);
+    let truth = shadows::ray_cast_maps(&Bvh::build(&scene), &maps.views, &CONFIG);
+    let texels = (CONFIG.resolution * CONFIG.resolution) as usize;
+    for (k, v) in maps.views.iter().enumerate() {
+        let layer = k * texels..(k + 1) * texels;
+        let linear = |d: f32| {
+            if v.orthographic == 1 {
+                v.near + d * (v.far - v.near)
+            } else {
+                v.near * v.far / (v.far - d * (v.far - v.near))
+            }
+        };
+        let agree = maps.depth[layer.clone()]
+            .iter()
+            .zip(&truth.depth[layer])
+            .filter(|&(&a, &b)| (linear(a) - linear(b)).abs() <= 1e-3 * (v.far - v.near) + 1e-4)
+            .count();
+        // Texels whose centre ray grazes a silhouette may hit another surface than the
+        // rasteriser's coverage rule gives them: a few per cent at 256².
+        let fraction = agree as f64 / texels as f64;
+        assert!(
+            fraction >= 0.97,
+            "view {k}: {:.2} % of texels agree",
+            100.0 * fraction
+        );
+    }
+}
+
+#[test]
+fn cpu_lookup_on_the_read_back_maps_equals_the_gpu_shading() {
+    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+        return;
+    };
+    let (scene, camera, lights) = spheres();
+    let view = gbuffer(&scene, &camera, 96, 64);
+    let (gpu_shaded, maps, lights) = shaded_gpu(g, &scene, &view, &camera, &lights);
+    let config = ShadingConfig {
+        method: Method::Tiled,
+        tile_size: 16,
+    };
+    let cpu_shaded =
+        cpu::shade(&view.0, &view.1, &camera, &lights, &config, Some(&maps)).expect("cpu");
+    let peak = cpu_shaded
+        .diffuse
+        .pixels()
+        .iter()
+        .fold(0.0f32, |m, p| m.max(p.max_element()));
+    // A comparison within rounding of its threshold may fall the other way on the GPU (one
+    // of the 16 taps: 1/9 of a light's weight at most), so count pixels, not a maximum.
+    let differ = cpu_shaded
+        .diffuse
+        .pixels()
+        .iter()
+        .zip(gpu_shaded.diffuse.pixels())
+        .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3 * peak)
+        .count();
+    let pixels = cpu_shaded.diffuse.pixels().len();
+    assert!(
+        differ * 200 <= pixels,
+        "{differ} of {pixels} pixels differ by more than 0.1 % of the peak"
+    );
+}
+
+#[test]
+fn lookup_agrees_with_shadow_rays_outside_the_penumbra() {
+    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+        return;
+    };
+    let (scene, camera, lights) = spheres();
+    let view = gbuffer(&scene, &camera, 96, 64);
+    let (_, maps, lights) = shaded_gpu(g, &scene, &view, &camera, &lights);
+    let bvh = Bvh::build(&scene);
+    let reach = 2.0 * scene.bounds().diagonal();
+    let lift = 1e-3 * scene.bounds().diagonal();
+    let (gb, frame) = &view;
+    let (mut pairs, mut agree, mut band, mut occluded) = (0usize, 0usize, 0usize, 0usize);
+
+    for y in 0..gb.height() {
+        for x in 0..gb.width() {
+            let Some(s) = cpu::sample(gb, frame, x, y) else {
+                continue;
+            };
+            for light in &lights {
+                let (l, att) = light_incidence(light, s.position);
+                if att <= 0.0 || s.normal.dot(l) <= 0.05 {
+                    continue;
+                }
+                let v = shadows::visibility(&maps, light, s.position, s.normal);
+                // The tent's weights sum to 1 within rounding.
+                let (lit, dark) = (v >= 1.0 - 1e-5, v <= 1e-5);
+                if !lit && !dark {
+                    band += 1;
+                    continue;
+                }
+                let ray = shadows::ray_visibility(&bvh, light, s.position, s.normal, lift, reach);
+                pairs += 1;
+                occluded += usize::from(!ray);
+                agree += usize::from(lit == ray);
+            }
+        }
+    }
+    let fraction = agree as f64 / pairs as f64;
+    println!(
+        "{pairs} receiver-light pairs outside the band ({band} inside): {:.2} % agree, {occluded} occluded by ray",
+        100.0 * fraction
+    );
+    assert!(
+        occluded * 20 > pairs,
+        "the scene casts shadows ({occluded} of {pairs})"
+    );
+    assert!(fraction >= 0.99, "{:.2} % agree", 100.0 * fraction);
+    // The band (partly lit by the 3-texel tent) stays a minority of the pairs.
+    assert!(
+        band * 4 < pairs,
+        "{band} pairs in the band, {pairs} outside"
+    );
+}
+
+#[test]
+fn shadows_only_remove_light_and_do_remove_it() {
+    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+        return;
+    };
+    let (scene, camera, lights) = spheres();
+    let view = gbuffer(&scene, &camera, 96, 64);
+    let config = ShadingConfig {
+        method: Method::Tiled,
+        tile_size: 16,
+    };
+    let lit = gpu::run(g, &view.0, &view.1, &camera, &lights, &config).expect("unshadowed");
+    let (shadowed, _, _) = shaded_gpu(g, &scene, &view, &camera, &lights);
+    let total = |s: &Shaded| {
+        s.diffuse
+            .pixels()
+            .iter()
+            .map(|p| p.element_sum())
+            .sum::<f32>()
+    };
+    for (a, b) in lit.diffuse.pixels().iter().zip(shadowed.diffuse.pixels()) {
+        assert!(
+            b.cmple(*a * (1.0 + 1e-4) + Vec3::splat(1e-6)).all(),
+            "{b} > {a}"
+        );
+    }
+    let (t_lit, t_shadowed) = (total(&lit), total(&shadowed));
+    assert!(
+        t_shadowed < 0.95 * t_lit,
+        "shadows removed only {:.1} % of the light",
+        100.0 * (1.0 - t_shadowed / t_lit)
+    );
+}
+
+#[test]
+fn bad_shadow_settings_are_errors() {
+    let (_, camera, lights) = spheres();
+    let bounds = scene::spheres_on_plane(5).bounds();
+    let all = vec![true; lights.len()];
+    for (config, why) in [
+        (
+            ShadowMapConfig {
+                resolution: 0,
+                ..CONFIG
+            },
+            "resolution 0",
+        ),
+        (
+            ShadowMapConfig {
+                cascades: 9,
+                ..CONFIG
+            },
+            "9 cascades",
+        ),
+        (
+            ShadowMapConfig {
+                bias: f32::NAN,
+                ..CONFIG
+            },
+            "bias NaN",
+        ),
+    ] {
+        let e = shadows::plan(&lights, &all, &camera, 1.0, bounds, &config, 256)
+            .expect_err(why)
+            .to_string();
+        assert!(e.contains(why), "{e}");
+    }
+    let e = shadows::plan(&lights, &all, &camera, 1.0, bounds, &CONFIG, 8)
+        .expect_err("too many views")
+        .to_string();
+    assert!(
+        e.contains("21 shadow views") && e.contains("8 texture array layers"),
+        "{e}"
+    );
+}

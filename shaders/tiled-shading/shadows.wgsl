@@ -1,0 +1,116 @@
+// Shadow-map lookup of the direct lights; mirrors `tiled_shading::shadows` (same names).
+// A light owns `shadow_count` views from `shadow_first` (one depth-array layer each). The
+// receiver moves `normal_offset` texels of its footprint along its normal, is projected into
+// the view that holds it (the cube face of the largest axis; the first cascade containing it),
+// and a 3×3 tent (bilinear taps at −1, 0, +1 texel: weights (1−f, 1, 1, f)/3 per axis over
+// 4×4 texels, four gathers) counts the texels whose linear depth + `bias` texels is not in
+// front of the receiver.
+// #import tiled-shading/lighting.wgsl
+// #import tiled-shading/shadow_view.wgsl
+
+struct ShadowParams {
+    bias: f32,
+    normal_offset: f32,
+    _pad0: f32,
+    _pad1: f32,
+};
+
+// Group 1: the shadow maps (`tiled_shading::gpu::shadows`); a 1×1 stand-in when no light
+// has shadows.
+@group(1) @binding(0) var<storage, read> shadow_views: array<ShadowView>;
+@group(1) @binding(1) var<uniform> shadow_params: ShadowParams;
+@group(1) @binding(2) var shadow_maps: texture_depth_2d_array;
+@group(1) @binding(3) var shadow_sampler: sampler;
+
+// Texels kept around every cube face and cascade (`MARGIN_TEXELS`).
+const MARGIN_TEXELS: f32 = 2.0;
+
+// Index among the light's views of the one that holds `p`.
+fn pick_shadow_view(light: Light, p: vec3<f32>, resolution: f32) -> u32 {
+    if light.kind == LIGHT_DIRECTIONAL {
+        let inner = 1.0 - 2.0 * MARGIN_TEXELS / resolution;
+        for (var k = 0u; k < light.shadow_count; k++) {
+            let c = shadow_views[light.shadow_first + k].view_proj * vec4<f32>(p, 1.0);
+            if abs(c.x) <= inner && abs(c.y) <= inner {
+                return k;
+            }
+        }
+        return light.shadow_count - 1u;
+    }
+    let w = p - light.position;
+    var best = 0u;
+    var best_dot = dot(w, shadow_views[light.shadow_first].axis);
+    for (var k = 1u; k < light.shadow_count; k++) {
+        let d = dot(w, shadow_views[light.shadow_first + k].axis);
+        if d > best_dot {
+            best = k;
+            best_dot = d;
+        }
+    }
+    return best;
+}
+
+fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    if light.shadow_count == 0u {
+        return 1.0;
+    }
+    let res = textureDimensions(shadow_maps).x;
+    let resolution = f32(res);
+    let layer = light.shadow_first + pick_shadow_view(light, p, resolution);
+    let v = shadow_views[layer];
+    var distance = 1.0;
+    if v.orthographic == 0u {
+        distance = max(dot(p - light.position, v.axis), 0.0);
+    }
+    let footprint = v.texel * distance;
+    let q = p + n * (shadow_params.normal_offset * footprint);
+    let clip = v.view_proj * vec4<f32>(q, 1.0);
+    if clip.w <= 0.0 {
+        return 1.0;
+    }
+    let ndc = clip.xyz / clip.w;
+    let receiver = linear_shadow_depth(v, clamp(ndc.z, 0.0, 1.0)) - shadow_params.bias * footprint;
+    let xy = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * resolution - 0.5;
+    let b = floor(xy);
+    let f = xy - b;
+    let wx = array<f32, 4>(1.0 - f.x, 1.0, 1.0, f.x);
+    let wy = array<f32, 4>(1.0 - f.y, 1.0, 1.0, f.y);
+    var lit = 0.0;
+    // Texel blocks (b−1, b) and (b+1, b+2) per axis; a gather at the corner between texels
+    // i and i+1 reads (x: (i, j+1), y: (i+1, j+1), z: (i+1, j), w: (i, j)), clamped to the edge.
+    for (var bj = 0; bj < 2; bj++) {
+        for (var bi = 0; bi < 2; bi++) {
+            let corner = (b + vec2<f32>(f32(2 * bi), f32(2 * bj))) / resolution;
+            let d = textureGather(shadow_maps, shadow_sampler, corner, layer);
+            let i = 2 * bi;
+            let j = 2 * bj;
+            let z = vec4<f32>(
+                linear_shadow_depth(v, d.x),
+                linear_shadow_depth(v, d.y),
+                linear_shadow_depth(v, d.z),
+                linear_shadow_depth(v, d.w),
+            );
+            let inside = vec4<f32>(vec4<bool>(receiver <= z.x, receiver <= z.y, receiver <= z.z, receiver <= z.w));
+            lit += inside.w * wx[i] * wy[j] + inside.z * wx[i + 1] * wy[j]
+                + inside.x * wx[i] * wy[j + 1] + inside.y * wx[i + 1] * wy[j + 1];
+        }
+    }
+    return min(lit / 9.0, 1.0);
+}
+
+// `shade_light` with the light's shadow (`tiled_shading::shadows::shade_shadowed`): the
+// lookup runs only where the light reaches the surface's front.
+fn shade_shadowed(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, roughness: f32, metallic: f32) -> Accumulated {
+    var none: Accumulated;
+    none.diffuse = vec3<f32>(0.0);
+    none.specular = vec3<f32>(0.0);
+    let inc = light_incidence(light, p);
+    if inc.w <= 0.0 || dot(n, inc.xyz) <= 0.0 {
+        return none;
+    }
+    let visible = shadow_visibility(light, p, n);
+    if visible <= 0.0 {
+        return none;
+    }
+    return reflect_light(light.color * (inc.w * visible), inc.xyz, n, v, albedo, roughness, metallic);
+}
