@@ -116,6 +116,14 @@ struct Args {
     /// Distance under which a VPL's 1/d² is clamped (default: 2 % of the scene diagonal).
     #[arg(long, requires = "vpls")]
     vpl_clamp: Option<f32>,
+    /// Shadow maps for every direct light (GPU only): RES×RES texels per view (spot: one
+    /// view, point: six cube faces, hemispherical: five, directional: four cascades).
+    #[arg(long, value_name = "RES", value_parser = clap::value_parser!(u32).range(8..=16384))]
+    shadows: Option<u32>,
+    /// Stand in for each emissive mesh with N hemispherical lights spread over its area
+    /// (with --shadows they draw its penumbrae); default 1, at its centroid.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    area_samples: u32,
     /// VPL visibility from per-VPL shadow maps in an atlas (GPU only; Holländer 2013 §3.6):
     /// `manylod` (a many-view LoD cut of 2^20 surfels per VPL, incremental after the first frame) or `ism` (imperfect shadow
     /// maps: 8 k random surfels per VPL). Default: no VPL visibility. Also writes the atlas
@@ -737,7 +745,7 @@ fn run() -> Result<()> {
             false,
             "scattered point lights",
         ),
-        None => vpl::primary_lights(&scene),
+        None => vpl::primary_lights_sampled(&scene, args.area_samples),
     };
     lights.extend(args.extra_lights.iter().copied());
     let shading = pipeline::ShadingConfig {
@@ -821,6 +829,9 @@ fn run() -> Result<()> {
     if args.vpl_shadows.is_some() && (args.cpu || indirect.is_none()) {
         bail!("--vpl-shadows needs --vpls N and runs on the GPU only (no --cpu)");
     }
+    if args.shadows.is_some() && args.cpu {
+        bail!("--shadows runs on the GPU only (no --cpu)");
+    }
     let gpu = if args.cpu {
         None
     } else {
@@ -839,6 +850,13 @@ fn run() -> Result<()> {
                 let mut renderer =
                     pipeline::gpu::GpuRenderer::new(d, q, &scene, &direct_lights, width, height)?;
                 renderer.set_shading(d, q, &shading)?;
+                if let Some(resolution) = args.shadows {
+                    let config = tiled_shading::shadows::ShadowMapConfig {
+                        resolution,
+                        ..Default::default()
+                    };
+                    renderer.set_shadows(d, q, Some(&config))?;
+                }
                 if let Some((config, set)) = indirect_ref {
                     match args.vpl_shadows {
                         Some(mode) => renderer.set_vpl_shadows(

@@ -68,20 +68,21 @@ fn a_symbolic_link_at_the_output_is_replaced_not_followed() {
 
 #[test]
 fn accuracy_measures_relative_luminance_error_and_bias() {
-    let img = |v: &[[f32; 4]]| Image::from_vec(2, 2, v.to_vec()).expect("2×2");
+    let img = |v: &[[f32; 4]]| Image::from_vec(5, 1, v.to_vec()).expect("5×1");
     let g = [0.5, 0.5, 0.5, 1.0];
-    let truth = img(&[g, g, [0.0; 4], [100.0, 100.0, 100.0, 1.0]]);
+    let truth = img(&[g, g, [0.0; 4], g, [100.0, 100.0, 100.0, 1.0]]);
     let same = gbuffer::accuracy(&truth, &truth, 10.0);
     assert_eq!((same.error, same.bias, same.pixels), (0.0, 0.0, 2));
-    // Twice as bright on the two counted pixels (the black and the emitter pixel are skipped).
-    let double = img(&[[1.0, 1.0, 1.0, 1.0]; 4]);
+    // Twice as bright on the two counted pixels (the black pixel, the emitter and its
+    // neighbour are skipped).
+    let double = img(&[[1.0, 1.0, 1.0, 1.0]; 5]);
     let a = gbuffer::accuracy(&truth, &double, 10.0);
     assert!(
         (a.error - 1.0).abs() < 1e-6 && (a.bias - 1.0).abs() < 1e-6,
         "{a:?}"
     );
     // NaN is an error, not a skipped pixel.
-    let nan = img(&[[f32::NAN; 4], g, g, g]);
+    let nan = img(&[[f32::NAN; 4], g, g, g, g]);
     let a = gbuffer::accuracy(&truth, &nan, 10.0);
     assert!((a.error - 0.5).abs() < 1e-6, "{a:?}");
 }

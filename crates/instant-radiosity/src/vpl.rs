@@ -381,33 +381,62 @@ fn area_emitters(scene: &Scene) -> Vec<Emitter> {
 
 /// Hemispherical point lights standing in for the scene's emissive meshes in direct shading
 /// (photons are then shot from the triangles themselves with [`VplConfig::emissive`]):
-/// one per mesh at its area-weighted centroid, along its mean normal, with intensity
-/// `radiance × area` (a small Lambertian emitter's intensity along its normal), reaching
-/// twice the scene diagonal.
-pub fn area_lights(scene: &Scene) -> Vec<Light> {
+/// `samples` per mesh, each with intensity `radiance × area / samples` (a small Lambertian
+/// emitter's intensity along its normal), reaching twice the scene diagonal. One sample sits
+/// at the mesh's area-weighted centroid along its mean normal; more are stratified over its
+/// area (the triangles by their share of the area, a Halton coordinate within each) along
+/// their triangle's normal, so shadowed they draw the area light's penumbrae.
+pub fn area_lights(scene: &Scene, samples: u32) -> Vec<Light> {
     let radius = 2.0 * scene.bounds().diagonal().max(1e-3);
+    let lift = 1e-4 * radius;
     let mut lights = Vec::new();
     for (mesh, material) in emissive_meshes(scene) {
-        let (mut area, mut centroid, mut normal) = (0.0, Vec3::ZERO, Vec3::ZERO);
-        for t in mesh.indices.chunks_exact(3) {
-            let v = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
-            let cross = (v[1] - v[0]).cross(v[2] - v[0]);
-            let a = 0.5 * cross.length();
-            area += a;
-            centroid += (v[0] + v[1] + v[2]) / 3.0 * a;
-            normal += cross * 0.5;
-        }
-        let (Some(direction), true) = (normal.try_normalize(), area > 0.0) else {
+        let triangles: Vec<([Vec3; 3], Vec3, f32)> = mesh
+            .indices
+            .chunks_exact(3)
+            .map(|t| {
+                let v = [t[0], t[1], t[2]].map(|i| mesh.positions[i as usize]);
+                let cross = (v[1] - v[0]).cross(v[2] - v[0]);
+                (v, cross, 0.5 * cross.length())
+            })
+            .filter(|(_, _, a)| *a > 0.0 && a.is_finite())
+            .collect();
+        let area: f32 = triangles.iter().map(|t| t.2).sum();
+        let normal: Vec3 = triangles.iter().map(|t| t.1 * 0.5).sum();
+        let (Some(mean_normal), true) = (normal.try_normalize(), area > 0.0) else {
             continue;
         };
-        let intensity = material.emissive.max_element();
-        lights.push(Light::Hemispherical {
-            position: centroid / area + direction * (1e-4 * radius),
+        let radiance = material.emissive.max_element();
+        let light = |position: Vec3, direction: Vec3, share: f32| Light::Hemispherical {
+            position: position + direction * lift,
             direction,
-            color: material.emissive / intensity,
-            intensity: intensity * area,
+            color: material.emissive / radiance,
+            intensity: radiance * share,
             radius,
-        });
+        };
+        if samples <= 1 {
+            let centroid: Vec3 = triangles
+                .iter()
+                .map(|(v, _, a)| (v[0] + v[1] + v[2]) / 3.0 * *a)
+                .sum();
+            lights.push(light(centroid / area, mean_normal, area));
+            continue;
+        }
+        let mut start = 0.0;
+        let mut t = 0;
+        for i in 0..samples {
+            // Stratified position along the cumulative area, then within its triangle.
+            let u = (i as f32 + 0.5) / samples as f32 * area;
+            while t + 1 < triangles.len() && start + triangles[t].2 < u {
+                start += triangles[t].2;
+                t += 1;
+            }
+            let (v, cross, a) = triangles[t];
+            let r1 = ((u - start) / a).clamp(0.0, 1.0).sqrt();
+            let r2 = radical_inverse(u64::from(i), 2);
+            let p = v[0] * (1.0 - r1) + v[1] * (r1 * (1.0 - r2)) + v[2] * (r1 * r2);
+            lights.push(light(p, cross.normalize(), area / samples as f32));
+        }
     }
     lights
 }
@@ -584,10 +613,19 @@ pub fn generate_from_primary(
 /// ([`VplConfig::emissive`]) and a description: the scene's punctual lights; else
 /// hemispherical stand-ins for its emissive meshes ([`area_lights`]); else a default sun.
 pub fn primary_lights(scene: &Scene) -> (Vec<Light>, bool, &'static str) {
+    primary_lights_sampled(scene, 1)
+}
+
+/// [`primary_lights`] with `area_samples` hemispherical lights per emissive mesh
+/// ([`area_lights`]).
+pub fn primary_lights_sampled(
+    scene: &Scene,
+    area_samples: u32,
+) -> (Vec<Light>, bool, &'static str) {
     if !scene.lights.is_empty() {
         return (scene.lights.clone(), false, "the scene's lights");
     }
-    let area = area_lights(scene);
+    let area = area_lights(scene, area_samples);
     if !area.is_empty() {
         return (area, true, "the emissive meshes (as hemispherical lights)");
     }

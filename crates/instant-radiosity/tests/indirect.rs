@@ -196,7 +196,7 @@ fn emissive_area_lights_emit_photons() {
     s.lights.clear();
     let set = vpls(&s, 256, 16, 1);
     assert!(set.vpls.iter().all(|v| v.position.y < s.bounds().max.y));
-    let lights = vpl::area_lights(&s);
+    let lights = vpl::area_lights(&s, 1);
     assert_eq!(lights.len(), 1);
     let Light::Hemispherical {
         direction,

@@ -22,6 +22,7 @@ use scene::{
     reference::{PathTracer, ReferenceConfig},
 };
 use serde::Serialize;
+use tiled_shading::shadows::ShadowMapConfig;
 
 /// Accuracy of the renderer against the path tracer; writes docs/bench/accuracy-*.
 #[derive(Parser, Debug)]
@@ -110,8 +111,21 @@ fn main() -> Result<()> {
     let bvh = scene::Bvh::build(&scene);
     let set = vpl::generate_from_primary(&scene, &bvh, vpls, config.subsets(), 1)?;
     let mut rows = Vec::new();
-    let mut measure = |name: &str, visibility: Option<Option<VplShadows>>| -> Result<()> {
-        let mut r = GpuRenderer::new(d, q, &scene, &lights, w, h)?;
+    // `shadowed`: the emitter as that many shadowed hemispherical samples (else one
+    // unshadowed point at its centroid).
+    let mut measure = |name: &str,
+                       shadowed: Option<u32>,
+                       visibility: Option<Option<VplShadows>>|
+     -> Result<()> {
+        let mut r = match shadowed {
+            Some(samples) => {
+                let (sampled, _, _) = vpl::primary_lights_sampled(&scene, samples);
+                let mut r = GpuRenderer::new(d, q, &scene, &sampled, w, h)?;
+                r.set_shadows(d, q, Some(&ShadowMapConfig::default()))?;
+                r
+            }
+            None => GpuRenderer::new(d, q, &scene, &lights, w, h)?,
+        };
         match visibility {
             None => {}
             Some(None) => r.set_indirect(d, &config, &set)?,
@@ -146,11 +160,19 @@ fn main() -> Result<()> {
         });
         Ok(())
     };
-    measure("direct light (no shadows)", None)?;
-    measure("+ VPLs, no visibility", Some(None))?;
-    measure("+ VPLs, ISM visibility", Some(Some(VplShadows::Ism)))?;
+    measure("direct light (one point, no shadows)", None, None)?;
+    measure("direct light (one point, shadow maps)", Some(1), None)?;
+    measure("direct light (16 samples, shadow maps)", Some(16), None)?;
+    measure("+ VPLs, no visibility", None, Some(None))?;
+    measure("+ VPLs, ISM visibility", None, Some(Some(VplShadows::Ism)))?;
     measure(
         "+ VPLs, ManyLoD visibility",
+        None,
+        Some(Some(VplShadows::ManyLod)),
+    )?;
+    measure(
+        "16 shadowed samples + VPLs, ManyLoD",
+        Some(16),
         Some(Some(VplShadows::ManyLod)),
     )?;
     let report = Report {

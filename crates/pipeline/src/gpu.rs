@@ -19,7 +19,9 @@ use instant_radiosity::{
     shadows::{ShadowConfig, VplShadowMaps, VplShadows},
     vpl::VplSet,
 };
+use tiled_shading::gpu::shadows::{GpuShadowMaps, ShadowMapPass};
 use tiled_shading::gpu::{ACCUMULATION_FORMAT, BoundShading, LightShading};
+use tiled_shading::shadows::{self, ShadowMapConfig};
 
 fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
@@ -112,7 +114,17 @@ pub struct GpuRenderer {
     camera: Option<Camera>,
     indirect: Option<Indirect>,
     vpl_shadows: Option<VplShadowMaps>,
+    shadows: Option<DirectShadows>,
+    bounds: scene::Aabb,
     timer: PassTimer,
+}
+
+/// Shadow maps of the direct lights as the renderer holds them: the raster pass, the maps
+/// (one layer per view of every light) and their configuration.
+struct DirectShadows {
+    pass: ShadowMapPass,
+    maps: GpuShadowMaps,
+    config: ShadowMapConfig,
 }
 
 /// The indirect stage as the renderer holds it: its pipelines for the frame size, their
@@ -218,6 +230,8 @@ impl GpuRenderer {
             camera: None,
             indirect: None,
             vpl_shadows: None,
+            shadows: None,
+            bounds: scene.bounds(),
             timer: PassTimer::new(device, 32),
         })
     }
@@ -257,6 +271,9 @@ impl GpuRenderer {
             bound.set_camera(queue, camera);
         }
         self.shading_bound = bound;
+        let maps = self.shadows.as_ref().map(|s| &s.maps);
+        self.shading
+            .bind_shadows(device, &mut self.shading_bound, maps)?;
         self.bind_composition(device);
         Ok(())
     }
@@ -300,13 +317,98 @@ impl GpuRenderer {
         lights: &[Light],
     ) -> Result<(), RenderError> {
         let lights = crate::validate_lights(lights)?;
-        if lights.len() <= self.shading_bound.capacity() {
-            self.shading_bound.set_lights(queue, &lights)?;
-            self.lights = lights;
-            return Ok(());
-        }
+        let rebind = lights.len() > self.shading_bound.capacity();
         self.lights = lights;
-        self.rebind(device, queue)
+        if rebind {
+            self.rebind(device, queue)?;
+        }
+        self.plan_shadows(device, queue)
+    }
+
+    /// Gives every direct light a shadow map (`Some`: [`tiled_shading::shadows`]; spot,
+    /// point and hemispherical lights by their views, directional ones by cascades that follow
+    /// the camera), or removes them (`None`). The maps are drawn each frame before the light
+    /// accumulation.
+    pub fn set_shadows(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        config: Option<&ShadowMapConfig>,
+    ) -> Result<(), RenderError> {
+        self.shadows = match config {
+            Some(config) => {
+                config.validate()?;
+                let pass = ShadowMapPass::new(device)?;
+                let maps = pass.bind(device, config, 1)?;
+                Some(DirectShadows {
+                    pass,
+                    maps,
+                    config: *config,
+                })
+            }
+            None => None,
+        };
+        self.plan_shadows(device, queue)
+    }
+
+    /// Plans the lights' shadow views (grows the maps when they need more layers) and writes
+    /// the lights with their views; without shadows, clears the lights' views.
+    fn plan_shadows(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<(), RenderError> {
+        let Some(plan) = self.shadow_plan(device.limits().max_texture_array_layers)? else {
+            for l in &mut self.lights {
+                l.shadow_count = shadows::NO_SHADOW;
+            }
+            self.shading_bound.set_lights(queue, &self.lights)?;
+            return Ok(self
+                .shading
+                .bind_shadows(device, &mut self.shading_bound, None)?);
+        };
+        if let Some(s) = &mut self.shadows
+            && plan.views.len() > s.maps.capacity()
+        {
+            s.maps = s.pass.bind(device, &s.config, plan.views.len())?;
+        }
+        self.write_shadow_plan(queue, &plan)?;
+        let maps = self.shadows.as_ref().map(|s| &s.maps);
+        Ok(self
+            .shading
+            .bind_shadows(device, &mut self.shading_bound, maps)?)
+    }
+
+    /// The shadow views of every light for the current camera (or one framing the scene
+    /// before the first camera), at most `max_views`; `None` without shadows.
+    fn shadow_plan(&self, max_views: u32) -> Result<Option<shadows::ShadowPlan>, RenderError> {
+        let Some(s) = &self.shadows else {
+            return Ok(None);
+        };
+        let camera = self.camera.unwrap_or_else(|| Camera::framing(self.bounds));
+        let (w, h) = self.size();
+        Ok(Some(shadows::plan(
+            &self.lights,
+            &vec![true; self.lights.len()],
+            &camera,
+            w as f32 / h as f32,
+            self.bounds,
+            &s.config,
+            max_views,
+        )?))
+    }
+
+    /// Writes `plan`'s views into the maps and the lights with their views.
+    fn write_shadow_plan(
+        &mut self,
+        queue: &wgpu::Queue,
+        plan: &shadows::ShadowPlan,
+    ) -> Result<(), RenderError> {
+        if let Some(s) = &mut self.shadows {
+            s.maps.set_views(queue, &plan.views)?;
+        }
+        plan.assign(&mut self.lights);
+        Ok(self.shading_bound.set_lights(queue, &self.lights)?)
     }
 
     /// Sets the camera of the following frames (validated: finite, positive field of view).
@@ -316,6 +418,11 @@ impl GpuRenderer {
         self.gbuffer_pass.write_frame(queue, &frame);
         self.shading_bound.set_camera(queue, camera);
         self.camera = Some(*camera);
+        // Directional cascades follow the camera (the view count does not change).
+        let made = self.shadows.as_ref().map_or(0, |s| s.maps.capacity());
+        if let Some(plan) = self.shadow_plan(u32::try_from(made).unwrap_or(u32::MAX))? {
+            self.write_shadow_plan(queue, &plan)?;
+        }
         Ok(())
     }
 
@@ -450,6 +557,10 @@ impl GpuRenderer {
             && self.indirect.is_some()
         {
             shadows.encode(encoder, Some(&self.timer));
+        }
+        if let Some(s) = &self.shadows {
+            s.pass
+                .encode(&s.maps, &self.scene, encoder, Some(&self.timer));
         }
         self.shading
             .encode(&self.shading_bound, encoder, Some(&self.timer));

@@ -12,6 +12,90 @@ use instant_radiosity::{
 };
 use pipeline::gpu::GpuRenderer;
 use scene::reference::{PathTracer, ReferenceConfig};
+use tiled_shading::shadows::ShadowMapConfig;
+
+/// The Cornell box of the shared fixtures and its view, `None` (skipped, a failure in CI)
+/// without them.
+fn cornell() -> Option<(scene::Scene, scene::Camera)> {
+    let Some(fixtures) = scene::shared_fixtures() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI needs ../shared/fixtures"
+        );
+        eprintln!("skipped: no ../shared/fixtures");
+        return None;
+    };
+    let path = fixtures.join("cornell/CornellBox-Original.obj");
+    let scene = scene::Scene::load(&path).expect("cornell");
+    let camera = scene::preset_view(&path, &scene).expect("the Cornell view of views.json");
+    Some((scene, camera))
+}
+
+/// The path tracer's image of `scene` with `bounces` after the first surface.
+fn truth(
+    scene: &scene::Scene,
+    camera: scene::Camera,
+    (w, h): (u32, u32),
+    bounces: u32,
+    spp: u32,
+) -> Image<[f32; 4]> {
+    let config = ReferenceConfig {
+        max_bounces: bounces,
+        ..ReferenceConfig::default()
+    };
+    let mut pt = PathTracer::new(scene, camera, w, h, &scene.lights, config);
+    pt.add_samples(spp);
+    Image::from_vec(
+        w,
+        h,
+        pt.image().iter().map(|c| [c.x, c.y, c.z, 1.0]).collect(),
+    )
+    .expect("truth")
+}
+
+#[test]
+fn shadowed_area_light_samples_match_the_path_traced_direct_light() {
+    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
+        return;
+    };
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let Some((scene, camera)) = cornell() else {
+        return;
+    };
+    let size = (64, 64);
+    let truth = truth(&scene, camera, size, 0, 1024);
+    let frame = |samples: u32, shadows: Option<&ShadowMapConfig>| {
+        let (lights, _, _) = vpl::primary_lights_sampled(&scene, samples);
+        let mut r = GpuRenderer::new(d, q, &scene, &lights, size.0, size.1).expect("renderer");
+        r.set_shadows(d, q, shadows).expect("shadows");
+        let image = r
+            .render(d, q, &camera, glam::Vec3::ZERO)
+            .expect("frame")
+            .image;
+        accuracy(&truth, &image, 10.0)
+    };
+    let shadows = ShadowMapConfig {
+        resolution: 256,
+        ..ShadowMapConfig::default()
+    };
+    let unshadowed = frame(1, None);
+    let hard = frame(1, Some(&shadows));
+    let soft = frame(16, Some(&shadows));
+    println!(
+        "direct light against the path tracer: one unshadowed point {unshadowed:?}, one shadowed point {hard:?}, 16 shadowed samples {soft:?}"
+    );
+    assert!(
+        hard.error < unshadowed.error,
+        "shadows lower the error: {hard:?} vs {unshadowed:?}"
+    );
+    assert!(
+        soft.error < hard.error,
+        "penumbrae lower it further: {soft:?} vs {hard:?}"
+    );
+    // 0.055 measured at 64² against 1024 spp (the issue's ≤ 0.05 is for 256² against 4096
+    // spp, where silhouettes weigh less: the accuracy bench measures it).
+    assert!(soft.error <= 0.07, "{soft:?}");
+}
 
 #[test]
 fn vpl_visibility_brings_the_frame_closer_to_the_path_tracer() {
@@ -19,34 +103,12 @@ fn vpl_visibility_brings_the_frame_closer_to_the_path_tracer() {
         return;
     };
     let (d, q) = (&gpu.device, &gpu.queue);
-    let Some(fixtures) = scene::shared_fixtures() else {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs ../shared/fixtures"
-        );
-        eprintln!("skipped: no ../shared/fixtures");
+    let Some((scene, camera)) = cornell() else {
         return;
     };
-    let path = fixtures.join("cornell/CornellBox-Original.obj");
-    let scene = scene::Scene::load(&path).expect("cornell");
-    let camera = scene::preset_view(&path, &scene).expect("the Cornell view of views.json");
     let (w, h) = (64, 64);
     // Direct light plus one bounce, as the VPLs approximate.
-    let mut pt = PathTracer::new(
-        &scene,
-        camera,
-        w,
-        h,
-        &scene.lights,
-        ReferenceConfig::default(),
-    );
-    pt.add_samples(1024);
-    let truth = Image::from_vec(
-        w,
-        h,
-        pt.image().iter().map(|c| [c.x, c.y, c.z, 1.0]).collect(),
-    )
-    .expect("truth");
+    let truth = truth(&scene, camera, (w, h), 1, 1024);
     let (lights, _, _) = vpl::primary_lights(&scene);
     let config = IndirectConfig::new(scene.bounds());
     let bvh = scene::Bvh::build(&scene);

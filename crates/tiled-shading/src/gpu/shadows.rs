@@ -100,6 +100,7 @@ impl ShadowMapPass {
             // The timer's begin stamp goes to the first pass, its end stamp to the last.
             let stamps = timestamps
                 .as_ref()
+                .filter(|_| v == 0 || v == last)
                 .map(|t| wgpu::RenderPassTimestampWrites {
                     query_set: t.query_set,
                     beginning_of_pass_write_index: t
@@ -230,6 +231,11 @@ impl GpuShadowMaps {
         queue.write_buffer(&self.views, 0, bytemuck::cast_slice(views));
         self.count = views.len();
         Ok(())
+    }
+
+    /// Layers made: the most views [`GpuShadowMaps::set_views`] takes.
+    pub fn capacity(&self) -> usize {
+        self.layers.len()
     }
 
     /// Views set.
