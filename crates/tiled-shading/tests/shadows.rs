@@ -44,6 +44,24 @@ fn gbuffer(scene: &Scene, camera: &Camera, w: u32, h: u32) -> (GBuffer, Frame) {
     (gb, Frame::new(camera, w, h))
 }
 
+/// The test device (`None`: skipped), [`spheres`] and its G-buffer of `w × h`.
+#[allow(clippy::type_complexity)]
+fn setup(
+    w: u32,
+    h: u32,
+) -> Option<(
+    &'static ::gpu::Gpu,
+    Scene,
+    Camera,
+    Vec<GpuLight>,
+    (GBuffer, Frame),
+)> {
+    let g = ::gpu::test_device(&tiled_shading::device_needs())?;
+    let (scene, camera, lights) = spheres();
+    let view = gbuffer(&scene, &camera, w, h);
+    Some((g, scene, camera, lights, view))
+}
+
 const CONFIG: ShadowMapConfig = ShadowMapConfig {
     resolution: 256,
     cascades: 4,
@@ -68,11 +86,9 @@ fn shaded_gpu(
 
 #[test]
 fn rasterised_maps_match_depth_ray_cast_through_every_texel() {
-    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+    let Some((g, scene, camera, lights, view)) = setup(64, 48) else {
         return;
     };
-    let (scene, camera, lights) = spheres();
-    let view = gbuffer(&scene, &camera, 64, 48);
     let (_, maps, _) = shaded_gpu(g, &scene, &view, &camera, &lights);
     let truth = shadows::ray_cast_maps(&Bvh::build(&scene), &maps.views, &CONFIG);
     let texels = (CONFIG.resolution * CONFIG.resolution) as usize;
@@ -103,11 +119,9 @@ fn rasterised_maps_match_depth_ray_cast_through_every_texel() {
 
 #[test]
 fn cpu_lookup_on_the_read_back_maps_equals_the_gpu_shading() {
-    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+    let Some((g, scene, camera, lights, view)) = setup(96, 64) else {
         return;
     };
-    let (scene, camera, lights) = spheres();
-    let view = gbuffer(&scene, &camera, 96, 64);
     let (gpu_shaded, maps, lights) = shaded_gpu(g, &scene, &view, &camera, &lights);
     let config = ShadingConfig {
         method: Method::Tiled,
@@ -138,11 +152,9 @@ fn cpu_lookup_on_the_read_back_maps_equals_the_gpu_shading() {
 
 #[test]
 fn lookup_agrees_with_shadow_rays_outside_the_penumbra() {
-    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+    let Some((g, scene, camera, lights, view)) = setup(96, 64) else {
         return;
     };
-    let (scene, camera, lights) = spheres();
-    let view = gbuffer(&scene, &camera, 96, 64);
     let (_, maps, lights) = shaded_gpu(g, &scene, &view, &camera, &lights);
     let bvh = Bvh::build(&scene);
     let reach = 2.0 * scene.bounds().diagonal();
@@ -193,11 +205,9 @@ fn lookup_agrees_with_shadow_rays_outside_the_penumbra() {
 
 #[test]
 fn shadows_only_remove_light_and_do_remove_it() {
-    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+    let Some((g, scene, camera, lights, view)) = setup(96, 64) else {
         return;
     };
-    let (scene, camera, lights) = spheres();
-    let view = gbuffer(&scene, &camera, 96, 64);
     let config = ShadingConfig {
         method: Method::Tiled,
         tile_size: 16,
