@@ -57,6 +57,27 @@ pub struct ShadowView {
     pub _pad: u32,
 }
 
+impl ShadowView {
+    /// Distance along the axis of a stored depth `d` (`linear_shadow_depth`).
+    pub fn linear_depth(&self, d: f32) -> f32 {
+        if self.orthographic == 1 {
+            self.near + d * (self.far - self.near)
+        } else {
+            self.near * self.far / (self.far - d * (self.far - self.near))
+        }
+    }
+
+    /// The stored depth of distance `z` along the axis: the inverse of
+    /// [`ShadowView::linear_depth`].
+    pub fn stored_depth(&self, z: f32) -> f32 {
+        if self.orthographic == 1 {
+            (z - self.near) / (self.far - self.near)
+        } else {
+            self.far / (self.far - self.near) * (1.0 - self.near / z)
+        }
+    }
+}
+
 /// How shadow maps are made and read.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadowMapConfig {
@@ -388,15 +409,6 @@ pub struct ShadowMaps {
     pub normal_offset: f32,
 }
 
-/// Linear distance along the view's axis of a stored depth `d`.
-fn linear_depth(v: &ShadowView, d: f32) -> f32 {
-    if v.orthographic == 1 {
-        v.near + d * (v.far - v.near)
-    } else {
-        v.near * v.far / (v.far - d * (v.far - v.near))
-    }
-}
-
 /// Fraction of `light` that reaches `p` (normal `n`) through `maps`: 1 for an unshadowed
 /// light, else the tent-filtered comparison described in the module docs (`shadow_visibility`
 /// in `shadows.wgsl`).
@@ -407,18 +419,7 @@ pub fn visibility(maps: &ShadowMaps, light: &GpuLight, p: Vec3, n: Vec3) -> f32 
     let first = light.shadow_first as usize;
     let views = &maps.views[first..first + light.shadow_count as usize];
     let k = pick_view(light, views, p, maps.resolution);
-    visibility_in(maps, &views[k], first + k, light, p, n)
-}
-
-/// [`visibility`] in one chosen view (`layer` of the maps).
-fn visibility_in(
-    maps: &ShadowMaps,
-    v: &ShadowView,
-    layer: usize,
-    light: &GpuLight,
-    p: Vec3,
-    n: Vec3,
-) -> f32 {
+    let (v, layer) = (&views[k], first + k);
     let axis = Vec3::from(v.axis);
     let m = Mat4::from_cols_array_2d(&v.view_proj);
     let distance = if v.orthographic == 1 {
@@ -433,7 +434,7 @@ fn visibility_in(
         return 1.0;
     }
     let ndc = clip.xyz() / clip.w;
-    let receiver = linear_depth(v, ndc.z.clamp(0.0, 1.0)) - maps.bias * footprint;
+    let receiver = v.linear_depth(ndc.z.clamp(0.0, 1.0)) - maps.bias * footprint;
     let res = maps.resolution as i32;
     let x = (ndc.x * 0.5 + 0.5) * res as f32 - 0.5;
     let y = (0.5 - ndc.y * 0.5) * res as f32 - 0.5;
@@ -448,7 +449,7 @@ fn visibility_in(
         for (i, wxi) in wx.iter().enumerate() {
             let tx = (bx as i32 - 1 + i as i32).clamp(0, res - 1);
             let d = maps.depth[base + (ty * res + tx) as usize];
-            if receiver <= linear_depth(v, d) {
+            if receiver <= v.linear_depth(d) {
                 lit += wxi * wyj;
             }
         }
@@ -499,15 +500,9 @@ pub fn ray_cast_maps(
                 let length = dir.length();
                 match bvh.closest_hit(a, dir / length, length) {
                     // `a` lies on the near plane: the hit's distance along the axis is
-                    // `near` plus its advance along the axis; back to stored depth by the
-                    // inverse of `linear_depth`.
+                    // `near` plus its advance along the axis.
                     Some(hit) => {
-                        let z = v.near + (dir / length * hit.t).dot(Vec3::from(v.axis));
-                        if v.orthographic == 1 {
-                            (z - v.near) / (v.far - v.near)
-                        } else {
-                            v.far / (v.far - v.near) * (1.0 - v.near / z)
-                        }
+                        v.stored_depth(v.near + (dir / length * hit.t).dot(Vec3::from(v.axis)))
                     }
                     None => 1.0,
                 }

@@ -94,17 +94,12 @@ fn rasterised_maps_match_depth_ray_cast_through_every_texel() {
     let texels = (CONFIG.resolution * CONFIG.resolution) as usize;
     for (k, v) in maps.views.iter().enumerate() {
         let layer = k * texels..(k + 1) * texels;
-        let linear = |d: f32| {
-            if v.orthographic == 1 {
-                v.near + d * (v.far - v.near)
-            } else {
-                v.near * v.far / (v.far - d * (v.far - v.near))
-            }
-        };
         let agree = maps.depth[layer.clone()]
             .iter()
             .zip(&truth.depth[layer])
-            .filter(|&(&a, &b)| (linear(a) - linear(b)).abs() <= 1e-3 * (v.far - v.near) + 1e-4)
+            .filter(|&(&a, &b)| {
+                (v.linear_depth(a) - v.linear_depth(b)).abs() <= 1e-3 * (v.far - v.near) + 1e-4
+            })
             .count();
         // Texels whose centre ray grazes a silhouette may hit another surface than the
         // rasteriser's coverage rule gives them: a few per cent at 256².
