@@ -418,9 +418,13 @@ impl GpuRenderer {
         self.gbuffer_pass.write_frame(queue, &frame);
         self.shading_bound.set_camera(queue, camera);
         self.camera = Some(*camera);
-        // Directional cascades follow the camera (the view count does not change).
+        // Directional cascades follow the camera (the view count does not change); the other
+        // lights' views do not depend on it.
+        let cascaded = self.lights.iter().any(|l| {
+            l.kind == tiled_shading::LIGHT_DIRECTIONAL && l.shadow_count != shadows::NO_SHADOW
+        });
         let made = self.shadows.as_ref().map_or(0, |s| s.maps.capacity());
-        if let Some(plan) = self.shadow_plan(u32::try_from(made).unwrap_or(u32::MAX))? {
+        if cascaded && let Some(plan) = self.shadow_plan(u32::try_from(made).unwrap_or(u32::MAX))? {
             self.write_shadow_plan(queue, &plan)?;
         }
         Ok(())
