@@ -521,6 +521,11 @@ impl GpuRenderer {
         self.set_indirect(device, config, set)
     }
 
+    /// Shadow views of the direct lights the frame renders (0 without shadows).
+    pub fn shadow_view_count(&self) -> usize {
+        self.shadows.as_ref().map_or(0, |s| s.maps.count())
+    }
+
     /// The VPL shadow maps, if set.
     pub fn vpl_shadows(&self) -> Option<&VplShadowMaps> {
         self.vpl_shadows.as_ref()
