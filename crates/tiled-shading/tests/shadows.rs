@@ -271,3 +271,44 @@ fn bad_shadow_settings_are_errors() {
         "{e}"
     );
 }
+
+#[test]
+fn caster_culling_keeps_every_sphere_that_meets_a_view() {
+    // A spot at the origin looking down −Y, 30° cone, reaching 10.
+    let spot = tiled_shading::gpu_lights(&["spot:0,0,0,0,-1,0,10,20,30".parse().expect("spot")])
+        .expect("light");
+    let views = shadows::light_views(
+        &spot[0],
+        &Camera::look_at(Vec3::Z, Vec3::ZERO),
+        1.0,
+        scene::Aabb {
+            min: Vec3::splat(-10.0),
+            max: Vec3::splat(10.0),
+        },
+        &CONFIG,
+    );
+    assert_eq!(views.len(), 1);
+    let v = &views[0];
+    assert!(v.sees_sphere(Vec3::new(0.0, -5.0, 0.0), 0.1), "on the axis");
+    assert!(
+        v.sees_sphere(Vec3::new(0.0, 5.0, 0.0), 5.5),
+        "behind, reaching the near plane"
+    );
+    assert!(
+        !v.sees_sphere(Vec3::new(0.0, 5.0, 0.0), 1.0),
+        "behind the light"
+    );
+    assert!(
+        !v.sees_sphere(Vec3::new(0.0, -12.0, 0.0), 1.0),
+        "beyond the radius"
+    );
+    // 5 below the light the cone's edge is 5·tan 30° (+ the margin) ≈ 2.9 off the axis.
+    assert!(
+        !v.sees_sphere(Vec3::new(4.0, -5.0, 0.0), 0.5),
+        "outside the cone"
+    );
+    assert!(
+        v.sees_sphere(Vec3::new(4.0, -5.0, 0.0), 1.5),
+        "straddling the cone's edge"
+    );
+}

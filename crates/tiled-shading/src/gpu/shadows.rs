@@ -59,7 +59,8 @@ pub struct GpuShadowMaps {
     params: wgpu::Buffer,
     sampler: wgpu::Sampler,
     group: wgpu::BindGroup,
-    count: usize,
+    /// The views set, for culling casters on the CPU.
+    set: Vec<ShadowView>,
     config: ShadowMapConfig,
 }
 
@@ -85,8 +86,9 @@ impl ShadowMapPass {
         Ok(Self { pipeline, layout })
     }
 
-    /// Records one depth pass per view of `maps` (cleared to the far plane, then `scene`
-    /// drawn as that view's instance), timed as one pass `shadow maps` by `timer`.
+    /// Records one depth pass per view of `maps` (cleared to the far plane, then the clusters
+    /// of `scene` whose bounds meet the view, drawn as that view's instance), timed as one
+    /// pass `shadow maps` by `timer`.
     pub fn encode(
         &self,
         maps: &GpuShadowMaps,
@@ -95,8 +97,8 @@ impl ShadowMapPass {
         timer: Option<&PassTimer>,
     ) {
         let timestamps = timer.and_then(|t| t.render_pass("shadow maps"));
-        let last = maps.count.saturating_sub(1);
-        for (v, layer) in maps.layers[..maps.count].iter().enumerate() {
+        let last = maps.set.len().saturating_sub(1);
+        for (v, (layer, view)) in maps.layers.iter().zip(&maps.set).enumerate() {
             // The timer's begin stamp goes to the first pass, its end stamp to the last.
             let stamps = timestamps
                 .as_ref()
@@ -125,7 +127,9 @@ impl ShadowMapPass {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &maps.group, &[]);
-            scene.draw_geometry(&mut pass, v as u32..v as u32 + 1);
+            scene.draw_geometry(&mut pass, v as u32..v as u32 + 1, |c, r| {
+                view.sees_sphere(c, r)
+            });
         }
     }
 }
@@ -208,7 +212,7 @@ impl ShadowMapPass {
             params,
             sampler,
             group,
-            count: 0,
+            set: Vec::new(),
             config: *config,
         })
     }
@@ -229,7 +233,7 @@ impl GpuShadowMaps {
             )));
         }
         queue.write_buffer(&self.views, 0, bytemuck::cast_slice(views));
-        self.count = views.len();
+        self.set = views.to_vec();
         Ok(())
     }
 
@@ -240,7 +244,7 @@ impl GpuShadowMaps {
 
     /// Views set.
     pub fn count(&self) -> usize {
-        self.count
+        self.set.len()
     }
 
     /// The configuration they were made with.
