@@ -116,8 +116,9 @@ struct Args {
     /// Distance under which a VPL's 1/d² is clamped (default: 2 % of the scene diagonal).
     #[arg(long, requires = "vpls")]
     vpl_clamp: Option<f32>,
-    /// Shadow maps for every direct light (GPU only): RES×RES texels per view (spot: one
-    /// view, point: six cube faces, hemispherical: five, directional: four cascades).
+    /// Shadow maps for every direct light: RES×RES texels per view (spot: one view, point:
+    /// six cube faces, hemispherical: five, directional: four cascades); with --cpu their
+    /// depth is ray-cast through every texel (slow at large RES).
     #[arg(long, value_name = "RES", value_parser = clap::value_parser!(u32).range(8..=16384))]
     shadows: Option<u32>,
     /// Stand in for each emissive mesh with N hemispherical lights spread over its area
@@ -829,9 +830,12 @@ fn run() -> Result<()> {
     if args.vpl_shadows.is_some() && (args.cpu || indirect.is_none()) {
         bail!("--vpl-shadows needs --vpls N and runs on the GPU only (no --cpu)");
     }
-    if args.shadows.is_some() && args.cpu {
-        bail!("--shadows runs on the GPU only (no --cpu)");
-    }
+    let shadow_config = args
+        .shadows
+        .map(|resolution| tiled_shading::shadows::ShadowMapConfig {
+            resolution,
+            ..Default::default()
+        });
     let gpu = if args.cpu {
         None
     } else {
@@ -850,13 +854,7 @@ fn run() -> Result<()> {
                 let mut renderer =
                     pipeline::gpu::GpuRenderer::new(d, q, &scene, &direct_lights, width, height)?;
                 renderer.set_shading(d, q, &shading)?;
-                if let Some(resolution) = args.shadows {
-                    let config = tiled_shading::shadows::ShadowMapConfig {
-                        resolution,
-                        ..Default::default()
-                    };
-                    renderer.set_shadows(d, q, Some(&config))?;
-                }
+                renderer.set_shadows(d, q, shadow_config.as_ref())?;
                 if let Some((config, set)) = indirect_ref {
                     match args.vpl_shadows {
                         Some(mode) => renderer.set_vpl_shadows(
@@ -902,13 +900,16 @@ fn run() -> Result<()> {
                         "--size {width}x{height}: the CPU reference renders at most {MAX_CPU_PIXELS} pixels"
                     );
                 }
-                let inputs = pipeline::cpu::FrameInputs::new(
+                let mut inputs = pipeline::cpu::FrameInputs::new(
                     &scene,
                     &camera,
                     &direct_lights,
                     (width, height),
                     ambient,
                 );
+                if let Some(config) = shadow_config {
+                    inputs = inputs.with_shadows(config);
+                }
                 let (rendered, stages) =
                     pipeline::cpu::render_indirect(&inputs, &shading, indirect_ref)?;
                 if args.heatmap {

@@ -10,6 +10,7 @@ use scene::{Camera, Light, Scene};
 
 use crate::{PassTiming, RenderError, Rendered, ShadingConfig};
 use instant_radiosity::{IndirectConfig, IndirectStages, vpl::VplSet};
+use tiled_shading::shadows::{self, ShadowMapConfig};
 
 pub use tiled_shading::lighting::{
     Surface, distance_attenuation, light_incidence, reflect_light, shade_light,
@@ -64,9 +65,20 @@ pub struct FrameInputs<'a> {
     width: u32,
     height: u32,
     ambient: Vec3,
+    shadows: Option<ShadowMapConfig>,
 }
 
 impl<'a> FrameInputs<'a> {
+    /// Shadows every light with maps of `config` (`GpuRenderer::set_shadows`' twin), whose
+    /// depth the CPU ray-casts through every texel centre
+    /// ([`tiled_shading::shadows::ray_cast_maps`]).
+    pub fn with_shadows(self, config: ShadowMapConfig) -> Self {
+        Self {
+            shadows: Some(config),
+            ..self
+        }
+    }
+
     /// `scene` from `camera` at `(width, height)`, lit by `lights` and `ambient`.
     pub fn new(
         scene: &'a Scene,
@@ -82,6 +94,7 @@ impl<'a> FrameInputs<'a> {
             width,
             height,
             ambient,
+            shadows: None,
         }
     }
 }
@@ -101,7 +114,7 @@ pub fn render_indirect(
     indirect: Option<(&IndirectConfig, &VplSet)>,
 ) -> Result<(Rendered, Option<IndirectStages>), RenderError> {
     let (scene, camera, width, height) = (inputs.scene, inputs.camera, inputs.width, inputs.height);
-    let gpu_lights = crate::validate_lights(inputs.lights)?;
+    let mut gpu_lights = crate::validate_lights(inputs.lights)?;
     let mut timings = Vec::new();
     let timed = |timings: &mut Vec<PassTiming>, name: &str, t: Instant| {
         timings.push(PassTiming {
@@ -113,8 +126,28 @@ pub fn render_indirect(
     let gb = gbuffer::cpu::rasterize(scene, camera, width, height)?.gbuffer;
     timed(&mut timings, "gbuffer", t);
     let frame = Frame::new(camera, width, height);
+    let maps = match &inputs.shadows {
+        Some(config) => {
+            let t = Instant::now();
+            let plan = shadows::plan(
+                &gpu_lights,
+                &vec![true; gpu_lights.len()],
+                camera,
+                width as f32 / height as f32,
+                scene.bounds(),
+                config,
+                u32::MAX,
+            )?;
+            plan.assign(&mut gpu_lights);
+            let maps = shadows::ray_cast_maps(&scene::Bvh::build(scene), &plan.views, config);
+            timed(&mut timings, "shadow maps", t);
+            Some(maps)
+        }
+        None => None,
+    };
     let t = Instant::now();
-    let direct = tiled_shading::cpu::shade(&gb, &frame, camera, &gpu_lights, shading, None)?;
+    let direct =
+        tiled_shading::cpu::shade(&gb, &frame, camera, &gpu_lights, shading, maps.as_ref())?;
     timed(
         &mut timings,
         &format!("light accumulation ({})", shading.method),

@@ -60,3 +60,56 @@ fn cascades_follow_the_camera_and_shadows_darken() {
         luminance(&lit)
     );
 }
+
+#[test]
+fn shadowed_gpu_frame_matches_the_cpu_frame() {
+    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
+        return;
+    };
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let scene = scene::spheres_on_plane(5);
+    let lights: Vec<Light> = ["dir:0.4,-1,0.3,1,1,1,2", "point:0.5,2.5,0.5,8,1,0.9,0.8,2"]
+        .iter()
+        .map(|s| s.parse().expect("light"))
+        .collect();
+    let camera = scene.camera_or_framed();
+    let config = ShadowMapConfig {
+        resolution: 256,
+        ..Default::default()
+    };
+    let (w, h) = (96, 64);
+    let mut r = GpuRenderer::new(d, q, &scene, &lights, w, h).expect("renderer");
+    r.set_shadows(d, q, Some(&config)).expect("shadows");
+    let gpu_frame = r.render(d, q, &camera, Vec3::ZERO).expect("frame").image;
+    let inputs = pipeline::cpu::FrameInputs::new(&scene, &camera, &lights, (w, h), Vec3::ZERO)
+        .with_shadows(config);
+    let cpu_frame = pipeline::cpu::render(&inputs).expect("cpu frame").image;
+    let peak = cpu_frame
+        .pixels()
+        .iter()
+        .fold(0.0f32, |m, p| m.max(p[0].max(p[1]).max(p[2])));
+    // The CPU's maps are ray-cast through texel centres, the GPU's rasterised: texels on a
+    // silhouette may differ (≤ 3 % of a map), and so may the pixels their tent reads.
+    let differ = cpu_frame
+        .pixels()
+        .iter()
+        .zip(gpu_frame.pixels())
+        .filter(|(a, b)| (0..3).any(|c| (a[c] - b[c]).abs() > 0.01 * peak))
+        .count();
+    assert!(
+        differ * 50 <= cpu_frame.pixels().len(),
+        "{differ} of {} pixels differ by more than 1 % of the peak",
+        cpu_frame.pixels().len()
+    );
+    // And the shadows are there on both: the unshadowed CPU frame is brighter.
+    let unshadowed = pipeline::cpu::render(&pipeline::cpu::FrameInputs::new(
+        &scene,
+        &camera,
+        &lights,
+        (w, h),
+        Vec3::ZERO,
+    ))
+    .expect("cpu frame")
+    .image;
+    assert!(luminance(&cpu_frame) < 0.97 * luminance(&unshadowed));
+}
