@@ -36,6 +36,39 @@ impl Stat {
     }
 }
 
+/// A Markdown table of a report: the header, then one row of cells per [`Table::row`];
+/// `Display` writes it with a blank line after.
+///
+/// ```
+/// let mut t = bench::Table::new(&["size", "ms"]);
+/// t.row([format!("{}×{}", 1920, 1080), format!("{:.3}", 0.25)]);
+/// assert_eq!(t.to_string(), "| size | ms |\n|---|---|\n| 1920×1080 | 0.250 |\n\n");
+/// ```
+pub struct Table(String);
+
+impl Table {
+    /// A table with the column names of `header`.
+    pub fn new(header: &[&str]) -> Self {
+        Self(format!(
+            "| {} |\n|{}\n",
+            header.join(" | "),
+            "---|".repeat(header.len())
+        ))
+    }
+
+    /// Appends a row of `cells`.
+    pub fn row(&mut self, cells: impl IntoIterator<Item = String>) {
+        let cells: Vec<String> = cells.into_iter().collect();
+        self.0 += &format!("| {} |\n", cells.join(" | "));
+    }
+}
+
+impl std::fmt::Display for Table {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "{}", self.0)
+    }
+}
+
 /// The program's arguments without the `--bench` that `cargo bench` passes to every bench
 /// target: what the benchmark programs parse.
 pub fn args() -> impl Iterator<Item = String> {

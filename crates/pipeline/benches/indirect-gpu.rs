@@ -212,98 +212,102 @@ fn main() -> Result<()> {
 }
 
 fn markdown(r: &Report) -> String {
-    use std::fmt::Write;
-    let mut s = r.header.markdown(
-        "Instant radiosity with interleaved deferred shading (Segovia 2006)",
-        r.frames,
-    );
-    let _ = writeln!(
-        s,
-        "\nScene `{}`, {}; primary light: the default sun; indirect light only (no direct \
-         light, no ambient), one bounce, no VPL visibility (SNSM). Blur 5×5 fast unless said. \
-         Times are medians of GPU timestamps; the reference (every pixel shades every VPL) is \
-         measured in the same run.\n",
-        r.scene, r.camera
-    );
-    let _ = writeln!(
-        s,
-        "## Table 3: ms per pass and per million fragments (4×4)\n"
-    );
-    let _ = writeln!(
-        s,
-        "| size | VPLs | interleaving | BC | BS | SNSM | BG | DB | B | composition |\n|---|---|---|---|---|---|---|---|---|---|"
-    );
+    let mut passes = bench::Table::new(&[
+        "size",
+        "VPLs",
+        "interleaving",
+        "BC",
+        "BS",
+        "SNSM",
+        "BG",
+        "DB",
+        "B",
+        "composition",
+    ]);
     for row in r.rows.iter().filter(|x| x.pattern == "4x4") {
         let mfrag = f64::from(row.width) * f64::from(row.height) / 1e6;
-        let get = |names: &[&str]| -> f64 {
-            row.passes
+        let cell = |names: &[&str]| {
+            let ms: f64 = row
+                .passes
                 .iter()
                 .filter(|(n, _)| names.contains(&n.as_str()))
                 .map(|(_, st)| st.median_ms)
-                .sum()
-        };
-        let cell = |names: &[&str]| {
-            let ms = get(names);
+                .sum();
             if ms == 0.0 {
                 "—".to_string()
             } else {
                 format!("{ms:.3} ({:.3})", ms / mfrag)
             }
         };
-        let _ = writeln!(
-            s,
-            "| {}×{} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
-            row.width,
-            row.height,
-            row.vpls,
-            row.interleaving,
+        let mut cells = vec![
+            format!("{}×{}", row.width, row.height),
+            row.vpls.to_string(),
+            row.interleaving.clone(),
             cell(&["z-prepass", "gbuffer"]),
-            cell(&["BS"]),
-            cell(&["SNSM"]),
-            cell(&["BG"]),
-            cell(&["DB"]),
-            cell(&["B"]),
-            cell(&["composition"]),
-        );
+        ];
+        cells.extend(["BS", "SNSM", "BG", "DB", "B", "composition"].map(|p| cell(&[p])));
+        passes.row(cells);
     }
-    let _ = writeln!(
-        s,
-        "\nCells: ms (ms per million fragments). BC = z-prepass + G-buffer (raster).\n\n## Speed-up of the indirect passes over the reference shading\n\nIndirect = BS + SNSM + BG + DB + B (fused: SNSM + DB + B). Ideal = n·m.\n\n| size | VPLs | pattern | interleaving | indirect ms | reference ms | speed-up | ideal | % of ideal |\n|---|---|---|---|---|---|---|---|---|"
-    );
+    let mut speedups = bench::Table::new(&[
+        "size",
+        "VPLs",
+        "pattern",
+        "interleaving",
+        "indirect ms",
+        "reference ms",
+        "speed-up",
+        "ideal",
+        "% of ideal",
+    ]);
     for row in &r.rows {
-        let _ = writeln!(
-            s,
-            "| {}×{} | {} | {} | {} | {:.3} | {:.3} | ×{:.1} | ×{} | {:.0} % |",
-            row.width,
-            row.height,
-            row.vpls,
-            row.pattern,
-            row.interleaving,
-            row.indirect.median_ms,
-            row.reference_shading.median_ms,
-            row.speedup,
-            row.ideal,
-            100.0 * row.speedup / f64::from(row.ideal)
-        );
+        speedups.row([
+            format!("{}×{}", row.width, row.height),
+            row.vpls.to_string(),
+            row.pattern.clone(),
+            row.interleaving.clone(),
+            format!("{:.3}", row.indirect.median_ms),
+            format!("{:.3}", row.reference_shading.median_ms),
+            format!("×{:.1}", row.speedup),
+            format!("×{}", row.ideal),
+            format!("{:.0} %", 100.0 * row.speedup / f64::from(row.ideal)),
+        ]);
     }
-    let _ = writeln!(
-        s,
-        "\n## Quality against the reference (indirect-only image, sRGB)\n\n| size | VPLs | pattern | FLIP mean | PSNR dB | RMSE | FLIP unfiltered | PSNR unfiltered |\n|---|---|---|---|---|---|---|---|"
-    );
+    let mut quality = bench::Table::new(&[
+        "size",
+        "VPLs",
+        "pattern",
+        "FLIP mean",
+        "PSNR dB",
+        "RMSE",
+        "FLIP unfiltered",
+        "PSNR unfiltered",
+    ]);
     for q in &r.quality {
-        let _ = writeln!(
-            s,
-            "| {}×{} | {} | {} | {:.4} | {:.1} | {:.4} | {:.4} | {:.1} |",
-            q.width,
-            q.height,
-            q.vpls,
-            q.pattern,
-            q.blurred.flip_mean,
-            q.blurred.psnr,
-            q.blurred.rmse,
-            q.unfiltered.flip_mean,
-            q.unfiltered.psnr
-        );
+        quality.row([
+            format!("{}×{}", q.width, q.height),
+            q.vpls.to_string(),
+            q.pattern.clone(),
+            format!("{:.4}", q.blurred.flip_mean),
+            format!("{:.1}", q.blurred.psnr),
+            format!("{:.4}", q.blurred.rmse),
+            format!("{:.4}", q.unfiltered.flip_mean),
+            format!("{:.1}", q.unfiltered.psnr),
+        ]);
     }
-    s
+    format!(
+        "{}\nScene `{}`, {}; primary light: the default sun; indirect light only (no direct \
+         light, no ambient), one bounce, no VPL visibility (SNSM). Blur 5×5 fast unless said. \
+         Times are medians of GPU timestamps; the reference (every pixel shades every VPL) is \
+         measured in the same run.\n\n## Table 3: ms per pass and per million fragments (4×4)\n\n\
+         {passes}Cells: ms (ms per million fragments). BC = z-prepass + G-buffer (raster).\n\n\
+         ## Speed-up of the indirect passes over the reference shading\n\nIndirect = BS + SNSM + \
+         BG + DB + B (fused: SNSM + DB + B). Ideal = n·m.\n\n{speedups}\
+         ## Quality against the reference (indirect-only image, sRGB)\n\n{quality}",
+        r.header.markdown(
+            "Instant radiosity with interleaved deferred shading (Segovia 2006)",
+            r.frames
+        ),
+        r.scene,
+        r.camera
+    )
 }

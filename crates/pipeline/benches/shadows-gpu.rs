@@ -165,36 +165,41 @@ fn main() -> Result<()> {
 }
 
 fn markdown(r: &Report) -> String {
-    use std::fmt::Write;
-    let mut s = r.header.markdown(
-        "Shadow maps of the direct lights (docs/shadows.md)",
-        r.frames,
-    );
-    let _ = writeln!(
-        s,
-        "\nScene `{}` ({} triangles), {}×{}, tiled light accumulation (16×16), every view \
-         {}² texels. `shadow maps` = the GPU time of rendering every view (one depth pass per \
-         view, the whole scene each); the light accumulation with the lookup against the same \
-         pass without shadows in the same run. Medians (minimum) of GPU timestamps.\n\n\
-         | lights | views | shadow maps ms | G triangles/s | light accumulation ms, shadowed | unshadowed | shadows + shading ms |\n\
-         |---|---|---|---|---|---|---|",
-        r.scene, r.triangles, r.width, r.height, r.resolution
-    );
+    let mut table = bench::Table::new(&[
+        "lights",
+        "views",
+        "shadow maps ms",
+        "G triangles/s",
+        "light accumulation ms, shadowed",
+        "unshadowed",
+        "shadows + shading ms",
+    ]);
     for row in &r.rows {
-        let _ = writeln!(
-            s,
-            "| {} {} | {} | {:.3} ({:.3}) | {:.2} | {:.3} ({:.3}) | {:.3} | {:.3} |",
-            row.count,
-            row.lights,
-            row.views,
-            row.shadow_maps.median_ms,
-            row.shadow_maps.min_ms,
-            row.triangles_per_s / 1e9,
-            row.shading_shadowed.median_ms,
-            row.shading_shadowed.min_ms,
-            row.shading_unshadowed.median_ms,
-            row.shadow_maps.median_ms + row.shading_shadowed.median_ms
-        );
+        let (maps, shaded) = (&row.shadow_maps, &row.shading_shadowed);
+        table.row([
+            format!("{} {}", row.count, row.lights),
+            row.views.to_string(),
+            format!("{:.3} ({:.3})", maps.median_ms, maps.min_ms),
+            format!("{:.2}", row.triangles_per_s / 1e9),
+            format!("{:.3} ({:.3})", shaded.median_ms, shaded.min_ms),
+            format!("{:.3}", row.shading_unshadowed.median_ms),
+            format!("{:.3}", maps.median_ms + shaded.median_ms),
+        ]);
     }
-    s
+    format!(
+        "{}\nScene `{}` ({} triangles), {}×{}, tiled light accumulation (16×16), every view \
+         {}² texels. `shadow maps` = the GPU time of rendering every view (one depth pass per \
+         view drawing the scene's clusters that meet it); the light accumulation with the \
+         lookup against the same pass without shadows in the same run. Medians (minimum) of \
+         GPU timestamps.\n\n{table}",
+        r.header.markdown(
+            "Shadow maps of the direct lights (docs/shadows.md)",
+            r.frames
+        ),
+        r.scene,
+        r.triangles,
+        r.width,
+        r.height,
+        r.resolution
+    )
 }
