@@ -15,45 +15,7 @@ pub(super) struct Draw {
 
 /// Triangles per [`Cluster`]: small enough that a light of small radius sees few of a large
 /// mesh's clusters, large enough that a view stays a few hundred draws.
-const CLUSTER_TRIANGLES: usize = 512;
-
-/// `mesh`'s triangles in the Morton (Z-curve) order of their centroids in the mesh's bounds,
-/// so consecutive triangles — a [`Cluster`] — lie close together (files keep them in any
-/// order: Sponza's 1024-triangle runs spanned half the scene).
-fn morton_ordered(mesh: &::scene::Mesh) -> Vec<u32> {
-    let centroid = |t: &[u32]| {
-        t.iter()
-            .map(|&i| mesh.positions[i as usize])
-            .sum::<glam::Vec3>()
-            / 3.0
-    };
-    let (lo, hi) = mesh.indices.chunks_exact(3).map(centroid).fold(
-        (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
-        |(lo, hi), c| (lo.min(c), hi.max(c)),
-    );
-    let scale = 1023.0 / (hi - lo).max(glam::Vec3::splat(f32::MIN_POSITIVE));
-    // 10 bits per axis, interleaved.
-    let spread = |v: u32| {
-        let mut x = v & 0x3ff;
-        x = (x | (x << 16)) & 0x0300_00ff;
-        x = (x | (x << 8)) & 0x0300_f00f;
-        x = (x | (x << 4)) & 0x030c_30c3;
-        (x | (x << 2)) & 0x0924_9249
-    };
-    let mut triangles: Vec<(u32, &[u32])> = mesh
-        .indices
-        .chunks_exact(3)
-        .map(|t| {
-            let q = ((centroid(t) - lo) * scale).as_uvec3();
-            (spread(q.x) | spread(q.y) << 1 | spread(q.z) << 2, t)
-        })
-        .collect();
-    triangles.sort_by_key(|&(code, _)| code);
-    triangles
-        .into_iter()
-        .flat_map(|(_, t)| t.iter().copied())
-        .collect()
-}
+const CLUSTER_TRIANGLES: usize = 1024;
 
 /// Consecutive triangles of one mesh and their bounding sphere, the unit of caster culling
 /// ([`GpuScene::draw_geometry`]).
@@ -81,7 +43,7 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// Draws the triangles of every cluster (≤ 512 triangles of a mesh, close in space) whose
+    /// Draws the triangles of every cluster (≤ 1024 consecutive triangles of a mesh) whose
     /// bounding sphere (centre, radius) `visible` accepts, positions only (vertex buffer slot
     /// 0, no bind groups), with `instances`: for depth-only passes whose pipeline sets its own
     /// groups (shadow maps draw view `v` as instance `v`, culling casters outside it).
@@ -122,8 +84,7 @@ impl GpuScene {
                 base_vertex,
                 material: m.material as usize,
             });
-            let ordered = morton_ordered(m);
-            for (k, triangles) in ordered.chunks(3 * CLUSTER_TRIANGLES).enumerate() {
+            for (k, triangles) in m.indices.chunks(3 * CLUSTER_TRIANGLES).enumerate() {
                 let (lo, hi) = triangles.iter().fold(
                     (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
                     |(lo, hi), &i| {
@@ -139,7 +100,7 @@ impl GpuScene {
                     radius: (hi - lo).length() * 0.5,
                 });
             }
-            indices.extend_from_slice(&ordered);
+            indices.extend_from_slice(&m.indices);
             vertices.extend(
                 m.positions
                     .iter()
