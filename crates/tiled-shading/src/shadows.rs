@@ -67,16 +67,6 @@ impl ShadowView {
         }
     }
 
-    /// Whether a sphere (centre, radius) meets the view's frustum: the caster culling of
-    /// [`crate::gpu::shadows::ShadowMapPass`] (six clip-space planes, depth 0 to 1).
-    pub fn sees_sphere(&self, centre: Vec3, radius: f32) -> bool {
-        let m = Mat4::from_cols_array_2d(&self.view_proj);
-        let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
-        [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2]
-            .iter()
-            .all(|p| p.xyz().dot(centre) + p.w >= -radius * p.xyz().length())
-    }
-
     /// The stored depth of distance `z` along the axis: the inverse of
     /// [`ShadowView::linear_depth`].
     pub fn stored_depth(&self, z: f32) -> f32 {

@@ -13,28 +13,12 @@ pub(super) struct Draw {
     pub(super) material: usize,
 }
 
-/// Triangles per [`Cluster`]: small enough that a light of small radius sees few of a large
-/// mesh's clusters, large enough that a view stays a few hundred draws.
-const CLUSTER_TRIANGLES: usize = 1024;
-
-/// Consecutive triangles of one mesh and their bounding sphere, the unit of caster culling
-/// ([`GpuScene::draw_geometry`]).
-#[derive(Clone, Copy, Debug)]
-struct Cluster {
-    first_index: u32,
-    index_count: u32,
-    base_vertex: i32,
-    centre: glam::Vec3,
-    radius: f32,
-}
-
 /// A scene uploaded for the G-buffer pass: one vertex and one index buffer, a bind group per
 /// material, and the materials as a storage buffer for later passes.
 pub struct GpuScene {
     pub(super) vertices: wgpu::Buffer,
     pub(super) indices: wgpu::Buffer,
     pub(super) draws: Vec<Draw>,
-    clusters: Vec<Cluster>,
     pub(super) material_groups: Vec<wgpu::BindGroup>,
     /// All materials ([`GpuMaterial`]), indexed by material id.
     pub materials: wgpu::Buffer,
@@ -43,22 +27,16 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// Draws the triangles of every cluster (≤ 1024 consecutive triangles of a mesh) whose
-    /// bounding sphere (centre, radius) `visible` accepts, positions only (vertex buffer slot
-    /// 0, no bind groups), with `instances`: for depth-only passes whose pipeline sets its own
-    /// groups (shadow maps draw view `v` as instance `v`, culling casters outside it).
-    pub fn draw_geometry(
-        &self,
-        pass: &mut wgpu::RenderPass<'_>,
-        instances: std::ops::Range<u32>,
-        visible: impl Fn(glam::Vec3, f32) -> bool,
-    ) {
+    /// Draws every triangle, positions only (vertex buffer slot 0, no bind groups), with
+    /// `instances`: for depth-only passes whose pipeline sets its own groups (shadow maps
+    /// draw view `v` as instance `v`).
+    pub fn draw_geometry(&self, pass: &mut wgpu::RenderPass<'_>, instances: std::ops::Range<u32>) {
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-        for c in self.clusters.iter().filter(|c| visible(c.centre, c.radius)) {
+        for d in &self.draws {
             pass.draw_indexed(
-                c.first_index..c.first_index + c.index_count,
-                c.base_vertex,
+                d.first_index..d.first_index + d.index_count,
+                d.base_vertex,
                 instances.clone(),
             );
         }
@@ -75,31 +53,13 @@ impl GpuScene {
         let mut vertices = Vec::new();
         let mut indices = Vec::new();
         let mut draws = Vec::new();
-        let mut clusters = Vec::new();
         for m in &scene.meshes {
-            let (first_index, base_vertex) = (indices.len() as u32, vertices.len() as i32);
             draws.push(Draw {
-                first_index,
+                first_index: indices.len() as u32,
                 index_count: m.indices.len() as u32,
-                base_vertex,
+                base_vertex: vertices.len() as i32,
                 material: m.material as usize,
             });
-            for (k, triangles) in m.indices.chunks(3 * CLUSTER_TRIANGLES).enumerate() {
-                let (lo, hi) = triangles.iter().fold(
-                    (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
-                    |(lo, hi), &i| {
-                        let p = m.positions[i as usize];
-                        (lo.min(p), hi.max(p))
-                    },
-                );
-                clusters.push(Cluster {
-                    first_index: first_index + (k * 3 * CLUSTER_TRIANGLES) as u32,
-                    index_count: triangles.len() as u32,
-                    base_vertex,
-                    centre: (lo + hi) * 0.5,
-                    radius: (hi - lo).length() * 0.5,
-                });
-            }
             indices.extend_from_slice(&m.indices);
             vertices.extend(
                 m.positions
@@ -179,7 +139,6 @@ impl GpuScene {
             vertices,
             indices,
             draws,
-            clusters,
             material_groups,
             materials,
             triangle_count: scene.triangle_count() as u64,

@@ -59,8 +59,7 @@ pub struct GpuShadowMaps {
     params: wgpu::Buffer,
     sampler: wgpu::Sampler,
     group: wgpu::BindGroup,
-    /// The views set, for culling casters on the CPU.
-    set: Vec<ShadowView>,
+    count: usize,
     config: ShadowMapConfig,
 }
 
@@ -86,9 +85,8 @@ impl ShadowMapPass {
         Ok(Self { pipeline, layout })
     }
 
-    /// Records one depth pass per view of `maps` (cleared to the far plane, then the clusters
-    /// of `scene` whose bounds meet the view, drawn as that view's instance), timed as one
-    /// pass `shadow maps` by `timer`.
+    /// Records one depth pass per view of `maps` (cleared to the far plane, then `scene`
+    /// drawn as that view's instance), timed as one pass `shadow maps` by `timer`.
     pub fn encode(
         &self,
         maps: &GpuShadowMaps,
@@ -97,8 +95,8 @@ impl ShadowMapPass {
         timer: Option<&PassTimer>,
     ) {
         let timestamps = timer.and_then(|t| t.render_pass("shadow maps"));
-        let last = maps.set.len().saturating_sub(1);
-        for (v, (layer, view)) in maps.layers.iter().zip(&maps.set).enumerate() {
+        let last = maps.count.saturating_sub(1);
+        for (v, layer) in maps.layers[..maps.count].iter().enumerate() {
             // The timer's begin stamp goes to the first pass, its end stamp to the last.
             let stamps = timestamps
                 .as_ref()
@@ -127,9 +125,7 @@ impl ShadowMapPass {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &maps.group, &[]);
-            scene.draw_geometry(&mut pass, v as u32..v as u32 + 1, |c, r| {
-                view.sees_sphere(c, r)
-            });
+            scene.draw_geometry(&mut pass, v as u32..v as u32 + 1);
         }
     }
 }
@@ -212,7 +208,7 @@ impl ShadowMapPass {
             params,
             sampler,
             group,
-            set: Vec::new(),
+            count: 0,
             config: *config,
         })
     }
@@ -233,7 +229,7 @@ impl GpuShadowMaps {
             )));
         }
         queue.write_buffer(&self.views, 0, bytemuck::cast_slice(views));
-        self.set = views.to_vec();
+        self.count = views.len();
         Ok(())
     }
 
@@ -244,7 +240,7 @@ impl GpuShadowMaps {
 
     /// Views set.
     pub fn count(&self) -> usize {
-        self.set.len()
+        self.count
     }
 
     /// The configuration they were made with.
