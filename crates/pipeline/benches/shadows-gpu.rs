@@ -140,7 +140,7 @@ fn main() -> Result<()> {
             shading_unshadowed: Stat::of(per_frame_sum(&plain, &[shading.as_str()])),
         };
         println!(
-            "{count:>4} {kind:<5} ({views:>3} views): shadow maps {:.3} ms ({:.2} G triangles/s), light accumulation {:.3} ms (unshadowed {:.3} ms)",
+            "{count:>4} {kind:<5} ({views:>3} views): shadow maps {:.3} ms ({:.2} G scene triangles/s), light accumulation {:.3} ms (unshadowed {:.3} ms)",
             row.shadow_maps.median_ms,
             row.triangles_per_s / 1e9,
             row.shading_shadowed.median_ms,
@@ -169,7 +169,7 @@ fn markdown(r: &Report) -> String {
         "lights",
         "views",
         "shadow maps ms",
-        "G triangles/s",
+        "G scene triangles/s",
         "light accumulation ms, shadowed",
         "unshadowed",
         "shadows + shading ms",
@@ -189,7 +189,7 @@ fn markdown(r: &Report) -> String {
     format!(
         "{}\nScene `{}` ({} triangles), {}×{}, tiled light accumulation (16×16), every view \
          {}² texels. `shadow maps` = the GPU time of rendering every view (one depth pass per \
-         view drawing the scene's clusters that meet it); the light accumulation with the \
+         view, the whole scene each: `G scene triangles/s` = views × scene triangles / time); the light accumulation with the \
          lookup against the same pass without shadows in the same run. Medians (minimum) of \
          GPU timestamps.\n\n{table}",
         r.header.markdown(
