@@ -327,6 +327,14 @@ impl SceneOption {
         let scene = scene::Scene::load(&path)?;
         Ok((path, scene))
     }
+
+    /// [`SceneOption::load`] and the scene's view: its preset in views.json, else its own
+    /// camera or one framing it.
+    pub fn load_viewed(&self) -> anyhow::Result<(std::path::PathBuf, scene::Scene, scene::Camera)> {
+        let (path, scene) = self.load()?;
+        let camera = scene::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
+        Ok((path, scene, camera))
+    }
 }
 
 /// Image error against a reference, on what a PNG shows (RGB clamped to \[0, 1\], sRGB).

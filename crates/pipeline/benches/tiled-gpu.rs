@@ -101,8 +101,7 @@ fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
     let gpu = args.common.options.gpu()?;
     let frames = args.common.options.frames(10);
-    let (path, scene) = args.common.scene.load()?;
-    let camera = scene::preset_view(&path, &scene).unwrap_or_else(|| scene.camera_or_framed());
+    let (path, scene, camera) = args.common.scene.load_viewed()?;
     println!(
         "scene: {} ({} triangles)",
         path.display(),
