@@ -12,8 +12,7 @@ fn sort_count(@builtin(global_invocation_id) id: vec3<u32>) {
     if !in_image(p) {
         return;
     }
-    let i = pixel_index(p);
-    let k = samples_or_first(i);
+    let k = samples_or_first(pixel_index(p));
     if k > 1u {
         atomicAdd(&sort[HISTOGRAM + k], 1u);
     }

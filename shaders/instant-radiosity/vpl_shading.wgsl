@@ -137,26 +137,18 @@ fn store(texel: vec2<u32>, sum: Accumulated) {
 
 @compute @workgroup_size(8, 8)
 fn shade_split(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= n * sub_width || id.y >= m * sub_height {
+    if !in_split_layout(id.xy) {
         return;
     }
-    let i = id.x / sub_width;
-    let j = id.y / sub_height;
-    let pixel = vec2((id.x % sub_width) * n + i, (id.y % sub_height) * m + j);
     // Padding texels (pixel outside the image) hold depth 0 and get zero.
-    store(id.xy, shade(id.xy, pixel, j * n + i));
+    store(id.xy, shade(id.xy, split_pixel(id.xy), split_subset(id.xy)));
 }
 
 @compute @workgroup_size(8, 8)
 fn shade_fused(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= n * sub_width || id.y >= m * sub_height {
+    let pixel = split_pixel(id.xy);
+    if !in_split_layout(id.xy) || pixel.x >= width || pixel.y >= height {
         return;
     }
-    let i = id.x / sub_width;
-    let j = id.y / sub_height;
-    let pixel = vec2((id.x % sub_width) * n + i, (id.y % sub_height) * m + j);
-    if pixel.x >= width || pixel.y >= height {
-        return;
-    }
-    store(pixel, shade(pixel, pixel, j * n + i));
+    store(pixel, shade(pixel, pixel, split_subset(id.xy)));
 }

@@ -33,23 +33,17 @@ fn shade(texel: vec2<u32>, subset: u32) -> vec4<f32> {
 
 @compute @workgroup_size(16, 16)
 fn shade_split(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= n * sub_width || id.y >= m * sub_height {
+    if !in_split_layout(id.xy) {
         return;
     }
-    let subset = (id.y / sub_height) * n + id.x / sub_width;
-    textureStore(irradiance, id.xy, shade(id.xy, subset));
+    textureStore(irradiance, id.xy, shade(id.xy, split_subset(id.xy)));
 }
 
 @compute @workgroup_size(16, 16)
 fn shade_fused(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= n * sub_width || id.y >= m * sub_height {
+    let p = split_pixel(id.xy);
+    if !in_split_layout(id.xy) || p.x >= width || p.y >= height {
         return;
     }
-    let i = id.x / sub_width;
-    let j = id.y / sub_height;
-    let p = vec2((id.x % sub_width) * n + i, (id.y % sub_height) * m + j);
-    if p.x >= width || p.y >= height {
-        return;
-    }
-    textureStore(irradiance, p, shade(p, j * n + i));
+    textureStore(irradiance, p, shade(p, split_subset(id.xy)));
 }

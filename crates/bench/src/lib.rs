@@ -36,6 +36,13 @@ impl Stat {
     }
 }
 
+/// `median (min)` in ms with three decimals, a report's usual cell.
+impl std::fmt::Display for Stat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:.3} ({:.3})", self.median_ms, self.min_ms)
+    }
+}
+
 /// A Markdown table of a report: the header, then one row of cells per [`Table::row`];
 /// `Display` writes it with a blank line after.
 ///

@@ -26,27 +26,13 @@ fn material(name: &str, albedo: f32, roughness: f32) -> Material {
 /// A 4×4 floor at y = 0 facing up, a ceiling at y = 1 facing down, a point light between
 /// them, and a camera under the ceiling looking straight down at the floor.
 fn plane_scene() -> (Scene, Camera) {
-    let (a, b) = (-2.0, 2.0);
-    let floor = Mesh::quad(
-        "floor",
-        [
-            Vec3::new(a, 0.0, a),
-            Vec3::new(a, 0.0, b),
-            Vec3::new(b, 0.0, b),
-            Vec3::new(b, 0.0, a),
-        ],
-        0,
-    );
-    let ceiling = Mesh::quad(
-        "ceiling",
-        [
-            Vec3::new(a, 1.0, a),
-            Vec3::new(b, 1.0, a),
-            Vec3::new(b, 1.0, b),
-            Vec3::new(a, 1.0, b),
-        ],
-        1,
-    );
+    // The square |x|, |z| ≤ 2 at height y, corners counter-clockwise seen from above.
+    let square = |y: f32| {
+        [(-2.0, -2.0), (-2.0, 2.0), (2.0, 2.0), (2.0, -2.0)].map(|(x, z)| Vec3::new(x, y, z))
+    };
+    let floor = Mesh::quad("floor", square(0.0), 0);
+    let [p0, p1, p2, p3] = square(1.0);
+    let ceiling = Mesh::quad("ceiling", [p0, p3, p2, p1], 1);
     let scene = Scene {
         meshes: vec![floor, ceiling],
         materials: vec![material("floor", 0.8, 1.0), material("ceiling", 0.7, 1.0)],

@@ -2,7 +2,7 @@
 //! CPU twin (the same atlas looked up by `shadows::vpl_visibility`), and the atlas's answers
 //! against ray casts from every VPL through the scene's BVH (the ground truth).
 
-use gbuffer::{Frame, Image, position};
+use gbuffer::{Frame, GBuffer, Image, position};
 use instant_radiosity::{
     IndirectConfig, Interleaving, cpu,
     gpu::IndirectStage,
@@ -20,6 +20,16 @@ const SHADOWS: ShadowConfig = ShadowConfig {
     normal_offset: 1.0,
     list_bytes: None,
 };
+
+/// The Cornell box from its camera: the scene, its CPU G-buffer and frame at `w × h`.
+fn cornell_box(w: u32, h: u32) -> (Scene, GBuffer, Frame) {
+    let scene = scene::cornell_box();
+    let camera = scene.camera_or_framed();
+    let gb = gbuffer::cpu::rasterize(&scene, &camera, w, h)
+        .expect("G-buffer")
+        .gbuffer;
+    (scene, gb, Frame::new(&camera, w, h))
+}
 
 fn set(scene: &Scene, subsets: u32) -> VplSet {
     vpl::generate_from_primary(scene, &Bvh::build(scene), 64, subsets, 5).expect("vpls")
@@ -52,13 +62,8 @@ fn gpu_shading_with_visibility_matches_its_cpu_twin() {
     let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) else {
         return;
     };
-    let scene = scene::cornell_box();
-    let camera = scene.camera_or_framed();
     let (w, h) = (64, 48);
-    let gb = gbuffer::cpu::rasterize(&scene, &camera, w, h)
-        .expect("G-buffer")
-        .gbuffer;
-    let frame = Frame::new(&camera, w, h);
+    let (scene, gb, frame) = cornell_box(w, h);
     let config = IndirectConfig {
         interleaving: Interleaving::Fused,
         blur: None,
@@ -129,13 +134,8 @@ fn atlas_visibility_agrees_with_ray_casts() {
     let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) else {
         return;
     };
-    let scene = scene::cornell_box();
-    let camera = scene.camera_or_framed();
     let (w, h) = (48, 36);
-    let gb = gbuffer::cpu::rasterize(&scene, &camera, w, h)
-        .expect("G-buffer")
-        .gbuffer;
-    let frame = Frame::new(&camera, w, h);
+    let (scene, gb, frame) = cornell_box(w, h);
     let set = set(&scene, 16);
     let bvh = Bvh::build(&scene);
     let band = 0.03 * scene.bounds().diagonal();

@@ -600,90 +600,107 @@ fn write_report(dir: &std::path::Path, r: &Report) -> Result<()> {
         )?;
     }
     let mut md = r.header.markdown("Interleave benchmarks", r.frames);
-    md.push_str("## Split and gather (Segovia 2006 §3, §5.1, §5.3)\n\nOne `Rgba32Uint` texture of random texels = a 16-byte/pixel G-buffer. Baselines in the same run: `copy_texture_to_texture` of the same texture, and a compute copy (the one-pass kernel with a 1×1 pattern: textureLoad → textureStore of the same texel). \"% of copy\" = baseline time / pass time (100 % = as fast as the baseline). GB/s counts bytes read + written. The two-pass row uses the fastest block of the sweep below for split and for gather.\n\n| size | copy_texture_to_texture ms (min) | GB/s | compute copy ms (min) | GB/s |\n|---|---|---|---|---|\n");
+    md.push_str("## Split and gather (Segovia 2006 §3, §5.1, §5.3)\n\nOne `Rgba32Uint` texture of random texels = a 16-byte/pixel G-buffer. Baselines in the same run: `copy_texture_to_texture` of the same texture, and a compute copy (the one-pass kernel with a 1×1 pattern: textureLoad → textureStore of the same texel). \"% of copy\" = baseline time / pass time (100 % = as fast as the baseline). GB/s counts bytes read + written. The two-pass row uses the fastest block of the sweep below for split and for gather.\n\n");
+    let mut copies = bench::Table::new(&[
+        "size",
+        "copy_texture_to_texture ms (min)",
+        "GB/s",
+        "compute copy ms (min)",
+        "GB/s",
+    ]);
     for c in &r.copy {
-        let _ = writeln!(
-            md,
-            "| {} | {:.3} ({:.3}) | {:.0} | {:.3} ({:.3}) | {:.0} |",
-            c.size,
-            c.copy_texture_to_texture.median_ms,
-            c.copy_texture_to_texture.min_ms,
-            c.copy_gbps,
-            c.compute_copy.median_ms,
-            c.compute_copy.min_ms,
-            c.compute_copy_gbps
-        );
+        copies.row([
+            c.size.clone(),
+            c.copy_texture_to_texture.to_string(),
+            format!("{:.0}", c.copy_gbps),
+            c.compute_copy.to_string(),
+            format!("{:.0}", c.compute_copy_gbps),
+        ]);
     }
-    md.push_str("\n| size | pattern | variant | split ms (min) | GB/s | % of copy | % of compute copy | gather ms (min) | GB/s | % of copy | % of compute copy |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    let percent = |f: f64| format!("{:.0} %", 100.0 * f);
+    let mut splits = bench::Table::new(&[
+        "size",
+        "pattern",
+        "variant",
+        "split ms (min)",
+        "GB/s",
+        "% of copy",
+        "% of compute copy",
+        "gather ms (min)",
+        "GB/s",
+        "% of copy",
+        "% of compute copy",
+    ]);
     for s in &r.split {
-        let _ = writeln!(
-            md,
-            "| {}×{} | {} | {} | {:.3} ({:.3}) | {:.0} | {:.0} % | {:.0} % | {:.3} ({:.3}) | {:.0} | {:.0} % | {:.0} % |",
-            s.width,
-            s.height,
-            s.pattern,
-            s.variant,
-            s.split.median_ms,
-            s.split.min_ms,
-            s.split_gbps,
-            100.0 * s.split_fraction_of_copy,
-            100.0 * s.split_fraction_of_compute_copy,
-            s.gather.median_ms,
-            s.gather.min_ms,
-            s.gather_gbps,
-            100.0 * s.gather_fraction_of_copy,
-            100.0 * s.gather_fraction_of_compute_copy
-        );
+        splits.row([
+            format!("{}×{}", s.width, s.height),
+            s.pattern.clone(),
+            s.variant.clone(),
+            s.split.to_string(),
+            format!("{:.0}", s.split_gbps),
+            percent(s.split_fraction_of_copy),
+            percent(s.split_fraction_of_compute_copy),
+            s.gather.to_string(),
+            format!("{:.0}", s.gather_gbps),
+            percent(s.gather_fraction_of_copy),
+            percent(s.gather_fraction_of_compute_copy),
+        ]);
     }
     let _ = write!(
         md,
-        "\n## Two-pass block-size sweep (Figure 5)\n\n![1024×1024 sweep]({stem}-sweep-1024x1024.svg)\n![4K sweep]({stem}-sweep-3840x2160.svg)\n\n| size | pattern | block p×q | split ms | gather ms |\n|---|---|---|---|---|\n"
+        "{copies}{splits}## Two-pass block-size sweep (Figure 5)\n\n![1024×1024 sweep]({stem}-sweep-1024x1024.svg)\n![4K sweep]({stem}-sweep-3840x2160.svg)\n\n"
     );
+    let mut sweep = bench::Table::new(&["size", "pattern", "block p×q", "split ms", "gather ms"]);
     for s in &r.sweep {
-        let _ = writeln!(
-            md,
-            "| {}×{} | {} | {} | {:.3} | {:.3} |",
-            s.width, s.height, s.pattern, s.block, s.split.median_ms, s.gather.median_ms
-        );
+        sweep.row([
+            format!("{}×{}", s.width, s.height),
+            s.pattern.clone(),
+            s.block.clone(),
+            format!("{:.3}", s.split.median_ms),
+            format!("{:.3}", s.gather.median_ms),
+        ]);
     }
-    md.push_str("\n## Edge-aware blur at 1280×1024 (Table 2)\n\nTwo separable passes on an `Rgba16Float` irradiance buffer guided by the discontinuity buffer of a rendered scene.\n\n| kernel | plain ms (min) | fast ms (min) | fast speed-up |\n|---|---|---|---|\n");
+    let mut blur =
+        bench::Table::new(&["kernel", "plain ms (min)", "fast ms (min)", "fast speed-up"]);
     for b in &r.blur_1280x1024 {
-        let _ = writeln!(
-            md,
-            "| {0}×{0} | {1:.3} ({2:.3}) | {3:.3} ({4:.3}) | {5:.2}× |",
-            b.kernel,
-            b.plain.median_ms,
-            b.plain.min_ms,
-            b.fast.median_ms,
-            b.fast.min_ms,
-            b.fast_speedup
-        );
+        blur.row([
+            format!("{0}×{0}", b.kernel),
+            b.plain.to_string(),
+            b.fast.to_string(),
+            format!("{:.2}×", b.fast_speedup),
+        ]);
     }
-    md.push_str("\n## Discontinuity buffer\n\n| size | ms (min) |\n|---|---|\n");
+    let mut discontinuity = bench::Table::new(&["size", "ms (min)"]);
     for (s, d) in &r.discontinuity {
-        let _ = writeln!(md, "| {s} | {:.3} ({:.3}) |", d.median_ms, d.min_ms);
+        discontinuity.row([s.clone(), d.to_string()]);
     }
-    md.push_str("\n## What splitting buys: split + shade + gather against the fused indirection (§3.1)\n\nEach pixel shades the 16 directional lights of its sub-buffer's subset. Split path: split linear depth and normals (tiled), shade the split G-buffer, gather the irradiance. Fused: one pass in sub-buffer order reading and writing the interleaved buffers by strided address.\n\n| size | pattern | fused ms (min) | split path ms (min) | passes (median ms) | split speed-up |\n|---|---|---|---|---|---|\n");
+    let mut shading = bench::Table::new(&[
+        "size",
+        "pattern",
+        "fused ms (min)",
+        "split path ms (min)",
+        "passes (median ms)",
+        "split speed-up",
+    ]);
     for s in &r.shading {
         let passes: Vec<String> = s
             .split_path_passes
             .iter()
             .map(|(n, ms)| format!("{n} {ms:.3}"))
             .collect();
-        let _ = writeln!(
-            md,
-            "| {}×{} | {} | {:.3} ({:.3}) | {:.3} ({:.3}) | {} | {:.2}× |",
-            s.width,
-            s.height,
-            s.pattern,
-            s.fused.median_ms,
-            s.fused.min_ms,
-            s.split_path.median_ms,
-            s.split_path.min_ms,
+        shading.row([
+            format!("{}×{}", s.width, s.height),
+            s.pattern.clone(),
+            s.fused.to_string(),
+            s.split_path.to_string(),
             passes.join(", "),
-            s.split_speedup
-        );
+            format!("{:.2}×", s.split_speedup),
+        ]);
     }
+    let _ = write!(
+        md,
+        "{sweep}## Edge-aware blur at 1280×1024 (Table 2)\n\nTwo separable passes on an `Rgba16Float` irradiance buffer guided by the discontinuity buffer of a rendered scene.\n\n{blur}## Discontinuity buffer\n\n{discontinuity}## What splitting buys: split + shade + gather against the fused indirection (§3.1)\n\nEach pixel shades the 16 directional lights of its sub-buffer's subset. Split path: split linear depth and normals (tiled), shade the split G-buffer, gather the irradiance. Fused: one pass in sub-buffer order reading and writing the interleaved buffers by strided address.\n\n{shading}"
+    );
     std::fs::write(base.with_extension("md"), md)?;
     println!("wrote {}.{{md,json}} and the sweep plots", base.display());
     Ok(())

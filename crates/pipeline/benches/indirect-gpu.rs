@@ -258,18 +258,28 @@ fn markdown(r: &Report) -> String {
         "ideal",
         "% of ideal",
     ]);
+    // The first cells of both tables: size, VPLs, pattern.
+    let configuration = |width: u32, height: u32, vpls: usize, pattern: &str| {
+        [
+            format!("{width}×{height}"),
+            vpls.to_string(),
+            pattern.to_owned(),
+        ]
+    };
     for row in &r.rows {
-        speedups.row([
-            format!("{}×{}", row.width, row.height),
-            row.vpls.to_string(),
-            row.pattern.clone(),
+        let cells = [
             row.interleaving.clone(),
             format!("{:.3}", row.indirect.median_ms),
             format!("{:.3}", row.reference_shading.median_ms),
             format!("×{:.1}", row.speedup),
             format!("×{}", row.ideal),
             format!("{:.0} %", 100.0 * row.speedup / f64::from(row.ideal)),
-        ]);
+        ];
+        speedups.row(
+            configuration(row.width, row.height, row.vpls, &row.pattern)
+                .into_iter()
+                .chain(cells),
+        );
     }
     let mut quality = bench::Table::new(&[
         "size",
@@ -282,16 +292,18 @@ fn markdown(r: &Report) -> String {
         "PSNR unfiltered",
     ]);
     for q in &r.quality {
-        quality.row([
-            format!("{}×{}", q.width, q.height),
-            q.vpls.to_string(),
-            q.pattern.clone(),
+        let cells = [
             format!("{:.4}", q.blurred.flip_mean),
             format!("{:.1}", q.blurred.psnr),
             format!("{:.4}", q.blurred.rmse),
             format!("{:.4}", q.unfiltered.flip_mean),
             format!("{:.1}", q.unfiltered.psnr),
-        ]);
+        ];
+        quality.row(
+            configuration(q.width, q.height, q.vpls, &q.pattern)
+                .into_iter()
+                .chain(cells),
+        );
     }
     format!(
         "{}\nScene `{}`, {}; primary light: the default sun; indirect light only (no direct \

@@ -64,6 +64,19 @@ impl Builder {
         mesh.indices.extend(tris.map(|i| base + i));
     }
 
+    /// A mesh "ground": the square `[-half, half]²` at y = 0 facing up, UVs 0..`uv_scale`.
+    fn ground(&mut self, material: u32, half: f32, uv_scale: f32) {
+        let plane = self.mesh("ground", material);
+        let corner = |x: f32, z: f32| Vec3::new(x * half, 0.0, z * half);
+        let corners = [
+            corner(-1.0, -1.0),
+            corner(1.0, -1.0),
+            corner(1.0, 1.0),
+            corner(-1.0, 1.0),
+        ];
+        Self::quad(plane, corners, Vec3::Y * 10.0, uv_scale);
+    }
+
     /// The four sides and top of a block whose top face is `top` (at any height) and bottom is at y = 0.
     fn block(mesh: &mut Mesh, top: [Vec3; 4]) {
         let center = top.iter().copied().sum::<Vec3>() / 4.0 * Vec3::new(1.0, 0.5, 1.0);
@@ -126,80 +139,49 @@ pub fn cornell_box() -> Scene {
     let mm = |x: f32, y: f32, z: f32| Vec3::new(x, y, z) / 1000.0;
     let inside = mm(278.0, 274.4, 279.6);
     let (w, h, d) = (556.0, 548.8, 559.2);
+    // A quad of the room, corners in millimetres, facing the inside.
+    let wall = |mesh: &mut Mesh, corners: [[f32; 3]; 4]| {
+        Builder::quad(mesh, corners.map(|[x, y, z]| mm(x, y, z)), inside, 1.0);
+    };
     let room = b.mesh("room", white);
-    Builder::quad(
+    wall(
         room,
-        [
-            mm(0.0, 0.0, 0.0),
-            mm(w, 0.0, 0.0),
-            mm(w, 0.0, d),
-            mm(0.0, 0.0, d),
-        ],
-        inside,
-        1.0,
+        [[0.0, 0.0, 0.0], [w, 0.0, 0.0], [w, 0.0, d], [0.0, 0.0, d]],
     );
-    Builder::quad(
-        room,
-        [mm(0.0, h, 0.0), mm(w, h, 0.0), mm(w, h, d), mm(0.0, h, d)],
-        inside,
-        1.0,
-    );
-    Builder::quad(
-        room,
-        [mm(0.0, 0.0, d), mm(w, 0.0, d), mm(w, h, d), mm(0.0, h, d)],
-        inside,
-        1.0,
-    );
+    wall(room, [[0.0, h, 0.0], [w, h, 0.0], [w, h, d], [0.0, h, d]]);
+    wall(room, [[0.0, 0.0, d], [w, 0.0, d], [w, h, d], [0.0, h, d]]);
     let red_wall = b.mesh("red wall", red);
-    Builder::quad(
+    wall(
         red_wall,
-        [mm(w, 0.0, 0.0), mm(w, 0.0, d), mm(w, h, d), mm(w, h, 0.0)],
-        inside,
-        1.0,
+        [[w, 0.0, 0.0], [w, 0.0, d], [w, h, d], [w, h, 0.0]],
     );
     let green_wall = b.mesh("green wall", green);
-    Builder::quad(
+    wall(
         green_wall,
-        [
-            mm(0.0, 0.0, 0.0),
-            mm(0.0, 0.0, d),
-            mm(0.0, h, d),
-            mm(0.0, h, 0.0),
-        ],
-        inside,
-        1.0,
+        [[0.0, 0.0, 0.0], [0.0, 0.0, d], [0.0, h, d], [0.0, h, 0.0]],
     );
     let blocks = b.mesh("blocks", white);
-    Builder::block(
-        blocks,
-        [
-            mm(130.0, 165.0, 65.0),
-            mm(82.0, 165.0, 225.0),
-            mm(240.0, 165.0, 272.0),
-            mm(290.0, 165.0, 114.0),
-        ],
-    );
-    Builder::block(
-        blocks,
-        [
-            mm(423.0, 330.0, 247.0),
-            mm(265.0, 330.0, 296.0),
-            mm(314.0, 330.0, 456.0),
-            mm(472.0, 330.0, 406.0),
-        ],
-    );
+    // The short and the tall block, by their tops.
+    let short = [(130.0, 65.0), (82.0, 225.0), (240.0, 272.0), (290.0, 114.0)];
+    let tall = [
+        (423.0, 247.0),
+        (265.0, 296.0),
+        (314.0, 456.0),
+        (472.0, 406.0),
+    ];
+    for (top, y) in [(short, 165.0), (tall, 330.0)] {
+        Builder::block(blocks, top.map(|(x, z)| mm(x, y, z)));
+    }
     let lamp = b.mesh("light", light);
     let ly = h - 1.0;
-    Builder::quad(
+    wall(
         lamp,
         [
-            mm(343.0, ly, 227.0),
-            mm(213.0, ly, 227.0),
-            mm(213.0, ly, 332.0),
-            mm(343.0, ly, 332.0),
+            [343.0, ly, 227.0],
+            [213.0, ly, 227.0],
+            [213.0, ly, 332.0],
+            [343.0, ly, 332.0],
         ],
-        inside,
-        1.0,
     );
 
     b.scene.lights.push(Light::Point {
@@ -226,18 +208,7 @@ pub fn spheres_on_plane(n: u32) -> Scene {
     let mut b = Builder::new();
     let ground = b.material("ground", Vec3::splat(0.6), 0.7, 0.0);
     let half = n as f32 * 0.5 + 1.0;
-    let plane = b.mesh("ground", ground);
-    Builder::quad(
-        plane,
-        [
-            Vec3::new(-half, 0.0, -half),
-            Vec3::new(half, 0.0, -half),
-            Vec3::new(half, 0.0, half),
-            Vec3::new(-half, 0.0, half),
-        ],
-        Vec3::Y * 10.0,
-        1.0,
-    );
+    b.ground(ground, half, 1.0);
     let mut rng = SplitMix(7);
     for k in 0..8u32 {
         let rgb = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 0.8 + 0.1;
@@ -323,29 +294,12 @@ pub fn thesis_walls(behind: u32) -> Scene {
         40.0,
     );
     let walls = b.mesh("walls", wall_m);
-    // The back wall, 1 m thick: a front face towards the camera and a back face.
-    Builder::quad(
-        walls,
-        [
-            v(-60.0, 0.0, -40.0),
-            v(60.0, 0.0, -40.0),
-            v(60.0, 30.0, -40.0),
-            v(-60.0, 30.0, -40.0),
-        ],
-        v(0.0, 10.0, 0.0),
-        12.0,
-    );
-    Builder::quad(
-        walls,
-        [
-            v(-60.0, 0.0, -41.0),
-            v(60.0, 0.0, -41.0),
-            v(60.0, 30.0, -41.0),
-            v(-60.0, 30.0, -41.0),
-        ],
-        v(0.0, 10.0, -80.0),
-        12.0,
-    );
+    // The back wall, 1 m thick: a front face (z = −40) towards the camera and a back face.
+    for (z, towards) in [(-40.0, 0.0), (-41.0, -80.0)] {
+        let face =
+            [(-60.0, 0.0), (60.0, 0.0), (60.0, 30.0), (-60.0, 30.0)].map(|(x, y)| v(x, y, z));
+        Builder::quad(walls, face, v(0.0, 10.0, towards), 12.0);
+    }
     for x in [-30.0f32, 30.0] {
         Builder::quad(
             walls,
@@ -498,18 +452,7 @@ pub fn checkerboard() -> Scene {
     let boxes = b.material("boxes", Vec3::new(0.8, 0.35, 0.1), 0.4, 0.0);
     let balls = b.material("balls", Vec3::new(0.9, 0.9, 0.95), 0.2, 1.0);
     let s = 20.0;
-    let plane = b.mesh("ground", ground);
-    Builder::quad(
-        plane,
-        [
-            Vec3::new(-s, 0.0, -s),
-            Vec3::new(s, 0.0, -s),
-            Vec3::new(s, 0.0, s),
-            Vec3::new(-s, 0.0, s),
-        ],
-        Vec3::Y * 10.0,
-        20.0,
-    );
+    b.ground(ground, s, 20.0);
     let cubes = b.mesh("boxes", boxes);
     for (x, z, e) in [(-2.0, -3.0, 0.8), (1.5, -6.0, 1.2), (4.0, -12.0, 1.5)] {
         let c = [

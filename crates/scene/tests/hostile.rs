@@ -105,96 +105,18 @@ const POSITIONS: &str =
 
 #[test]
 fn accessors_of_the_wrong_type_or_size_are_errors() {
-    // (case, accessor 1, what the error says); accessor 0 is POSITION, 1 the one under test,
-    // used as indices unless the case names an attribute.
-    let cases: &[(&str, &str, &str, &str)] = &[
-        (
-            "float indices",
-            r#"{"bufferView":1,"componentType":5126,"count":1,"type":"SCALAR"}"#,
-            "",
-            "must be Scalar",
-        ),
-        (
-            "short indices",
-            r#"{"bufferView":1,"componentType":5122,"count":3,"type":"SCALAR"}"#,
-            "",
-            "must be Scalar",
-        ),
-        (
-            "vec3 indices",
-            r#"{"bufferView":1,"componentType":5123,"count":1,"type":"VEC3"}"#,
-            "",
-            "must be Scalar",
-        ),
-        (
-            "normalized indices",
-            r#"{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR","normalized":true}"#,
-            "",
-            "must not be normalized",
-        ),
-        (
-            "indices longer than the view",
-            r#"{"bufferView":1,"componentType":5123,"count":4,"type":"SCALAR"}"#,
-            "",
-            "reach past the 6 bytes of buffer view 1",
-        ),
-        (
-            "indices past the view by offset",
-            r#"{"bufferView":1,"byteOffset":2,"componentType":5123,"count":3,"type":"SCALAR"}"#,
-            "",
-            "reach past",
-        ),
-        (
-            "a count that wraps",
-            r#"{"bufferView":1,"componentType":5123,"count":4611686018427387907,"type":"SCALAR"}"#,
-            "",
-            "more than the",
-        ),
-        (
-            "two indices",
-            r#"{"bufferView":1,"componentType":5123,"count":2,"type":"SCALAR"}"#,
-            "",
-            "not a multiple of 3",
-        ),
-        (
-            "u32 texture coordinates",
-            r#"{"bufferView":0,"componentType":5125,"count":3,"type":"VEC2"}"#,
-            "TEXCOORD_0",
-            "must be Vec2",
-        ),
-        (
-            "unnormalized u8 texture coordinates",
-            r#"{"bufferView":0,"componentType":5121,"count":3,"type":"VEC2"}"#,
-            "TEXCOORD_0",
-            "must be normalized",
-        ),
-        (
-            "vec2 normals",
-            r#"{"bufferView":0,"componentType":5126,"count":3,"type":"VEC2"}"#,
-            "NORMAL",
-            "must be Vec3",
-        ),
-        (
-            "too few normals",
-            r#"{"bufferView":0,"componentType":5126,"count":2,"type":"VEC3"}"#,
-            "NORMAL",
-            "2 normals for 3 positions",
-        ),
-        (
-            "sparse 2^40 zeros",
-            r#"{"componentType":5126,"count":1099511627776,"type":"VEC3","sparse":{"count":1,"indices":{"bufferView":1,"componentType":5123},"values":{"bufferView":0}}}"#,
-            "NORMAL",
-            "more than the",
-        ),
-        (
-            "sparse index out of range",
-            r#"{"bufferView":0,"componentType":5126,"count":1,"type":"VEC3","sparse":{"count":1,"indices":{"bufferView":1,"byteOffset":4,"componentType":5123},"values":{"bufferView":0}}}"#,
-            "NORMAL",
-            "indices must increase and stay below 1",
-        ),
-    ];
-    for &(case, under_test, attribute, why) in cases {
-        let (attributes, indices) = if attribute.is_empty() {
+    // Accessor 0 is POSITION, 1 the one under test: a line of the table, used as indices
+    // unless the line names an attribute.
+    let cases: Vec<&str> = include_str!("hostile/accessors.tsv")
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .collect();
+    assert_eq!(cases.len(), 14, "accessors.tsv lost cases");
+    for line in cases {
+        let [case, under_test, attribute, why] = line.split('\t').collect::<Vec<_>>()[..] else {
+            panic!("accessors.tsv: four tab-separated fields expected in {line:?}");
+        };
+        let (attributes, indices) = if attribute == "-" {
             (r#"{"POSITION":0}"#.to_string(), r#","indices":1"#)
         } else {
             (format!(r#"{{"POSITION":0,"{attribute}":1}}"#), "")

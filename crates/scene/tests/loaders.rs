@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use scene::{Scene, SceneErrorKind};
+use scene::{Scene, SceneError, SceneErrorKind};
 
 fn fixtures() -> Option<PathBuf> {
     let dir = scene::shared_fixtures();
@@ -20,6 +20,13 @@ fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("scene-tests-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir.join(name)
+}
+
+/// The error of loading a file `name` holding `text`.
+fn load_error(name: &str, text: &str) -> SceneError {
+    let p = tmp(name);
+    std::fs::write(&p, text).expect("write");
+    Scene::load(&p).expect_err(name)
 }
 
 /// (path under fixtures, triangles as counted in SOURCES.md).
@@ -108,9 +115,7 @@ fn missing_file_names_the_file() {
 
 #[test]
 fn unknown_extension_is_an_error() {
-    let p = tmp("scene.xyz");
-    std::fs::write(&p, "hello").expect("write");
-    let e = Scene::load(&p).unwrap_err();
+    let e = load_error("scene.xyz", "hello");
     assert!(
         matches!(e.kind, SceneErrorKind::UnsupportedFormat(_)),
         "{e}"
@@ -132,13 +137,10 @@ fn truncated_gltf_buffer_is_an_error() {
 
 #[test]
 fn gltf_without_meshes_is_an_error() {
-    let p = tmp("empty.gltf");
-    std::fs::write(
-        &p,
+    let e = load_error(
+        "empty.gltf",
         r#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{}],"scene":0}"#,
-    )
-    .expect("write");
-    let e = Scene::load(&p).unwrap_err();
+    );
     assert!(matches!(e.kind, SceneErrorKind::NoMeshes), "{e}");
 }
 
@@ -160,9 +162,7 @@ fn undecodable_texture_is_an_error() {
 
 #[test]
 fn nan_positions_are_an_error() {
-    let p = tmp("nan.obj");
-    std::fs::write(&p, "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n").expect("write");
-    let e = Scene::load(&p).unwrap_err();
+    let e = load_error("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
     assert!(
         e.to_string().contains("finite numbers") && e.to_string().contains("line 2"),
         "{e}"
@@ -171,13 +171,10 @@ fn nan_positions_are_an_error() {
 
 #[test]
 fn ply_with_out_of_range_index_is_an_error() {
-    let p = tmp("bad.ply");
-    std::fs::write(
-        &p,
+    let e = load_error(
+        "bad.ply",
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
-    )
-    .expect("write");
-    let e = Scene::load(&p).unwrap_err();
+    );
     assert!(e.to_string().contains("out of range"), "{e}");
 }
 

@@ -156,9 +156,7 @@ fn main() -> Result<()> {
          Subdivision Shading normal, vec4 f32 each) from the tables. Vertices are shared (each \
          evaluated once). Baseline: clearing the same two output buffers (write bandwidth), same run. \
          The paper (Table 2.1, GTX 295): BigGuy level 5, 2.97 M triangles at 21 fps; Dupuy & \
-         Vanhoey 2021: 2.9 M faces in under 3 ms on an RTX 2080.\n\n\
-         | mesh | input tri | level | triangles | vertices | initial ms | main ms | clear ms | main ÷ clear | G vertices/s (main) | G vertices/s (both) | G triangles/s (both) |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
+         Vanhoey 2021: 2.9 M faces in under 3 ms on an RTX 2080.\n\n",
         bft.level,
         bft.segments(),
         bft.segments(),
@@ -166,46 +164,68 @@ fn main() -> Result<()> {
         bft.weight_bytes() as f64 / 1e6,
         frames
     ));
+    let ms = |s: &Stat| format!("{:.3}", s.median_ms);
+    let mut uniform = bench::Table::new(&[
+        "mesh",
+        "input tri",
+        "level",
+        "triangles",
+        "vertices",
+        "initial ms",
+        "main ms",
+        "clear ms",
+        "main ÷ clear",
+        "G vertices/s (main)",
+        "G vertices/s (both)",
+        "G triangles/s (both)",
+    ]);
     for r in &rows {
-        md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.2} |\n",
-            r.mesh,
-            r.input_triangles,
-            r.level,
-            r.triangles,
-            r.vertices,
-            r.initial.median_ms,
-            r.evaluate.median_ms,
-            r.clear_baseline.median_ms,
-            r.evaluate.median_ms / r.clear_baseline.median_ms,
-            r.vertices_per_s / 1e9,
-            r.vertices_per_s_total / 1e9,
-            r.triangles_per_s_total / 1e9
-        ));
+        uniform.row([
+            r.mesh.clone(),
+            r.input_triangles.to_string(),
+            r.level.to_string(),
+            r.triangles.to_string(),
+            r.vertices.to_string(),
+            ms(&r.initial),
+            ms(&r.evaluate),
+            ms(&r.clear_baseline),
+            format!("{:.2}", r.evaluate.median_ms / r.clear_baseline.median_ms),
+            format!("{:.2}", r.vertices_per_s / 1e9),
+            format!("{:.2}", r.vertices_per_s_total / 1e9),
+            format!("{:.2}", r.triangles_per_s_total / 1e9),
+        ]);
     }
+    md.push_str(&uniform.to_string());
     md.push_str(
-        "\n## Adaptive tessellation\n\nScreen-space factors (each M¹ edge split so its fine edges \
+        "## Adaptive tessellation\n\nScreen-space factors (each M¹ edge split so its fine edges \
          are about the target length on a 1920×1080 image of a camera framing the mesh), up to \
          level 6 (32 segments per M¹ edge); metric pass and adaptive main step (vertices with \
          geomorph, triangles appended to an indirect draw), against the uniform level-6 main step \
-         measured in the same run.\n\n\
-         | mesh | target px | triangles drawn | written | metric ms | adaptive main ms | uniform level 6 ms (triangles) | adaptive ÷ uniform |\n\
-         |---|---|---|---|---|---|---|---|\n",
+         measured in the same run.\n\n",
     );
+    let mut tessellation = bench::Table::new(&[
+        "mesh",
+        "target px",
+        "triangles drawn",
+        "written",
+        "metric ms",
+        "adaptive main ms",
+        "uniform level 6 ms (triangles)",
+        "adaptive ÷ uniform",
+    ]);
     for r in &adaptive {
-        md.push_str(&format!(
-            "| {} | {} | {} | {} | {:.3} | {:.3} | {:.3} ({}) | {:.2} |\n",
-            r.mesh,
-            r.target_pixels,
-            r.triangles_drawn,
-            r.triangles_written,
-            r.factors.median_ms,
-            r.evaluate.median_ms,
-            r.uniform_max.median_ms,
-            r.uniform_max_triangles,
-            r.evaluate.median_ms / r.uniform_max.median_ms
-        ));
+        tessellation.row([
+            r.mesh.clone(),
+            r.target_pixels.to_string(),
+            r.triangles_drawn.to_string(),
+            r.triangles_written.to_string(),
+            ms(&r.factors),
+            ms(&r.evaluate),
+            format!("{} ({})", ms(&r.uniform_max), r.uniform_max_triangles),
+            format!("{:.2}", r.evaluate.median_ms / r.uniform_max.median_ms),
+        ]);
     }
+    md.push_str(&tessellation.to_string());
     let report = Report {
         header,
         frames: frames,

@@ -145,6 +145,25 @@ fn any_factors_give_a_crack_free_manifold() {
     }
 }
 
+/// The adaptive tessellation of `mesh` with factors `f` (collapsed triangles dropped) and the
+/// uniform one at `level`, both on the CPU.
+fn adaptive_and_uniform(
+    sub: &Subdivider,
+    mesh: &TriMesh,
+    f: &[f32],
+    level: u32,
+) -> (Refined, Refined) {
+    let bft = tables();
+    let adaptive = sub
+        .evaluate_adaptive_cpu(bft, &mesh.positions_f32(), f, bft.level + 1)
+        .expect("adaptive")
+        .without_collapsed();
+    let uniform = sub
+        .evaluate_cpu(bft, &mesh.positions_f32(), level)
+        .expect("uniform");
+    (adaptive, uniform)
+}
+
 /// Integer factors n everywhere are the uniform tessellation at level n + 1 (same points, same
 /// triangle count); with mixed factors every vertex still lies on the limit surface where no
 /// geomorph is under way.
@@ -156,13 +175,7 @@ fn integer_factors_equal_uniform_tessellation() {
     let diag = mesh.diagonal();
     for n in 0..=bft.level {
         let f = vec![n as f32; sub.m1.edges.len()];
-        let adaptive = sub
-            .evaluate_adaptive_cpu(bft, &mesh.positions_f32(), &f, bft.level + 1)
-            .expect("adaptive")
-            .without_collapsed();
-        let uniform = sub
-            .evaluate_cpu(bft, &mesh.positions_f32(), n + 1)
-            .expect("uniform");
+        let (adaptive, uniform) = adaptive_and_uniform(&sub, &mesh, &f, n + 1);
         assert_eq!(adaptive.indices.len(), uniform.indices.len(), "level {n}");
         assert_eq!(
             adaptive.positions.len(),
@@ -185,13 +198,7 @@ fn geomorph_starts_on_the_coarser_mesh() {
     let diag = mesh.diagonal();
     for n in 1..bft.level {
         let f = vec![n as f32 + 1e-5; sub.m1.edges.len()];
-        let morphed = sub
-            .evaluate_adaptive_cpu(bft, &mesh.positions_f32(), &f, bft.level + 1)
-            .expect("adaptive")
-            .without_collapsed();
-        let coarse = sub
-            .evaluate_cpu(bft, &mesh.positions_f32(), n + 1)
-            .expect("uniform");
+        let (morphed, coarse) = adaptive_and_uniform(&sub, &mesh, &f, n + 1);
         let mut targets: Vec<DVec3> = coarse.positions.iter().map(|p| p.as_dvec3()).collect();
         for t in coarse.indices.chunks_exact(3) {
             for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {

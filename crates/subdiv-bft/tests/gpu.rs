@@ -4,7 +4,7 @@ mod common;
 
 use common::*;
 use glam::{DVec3, Vec3};
-use subdiv_bft::{Subdivider, TriMesh, gpu::GpuSubdivider, patch::padded_weights};
+use subdiv_bft::{Refined, Subdivider, TriMesh, gpu::GpuSubdivider, patch::padded_weights};
 
 fn meshes() -> Vec<(String, TriMesh)> {
     let mut v: Vec<(String, TriMesh)> = [3, 5, 6, 7, 12, 18]
@@ -36,6 +36,12 @@ fn compare(what: &str, cpu: &[Vec3], gpu: &[Vec3], tolerance: f32, normals: bool
             "{what}: vertex {i}: CPU {c} GPU {g} (error {err:e} > {tolerance:e})"
         );
     }
+}
+
+/// [`compare`] of two levels' positions within [`POSITION_TOLERANCE`] of `mesh`'s diagonal.
+fn compare_positions(what: &str, mesh: &TriMesh, cpu: &Refined, gpu: &Refined) {
+    let tolerance = (POSITION_TOLERANCE * mesh.diagonal()) as f32;
+    compare(what, &cpu.positions, &gpu.positions, tolerance, false);
 }
 
 #[test]
@@ -190,13 +196,7 @@ fn animated_control_mesh_needs_no_rebuild() {
         gpu.queue.submit([encoder.finish()]);
         let got = g.read_level(&gpu.device, &gpu.queue, &out).expect("read");
         let want = sub.evaluate_cpu(bft, &moved, 3).expect("cpu");
-        compare(
-            &format!("frame {frame}"),
-            &want.positions,
-            &got.positions,
-            (POSITION_TOLERANCE * mesh.diagonal()) as f32,
-            false,
-        );
+        compare_positions(&format!("frame {frame}"), &mesh, &want, &got);
     }
 }
 
@@ -224,13 +224,7 @@ fn default_limits_fall_back_to_uniform_evaluation() {
     let positions = mesh.positions_f32();
     let got = subdiv_bft::gpu::run(gpu, &sub, bft, &positions, 2).expect("uniform");
     let want = sub.evaluate_cpu(bft, &positions, 2).expect("cpu");
-    compare(
-        "default limits",
-        &want.positions,
-        &got.positions,
-        (POSITION_TOLERANCE * mesh.diagonal()) as f32,
-        false,
-    );
+    compare_positions("default limits", &mesh, &want, &got);
 }
 
 /// The main step writes into the caller's vertex buffers (`bind_level`): the same vertices as

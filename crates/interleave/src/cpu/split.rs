@@ -14,15 +14,15 @@ pub fn split<T: Copy + Default + Send + Sync>(
     variant: SplitVariant,
 ) -> Result<Image<T>, InterleaveError> {
     check_size("image", image, layout.width, layout.height)?;
-    variant.validate(layout.pattern)?;
-    Ok(match variant {
-        SplitVariant::OnePass => split_one_pass(image, layout),
-        SplitVariant::TwoPass(block) => {
-            let geometry = BlockGeometry::new(layout, block);
-            split_block_translation(&split_block_splitting(image, &geometry), &geometry)
-        }
-        SplitVariant::Tiled => split_tiled(image, layout),
-    })
+    let two_pass = [split_block_splitting, split_block_translation];
+    by_variant(
+        image,
+        layout,
+        variant,
+        split_one_pass,
+        two_pass,
+        split_tiled,
+    )
 }
 
 /// Gathers the sub-buffers of `split` back into an image of `layout`'s size with `variant`.
@@ -31,20 +31,39 @@ pub fn gather<T: Copy + Default + Send + Sync>(
     layout: &SplitLayout,
     variant: SplitVariant,
 ) -> Result<Image<T>, InterleaveError> {
-    check_size(
-        "split image",
+    let (w, h) = (layout.split_width(), layout.split_height());
+    check_size("split image", split, w, h)?;
+    let two_pass = [gather_block_translation, gather_block_gathering];
+    by_variant(
         split,
-        layout.split_width(),
-        layout.split_height(),
-    )?;
+        layout,
+        variant,
+        gather_one_pass,
+        two_pass,
+        gather_tiled,
+    )
+}
+
+/// A pass with one pass, two passes through a block intermediate, or tiles.
+type Pass<T, G> = fn(&Image<T>, &G) -> Image<T>;
+
+/// Runs `variant` of a split or gather: its one pass, its two passes in order, or its tiled pass.
+fn by_variant<T>(
+    input: &Image<T>,
+    layout: &SplitLayout,
+    variant: SplitVariant,
+    one_pass: Pass<T, SplitLayout>,
+    two_pass: [Pass<T, BlockGeometry>; 2],
+    tiled: Pass<T, SplitLayout>,
+) -> Result<Image<T>, InterleaveError> {
     variant.validate(layout.pattern)?;
     Ok(match variant {
-        SplitVariant::OnePass => gather_one_pass(split, layout),
+        SplitVariant::OnePass => one_pass(input, layout),
         SplitVariant::TwoPass(block) => {
             let geometry = BlockGeometry::new(layout, block);
-            gather_block_gathering(&gather_block_translation(split, &geometry), &geometry)
+            two_pass[1](&two_pass[0](input, &geometry), &geometry)
         }
-        SplitVariant::Tiled => gather_tiled(split, layout),
+        SplitVariant::Tiled => tiled(input, layout),
     })
 }
 

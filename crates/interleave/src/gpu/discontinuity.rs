@@ -4,7 +4,7 @@ use ::gpu::kernel::{self, Binding, Layout};
 use ::gpu::{transfer, wgpu};
 use bytemuck::Pod;
 
-use super::{DISCONTINUITY_FORMAT, Passes, READ, WRITE, compute_kernel, groups, pass, view};
+use super::{DISCONTINUITY_FORMAT, Passes, WRITE, compute_kernel, groups, pass, view};
 use crate::{InterleaveError, Thresholds};
 
 /// Uniform block of `discontinuity.wgsl`.
@@ -82,14 +82,7 @@ impl DiscontinuityPass {
         discontinuities: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
         let size = (linear_depth.width(), linear_depth.height());
-        kernel::check_texture(
-            "linear depth",
-            linear_depth,
-            size,
-            gbuffer::LINEAR_DEPTH_FORMAT,
-            READ,
-        )?;
-        kernel::check_texture("normals", normals, size, gbuffer::NORMAL_FORMAT, READ)?;
+        super::check_gbuffer(linear_depth, normals, size)?;
         kernel::check_texture(
             "discontinuity buffer",
             discontinuities,

@@ -88,6 +88,18 @@ const READ: wgpu::TextureUsages = wgpu::TextureUsages::TEXTURE_BINDING;
 /// Usage of a texture a kernel writes.
 const WRITE: wgpu::TextureUsages = wgpu::TextureUsages::STORAGE_BINDING;
 
+/// Checks a pass's G-buffer inputs: linear depth and normals of `size`, readable.
+fn check_gbuffer(
+    linear_depth: &wgpu::Texture,
+    normals: &wgpu::Texture,
+    size: (u32, u32),
+) -> Result<(), crate::InterleaveError> {
+    let depth_format = gbuffer::LINEAR_DEPTH_FORMAT;
+    kernel::check_texture("linear depth", linear_depth, size, depth_format, READ)?;
+    kernel::check_texture("normals", normals, size, gbuffer::NORMAL_FORMAT, READ)?;
+    Ok(())
+}
+
 fn groups(size: (u32, u32), workgroup: u32) -> (u32, u32) {
     (size.0.div_ceil(workgroup), size.1.div_ceil(workgroup))
 }

@@ -4,7 +4,7 @@
 use ::gpu::kernel::{self, Binding, Layout};
 use ::gpu::{transfer, wgpu};
 
-use super::{IRRADIANCE_FORMAT, Passes, READ, WRITE, compute_kernel, groups, pass, view};
+use super::{IRRADIANCE_FORMAT, Passes, WRITE, compute_kernel, groups, pass, view};
 use crate::cpu::SubsetLight;
 use crate::{InterleaveError, Pattern, SplitLayout};
 
@@ -76,14 +76,7 @@ impl SubsetShading {
         textures: [&wgpu::Texture; 3],
     ) -> Result<Passes, InterleaveError> {
         let [depth, normals, irradiance] = textures;
-        kernel::check_texture(
-            "linear depth",
-            depth,
-            size,
-            gbuffer::LINEAR_DEPTH_FORMAT,
-            READ,
-        )?;
-        kernel::check_texture("normals", normals, size, gbuffer::NORMAL_FORMAT, READ)?;
+        super::check_gbuffer(depth, normals, size)?;
         kernel::check_texture("irradiance", irradiance, size, IRRADIANCE_FORMAT, WRITE)?;
         let (d, nrm, out) = (view(depth), view(normals), view(irradiance));
         let l = &self.layout;
