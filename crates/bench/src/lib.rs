@@ -308,6 +308,25 @@ pub struct SceneArgs {
     pub options: Options,
 }
 
+/// `--quick`: a smoke test of a benchmark that sweeps configurations.
+#[derive(clap::Args, Debug)]
+pub struct Quick {
+    /// Only the first entry of every sweep (sizes, counts, patterns; a smoke test).
+    #[arg(long)]
+    pub quick: bool,
+}
+
+impl Quick {
+    /// `all`, or with `--quick` or in [run-once mode](run_once) its first entry.
+    pub fn sweep<'a, T>(&self, all: &'a [T]) -> &'a [T] {
+        if self.quick || run_once() {
+            &all[..all.len().min(1)]
+        } else {
+            all
+        }
+    }
+}
+
 /// The scene option of the benchmarks that render one.
 #[derive(clap::Args, Debug)]
 pub struct SceneOption {

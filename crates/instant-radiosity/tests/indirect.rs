@@ -25,7 +25,7 @@ fn material(name: &str, albedo: f32, roughness: f32) -> Material {
 
 /// A 4×4 floor at y = 0 facing up, a ceiling at y = 1 facing down, a point light between
 /// them, and a camera under the ceiling looking straight down at the floor.
-fn plane_scene() -> (Scene, Camera) {
+fn plane_scene() -> Scene {
     // The square |x|, |z| ≤ 2 at height y, corners counter-clockwise seen from above.
     let square = |y: f32| {
         [(-2.0, -2.0), (-2.0, 2.0), (2.0, 2.0), (2.0, -2.0)].map(|(x, z)| Vec3::new(x, y, z))
@@ -33,27 +33,25 @@ fn plane_scene() -> (Scene, Camera) {
     let floor = Mesh::quad("floor", square(0.0), 0);
     let [p0, p1, p2, p3] = square(1.0);
     let ceiling = Mesh::quad("ceiling", [p0, p3, p2, p1], 1);
-    let scene = Scene {
+    Scene {
         meshes: vec![floor, ceiling],
         materials: vec![material("floor", 0.8, 1.0), material("ceiling", 0.7, 1.0)],
         textures: Vec::new(),
-        camera: None,
+        camera: Some(Camera {
+            eye: Vec3::new(0.0, 0.9, 0.0),
+            target: Vec3::ZERO,
+            up: Vec3::NEG_Z,
+            fov_y: 60f32.to_radians(),
+            near: 0.01,
+            far: 10.0,
+        }),
         lights: vec![Light::Point {
             position: Vec3::new(0.3, 0.5, -0.2),
             color: Vec3::ONE,
             intensity: 1.0,
             radius: 100.0,
         }],
-    };
-    let camera = Camera {
-        eye: Vec3::new(0.0, 0.9, 0.0),
-        target: Vec3::ZERO,
-        up: Vec3::NEG_Z,
-        fov_y: 60f32.to_radians(),
-        near: 0.01,
-        far: 10.0,
-    };
-    (scene, camera)
+    }
 }
 
 fn vpls(scene: &Scene, count: usize, subsets: u32, seed: u64) -> VplSet {
@@ -71,7 +69,9 @@ fn vpls(scene: &Scene, count: usize, subsets: u32, seed: u64) -> VplSet {
     .expect("vpls")
 }
 
-fn frame_and_gbuffer(scene: &Scene, camera: &Camera, w: u32, h: u32) -> (Frame, GBuffer) {
+/// The frame and CPU G-buffer of `scene` from its camera at `w × h`.
+fn frame_and_gbuffer(scene: &Scene, w: u32, h: u32) -> (Frame, GBuffer) {
+    let camera = &scene.camera_or_framed();
     let gb = gbuffer::cpu::rasterize(scene, camera, w, h)
         .expect("rasterize")
         .gbuffer;
@@ -280,8 +280,7 @@ fn bad_vpl_requests_are_errors() {
 #[test]
 fn bad_configurations_are_errors() {
     let s = scene::cornell_box();
-    let cam = s.camera_or_framed();
-    let (frame, gb) = frame_and_gbuffer(&s, &cam, 16, 12);
+    let (frame, gb) = frame_and_gbuffer(&s, 16, 12);
     let set = vpls(&s, 64, 16, 0);
     let mut c = config(&s, (4, 4), Interleaving::Fused, None);
     c.pattern = Pattern { n: 2, m: 2 };
@@ -314,8 +313,7 @@ fn bad_configurations_are_errors() {
 #[test]
 fn pattern_1x1_is_the_reference() {
     let s = scene::cornell_box();
-    let cam = s.camera_or_framed();
-    let (frame, gb) = frame_and_gbuffer(&s, &cam, 40, 30);
+    let (frame, gb) = frame_and_gbuffer(&s, 40, 30);
     let set = vpls(&s, 64, 1, 5);
     let reference = config(&s, (1, 1), Interleaving::Reference, None);
     let expected = cpu::indirect(&gb, &frame, &set, &reference).expect("reference");
@@ -340,9 +338,8 @@ fn pattern_1x1_is_the_reference() {
 #[test]
 fn each_pixel_sums_its_own_subset() {
     let s = scene::cornell_box();
-    let cam = s.camera_or_framed();
     let (w, h) = (37, 29);
-    let (frame, gb) = frame_and_gbuffer(&s, &cam, w, h);
+    let (frame, gb) = frame_and_gbuffer(&s, w, h);
     let (n, m) = (4u32, 3u32);
     let set = vpls(&s, 12 * 8, n * m, 11);
     let clamp = IndirectConfig::new(s.bounds()).clamp_distance as f64;
@@ -401,8 +398,8 @@ fn each_pixel_sums_its_own_subset() {
 /// the reference within 1 %, blur off and on (each subset is a representative sample).
 #[test]
 fn flat_plane_mean_matches_the_reference() {
-    let (s, cam) = plane_scene();
-    let (frame, gb) = frame_and_gbuffer(&s, &cam, 96, 96);
+    let s = plane_scene();
+    let (frame, gb) = frame_and_gbuffer(&s, 96, 96);
     assert!(
         gb.linear_depth.pixels().iter().all(|&d| d > 0.0),
         "floor fills the view"
@@ -448,8 +445,7 @@ fn gpu_indirect_stage_matches_cpu() {
     };
     let mut s = scene::cornell_box();
     s.materials[1].roughness = 0.3; // a glossy wall
-    let cam = s.camera_or_framed();
-    let (frame, gb) = frame_and_gbuffer(&s, &cam, 67, 45);
+    let (frame, gb) = frame_and_gbuffer(&s, 67, 45);
     for (pattern, interleaving, blur) in [
         ((4, 4), Interleaving::Split(SplitVariant::Tiled), fast(5)),
         ((4, 4), Interleaving::Split(SplitVariant::OnePass), None),
@@ -506,8 +502,7 @@ fn bind_rejects_mismatched_inputs() {
     };
     let d = &gpu.device;
     let s = scene::cornell_box();
-    let cam = s.camera_or_framed();
-    let (frame, gb) = frame_and_gbuffer(&s, &cam, 32, 24);
+    let (frame, gb) = frame_and_gbuffer(&s, 32, 24);
     let uploaded = gbuffer::gpu::UploadedGBuffer::new(d, &gpu.queue, &gb, &frame).expect("upload");
     let c = config(&s, (4, 4), Interleaving::Fused, fast(5));
     let set = vpls(&s, 64, 16, 0);

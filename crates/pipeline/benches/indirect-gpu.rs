@@ -25,9 +25,8 @@ use serde::Serialize;
 struct Args {
     #[command(flatten)]
     common: bench::SceneArgs,
-    /// Only the first size, VPL count and pattern (a smoke test).
-    #[arg(long)]
-    quick: bool,
+    #[command(flatten)]
+    quick: bench::Quick,
 }
 
 const SIZES: [(u32, u32); 3] = [(1024, 768), (1920, 1080), (3840, 2160)];
@@ -105,11 +104,8 @@ fn main() -> Result<()> {
     let bvh = Bvh::build(&scene);
     let bounds = scene.bounds();
 
-    let (sizes, counts, patterns) = if args.quick || bench::run_once() {
-        (&SIZES[..1], &VPLS[..1], &PATTERNS[..1])
-    } else {
-        (&SIZES[..], &VPLS[..], &PATTERNS[..])
-    };
+    let q = &args.quick;
+    let (sizes, counts, patterns) = (q.sweep(&SIZES), q.sweep(&VPLS), q.sweep(&PATTERNS));
     let mut rows = Vec::new();
     let mut qualities = Vec::new();
     for (w, h) in sizes.iter().copied().map(bench::size) {

@@ -23,9 +23,8 @@ use serde::Serialize;
 struct Args {
     #[command(flatten)]
     common: bench::SceneArgs,
-    /// Only the smallest size and light count, and test 1 (a smoke test).
-    #[arg(long)]
-    quick: bool,
+    #[command(flatten)]
+    quick: bench::Quick,
 }
 
 const SIZES: [(u32, u32); 2] = [(1920, 1080), (3840, 2160)];
@@ -107,11 +106,8 @@ fn main() -> Result<()> {
         path.display(),
         scene.triangle_count()
     );
-    let (sizes, counts, tests) = if args.quick || bench::run_once() {
-        (&SIZES[..1], &LIGHTS[..1], &TESTS[..1])
-    } else {
-        (&SIZES[..], &LIGHTS[..], &TESTS[..])
-    };
+    let q = &args.quick;
+    let (sizes, counts, tests) = (q.sweep(&SIZES), q.sweep(&LIGHTS), q.sweep(&TESTS));
 
     let mut sweep = Vec::new();
     for (w, h) in sizes.iter().copied().map(bench::size) {

@@ -112,19 +112,14 @@ mod tests {
 
     #[test]
     fn invalid_lights_are_rejected() {
-        let bad = Light::Point {
-            position: Vec3::NAN,
+        let point = |position: Vec3, radius: f32| Light::Point {
+            position,
             color: Vec3::ONE,
             intensity: 1.0,
-            radius: 1.0,
+            radius,
         };
-        assert!(validate_lights(&[bad]).is_err());
-        let bad = Light::Point {
-            position: Vec3::ZERO,
-            color: Vec3::ONE,
-            intensity: 1.0,
-            radius: 0.0,
-        };
-        assert!(validate_lights(&[bad]).is_err());
+        assert!(validate_lights(&[point(Vec3::ZERO, 1.0)]).is_ok());
+        assert!(validate_lights(&[point(Vec3::NAN, 1.0)]).is_err());
+        assert!(validate_lights(&[point(Vec3::ZERO, 0.0)]).is_err());
     }
 }

@@ -14,9 +14,10 @@ use pipeline::gpu::GpuRenderer;
 use scene::reference::{PathTracer, ReferenceConfig};
 use tiled_shading::shadows::ShadowMapConfig;
 
-/// The Cornell box of the shared fixtures and its view, `None` (skipped, a failure in CI)
-/// without them.
-fn cornell() -> Option<(scene::Scene, scene::Camera)> {
+/// The test GPU, the Cornell box of the shared fixtures and its view; `None` (skipped, a
+/// failure in CI) without a GPU or the fixtures.
+fn cornell() -> Option<(&'static gpu::Gpu, scene::Scene, scene::Camera)> {
+    let gpu = gpu::test_device(&pipeline::device_needs())?;
     let Some(fixtures) = scene::shared_fixtures() else {
         assert!(
             std::env::var_os("CI").is_none(),
@@ -28,7 +29,7 @@ fn cornell() -> Option<(scene::Scene, scene::Camera)> {
     let path = fixtures.join("cornell/CornellBox-Original.obj");
     let scene = scene::Scene::load(&path).expect("cornell");
     let camera = scene::preset_view(&path, &scene).expect("the Cornell view of views.json");
-    Some((scene, camera))
+    Some((gpu, scene, camera))
 }
 
 /// The path tracer's image of `scene` with `bounces` after the first surface.
@@ -55,13 +56,10 @@ fn truth(
 
 #[test]
 fn shadowed_area_light_samples_match_the_path_traced_direct_light() {
-    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
+    let Some((gpu, scene, camera)) = cornell() else {
         return;
     };
     let (d, q) = (&gpu.device, &gpu.queue);
-    let Some((scene, camera)) = cornell() else {
-        return;
-    };
     let size = (64, 64);
     let truth = truth(&scene, camera, size, 0, 1024);
     let frame = |samples: u32, shadows: Option<&ShadowMapConfig>| {
@@ -99,13 +97,10 @@ fn shadowed_area_light_samples_match_the_path_traced_direct_light() {
 
 #[test]
 fn vpl_visibility_brings_the_frame_closer_to_the_path_tracer() {
-    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
+    let Some((gpu, scene, camera)) = cornell() else {
         return;
     };
     let (d, q) = (&gpu.device, &gpu.queue);
-    let Some((scene, camera)) = cornell() else {
-        return;
-    };
     let (w, h) = (64, 64);
     // Direct light plus one bounce, as the VPLs approximate.
     let truth = truth(&scene, camera, (w, h), 1, 1024);

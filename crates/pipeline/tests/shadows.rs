@@ -13,12 +13,12 @@ fn luminance(image: &gbuffer::Image<[f32; 4]>) -> f32 {
 
 #[test]
 fn cascades_follow_the_camera_and_shadows_darken() {
+    let scene = scene::spheres_on_plane(5);
+    let sun: Light = "dir:0.4,-1,0.3,1,1,1,2".parse().expect("light");
     let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
         return;
     };
     let (d, q) = (&gpu.device, &gpu.queue);
-    let scene = scene::spheres_on_plane(5);
-    let sun: Light = "dir:0.4,-1,0.3,1,1,1,2".parse().expect("light");
     let first = scene.camera_or_framed();
     let second = Camera {
         eye: first.eye + Vec3::new(2.0, 1.0, -1.0),

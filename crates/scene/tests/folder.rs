@@ -72,15 +72,17 @@ fn gltf_buffers_outside_the_folder_are_refused() {
     #[cfg(unix)]
     {
         std::os::unix::fs::symlink(outside.join("tri.bin"), scene.join("link.bin")).expect("link");
-        let e = load_gltf(&scene, "link.bin")
-            .err()
-            .expect("a link out of the folder was read");
-        assert!(e.contains("outside the scene's folder"), "{e}");
+        refused(
+            load_gltf(&scene, "link.bin"),
+            "a link out of the folder was read",
+            "outside the scene's folder",
+        );
         std::os::unix::fs::symlink(&outside, scene.join("out")).expect("link");
-        let e = load_gltf(&scene, "out/tri.bin")
-            .err()
-            .expect("a linked folder was read");
-        assert!(e.contains("outside the scene's folder"), "{e}");
+        refused(
+            load_gltf(&scene, "out/tri.bin"),
+            "a linked folder was read",
+            "outside the scene's folder",
+        );
     }
 }
 
@@ -109,19 +111,28 @@ fn gltf_buffers_inside_the_folder_load_and_are_bounded() {
     let mut long = triangle();
     long.resize(1 << 20, 0);
     std::fs::write(scene.join("long.bin"), long).expect("buffer");
-    let e = load_gltf(&scene, "long.bin")
-        .err()
-        .expect("read past the declared length");
-    assert!(e.contains("more than the 39 allowed"), "{e}");
+    refused(
+        load_gltf(&scene, "long.bin"),
+        "read past the declared length",
+        "more than the 39 allowed",
+    );
     std::fs::create_dir_all(scene.join("dir.bin")).expect("folder");
-    let e = load_gltf(&scene, "dir.bin")
-        .err()
-        .expect("a folder was read as a buffer");
-    assert!(e.contains("not a regular file"), "{e}");
-    let e = load_gltf(&scene, "missing.bin")
-        .err()
-        .expect("a missing buffer");
-    assert!(e.contains("no such file"), "{e}");
+    refused(
+        load_gltf(&scene, "dir.bin"),
+        "a folder was read as a buffer",
+        "not a regular file",
+    );
+    refused(
+        load_gltf(&scene, "missing.bin"),
+        "a missing buffer",
+        "no such file",
+    );
+}
+
+/// Asserts that `loaded` failed (else panics with `what`) with an error that says `why`.
+fn refused(loaded: Result<scene::Scene, String>, what: &str, why: &str) {
+    let e = loaded.err().unwrap_or_else(|| panic!("{what}"));
+    assert!(e.contains(why), "{what}: {e}");
 }
 
 fn load_obj(scene: &Path, obj: &str, mtl: Option<&str>) -> Result<scene::Scene, String> {
@@ -139,25 +150,28 @@ const TRIANGLE_OBJ: &str =
 #[test]
 fn obj_materials_and_textures_outside_the_folder_are_refused() {
     let (outside, scene) = layout("obj");
-    let e = load_obj(
-        &scene,
-        &format!("mtllib ../outside/m.mtl\n{TRIANGLE_OBJ}"),
-        None,
-    )
-    .err()
-    .expect("a material library outside the folder was read");
-    assert!(e.contains("outside the scene's folder"), "{e}");
+    refused(
+        load_obj(
+            &scene,
+            &format!("mtllib ../outside/m.mtl\n{TRIANGLE_OBJ}"),
+            None,
+        ),
+        "a material library outside the folder was read",
+        "outside the scene's folder",
+    );
     let absolute = outside.join("m.mtl").display().to_string();
-    let e = load_obj(&scene, &format!("mtllib {absolute}\n{TRIANGLE_OBJ}"), None)
-        .err()
-        .expect("an absolute material library was read");
-    assert!(e.contains("absolute paths are not read"), "{e}");
+    refused(
+        load_obj(&scene, &format!("mtllib {absolute}\n{TRIANGLE_OBJ}"), None),
+        "an absolute material library was read",
+        "absolute paths are not read",
+    );
     std::fs::write(outside.join("t.png"), b"not read").expect("texture");
     let mtl = "newmtl red\nKd 1 0 0\nmap_Kd ../outside/t.png\n";
-    let e = load_obj(&scene, &format!("mtllib m.mtl\n{TRIANGLE_OBJ}"), Some(mtl))
-        .err()
-        .expect("a texture outside the folder was read");
-    assert!(e.contains("outside the scene's folder"), "{e}");
+    refused(
+        load_obj(&scene, &format!("mtllib m.mtl\n{TRIANGLE_OBJ}"), Some(mtl)),
+        "a texture outside the folder was read",
+        "outside the scene's folder",
+    );
 }
 
 #[test]

@@ -347,22 +347,17 @@ pub fn m1_configurations(max_valence: u8) -> Vec<Key> {
                 Corner::Interior(_) => (1, 1),
                 Corner::Boundary { before, after } => (before, after),
             };
-            let ab = if before == 0 {
-                Corner::Boundary {
-                    before: 2,
-                    after: 0,
+            // The corners at the midpoints of the edges to the next and previous corner: on
+            // the boundary where that edge is, else regular interior vertices.
+            let midpoint = |on_boundary: bool, before, after| {
+                if on_boundary {
+                    Corner::Boundary { before, after }
+                } else {
+                    Corner::Interior(6)
                 }
-            } else {
-                Corner::Interior(6)
             };
-            let ca = if after == 0 {
-                Corner::Boundary {
-                    before: 0,
-                    after: 2,
-                }
-            } else {
-                Corner::Interior(6)
-            };
+            let ab = midpoint(before == 0, 2, 0);
+            let ca = midpoint(after == 0, 0, 2);
             [a, ab, ca]
         })
         .collect();

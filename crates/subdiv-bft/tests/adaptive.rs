@@ -172,7 +172,6 @@ fn integer_factors_equal_uniform_tessellation() {
     let bft = tables();
     let mesh = bipyramid(7);
     let sub = Subdivider::new(&mesh.topology, bft).expect("subdivider");
-    let diag = mesh.diagonal();
     for n in 0..=bft.level {
         let f = vec![n as f32; sub.m1.edges.len()];
         let (adaptive, uniform) = adaptive_and_uniform(&sub, &mesh, &f, n + 1);
@@ -184,7 +183,10 @@ fn integer_factors_equal_uniform_tessellation() {
         );
         let a: Vec<DVec3> = adaptive.positions.iter().map(|p| p.as_dvec3()).collect();
         let u: Vec<DVec3> = uniform.positions.iter().map(|p| p.as_dvec3()).collect();
-        assert!(max_nearest(&a, &u) <= 1e-6 * diag, "level {n}: points");
+        assert!(
+            max_nearest(&a, &u) <= 1e-6 * mesh.diagonal(),
+            "level {n}: points"
+        );
     }
 }
 
@@ -195,7 +197,6 @@ fn geomorph_starts_on_the_coarser_mesh() {
     let bft = tables();
     let mesh = bipyramid(6);
     let sub = Subdivider::new(&mesh.topology, bft).expect("subdivider");
-    let diag = mesh.diagonal();
     for n in 1..bft.level {
         let f = vec![n as f32 + 1e-5; sub.m1.edges.len()];
         let (morphed, coarse) = adaptive_and_uniform(&sub, &mesh, &f, n + 1);
@@ -214,7 +215,10 @@ fn geomorph_starts_on_the_coarser_mesh() {
             "level {n}: closed mesh V"
         );
         let err = max_nearest(&got, &targets);
-        assert!(err <= 1e-4 * diag, "level {n}: morph start {err:e}");
+        assert!(
+            err <= 1e-4 * mesh.diagonal(),
+            "level {n}: morph start {err:e}"
+        );
     }
 }
 

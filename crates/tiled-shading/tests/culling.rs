@@ -263,7 +263,8 @@ fn normal_cones_remove_exactly_the_lights_behind_a_wall() {
         return;
     };
     let cfg = config(Method::TiledCones, 16);
-    let gpu_cones = gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &cfg).expect("gpu run");
+    let gpu_cones =
+        gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &cfg, None).expect("gpu run");
     same_lists("wall cones", &c, &cfg, &gpu_cones, &cones);
 }
 
@@ -277,7 +278,16 @@ fn normal_cones_never_change_the_image() {
             continue;
         };
         let run = |m| {
-            gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &config(m, 16)).expect("gpu run")
+            gpu::run(
+                g,
+                &c.gb,
+                &c.frame,
+                &c.camera,
+                &c.lights,
+                &config(m, 16),
+                None,
+            )
+            .expect("gpu run")
         };
         compare(
             "gpu cones vs tiled",
@@ -302,8 +312,8 @@ fn gpu_matches_cpu_images_and_lists() {
                     continue;
                 }
                 let cfg = config(method, tile);
-                let gpu_out =
-                    gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &cfg).expect("gpu run");
+                let gpu_out = gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &cfg, None)
+                    .expect("gpu run");
                 compare(
                     &format!("gpu {method} {tile} vs brute"),
                     &brute,
@@ -348,6 +358,7 @@ fn lists_longer_than_workgroup_memory_are_shaded_in_flushes() {
             &c.camera,
             &c.lights,
             &config(method, 16),
+            None,
         )
         .expect("gpu run");
         let lit: Vec<u32> = out.counts.iter().copied().filter(|&n| n > 0).collect();

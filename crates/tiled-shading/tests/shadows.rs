@@ -207,7 +207,7 @@ fn shadows_only_remove_light_and_do_remove_it() {
         method: Method::Tiled,
         tile_size: 16,
     };
-    let lit = gpu::run(g, &view.0, &view.1, &camera, &lights, &config).expect("unshadowed");
+    let lit = gpu::run(g, &view.0, &view.1, &camera, &lights, &config, None).expect("unshadowed");
     let (shadowed, _, _) = shaded_gpu(g, &scene, &view, &camera, &lights);
     let total = |s: &Shaded| {
         s.diffuse

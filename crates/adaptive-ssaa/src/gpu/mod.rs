@@ -143,16 +143,13 @@ fn storage(
     size: u64,
     extra: wgpu::BufferUsages,
 ) -> Result<wgpu::Buffer, GpuError> {
-    transfer::check_buffer_size(device, label, size, wgpu::BufferUsages::STORAGE)?;
-    Ok(device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: size.max(4),
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_SRC
-            | wgpu::BufferUsages::COPY_DST
-            | extra,
-        mapped_at_creation: false,
-    }))
+    use wgpu::BufferUsages as U;
+    transfer::buffer(
+        device,
+        label,
+        size,
+        U::STORAGE | U::COPY_SRC | U::COPY_DST | extra,
+    )
 }
 
 /// Inputs [`Ssaa::new`] binds.

@@ -162,16 +162,11 @@ pub fn split_block_splitting<T: Copy + Default + Send + Sync>(
     image: &Image<T>,
     g: &BlockGeometry,
 ) -> Image<T> {
-    let (w, h) = g.intermediate_size();
     let crate::Pattern { n, m } = g.layout.pattern;
-    per_texel(w, h, |bx, by| {
-        let (i, u, j, v) = g.sub_texel_at(bx, by);
+    let (width, height) = (g.layout.width, g.layout.height);
+    fill_intermediate(image, g, |i, u, j, v| {
         let (x, y) = (u * n + i, v * m + j);
-        if x < g.layout.width && y < g.layout.height {
-            image.get(x, y)
-        } else {
-            T::default()
-        }
+        (x < width && y < height).then_some((x, y))
     })
 }
 
@@ -195,15 +190,23 @@ pub fn gather_block_translation<T: Copy + Default + Send + Sync>(
     split: &Image<T>,
     g: &BlockGeometry,
 ) -> Image<T> {
+    let (sub_width, sub_height) = (g.layout.sub_width, g.layout.sub_height);
+    fill_intermediate(split, g, |i, u, j, v| {
+        (u < sub_width && v < sub_height).then_some((i * sub_width + u, j * sub_height + v))
+    })
+}
+
+/// The intermediate texture of `g`: texel (bx, by) holds sub-buffer texel (i, u, j, v), read
+/// from `source` at `at(i, u, j, v)`, or zero where that is `None` (padding).
+fn fill_intermediate<T: Copy + Default + Send + Sync>(
+    source: &Image<T>,
+    g: &BlockGeometry,
+    at: impl Fn(u32, u32, u32, u32) -> Option<(u32, u32)> + Sync,
+) -> Image<T> {
     let (w, h) = g.intermediate_size();
-    let l = &g.layout;
     per_texel(w, h, |bx, by| {
         let (i, u, j, v) = g.sub_texel_at(bx, by);
-        if u < l.sub_width && v < l.sub_height {
-            split.get(i * l.sub_width + u, j * l.sub_height + v)
-        } else {
-            T::default()
-        }
+        at(i, u, j, v).map_or_else(T::default, |(x, y)| source.get(x, y))
     })
 }
 
@@ -242,37 +245,26 @@ pub fn split_tiled<T: Copy + Default + Send + Sync>(
     layout: &SplitLayout,
 ) -> Image<T> {
     let crate::Pattern { n, m } = layout.pattern;
-    let (a, b) = crate::tile(layout.pattern).unwrap_or((1, 1));
-    let (tiles_x, tiles_y) = (layout.sub_width.div_ceil(a), layout.sub_height.div_ceil(b));
-    let writes: Vec<(u32, u32, T)> = (0..tiles_y)
-        .into_par_iter()
-        .flat_map_iter(|tv| {
-            (0..tiles_x).flat_map(move |tu| {
-                let (x0, y0) = (tu * a * n, tv * b * m);
-                let mut tile = vec![T::default(); (a * n * b * m) as usize];
-                for k in 0..a * n * b * m {
-                    let (lx, ly) = (k % (a * n), k / (a * n));
-                    let (x, y) = (x0 + lx, y0 + ly);
-                    if x < layout.width && y < layout.height {
-                        tile[tile_slot(lx, ly, n, m, a, b) as usize] = image.get(x, y);
-                    }
-                }
-                (0..a * n * b * m).filter_map(move |k| {
-                    let (i, u, j, v) = tile_pixel(k, n, a, b);
-                    let (u, v) = (tu * a + u, tv * b + v);
-                    (u < layout.sub_width && v < layout.sub_height).then(|| {
-                        let (sx, sy) = layout.sub_buffer_origin(i, j);
-                        (sx + u, sy + v, tile[k as usize])
-                    })
-                })
+    let size = (layout.split_width(), layout.split_height());
+    by_tiles(layout, size, |tu, tv, (a, b)| {
+        let (x0, y0) = (tu * a * n, tv * b * m);
+        let mut tile = vec![T::default(); (a * n * b * m) as usize];
+        for k in 0..a * n * b * m {
+            let (lx, ly) = (k % (a * n), k / (a * n));
+            let (x, y) = (x0 + lx, y0 + ly);
+            if x < layout.width && y < layout.height {
+                tile[tile_slot(lx, ly, n, m, a, b) as usize] = image.get(x, y);
+            }
+        }
+        (0..a * n * b * m).filter_map(move |k| {
+            let (i, u, j, v) = tile_pixel(k, n, a, b);
+            let (u, v) = (tu * a + u, tv * b + v);
+            (u < layout.sub_width && v < layout.sub_height).then(|| {
+                let (sx, sy) = layout.sub_buffer_origin(i, j);
+                (sx + u, sy + v, tile[k as usize])
             })
         })
-        .collect();
-    let mut out = Image::filled(layout.split_width(), layout.split_height(), T::default());
-    for (x, y, t) in writes {
-        out.set(x, y, t);
-    }
-    out
+    })
 }
 
 /// The tiled one-pass gather (`gather_tiled`): each sub-buffer's a×b run is read in order into
@@ -282,32 +274,46 @@ pub fn gather_tiled<T: Copy + Default + Send + Sync>(
     layout: &SplitLayout,
 ) -> Image<T> {
     let crate::Pattern { n, m } = layout.pattern;
+    by_tiles(layout, (layout.width, layout.height), |tu, tv, (a, b)| {
+        let mut tile = vec![T::default(); (a * n * b * m) as usize];
+        for k in 0..a * n * b * m {
+            let (i, u, j, v) = tile_pixel(k, n, a, b);
+            let (u, v) = (tu * a + u, tv * b + v);
+            if u < layout.sub_width && v < layout.sub_height {
+                let (sx, sy) = layout.sub_buffer_origin(i, j);
+                tile[k as usize] = split.get(sx + u, sy + v);
+            }
+        }
+        let (x0, y0) = (tu * a * n, tv * b * m);
+        (0..a * n * b * m).filter_map(move |k| {
+            let (lx, ly) = (k % (a * n), k / (a * n));
+            let (x, y) = (x0 + lx, y0 + ly);
+            (x < layout.width && y < layout.height)
+                .then(|| (x, y, tile[tile_slot(lx, ly, n, m, a, b) as usize]))
+        })
+    })
+}
+
+/// An image of `size` written tile by tile (the workgroups of `tiled.wgsl`, a×b texels of
+/// every sub-buffer each): `tile(tu, tv, (a, b))` gives the (x, y, value) writes of tile
+/// (tu, tv).
+fn by_tiles<T, I>(
+    layout: &SplitLayout,
+    (width, height): (u32, u32),
+    tile: impl Fn(u32, u32, (u32, u32)) -> I + Sync,
+) -> Image<T>
+where
+    T: Copy + Default + Send + Sync,
+    I: Iterator<Item = (u32, u32, T)>,
+{
     let (a, b) = crate::tile(layout.pattern).unwrap_or((1, 1));
     let (tiles_x, tiles_y) = (layout.sub_width.div_ceil(a), layout.sub_height.div_ceil(b));
+    let tile = &tile;
     let writes: Vec<(u32, u32, T)> = (0..tiles_y)
         .into_par_iter()
-        .flat_map_iter(|tv| {
-            (0..tiles_x).flat_map(move |tu| {
-                let mut tile = vec![T::default(); (a * n * b * m) as usize];
-                for k in 0..a * n * b * m {
-                    let (i, u, j, v) = tile_pixel(k, n, a, b);
-                    let (u, v) = (tu * a + u, tv * b + v);
-                    if u < layout.sub_width && v < layout.sub_height {
-                        let (sx, sy) = layout.sub_buffer_origin(i, j);
-                        tile[k as usize] = split.get(sx + u, sy + v);
-                    }
-                }
-                let (x0, y0) = (tu * a * n, tv * b * m);
-                (0..a * n * b * m).filter_map(move |k| {
-                    let (lx, ly) = (k % (a * n), k / (a * n));
-                    let (x, y) = (x0 + lx, y0 + ly);
-                    (x < layout.width && y < layout.height)
-                        .then(|| (x, y, tile[tile_slot(lx, ly, n, m, a, b) as usize]))
-                })
-            })
-        })
+        .flat_map_iter(|tv| (0..tiles_x).flat_map(move |tu| tile(tu, tv, (a, b))))
         .collect();
-    let mut out = Image::filled(layout.width, layout.height, T::default());
+    let mut out = Image::filled(width, height, T::default());
     for (x, y, t) in writes {
         out.set(x, y, t);
     }

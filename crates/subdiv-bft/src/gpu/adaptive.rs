@@ -6,7 +6,7 @@
 use ::gpu::{PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 
-use super::{ADAPTIVE_STORAGE_BUFFERS, GpuSubdivider, WORKGROUP, empty, pass, read_vec3, storage};
+use super::{ADAPTIVE_STORAGE_BUFFERS, GpuSubdivider, WORKGROUP, pass, read_mesh, storage};
 use crate::{
     Refined, SubdivError, Subdivider,
     adaptive::{ScreenView, check_factors},
@@ -114,9 +114,10 @@ impl GpuSubdivider {
         }
         let out =
             wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-        let positions = empty(device, "adaptive positions", vertex_count as u64 * 16, out)?;
-        let normals = empty(device, "adaptive normals", vertex_count as u64 * 16, out)?;
-        let indices = empty(
+        let positions =
+            transfer::buffer(device, "adaptive positions", vertex_count as u64 * 16, out)?;
+        let normals = transfer::buffer(device, "adaptive normals", vertex_count as u64 * 16, out)?;
+        let indices = transfer::buffer(
             device,
             "adaptive indices",
             index_count * 4,
@@ -131,7 +132,7 @@ impl GpuSubdivider {
                 | wgpu::BufferUsages::COPY_DST
                 | wgpu::BufferUsages::COPY_SRC,
         )?;
-        let factors = empty(
+        let factors = transfer::buffer(
             device,
             "tessellation factors",
             u64::from(self.edge_count) * 4,
@@ -149,7 +150,7 @@ impl GpuSubdivider {
         let mut bindings = self.evaluate_bindings(&params, &walk, &positions, &normals);
         bindings.extend([&factors, &indices, &draw_args, &triangle_walk]);
         let evaluate_bind = evaluate.1.bind_buffers(device, &bindings);
-        let factor_params = empty(
+        let factor_params = transfer::buffer(
             device,
             "factor params",
             size_of::<FactorParams>() as u64,
@@ -244,12 +245,14 @@ impl GpuSubdivider {
         adaptive: &GpuAdaptive,
     ) -> Result<Refined, SubdivError> {
         let args: Vec<u32> = transfer::read_pod(device, queue, &adaptive.draw_args)?;
-        let mut indices: Vec<u32> = transfer::read_pod(device, queue, &adaptive.indices)?;
-        indices.truncate(args.first().copied().unwrap_or(0) as usize);
-        Ok(Refined {
-            positions: read_vec3(device, queue, &adaptive.positions, adaptive.vertex_capacity)?,
-            normals: read_vec3(device, queue, &adaptive.normals, adaptive.vertex_capacity)?,
-            indices,
-        })
+        let index_count = args.first().copied().unwrap_or(0);
+        let buffers = [&adaptive.positions, &adaptive.normals, &adaptive.indices];
+        read_mesh(
+            device,
+            queue,
+            buffers,
+            adaptive.vertex_capacity,
+            index_count,
+        )
     }
 }

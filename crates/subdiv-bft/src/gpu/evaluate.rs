@@ -5,7 +5,7 @@
 use ::gpu::kernel;
 use ::gpu::{PassTimer, transfer};
 
-use super::{EvaluateParams, GpuLevel, GpuSubdivider, empty, pass, read_vec3, storage};
+use super::{EvaluateParams, GpuLevel, GpuSubdivider, pass, read_mesh, storage};
 use crate::patch::{grid_walk, inner_count};
 use crate::{Refined, SubdivError, Subdivider, bft::grid_count};
 
@@ -23,8 +23,8 @@ impl GpuSubdivider {
             | wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;
-        let positions = empty(device, "fine positions", bytes, out)?;
-        let normals = empty(device, "fine normals", bytes, out)?;
+        let positions = transfer::buffer(device, "fine positions", bytes, out)?;
+        let normals = transfer::buffer(device, "fine normals", bytes, out)?;
         self.bind_level(device, sub, level, &positions, &normals)
     }
 
@@ -149,12 +149,13 @@ impl GpuSubdivider {
         queue: &wgpu::Queue,
         level: &GpuLevel,
     ) -> Result<Refined, SubdivError> {
-        let mut indices: Vec<u32> = transfer::read_pod(device, queue, &level.indices)?;
-        indices.truncate(level.index_count as usize);
-        Ok(Refined {
-            positions: read_vec3(device, queue, &level.positions, level.vertex_count)?,
-            normals: read_vec3(device, queue, &level.normals, level.vertex_count)?,
-            indices,
-        })
+        let buffers = [&level.positions, &level.normals, &level.indices];
+        read_mesh(
+            device,
+            queue,
+            buffers,
+            level.vertex_count,
+            level.index_count,
+        )
     }
 }

@@ -55,15 +55,6 @@ fn storage(device: &wgpu::Device, label: &str, bytes: &[u8]) -> Result<wgpu::Buf
     )?)
 }
 
-fn empty(
-    device: &wgpu::Device,
-    label: &str,
-    size: u64,
-    usage: wgpu::BufferUsages,
-) -> Result<wgpu::Buffer, SubdivError> {
-    Ok(transfer::buffer(device, label, size, usage)?)
-}
-
 /// Bindings 0–8 of `evaluate.wgsl`, shared by the uniform and the adaptive kernel: params,
 /// patches, rings, tables, M¹ positions and normals, grid walk; fine positions and normals.
 const EVALUATE_BINDINGS: [Binding; 9] = [
@@ -213,14 +204,14 @@ impl GpuSubdivider {
         let m0_count = sub.m0.vertex_count() as u32;
         let m1_count = sub.m1.vertex_count() as u32;
         let rw = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-        let m0_positions = empty(
+        let m0_positions = transfer::buffer(
             device,
             "M0 positions",
             u64::from(m0_count) * 16,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         )?;
-        let m1_positions = empty(device, "M1 positions", u64::from(m1_count) * 16, rw)?;
-        let m1_normals = empty(device, "M1 normals", u64::from(m1_count) * 16, rw)?;
+        let m1_positions = transfer::buffer(device, "M1 positions", u64::from(m1_count) * 16, rw)?;
+        let m1_normals = transfer::buffer(device, "M1 normals", u64::from(m1_count) * 16, rw)?;
         let counts = transfer::buffer_init(
             device,
             "M1 counts",
@@ -351,4 +342,22 @@ fn read_vec3(
         .take(count as usize)
         .map(|p| Vec3::new(p[0], p[1], p[2]))
         .collect())
+}
+
+/// A mesh read back: `vertex_count` vertices of `positions` and `normals` (vec4 f32 each)
+/// and the first `index_count` indices of `indices`.
+fn read_mesh(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    [positions, normals, indices]: [&wgpu::Buffer; 3],
+    vertex_count: u32,
+    index_count: u32,
+) -> Result<crate::Refined, SubdivError> {
+    let mut indices: Vec<u32> = transfer::read_pod(device, queue, indices)?;
+    indices.truncate(index_count as usize);
+    Ok(crate::Refined {
+        positions: read_vec3(device, queue, positions, vertex_count)?,
+        normals: read_vec3(device, queue, normals, vertex_count)?,
+        indices,
+    })
 }

@@ -51,26 +51,15 @@ pub fn run_shadowed(
     let mut encoder = device.create_command_encoder(&Default::default());
     pass.encode(&maps, &uploaded, &mut encoder, None);
     queue.submit([encoder.finish()]);
-    let shaded = shade(gpu, gb, frame, camera, &lights, config, Some(&maps))?;
+    let shaded = run(gpu, gb, frame, camera, &lights, config, Some(&maps))?;
     Ok((shaded, maps.read(device, queue, &plan.views)?, lights))
 }
 
-/// Uploads `gb`, `frame` and `lights`, runs one light accumulation with `config` and reads
-/// everything back: the GPU twin of [`crate::cpu::shade`] (lists sorted by light index; for
+/// Uploads `gb`, `frame` and `lights`, runs one light accumulation with `config` (looking up
+/// the shadow maps `maps`, if any) and reads everything back: the GPU twin of [`crate::cpu::shade`] (lists sorted by light index; for
 /// brute force the lists and counts are those the CPU reports: every light for every tile
 /// with a surface — the shader keeps none).
 pub fn run(
-    gpu: &Gpu,
-    gb: &GBuffer,
-    frame: &Frame,
-    camera: &Camera,
-    lights: &[GpuLight],
-    config: &ShadingConfig,
-) -> Result<Shaded, ShadingError> {
-    shade(gpu, gb, frame, camera, lights, config, None)
-}
-
-fn shade(
     gpu: &Gpu,
     gb: &GBuffer,
     frame: &Frame,
