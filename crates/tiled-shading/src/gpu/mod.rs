@@ -14,7 +14,7 @@
 //! let frame = gbuffer::Frame::new(&camera, 320, 240);
 //! let lights = tiled_shading::gpu_lights(&scene::scatter_point_lights(scene.bounds(), 1024, 3))?;
 //! let config = ShadingConfig { method: Method::TiledCones, ..Default::default() };
-//! let shaded = run(&gpu, &gb, &frame, &camera, &lights, &config)?;
+//! let shaded = run(&gpu, &gb, &frame, &camera, &lights, &config, None)?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
