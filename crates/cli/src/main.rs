@@ -748,6 +748,8 @@ fn run() -> Result<()> {
         ),
         None => vpl::primary_lights_sampled(&scene, args.area_samples),
     };
+    let mut photon_lights = vpl::photon_lights(&lights, emissive_photons).to_vec();
+    photon_lights.extend(args.extra_lights.iter().copied());
     lights.extend(args.extra_lights.iter().copied());
     let shading = pipeline::ShadingConfig {
         method: args.shading,
@@ -763,7 +765,7 @@ fn run() -> Result<()> {
             let set = vpl::generate(
                 &scene,
                 &bvh,
-                &lights,
+                &photon_lights,
                 &vpl::VplConfig {
                     count,
                     subsets,

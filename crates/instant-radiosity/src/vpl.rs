@@ -606,7 +606,14 @@ pub fn generate_from_primary(
         seed,
         emissive,
     };
-    generate(scene, bvh, &lights, &config)
+    generate(scene, bvh, photon_lights(&lights, emissive), &config)
+}
+
+/// The lights photons leave besides the emissive triangles: none where `lights` are
+/// [`primary_lights`]' stand-ins for those triangles (`emissive`; shooting from both would
+/// count the lamps' flux twice), else `lights`.
+pub fn photon_lights(lights: &[Light], emissive: bool) -> &[Light] {
+    if emissive { &[] } else { lights }
 }
 
 /// The primary lights of a scene, whether photons must also leave its emissive triangles

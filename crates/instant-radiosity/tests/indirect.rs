@@ -136,14 +136,13 @@ fn vpl_generation_is_deterministic_and_complete() {
 
 /// In a closed box with one albedo, every photon of a point light hits a wall, so the VPLs'
 /// flux sums to albedo × the light's flux (4π·I, the window of a huge radius ≈ 1).
-#[test]
-fn vpl_flux_sums_to_reflected_light_flux() {
+/// The Cornell box closed at the front, every surface of `albedo`, its lamp still emissive:
+/// every photon hits it and reflects `albedo` of its flux.
+fn closed_grey_box(albedo: f32) -> Scene {
     let mut s = scene::cornell_box();
-    let albedo = 0.5;
     for m in &mut s.materials {
         m.base_color = Vec4::new(albedo, albedo, albedo, 1.0);
         m.base_color_texture = None;
-        m.emissive = Vec3::ZERO;
     }
     let b = s.bounds();
     s.meshes.push(Mesh::quad(
@@ -156,22 +155,64 @@ fn vpl_flux_sums_to_reflected_light_flux() {
         ],
         0,
     ));
-    let centre = b.center();
-    s.lights = vec![Light::Point {
-        position: centre,
-        color: Vec3::new(1.0, 0.5, 0.25),
-        intensity: 2.0,
-        radius: 1e4,
-    }];
-    let set = vpls(&s, 1024, 16, 9);
+    s
+}
+
+/// Σ VPL flux against the flux reflected where photons of total flux `emitted` first land.
+fn assert_reflected_flux(set: &VplSet, emitted: Vec3, albedo: f32) {
     let total: Vec3 = set.vpls.iter().map(|v| v.flux).sum();
-    let expected = Vec3::new(1.0, 0.5, 0.25) * 2.0 * 4.0 * std::f32::consts::PI * albedo;
+    let expected = emitted * albedo;
     let photons: u64 = set.photons.iter().sum();
-    assert_eq!(photons, 1024, "every photon hits the closed box");
+    assert_eq!(
+        photons,
+        set.vpls.len() as u64,
+        "every photon hits the closed box"
+    );
     assert!(
         ((total - expected).abs() / expected).max_element() < 1e-4,
         "{total} vs {expected}"
     );
+}
+
+#[test]
+fn vpl_flux_sums_to_reflected_light_flux() {
+    let albedo = 0.5;
+    let mut s = closed_grey_box(albedo);
+    for m in &mut s.materials {
+        m.emissive = Vec3::ZERO;
+    }
+    s.lights = vec![Light::Point {
+        position: s.bounds().center(),
+        color: Vec3::new(1.0, 0.5, 0.25),
+        intensity: 2.0,
+        radius: 1e4,
+    }];
+    let emitted = Vec3::new(1.0, 0.5, 0.25) * 2.0 * 4.0 * std::f32::consts::PI;
+    assert_reflected_flux(&vpls(&s, 1024, 16, 9), emitted, albedo);
+}
+
+/// A scene lit only by an emissive lamp: photons leave the lamp's triangles and carry its
+/// flux π·L·A once, whether through `generate` or `generate_from_primary` (whose primary
+/// lights are the lamp's hemispherical stand-ins for direct light).
+#[test]
+fn emissive_lamp_flux_is_counted_once() {
+    let albedo = 0.5;
+    let mut s = closed_grey_box(albedo);
+    s.lights.clear();
+    let lamp = s.meshes.iter().find(|m| m.name == "light").expect("lamp");
+    let area: f32 = lamp
+        .indices
+        .chunks_exact(3)
+        .map(|t| {
+            let [a, b, c] = [0, 1, 2].map(|k| lamp.positions[t[k] as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    let emitted = s.materials[lamp.material as usize].emissive * std::f32::consts::PI * area;
+    assert_reflected_flux(&vpls(&s, 1024, 16, 3), emitted, albedo);
+    let bvh = Bvh::build(&s);
+    let primary = vpl::generate_from_primary(&s, &bvh, 1024, 16, 3).expect("vpls");
+    assert_reflected_flux(&primary, emitted, albedo);
 }
 
 /// The Cornell box's emissive quad is a primary light too, and its hemispherical stand-in
