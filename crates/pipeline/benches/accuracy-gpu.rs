@@ -1,10 +1,12 @@
 //! `accuracy-gpu`: how far the renderer's frames are from the path-traced ground truth
-//! (`scene::reference`, issue 21's measure): per configuration, the relative mean absolute
-//! luminance error and bias (emitters excluded, [`gbuffer::accuracy`]) and FLIP / PSNR against
-//! the path tracer at `--spp` samples — direct light only (truth: no bounce), then direct light
-//! plus 1024 VPLs without visibility, with ISM and with ManyLoD visibility (truth: one bounce).
-//! Accuracy does not depend on the adapter (the GPU only renders the frame), so the report of
-//! any adapter is valid; writes `accuracy-<adapter>-<date>.{md,json}` under `--out`.
+//! (`scene::reference`, issue 21's measure) on the Cornell box (its ceiling lamp) and
+//! Dabrovic Sponza (the default sun): per configuration, the relative mean absolute luminance
+//! error and bias (emitters excluded, [`gbuffer::accuracy`]) and FLIP / PSNR against the path
+//! tracer at `--spp` samples — direct light without and with shadow maps (truth: no bounce),
+//! then shadowed direct light plus `--vpls` VPLs without visibility, with ISM and with ManyLoD
+//! visibility (truth: one bounce). Accuracy does not depend on the adapter (the GPU only
+//! renders the frame), so the report of any adapter is valid; writes
+//! `accuracy-<adapter>-<date>.{md,json}` under `--out`.
 
 use anyhow::Result;
 use bench::{Header, Quality};
@@ -36,6 +38,37 @@ struct Args {
     /// VPLs of the indirect configurations.
     #[arg(long, default_value_t = 1024)]
     vpls: usize,
+    /// Also write the docs' picture (PNG): the truth and the renderer side by side — direct
+    /// light, then one bounce without and with ManyLoD visibility, on the Cornell box.
+    #[arg(long)]
+    picture: Option<std::path::PathBuf>,
+}
+
+/// The configurations of the docs' picture, left to right after the truth of each half.
+const PICTURE: [&str; 3] = [
+    "direct light (16 samples, shadow maps)",
+    "shadowed direct light + VPLs, no visibility",
+    "shadowed direct light + VPLs, ManyLoD",
+];
+
+/// `images` side by side with a 4-pixel black gap (all of one size).
+fn side_by_side(images: &[&Image<[f32; 4]>]) -> Result<Image<[f32; 4]>> {
+    let (w, h) = (images[0].width(), images[0].height());
+    let gap = 4;
+    let width = images.len() as u32 * (w + gap) - gap;
+    let mut out = Image::filled(width, h, [0.0, 0.0, 0.0, 1.0]);
+    for (k, image) in images.iter().enumerate() {
+        anyhow::ensure!(
+            image.width() == w && image.height() == h,
+            "picture sizes differ"
+        );
+        for y in 0..h {
+            for x in 0..w {
+                out.set(k as u32 * (w + gap) + x, y, image.get(x, y));
+            }
+        }
+    }
+    Ok(out)
 }
 
 #[derive(Serialize)]
@@ -49,22 +82,27 @@ struct Row {
 }
 
 #[derive(Serialize)]
-struct Report {
-    #[serde(flatten)]
-    header: Header,
+struct SceneRows {
     scene: String,
-    size: (u32, u32),
-    spp: u32,
-    vpls: usize,
     rows: Vec<Row>,
 }
 
-/// The Cornell box of `../shared/fixtures/cornell` from its view in `scene`'s views.json
-/// (the issue's: eye (0, 1, 3.9), target (0, 1, 0), fov 39.3°).
-fn cornell() -> Result<(Scene, Camera)> {
+#[derive(Serialize)]
+struct Report {
+    #[serde(flatten)]
+    header: Header,
+    size: (u32, u32),
+    spp: u32,
+    vpls: usize,
+    scenes: Vec<SceneRows>,
+}
+
+/// `file` of `../shared/fixtures` from its view in `scene`'s views.json (the Cornell box's is
+/// the issue's: eye (0, 1, 3.9), target (0, 1, 0), fov 39.3°).
+fn fixture(file: &str) -> Result<(Scene, Camera)> {
     let dir =
         scene::shared_fixtures().ok_or_else(|| anyhow::anyhow!("../shared/fixtures not found"))?;
-    let path = dir.join("cornell/CornellBox-Original.obj");
+    let path = dir.join(file);
     let scene = Scene::load(&path)?;
     let camera = scene::preset_view(&path, &scene)
         .ok_or_else(|| anyhow::anyhow!("no view of {} in views.json", path.display()))?;
@@ -73,6 +111,7 @@ fn cornell() -> Result<(Scene, Camera)> {
 
 fn truth(
     scene: &Scene,
+    lights: &[scene::Light],
     camera: Camera,
     (w, h): (u32, u32),
     bounces: u32,
@@ -82,7 +121,7 @@ fn truth(
         max_bounces: bounces,
         ..ReferenceConfig::default()
     };
-    let mut pt = PathTracer::new(scene, camera, w, h, &scene.lights, config);
+    let mut pt = PathTracer::new(scene, camera, w, h, lights, config);
     pt.add_samples(spp);
     Ok(Image::from_vec(
         w,
@@ -91,46 +130,57 @@ fn truth(
     )?)
 }
 
-fn main() -> Result<()> {
-    let args = Args::parse_from(bench::args());
-    let gpu = args.options.gpu()?;
-    let (d, q) = (&gpu.device, &gpu.queue);
-    let (scene, camera) = cornell()?;
-    let size = if bench::run_once() {
-        (32, 32)
-    } else {
-        (256, 256)
-    };
-    let spp = if bench::run_once() { 4 } else { args.spp };
-    let vpls = if bench::run_once() { 64 } else { args.vpls };
-    let (w, h) = size;
-    let direct_truth = truth(&scene, camera, size, 0, spp)?;
-    let bounce_truth = truth(&scene, camera, size, 1, spp)?;
-    let (lights, _, _) = vpl::primary_lights(&scene);
+/// What one scene's rows are measured with.
+struct Setup<'a> {
+    gpu: &'a gpu::Gpu,
+    size: (u32, u32),
+    spp: u32,
+    vpls: usize,
+}
+
+/// The rows of `scene` from `camera`, and the frames of [`PICTURE`] with both truths.
+fn measure_scene(
+    setup: &Setup<'_>,
+    scene: &Scene,
+    camera: Camera,
+) -> Result<(Vec<Row>, Vec<Image<[f32; 4]>>)> {
+    let (d, q) = (&setup.gpu.device, &setup.gpu.queue);
+    let (w, h) = setup.size;
+    let (lights, emissive, lit_by) = vpl::primary_lights(scene);
+    println!("{} triangles, lit by {lit_by}", scene.triangle_count());
+    // The truth sees the emissive triangles themselves, not their stand-ins.
+    let true_lights = vpl::photon_lights(&lights, emissive);
+    let direct_truth = truth(scene, true_lights, camera, setup.size, 0, setup.spp)?;
+    let bounce_truth = truth(scene, true_lights, camera, setup.size, 1, setup.spp)?;
     let config = IndirectConfig::new(scene.bounds());
-    let bvh = scene::Bvh::build(&scene);
-    let set = vpl::generate_from_primary(&scene, &bvh, vpls, config.subsets(), 1)?;
+    let bvh = scene::Bvh::build(scene);
+    let set = vpl::generate_from_primary(scene, &bvh, setup.vpls, config.subsets(), 1)?;
     let mut rows = Vec::new();
-    // `shadowed`: the emitter as that many shadowed hemispherical samples (else one
-    // unshadowed point at its centroid).
+    let mut pictures = Vec::new();
+    // `shadowed`: the lights with shadow maps, an emitter as that many hemispherical samples
+    // (else unshadowed, an emitter one point at its centroid).
     let mut measure = |name: &str,
                        shadowed: Option<u32>,
-                       visibility: Option<Option<VplShadows>>|
+                       visibility: Option<Option<(VplShadows, u32)>>|
      -> Result<()> {
         let mut r = match shadowed {
             Some(samples) => {
-                let (sampled, _, _) = vpl::primary_lights_sampled(&scene, samples);
-                let mut r = GpuRenderer::new(d, q, &scene, &sampled, w, h)?;
+                let (sampled, _, _) = vpl::primary_lights_sampled(scene, samples);
+                let mut r = GpuRenderer::new(d, q, scene, &sampled, w, h)?;
                 r.set_shadows(d, q, Some(&ShadowMapConfig::default()))?;
                 r
             }
-            None => GpuRenderer::new(d, q, &scene, &lights, w, h)?,
+            None => GpuRenderer::new(d, q, scene, &lights, w, h)?,
         };
         match visibility {
             None => {}
             Some(None) => r.set_indirect(d, &config, &set)?,
-            Some(Some(mode)) => {
-                r.set_vpl_shadows(d, &scene, mode, &ShadowConfig::default(), &config, &set)?
+            Some(Some((mode, tile))) => {
+                let maps = ShadowConfig {
+                    tile,
+                    ..ShadowConfig::default()
+                };
+                r.set_vpl_shadows(d, scene, mode, &maps, &config, &set)?
             }
         }
         let image = r.render(d, q, &camera, Vec3::ZERO)?.image;
@@ -145,11 +195,14 @@ fn main() -> Result<()> {
         } = gbuffer::accuracy(truth, &image, 10.0);
         let quality = bench::quality(truth, &image);
         println!(
-            "{name:<40} vs {truth_name:<12}: error {error:.3}, bias {:+.1} %, FLIP {:.4}, PSNR {:.1} dB",
+            "{name:<48} vs {truth_name:<12}: error {error:.3}, bias {:+.1} %, FLIP {:.4}, PSNR {:.1} dB",
             100.0 * bias,
             quality.flip_mean,
             quality.psnr
         );
+        if PICTURE.contains(&name) {
+            pictures.push(image);
+        }
         rows.push(Row {
             configuration: name.into(),
             truth: truth_name.into(),
@@ -160,29 +213,77 @@ fn main() -> Result<()> {
         });
         Ok(())
     };
-    measure("direct light (one point, no shadows)", None, None)?;
-    measure("direct light (one point, shadow maps)", Some(1), None)?;
-    measure("direct light (16 samples, shadow maps)", Some(16), None)?;
-    measure("+ VPLs, no visibility", None, Some(None))?;
-    measure("+ VPLs, ISM visibility", None, Some(Some(VplShadows::Ism)))?;
+    measure("direct light (no shadows)", None, None)?;
+    measure("direct light (shadow maps)", Some(1), None)?;
+    // Emitters as area lights: 16 shadowed samples each (punctual lights are one sample).
+    let samples = if emissive { 16 } else { 1 };
+    if emissive {
+        measure(PICTURE[0], Some(samples), None)?;
+    }
+    let (ism, manylod) = (VplShadows::Ism, VplShadows::ManyLod);
+    let bounce = |visibility: &str| format!("shadowed direct light + VPLs, {visibility}");
+    measure(&bounce("no visibility"), Some(samples), Some(None))?;
+    measure(&bounce("ISM"), Some(samples), Some(Some((ism, 32))))?;
+    measure(&bounce("ManyLoD"), Some(samples), Some(Some((manylod, 32))))?;
     measure(
-        "+ VPLs, ManyLoD visibility",
-        None,
-        Some(Some(VplShadows::ManyLod)),
+        &bounce("ManyLoD 64×64 maps"),
+        Some(samples),
+        Some(Some((manylod, 64))),
     )?;
-    measure(
-        "16 shadowed samples + VPLs, ManyLoD",
-        Some(16),
-        Some(Some(VplShadows::ManyLod)),
-    )?;
+    if pictures.len() == PICTURE.len() {
+        pictures.splice(0..0, [direct_truth.clone()]);
+        pictures.insert(2, bounce_truth);
+    }
+    Ok((rows, pictures))
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse_from(bench::args());
+    let gpu = args.options.gpu()?;
+    let once = bench::run_once();
+    let setup = Setup {
+        gpu: &gpu,
+        size: if once { (32, 32) } else { (256, 256) },
+        spp: if once { 4 } else { args.spp },
+        vpls: if once { 64 } else { args.vpls },
+    };
+    let mut scenes = Vec::new();
+    for (file, label) in [
+        (
+            "cornell/CornellBox-Original.obj",
+            "Cornell box (cornell/CornellBox-Original.obj), its ceiling lamp",
+        ),
+        (
+            "sponza/dabrovic/sponza.gltf",
+            "Dabrovic Sponza (sponza/dabrovic/sponza.gltf), the default sun",
+        ),
+    ] {
+        println!("{label}");
+        let (scene, camera) = fixture(file)?;
+        let (rows, pictures) = measure_scene(&setup, &scene, camera)?;
+        if let (Some(path), true) = (&args.picture, file.starts_with("cornell")) {
+            let strip: Vec<&Image<[f32; 4]>> = pictures.iter().collect();
+            anyhow::ensure!(
+                strip.len() == 5,
+                "the picture's configurations were not all measured"
+            );
+            side_by_side(&strip)?.write_png(path)?;
+            println!("wrote {}", path.display());
+        }
+        scenes.push(SceneRows {
+            scene: format!(
+                "{label}, {}",
+                bench::scene_labels(std::path::Path::new(file), &camera).1
+            ),
+            rows,
+        });
+    }
     let report = Report {
         header: Header::new(&gpu),
-        scene: "cornell/CornellBox-Original.obj, eye (0, 1, 3.9), target (0, 1, 0), fov 39.3°"
-            .into(),
-        size,
-        spp,
-        vpls: set.vpls.len(),
-        rows,
+        size: setup.size,
+        spp: setup.spp,
+        vpls: setup.vpls,
+        scenes,
     };
     args.options
         .write_report(&report.header, "accuracy-", &report, &markdown(&report))
@@ -195,25 +296,29 @@ fn markdown(r: &Report) -> String {
         .markdown("Accuracy against the path-traced ground truth", 1);
     let _ = writeln!(
         s,
-        "Scene {}, {}×{}; truth: `scene::reference` at {} spp (direct light only, or one bounce), \
-         the lamp an area light; frames: the GPU renderer, tiled shading, no ambient, {} VPLs 4×4 \
-         fused with the 5×5 blur. Error: relative mean absolute luminance error over the pixels \
-         the truth lights, the emitter (luminance > 10) excluded; bias: mean luminance ratio − 1. \
-         The timing line above does not apply: nothing here is timed.\n\n\
-         | configuration | truth | error | bias | FLIP | PSNR dB |\n|---|---|---|---|---|---|",
-        r.scene, r.size.0, r.size.1, r.spp, r.vpls
+        "{}×{}; truth: `scene::reference` at {} spp (direct light only, or one bounce), emitters \
+         as area lights; frames: the GPU renderer, tiled shading, no ambient, {} VPLs 4×4 fused \
+         with the 5×5 blur, VPL visibility maps 32×32 unless said, direct shadow maps 1024² \
+         (an emitter as 16 shadowed samples, a punctual light as itself). Error: relative mean \
+         absolute luminance error over the pixels the truth lights, emitters (luminance > 10) \
+         and their neighbours excluded; bias: mean luminance ratio − 1. The timing line above \
+         does not apply: nothing here is timed.\n",
+        r.size.0, r.size.1, r.spp, r.vpls
     );
-    for row in &r.rows {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.3} | {:+.1} % | {:.4} | {:.1} |",
-            row.configuration,
-            row.truth,
-            row.error,
-            100.0 * row.bias,
-            row.quality.flip_mean,
-            row.quality.psnr
-        );
+    for scene in &r.scenes {
+        let mut table =
+            bench::Table::new(&["configuration", "truth", "error", "bias", "FLIP", "PSNR dB"]);
+        for row in &scene.rows {
+            table.row([
+                row.configuration.clone(),
+                row.truth.clone(),
+                format!("{:.3}", row.error),
+                format!("{:+.1} %", 100.0 * row.bias),
+                format!("{:.4}", row.quality.flip_mean),
+                format!("{:.1}", row.quality.psnr),
+            ]);
+        }
+        let _ = write!(s, "## {}\n\n{table}", scene.scene);
     }
     s
 }
