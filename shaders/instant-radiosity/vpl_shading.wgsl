@@ -1,7 +1,7 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
 // #import tiled-shading/lighting.wgsl
-// #import manylod/common.wgsl
+// #import manylod/lookup.wgsl
 // #import interleave/pattern.wgsl
 // SNSM — shading with no shadow map (Segovia 2006 §4.3, §6.2): each pixel sums the diffuse and
 // glossy light reflected from the hemispherical VPLs of its subset, visibility ignored. Twin of
@@ -16,7 +16,7 @@
 //   shade_split: reads the split G-buffer at (x, y), writes split irradiance at (x, y) (BS/BG around it);
 //   shade_fused: reads the G-buffer and writes the irradiance at the image pixel (no BS/BG).
 //
-// With VPL shadow maps (`shadow.enabled`, Holländer 2013 §3.6 SSM mode), VPL k's light is
+// With VPL shadow maps (`atlas_params.enabled`, Holländer 2013 §3.6 SSM mode), VPL k's light is
 // multiplied by its visibility: p is looked up in micro-view k of the ManyLoDs / ISM atlas
 // (paraboloid around the VPL normal, `manylod::View::splat`'s projection).
 
@@ -46,48 +46,20 @@ struct ShadingParams {
 @group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(8) var specular_out: texture_storage_2d<rgba16float, write>;
 
-// `instant_radiosity::shadows::ShadowParams`.
-struct ShadowParams {
-    enabled: u32,
-    tile: u32,
-    columns: u32,
-    width: u32,
-    far: f32,
-    lift: f32,
-    bias: f32,
-    // Receivers move this many atlas pixels (at their distance) along their normal.
-    normal_offset: f32,
-};
+// The VPL shadow maps (`manylod/lookup.wgsl`'s atlas; `manylod::lookup::AtlasParams`).
+@group(0) @binding(9) var<storage, read> atlas: array<u32>;
+@group(0) @binding(10) var<uniform> atlas_params: AtlasParams;
 
-@group(0) @binding(9) var<storage, read> shadow_atlas: array<u32>;
-@group(0) @binding(10) var<uniform> shadow: ShadowParams;
-
-// Visibility of p (normal n) from VPL k: 1 unless the atlas holds something nearer (depth
-// bias added, p moved off its surface by the normal offset). Twin of
-// `instant_radiosity::shadows::vpl_visibility`.
-fn vpl_visibility(k: u32, vpl: Vpl, receiver: vec3<f32>, n: vec3<f32>) -> f32 {
-    if shadow.enabled == 0u {
+// Visibility of p (normal n) from VPL k in its atlas tile (`instant_radiosity::shadows::vpl_visibility`).
+fn vpl_visibility(k: u32, vpl: Vpl, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    if atlas_params.enabled == 0u {
         return 1.0;
     }
-    let to = receiver - vpl.position;
-    let cos_vpl = max(dot(vpl.normal, normalize(to)), 0.0);
-    let p = receiver + n * (length(to) * 2.0 * (1.0 + cos_vpl) / f32(shadow.tile) * shadow.normal_offset);
-    // The paraboloid frame of `manylod::view::paraboloid_frame`.
-    let nrm = vpl.normal;
-    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), abs(nrm.z) < 0.9);
-    let t = normalize(cross(helper, nrm));
-    let b = cross(nrm, t);
-    let d = p - (vpl.position + nrm * shadow.lift);
-    let dist = length(d);
-    let l = vec3<f32>(dot(t, d), dot(b, d), dot(nrm, d)) / dist;
-    if l.z <= 0.0 {
+    let t = atlas_texel(atlas_params, k, vpl.position, vpl.normal, p, n);
+    if t.index == NO_TEXEL {
         return 0.0;
     }
-    let uv = l.xy / (1.0 + l.z);
-    let px = min(vec2<u32>((uv * 0.5 + 0.5) * f32(shadow.tile)), vec2<u32>(shadow.tile - 1u));
-    let origin = vec2<u32>(k % shadow.columns, k / shadow.columns) * shadow.tile;
-    let stored = unpack_depth(shadow_atlas[(origin.y + px.y) * shadow.width + origin.x + px.x]);
-    return select(0.0, 1.0, dist / shadow.far <= stored + shadow.bias);
+    return atlas_test(t, atlas[t.index]);
 }
 
 const INV_PI_VPL: f32 = 0.318309886183791;

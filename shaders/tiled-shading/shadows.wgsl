@@ -5,8 +5,13 @@
 // and a 3×3 tent (bilinear taps at −1, 0, +1 texel: weights (1−f, 1, 1, f)/3 per axis over
 // 4×4 texels, four gathers) counts the texels whose linear depth + `bias` texels is not in
 // front of the receiver.
+// A light whose `shadow_count` carries `PARABOLOID_SHADOW` instead owns (count & 0xff)
+// paraboloid views of the ManyLoD atlas from tile `shadow_first` (Holländer 2013 §3.6 for many
+// lights): one around a spot's or hemispherical light's direction, two (±y) for a point light;
+// the receiver is looked up in the one facing it (`manylod/lookup.wgsl`, one texel).
 // #import tiled-shading/lighting.wgsl
 // #import tiled-shading/shadow_view.wgsl
+// #import manylod/lookup.wgsl
 
 struct ShadowParams {
     bias: f32,
@@ -21,6 +26,33 @@ struct ShadowParams {
 @group(1) @binding(1) var<uniform> shadow_params: ShadowParams;
 @group(1) @binding(2) var shadow_maps: texture_depth_2d_array;
 @group(1) @binding(3) var shadow_sampler: sampler;
+// The ManyLoD atlas of the lights with paraboloid shadows (a stand-in without them).
+@group(1) @binding(4) var<storage, read> atlas: array<u32>;
+@group(1) @binding(5) var<uniform> atlas_params: AtlasParams;
+
+const PARABOLOID_SHADOW: u32 = 0x80000000u;
+
+// The axis of paraboloid view `k` (0 or 1) of `light` (`tiled_shading::shadows::paraboloid_views`).
+fn paraboloid_axis(light: Light, k: u32) -> vec3<f32> {
+    if light.kind == LIGHT_POINT {
+        return select(vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, -1.0, 0.0), k == 1u);
+    }
+    return select(light.direction, -light.direction, k == 1u);
+}
+
+// Visibility of p (normal n) from `light` through its paraboloid views.
+fn paraboloid_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let count = light.shadow_count & 0xffu;
+    var k = 0u;
+    if count == 2u && dot(p - light.position, paraboloid_axis(light, 0u)) < 0.0 {
+        k = 1u;
+    }
+    let t = atlas_texel(atlas_params, light.shadow_first + k, light.position, paraboloid_axis(light, k), p, n);
+    if t.index == NO_TEXEL {
+        return 0.0;
+    }
+    return atlas_test(t, atlas[t.index]);
+}
 
 // Texels kept around every cube face and cascade (`MARGIN_TEXELS`).
 const MARGIN_TEXELS: f32 = 2.0;
@@ -53,6 +85,9 @@ fn pick_shadow_view(light: Light, p: vec3<f32>, resolution: f32) -> u32 {
 fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if light.shadow_count == 0u {
         return 1.0;
+    }
+    if (light.shadow_count & PARABOLOID_SHADOW) != 0u {
+        return paraboloid_visibility(light, p, n);
     }
     let res = textureDimensions(shadow_maps).x;
     let resolution = f32(res);

@@ -10,9 +10,10 @@ use interleave::{SplitLayout, SplitVariant};
 use rayon::prelude::*;
 
 use crate::IndirectError;
-use crate::shadows::{ShadowParams, vpl_visibility};
+use crate::shadows::vpl_visibility;
 use crate::{IndirectConfig, IndirectStages, Interleaving, vpl::GpuVpl, vpl::VplSet};
 use gpu::PassTiming;
+use manylod::lookup::AtlasParams;
 use tiled_shading::lighting::{Surface, reflect_light};
 
 /// The clamped intensity of `vpl` towards `p` and the direction to it (`vpl_intensity`):
@@ -44,7 +45,7 @@ pub struct ShadingInputs<'a> {
     pub clamp_squared: f32,
     /// VPL visibility: a shadow-map atlas (read back from [`crate::shadows::VplShadowMaps`])
     /// and its parameters; `None` shades without visibility (SNSM).
-    pub shadows: Option<(&'a [u32], ShadowParams)>,
+    pub shadows: Option<(&'a [u32], AtlasParams)>,
 }
 
 /// SNSM on split G-buffer images (`shade_split`): texel (x, y) of the split layout shades the
@@ -154,7 +155,7 @@ pub fn indirect_with_shadows(
     frame: &Frame,
     set: &VplSet,
     config: &IndirectConfig,
-    shadows: Option<(&[u32], ShadowParams)>,
+    shadows: Option<(&[u32], AtlasParams)>,
 ) -> Result<IndirectStages, IndirectError> {
     config.validate(set)?;
     let (w, h) = (gb.width(), gb.height());

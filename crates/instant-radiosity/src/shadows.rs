@@ -9,6 +9,7 @@ use glam::Vec3;
 use manylod::{
     AtlasLayout, Bsh, View,
     gpu::{CutKind, GpuIsm, GpuManyLod},
+    lookup::AtlasParams,
     splat, surfels,
 };
 use scene::Scene;
@@ -63,70 +64,18 @@ impl Default for ShadowConfig {
     }
 }
 
-/// Uniform block `ShadowParams` of `vpl_shading.wgsl`: how the shading finds VPL `k`'s tile.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ShadowParams {
-    /// 0: no visibility (every VPL sees everything).
-    pub enabled: u32,
-    /// Tile side in pixels.
-    pub tile: u32,
-    /// Tiles per atlas row.
-    pub columns: u32,
-    /// Atlas row length in pixels.
-    pub width: u32,
-    /// Distance mapped to depth 1.
-    pub far: f32,
-    /// How far each view sits off its VPL's surface, along the normal.
-    pub lift: f32,
-    /// Depth bias (fraction of `far`).
-    pub bias: f32,
-    /// Normal offset of receivers, in atlas pixels at their distance.
-    pub normal_offset: f32,
-}
-
-/// Visibility of `p` from VPL `k` in `atlas` (`vpl_visibility` of `vpl_shading.wgsl`): 1 when
-/// no stored depth in its paraboloid tile is nearer than `p` (plus the bias), 0 behind the
-/// VPL's surface or occluded; always 1 when `params` are disabled.
+/// Visibility of `p` (normal `n`) from VPL `k` in `atlas`: [`manylod::lookup::visibility`]
+/// from the VPL's position and normal (`atlas_visibility` in `vpl_shading.wgsl`).
 pub fn vpl_visibility(
     atlas: &[u32],
-    params: &ShadowParams,
+    params: &AtlasParams,
     k: u32,
     vpl: &GpuVpl,
     p: Vec3,
     n: Vec3,
 ) -> f32 {
-    if params.enabled == 0 {
-        return 1.0;
-    }
-    // Normal offset: the receiver moves off its surface by `normal_offset` atlas pixels at its
-    // distance (a paraboloid pixel spans 2·(1 + cos θ)/tile radians), so the splats of its own
-    // surface in its pixel do not shadow it.
-    let nrm = Vec3::from(vpl.normal);
-    let to = p - Vec3::from(vpl.position);
-    let cos = nrm.dot(to.normalize_or_zero()).max(0.0);
-    let p = p + n * (to.length() * 2.0 * (1.0 + cos) / params.tile as f32 * params.normal_offset);
-    let (t, b) = manylod::view::paraboloid_frame(nrm);
-    let d = p - (Vec3::from(vpl.position) + nrm * params.lift);
-    let dist = d.length();
-    let l = Vec3::new(t.dot(d), b.dot(d), nrm.dot(d)) / dist;
-    if l.z <= 0.0 {
-        return 0.0;
-    }
-    let uv = l.truncate() / (1.0 + l.z);
-    let px = ((uv * 0.5 + 0.5) * params.tile as f32)
-        .as_uvec2()
-        .min(glam::UVec2::splat(params.tile - 1));
-    let origin = glam::UVec2::new(k % params.columns, k / params.columns) * params.tile;
-    let word = atlas
-        .get(((origin.y + px.y) * params.width + origin.x + px.x) as usize)
-        .copied()
-        .unwrap_or(u32::MAX);
-    if dist / params.far <= splat::unpack_depth(word) + params.bias {
-        1.0
-    } else {
-        0.0
-    }
+    let view = (Vec3::from(vpl.position), Vec3::from(vpl.normal));
+    manylod::lookup::visibility(atlas, params, k, view, p, n)
 }
 
 /// Node-views a ManyLoD cut list holds per micro-view pixel: cuts hold culled node-views too,
@@ -149,7 +98,7 @@ pub struct VplShadowMaps {
     atlas: wgpu::Buffer,
     layout: AtlasLayout,
     params: wgpu::Buffer,
-    shadow_params: ShadowParams,
+    shadow_params: AtlasParams,
     frames: u32,
 }
 
@@ -163,14 +112,30 @@ impl VplShadowMaps {
         mode: VplShadows,
         config: &ShadowConfig,
     ) -> Result<Self, IndirectError> {
-        let (positions, indices) = scene_mesh(scene);
-        let count = 1usize << config.points_log2.min(26);
-        let s = surfels::sample(&positions, &indices, count, 1)?;
-        let (p, n) = surfels::evaluate(&s, &positions, &indices);
-        let bsh = Bsh::build(&p, &n, surfels::disc_radius(&positions, &indices, count))?;
         let diagonal = scene.bounds().diagonal();
         let lift = 1e-3 * diagonal;
         let views = vpl_views(set, config.tile, lift);
+        let (positions, indices) = scene_mesh(scene);
+        let mesh = (&positions[..], &indices[..]);
+        Self::from_views(device, mesh, diagonal, views, lift, mode, config)
+    }
+
+    /// The same for any paraboloid `views` (each `config.tile` pixels, set `lift` off its
+    /// origin) of the triangle `mesh` ([`scene_mesh`]) of a scene of `diagonal`: the direct
+    /// lights' ManyLoD shadows (`tiled_shading::shadows::paraboloid_views`).
+    pub fn from_views(
+        device: &wgpu::Device,
+        (positions, indices): (&[Vec3], &[u32]),
+        diagonal: f32,
+        views: Vec<View>,
+        lift: f32,
+        mode: VplShadows,
+        config: &ShadowConfig,
+    ) -> Result<Self, IndirectError> {
+        let count = 1usize << config.points_log2.min(26);
+        let s = surfels::sample(positions, indices, count, 1)?;
+        let (p, n) = surfels::evaluate(&s, positions, indices);
+        let bsh = Bsh::build(&p, &n, surfels::disc_radius(positions, indices, count))?;
         let layout = vpl_atlas(views.len(), config.tile, diagonal);
         let (width, height) = layout.size();
         let atlas = transfer::buffer(
@@ -234,7 +199,7 @@ impl VplShadowMaps {
             };
             batches.push(Batch { manylod, ism });
         }
-        let params = ShadowParams {
+        let params = AtlasParams {
             enabled: 1,
             tile: layout.tile,
             columns: layout.columns,
@@ -287,7 +252,7 @@ impl VplShadowMaps {
     }
 
     /// What the shading's lookup needs ([`vpl_visibility`]).
-    pub fn params(&self) -> ShadowParams {
+    pub fn params(&self) -> AtlasParams {
         self.shadow_params
     }
 
@@ -324,7 +289,7 @@ pub fn disabled_bindings(
     let params = transfer::buffer_init(
         device,
         "no vpl shadow params",
-        bytemuck::bytes_of(&ShadowParams::default()),
+        bytemuck::bytes_of(&AtlasParams::default()),
         wgpu::BufferUsages::UNIFORM,
     )?;
     Ok((atlas, params))

@@ -14,6 +14,7 @@
 pub mod bsh;
 pub mod cut;
 pub mod gpu;
+pub mod lookup;
 pub mod splat;
 pub mod surfels;
 pub mod view;
@@ -34,6 +35,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "inplace.wgsl",
         "inplace_atomic.wgsl",
         "inplace_ballot.wgsl",
+        "lookup.wgsl",
         "refit.wgsl",
         "splat.wgsl",
     ],

@@ -19,7 +19,7 @@ use instant_radiosity::{
     shadows::{ShadowConfig, VplShadowMaps, VplShadows},
     vpl::VplSet,
 };
-use tiled_shading::gpu::shadows::{GpuShadowMaps, ShadowMapPass};
+use tiled_shading::gpu::shadows::{AtlasBindings, GpuShadowMaps, ShadowInputs, ShadowMapPass};
 use tiled_shading::gpu::{ACCUMULATION_FORMAT, BoundShading, LightShading};
 use tiled_shading::shadows::{self, ShadowMapConfig};
 
@@ -115,8 +115,19 @@ pub struct GpuRenderer {
     indirect: Option<Indirect>,
     vpl_shadows: Option<VplShadowMaps>,
     shadows: Option<DirectShadows>,
+    light_atlas: Option<LightAtlas>,
     bounds: scene::Aabb,
     timer: PassTimer,
+}
+
+/// ManyLoD shadows of the point, spot and hemispherical lights (Holländer 2013 §3.6's
+/// many-view cut, as for VPLs): the scene's triangles to sample, the maps' configuration, the
+/// lights' paraboloid views and their maps (`None` while no light has such views).
+struct LightAtlas {
+    mesh: (Vec<Vec3>, Vec<u32>),
+    config: ShadowConfig,
+    plan: shadows::ShadowPlan,
+    maps: Option<VplShadowMaps>,
 }
 
 /// Shadow maps of the direct lights as the renderer holds them: the raster pass, the maps
@@ -231,6 +242,7 @@ impl GpuRenderer {
             indirect: None,
             vpl_shadows: None,
             shadows: None,
+            light_atlas: None,
             bounds: scene.bounds(),
             timer: PassTimer::new(device, 32),
         })
@@ -271,9 +283,7 @@ impl GpuRenderer {
             bound.set_camera(queue, camera);
         }
         self.shading_bound = bound;
-        let maps = self.shadows.as_ref().map(|s| &s.maps);
-        self.shading
-            .bind_shadows(device, &mut self.shading_bound, maps)?;
+        self.bind_shadow_lookup(device)?;
         self.bind_composition(device);
         Ok(())
     }
@@ -351,45 +361,128 @@ impl GpuRenderer {
         self.plan_shadows(device, queue)
     }
 
-    /// Plans the lights' shadow views (grows the maps when they need more layers) and writes
-    /// the lights with their views; without shadows, clears the lights' views.
+    /// Gives the point, spot and hemispherical lights ManyLoD shadows (`Some`: one paraboloid
+    /// view per spot or hemispherical light, two per point light, `config.tile` pixels, cut
+    /// and splatted over surfels of `scene` every frame, [`tiled_shading::shadows`]'s
+    /// `PARABOLOID_SHADOW`), or removes them (`None`). Directional lights keep their
+    /// cascades when [`GpuRenderer::set_shadows`] is set.
+    pub fn set_manylod_shadows(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        config: Option<&ShadowConfig>,
+    ) -> Result<(), RenderError> {
+        self.light_atlas = config.map(|config| LightAtlas {
+            mesh: instant_radiosity::shadows::scene_mesh(scene),
+            config: *config,
+            plan: shadows::ShadowPlan::default(),
+            maps: None,
+        });
+        self.plan_shadows(device, queue)
+    }
+
+    /// Binds the light accumulation's shadow lookup to the current maps and atlas.
+    fn bind_shadow_lookup(&mut self, device: &wgpu::Device) -> Result<(), RenderError> {
+        let inputs = ShadowInputs {
+            maps: self.shadows.as_ref().map(|s| &s.maps),
+            atlas: self
+                .light_atlas
+                .as_ref()
+                .and_then(|a| a.maps.as_ref())
+                .map(|m| {
+                    let (atlas, params) = m.bindings();
+                    AtlasBindings { atlas, params }
+                }),
+        };
+        Ok(self
+            .shading
+            .bind_shadows(device, &mut self.shading_bound, inputs)?)
+    }
+
+    /// Plans the lights' shadows — ManyLoD paraboloids where set (remade for the lights),
+    /// depth views for the others (the maps grow when they need more layers) — and writes the
+    /// lights with their views; without shadows, clears the lights' views.
     fn plan_shadows(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<(), RenderError> {
-        let Some(plan) = self.shadow_plan(device.limits().max_texture_array_layers)? else {
-            for l in &mut self.lights {
-                l.shadow_count = shadows::NO_SHADOW;
-            }
-            self.shading_bound.set_lights(queue, &self.lights)?;
-            return Ok(self
-                .shading
-                .bind_shadows(device, &mut self.shading_bound, None)?);
-        };
-        if let Some(s) = &mut self.shadows
-            && plan.views.len() > s.maps.capacity()
-        {
-            s.maps = s.pass.bind(device, &s.config, plan.views.len())?;
+        for l in &mut self.lights {
+            l.shadow_first = 0;
+            l.shadow_count = shadows::NO_SHADOW;
         }
-        self.write_shadow_plan(queue, &plan)?;
-        let maps = self.shadows.as_ref().map(|s| &s.maps);
-        Ok(self
-            .shading
-            .bind_shadows(device, &mut self.shading_bound, maps)?)
+        let diagonal = self.bounds.diagonal();
+        if let Some(a) = &mut self.light_atlas {
+            let lit: Vec<bool> = self
+                .lights
+                .iter()
+                .map(|l| l.kind != tiled_shading::LIGHT_DIRECTIONAL)
+                .collect();
+            let (views, plan) = shadows::paraboloid_plan(&self.lights, &lit);
+            let size = a.config.tile;
+            let views: Vec<manylod::View> = views
+                .into_iter()
+                .map(|(position, normal)| manylod::View::Paraboloid {
+                    position,
+                    normal,
+                    size,
+                })
+                .collect();
+            let mesh = (&a.mesh.0[..], &a.mesh.1[..]);
+            a.maps = if views.is_empty() {
+                None
+            } else {
+                let mode = VplShadows::ManyLod;
+                let maps =
+                    VplShadowMaps::from_views(device, mesh, diagonal, views, 0.0, mode, &a.config)?;
+                Some(maps)
+            };
+            a.plan = plan;
+        }
+        if let Some(plan) = self.shadow_plan(device.limits().max_texture_array_layers)? {
+            if let Some(s) = &mut self.shadows
+                && plan.views.len() > s.maps.capacity()
+            {
+                s.maps = s.pass.bind(device, &s.config, plan.views.len())?;
+            }
+            self.write_shadow_plan(queue, &plan)?;
+        } else {
+            self.assign_paraboloids();
+            self.shading_bound.set_lights(queue, &self.lights)?;
+        }
+        self.bind_shadow_lookup(device)
     }
 
-    /// The shadow views of every light for the current camera (or one framing the scene
-    /// before the first camera), at most `max_views`; `None` without shadows.
+    /// Writes the ManyLoD paraboloid views into the lights that have them.
+    fn assign_paraboloids(&mut self) {
+        if let Some(a) = &self.light_atlas {
+            for (l, &(first, count)) in self.lights.iter_mut().zip(&a.plan.lights) {
+                if count != shadows::NO_SHADOW {
+                    l.shadow_first = first;
+                    l.shadow_count = count;
+                }
+            }
+        }
+    }
+
+    /// The shadow views of every light (the directional ones only when ManyLoD shadows the
+    /// others) for the current camera (or one framing the scene before the first camera), at
+    /// most `max_views`; `None` without shadow maps.
     fn shadow_plan(&self, max_views: u32) -> Result<Option<shadows::ShadowPlan>, RenderError> {
         let Some(s) = &self.shadows else {
             return Ok(None);
         };
         let camera = self.camera.unwrap_or_else(|| Camera::framing(self.bounds));
         let (w, h) = self.size();
+        let rasterised: Vec<bool> = self
+            .lights
+            .iter()
+            .map(|l| self.light_atlas.is_none() || l.kind == tiled_shading::LIGHT_DIRECTIONAL)
+            .collect();
         Ok(Some(shadows::plan(
             &self.lights,
-            &vec![true; self.lights.len()],
+            &rasterised,
             &camera,
             w as f32 / h as f32,
             self.bounds,
@@ -398,7 +491,8 @@ impl GpuRenderer {
         )?))
     }
 
-    /// Writes `plan`'s views into the maps and the lights with their views.
+    /// Writes `plan`'s views into the maps and the lights with their views (and the ManyLoD
+    /// paraboloids).
     fn write_shadow_plan(
         &mut self,
         queue: &wgpu::Queue,
@@ -408,6 +502,7 @@ impl GpuRenderer {
             s.maps.set_views(queue, &plan.views)?;
         }
         plan.assign(&mut self.lights);
+        self.assign_paraboloids();
         Ok(self.shading_bound.set_lights(queue, &self.lights)?)
     }
 
@@ -526,6 +621,11 @@ impl GpuRenderer {
         self.shadows.as_ref().map_or(0, |s| s.maps.count())
     }
 
+    /// The direct lights' ManyLoD shadow maps, if set and some light has paraboloid views.
+    pub fn manylod_shadows(&self) -> Option<&VplShadowMaps> {
+        self.light_atlas.as_ref().and_then(|a| a.maps.as_ref())
+    }
+
     /// The VPL shadow maps, if set.
     pub fn vpl_shadows(&self) -> Option<&VplShadowMaps> {
         self.vpl_shadows.as_ref()
@@ -570,6 +670,9 @@ impl GpuRenderer {
         if let Some(s) = &self.shadows {
             s.pass
                 .encode(&s.maps, &self.scene, encoder, Some(&self.timer));
+        }
+        if let Some(maps) = self.light_atlas.as_mut().and_then(|a| a.maps.as_mut()) {
+            maps.encode(encoder, Some(&self.timer));
         }
         self.shading
             .encode(&self.shading_bound, encoder, Some(&self.timer));

@@ -37,7 +37,7 @@ use scene::{Camera, Light};
 /// This crate's WGSL (`shaders/tiled-shading/`, carried into the package by the `shaders` link).
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "tiled-shading",
-    imports: [gbuffer::SHADERS],
+    imports: [gbuffer::SHADERS, manylod::SHADERS],
     files: [
         "lighting.wgsl",
         "shadow_view.wgsl",

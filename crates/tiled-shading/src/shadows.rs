@@ -14,14 +14,24 @@
 //! wide (the tent's support) whatever the light's size: a hard-shadow filter, not a soft
 //! shadow; area lights get their penumbrae from several shadowed points
 //! (`instant_radiosity::vpl::area_lights`, see `docs/shadows.md`).
+//!
+//! Many lights can instead take their shadows from a ManyLoD atlas (Holländer 2013 §3.6, the
+//! many-view cut that renders the VPLs' shadow maps): [`paraboloid_views`] gives a light's
+//! paraboloid views, [`paraboloid_plan`] numbers them, and a light whose `shadow_count` carries
+//! [`PARABOLOID_SHADOW`] is looked up there ([`manylod::lookup`], one texel, no filter).
 
 use glam::{Mat4, Vec3, Vec4Swizzles};
+use manylod::lookup::{self, AtlasParams};
 use scene::{Aabb, Camera, orthonormal_basis};
 
 use crate::{GpuLight, LIGHT_DIRECTIONAL, ShadingError};
 
 /// `GpuLight::shadow_count` of a light without shadows.
 pub const NO_SHADOW: u32 = 0;
+
+/// Flag of `GpuLight::shadow_count`: the light's (count & 0xff) views are paraboloid tiles of
+/// the ManyLoD atlas from tile `shadow_first`, not depth-array layers.
+pub const PARABOLOID_SHADOW: u32 = 0x8000_0000;
 
 /// Widest spot cone (half angle, radians) drawn into one perspective view; wider spots use
 /// five cube faces around their axis.
@@ -369,6 +379,61 @@ pub fn plan(
     Ok(plan)
 }
 
+/// The paraboloid views (origin, axis) that cover what `light` lights: one around a spot's
+/// direction (two, ±direction, for a cone wider than 90°) or a hemispherical light's, two
+/// (±y) for a point light, none for a directional light (cascades only). The order is the
+/// one `paraboloid_axis` in `shadows.wgsl` assumes.
+pub fn paraboloid_views(light: &GpuLight) -> Vec<(Vec3, Vec3)> {
+    let (p, d) = (Vec3::from(light.position), Vec3::from(light.direction));
+    match light.kind {
+        LIGHT_DIRECTIONAL => Vec::new(),
+        LIGHT_SPOT if light.cos_outer < 0.0 => vec![(p, d), (p, -d)],
+        LIGHT_SPOT | LIGHT_HEMISPHERICAL => vec![(p, d)],
+        _ => vec![(p, Vec3::Y), (p, Vec3::NEG_Y)],
+    }
+}
+
+/// The paraboloid views of the lights `shadowed` says (one flag per light), numbered from
+/// tile 0, and per light (first tile, [`PARABOLOID_SHADOW`] | count), or [`NO_SHADOW`].
+pub fn paraboloid_plan(lights: &[GpuLight], shadowed: &[bool]) -> (Vec<(Vec3, Vec3)>, ShadowPlan) {
+    let mut views = Vec::new();
+    let mut plan = ShadowPlan::default();
+    for (light, &on) in lights
+        .iter()
+        .zip(shadowed.iter().chain(std::iter::repeat(&false)))
+    {
+        let own = if on {
+            paraboloid_views(light)
+        } else {
+            Vec::new()
+        };
+        plan.lights.push(if own.is_empty() {
+            (0, NO_SHADOW)
+        } else {
+            (views.len() as u32, PARABOLOID_SHADOW | own.len() as u32)
+        });
+        views.extend(own);
+    }
+    (views, plan)
+}
+
+/// Visibility of `p` from `light` through its paraboloid tiles of `atlas` (the one facing `p`
+/// of a pair; `paraboloid_visibility` in `shadows.wgsl`).
+fn paraboloid_visibility(
+    (atlas, params): &(Vec<u32>, AtlasParams),
+    light: &GpuLight,
+    p: Vec3,
+    n: Vec3,
+) -> f32 {
+    let views = paraboloid_views(light);
+    let count = (light.shadow_count & 0xff) as usize;
+    let k = usize::from(count == 2 && (p - views[0].0).dot(views[0].1) < 0.0);
+    match views.get(k) {
+        Some(&view) => lookup::visibility(atlas, params, light.shadow_first + k as u32, view, p, n),
+        None => 1.0,
+    }
+}
+
 /// The index (among the light's `count` views) of the view that holds `p`: the cube face of
 /// the largest axis for a cube, the first cascade whose box contains `p` (else the last).
 fn pick_view(light: &GpuLight, views: &[ShadowView], p: Vec3, resolution: u32) -> usize {
@@ -407,6 +472,8 @@ pub struct ShadowMaps {
     pub bias: f32,
     /// See [`ShadowMapConfig::normal_offset`].
     pub normal_offset: f32,
+    /// The ManyLoD atlas of the lights with [`PARABOLOID_SHADOW`] and its parameters.
+    pub atlas: Option<(Vec<u32>, AtlasParams)>,
 }
 
 /// Fraction of `light` that reaches `p` (normal `n`) through `maps`: 1 for an unshadowed
@@ -415,6 +482,12 @@ pub struct ShadowMaps {
 pub fn visibility(maps: &ShadowMaps, light: &GpuLight, p: Vec3, n: Vec3) -> f32 {
     if light.shadow_count == NO_SHADOW {
         return 1.0;
+    }
+    if light.shadow_count & PARABOLOID_SHADOW != 0 {
+        return maps
+            .atlas
+            .as_ref()
+            .map_or(1.0, |atlas| paraboloid_visibility(atlas, light, p, n));
     }
     let first = light.shadow_first as usize;
     let views = &maps.views[first..first + light.shadow_count as usize];
@@ -515,7 +588,46 @@ pub fn ray_cast_maps(
         resolution: res,
         bias: config.bias,
         normal_offset: config.normal_offset,
+        atlas: None,
     }
+}
+
+/// A ManyLoD-style atlas of paraboloid `views` (origin, axis) made by casting a ray through
+/// the centre of every texel against `bvh`: the packed distance (over `params.far`) of the
+/// first surface a perfect splatting would store there (clear where the ray meets nothing
+/// or the texel lies outside the hemisphere). The ground truth of the ManyLoD maps.
+pub fn ray_cast_atlas(bvh: &scene::Bvh, views: &[(Vec3, Vec3)], params: &AtlasParams) -> Vec<u32> {
+    use manylod::splat::{CLEAR, pack_depth};
+    use rayon::prelude::*;
+    let (tile, width) = (params.tile, params.width);
+    let rows = (views.len() as u32).div_ceil(params.columns.max(1));
+    let mut atlas = vec![CLEAR; (width * rows * tile) as usize];
+    atlas
+        .par_chunks_mut(width as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let (ty, py) = (y as u32 / tile, y as u32 % tile);
+            for (x, word) in row.iter_mut().enumerate() {
+                let (tx, px) = (x as u32 / tile, x as u32 % tile);
+                let Some(&(origin, normal)) = views.get((ty * params.columns + tx) as usize) else {
+                    continue;
+                };
+                // The inverse of uv = l.xy / (1 + l.z) on the unit sphere.
+                let uv = (glam::Vec2::new(px as f32, py as f32) + 0.5) / tile as f32 * 2.0 - 1.0;
+                let r2 = uv.length_squared();
+                if r2 >= 1.0 {
+                    continue;
+                }
+                let z = (1.0 - r2) / (1.0 + r2);
+                let (t, b) = manylod::view::paraboloid_frame(normal);
+                let dir = t * (uv.x * (1.0 + z)) + b * (uv.y * (1.0 + z)) + normal * z;
+                let eye = origin + normal * params.lift;
+                if let Some(hit) = bvh.closest_hit(eye, dir.normalize(), params.far) {
+                    *word = pack_depth(hit.t / params.far, 0);
+                }
+            }
+        });
+    atlas
 }
 
 /// Whether `p` (normal `n`) sees `light`, by a ray through `bvh` (the ground truth the

@@ -263,8 +263,16 @@ fn normal_cones_remove_exactly_the_lights_behind_a_wall() {
         return;
     };
     let cfg = config(Method::TiledCones, 16);
-    let gpu_cones =
-        gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &cfg, None).expect("gpu run");
+    let gpu_cones = gpu::run(
+        g,
+        &c.gb,
+        &c.frame,
+        &c.camera,
+        &c.lights,
+        &cfg,
+        Default::default(),
+    )
+    .expect("gpu run");
     same_lists("wall cones", &c, &cfg, &gpu_cones, &cones);
 }
 
@@ -285,7 +293,7 @@ fn normal_cones_never_change_the_image() {
                 &c.camera,
                 &c.lights,
                 &config(m, 16),
-                None,
+                Default::default(),
             )
             .expect("gpu run")
         };
@@ -312,8 +320,16 @@ fn gpu_matches_cpu_images_and_lists() {
                     continue;
                 }
                 let cfg = config(method, tile);
-                let gpu_out = gpu::run(g, &c.gb, &c.frame, &c.camera, &c.lights, &cfg, None)
-                    .expect("gpu run");
+                let gpu_out = gpu::run(
+                    g,
+                    &c.gb,
+                    &c.frame,
+                    &c.camera,
+                    &c.lights,
+                    &cfg,
+                    Default::default(),
+                )
+                .expect("gpu run");
                 compare(
                     &format!("gpu {method} {tile} vs brute"),
                     &brute,
@@ -358,7 +374,7 @@ fn lists_longer_than_workgroup_memory_are_shaded_in_flushes() {
             &c.camera,
             &c.lights,
             &config(method, 16),
-            None,
+            Default::default(),
         )
         .expect("gpu run");
         let lit: Vec<u32> = out.counts.iter().copied().filter(|&n| n > 0).collect();

@@ -207,7 +207,16 @@ fn shadows_only_remove_light_and_do_remove_it() {
         method: Method::Tiled,
         tile_size: 16,
     };
-    let lit = gpu::run(g, &view.0, &view.1, &camera, &lights, &config, None).expect("unshadowed");
+    let lit = gpu::run(
+        g,
+        &view.0,
+        &view.1,
+        &camera,
+        &lights,
+        &config,
+        Default::default(),
+    )
+    .expect("unshadowed");
     let (shadowed, _, _) = shaded_gpu(g, &scene, &view, &camera, &lights);
     let total = |s: &Shaded| {
         s.diffuse
@@ -270,4 +279,135 @@ fn bad_shadow_settings_are_errors() {
         e.contains("21 shadow views") && e.contains("8 texture array layers"),
         "{e}"
     );
+}
+
+/// ManyLoD-style shadows (Holländer 2013 §3.6 for many lights) from an atlas ray-cast through
+/// every texel of every light's paraboloid views: the GPU lookup equals the CPU twin, and it
+/// agrees with shadow rays where the receiver is not within a texel of a shadow's edge.
+#[test]
+fn paraboloid_shadows_from_a_ray_cast_atlas() {
+    let Some((g, scene, camera, lights, view)) = setup(96, 64) else {
+        return;
+    };
+    let mut lights: Vec<GpuLight> = lights
+        .into_iter()
+        .filter(|l| l.kind != tiled_shading::LIGHT_DIRECTIONAL)
+        .collect();
+    let (views, plan) = shadows::paraboloid_plan(&lights, &vec![true; lights.len()]);
+    assert_eq!(
+        views.len(),
+        2 + 1 + 1 + 1,
+        "point 2, spots 1 each, hemispherical 1"
+    );
+    plan.assign(&mut lights);
+    let bvh = Bvh::build(&scene);
+    let diagonal = scene.bounds().diagonal();
+    let layout = manylod::AtlasLayout::new(views.len(), 128, 2.0 * diagonal);
+    let params = manylod::lookup::AtlasParams {
+        enabled: 1,
+        tile: layout.tile,
+        columns: layout.columns,
+        width: layout.size().0,
+        far: layout.far,
+        lift: 0.0,
+        bias: 0.002,
+        normal_offset: 1.0,
+    };
+    let atlas = shadows::ray_cast_atlas(&bvh, &views, &params);
+    let upload = |label, bytes: &[u8], usage| {
+        ::gpu::transfer::buffer_init(&g.device, label, bytes, usage).expect("upload")
+    };
+    let atlas_buffer = upload(
+        "atlas",
+        bytemuck::cast_slice(&atlas),
+        wgpu::BufferUsages::STORAGE,
+    );
+    let params_buffer = upload(
+        "atlas params",
+        bytemuck::bytes_of(&params),
+        wgpu::BufferUsages::UNIFORM,
+    );
+    let config = ShadingConfig {
+        method: Method::Tiled,
+        tile_size: 16,
+    };
+    let inputs = gpu::shadows::ShadowInputs {
+        maps: None,
+        atlas: Some(gpu::shadows::AtlasBindings {
+            atlas: &atlas_buffer,
+            params: &params_buffer,
+        }),
+    };
+    let (gb, frame) = &view;
+    let on_gpu = gpu::run(g, gb, frame, &camera, &lights, &config, inputs).expect("gpu");
+    let maps = ShadowMaps {
+        views: Vec::new(),
+        depth: Vec::new(),
+        resolution: 1,
+        bias: 0.0,
+        normal_offset: 0.0,
+        atlas: Some((atlas.clone(), params)),
+    };
+    let on_cpu = cpu::shade(gb, frame, &camera, &lights, &config, Some(&maps)).expect("cpu");
+    let peak = on_cpu
+        .diffuse
+        .pixels()
+        .iter()
+        .fold(0.0f32, |m, p| m.max(p.max_element()));
+    let differ = on_cpu
+        .diffuse
+        .pixels()
+        .iter()
+        .zip(on_gpu.diffuse.pixels())
+        .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3 * peak)
+        .count();
+    let pixels = on_cpu.diffuse.pixels().len();
+    assert!(
+        differ * 200 <= pixels,
+        "{differ} of {pixels} pixels differ (GPU vs CPU)"
+    );
+
+    // Against shadow rays, outside the band where a point one texel away on the surface
+    // answers otherwise.
+    let lift = 1e-3 * diagonal;
+    let (mut pairs, mut agree, mut occluded, mut band) = (0usize, 0usize, 0usize, 0usize);
+    for y in 0..gb.height() {
+        for x in 0..gb.width() {
+            let Some(s) = cpu::sample(gb, frame, x, y) else {
+                continue;
+            };
+            for light in &lights {
+                let (l, att) = light_incidence(light, s.position);
+                if att <= 0.0 || s.normal.dot(l) <= 0.05 {
+                    continue;
+                }
+                let ray = |p: Vec3| shadows::ray_visibility(&bvh, light, p, s.normal, lift, 0.0);
+                let truth = ray(s.position);
+                let to = s.position - Vec3::from(light.position);
+                let texel = to.length() * 4.0 / params.tile as f32;
+                let (t, b) = scene::orthonormal_basis(s.normal);
+                if [t, -t, b, -b]
+                    .iter()
+                    .any(|&d| ray(s.position + d * texel) != truth)
+                {
+                    band += 1;
+                    continue;
+                }
+                let atlas_says = shadows::visibility(&maps, light, s.position, s.normal) > 0.5;
+                pairs += 1;
+                occluded += usize::from(!truth);
+                agree += usize::from(atlas_says == truth);
+            }
+        }
+    }
+    let fraction = agree as f64 / pairs as f64;
+    println!(
+        "{pairs} pairs outside the band ({band} inside): {:.2} % agree, {occluded} occluded",
+        100.0 * fraction
+    );
+    assert!(
+        occluded * 20 > pairs,
+        "the scene casts shadows ({occluded} of {pairs})"
+    );
+    assert!(fraction >= 0.98, "{:.2} % agree", 100.0 * fraction);
 }

@@ -14,7 +14,7 @@
 //! let frame = gbuffer::Frame::new(&camera, 320, 240);
 //! let lights = tiled_shading::gpu_lights(&scene::scatter_point_lights(scene.bounds(), 1024, 3))?;
 //! let config = ShadingConfig { method: Method::TiledCones, ..Default::default() };
-//! let shaded = run(&gpu, &gb, &frame, &camera, &lights, &config, None)?;
+//! let shaded = run(&gpu, &gb, &frame, &camera, &lights, &config, Default::default())?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -247,7 +247,7 @@ impl LightShading {
         }
         Ok(BoundShading {
             group: self.layout.bind(device, &resources),
-            shadow_group: shadows::stand_in_group(device, &self.shadow_layout)?,
+            shadow_group: shadows::lookup_group(device, &self.shadow_layout, Default::default())?,
             params,
             params_buffer,
             lights,
@@ -260,18 +260,15 @@ impl LightShading {
         })
     }
 
-    /// Makes `bound` read `maps` for the lights whose `shadow_count` is set (`None`: no
-    /// shadows; every light must then be unshadowed).
+    /// Makes `bound` look shadows up in `inputs` (what is `None` there no light of the light
+    /// buffer may use).
     pub fn bind_shadows(
         &self,
         device: &wgpu::Device,
         bound: &mut BoundShading,
-        maps: Option<&shadows::GpuShadowMaps>,
+        inputs: shadows::ShadowInputs<'_>,
     ) -> Result<(), ShadingError> {
-        bound.shadow_group = match maps {
-            Some(m) => m.lookup_group(device, &self.shadow_layout),
-            None => shadows::stand_in_group(device, &self.shadow_layout)?,
-        };
+        bound.shadow_group = shadows::lookup_group(device, &self.shadow_layout, inputs)?;
         Ok(())
     }
 

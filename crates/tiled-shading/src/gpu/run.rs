@@ -5,7 +5,7 @@ use gbuffer::gpu::{GBufferPass, GpuScene, UploadedGBuffer};
 use gbuffer::{Frame, GBuffer};
 use scene::{Camera, Scene};
 
-use super::shadows::{GpuShadowMaps, ShadowMapPass};
+use super::shadows::{ShadowInputs, ShadowMapPass};
 use super::{LightShading, read_outputs};
 use crate::cpu::Shaded;
 use crate::shadows::{self, ShadowMapConfig, ShadowMaps};
@@ -51,12 +51,16 @@ pub fn run_shadowed(
     let mut encoder = device.create_command_encoder(&Default::default());
     pass.encode(&maps, &uploaded, &mut encoder, None);
     queue.submit([encoder.finish()]);
-    let shaded = run(gpu, gb, frame, camera, &lights, config, Some(&maps))?;
+    let inputs = ShadowInputs {
+        maps: Some(&maps),
+        atlas: None,
+    };
+    let shaded = run(gpu, gb, frame, camera, &lights, config, inputs)?;
     Ok((shaded, maps.read(device, queue, &plan.views)?, lights))
 }
 
-/// Uploads `gb`, `frame` and `lights`, runs one light accumulation with `config` (looking up
-/// the shadow maps `maps`, if any) and reads everything back: the GPU twin of [`crate::cpu::shade`] (lists sorted by light index; for
+/// Uploads `gb`, `frame` and `lights`, runs one light accumulation with `config` (looking
+/// shadows up in `shadows`) and reads everything back: the GPU twin of [`crate::cpu::shade`] (lists sorted by light index; for
 /// brute force the lists and counts are those the CPU reports: every light for every tile
 /// with a surface — the shader keeps none).
 pub fn run(
@@ -66,7 +70,7 @@ pub fn run(
     camera: &Camera,
     lights: &[GpuLight],
     config: &ShadingConfig,
-    maps: Option<&GpuShadowMaps>,
+    shadows: ShadowInputs<'_>,
 ) -> Result<Shaded, ShadingError> {
     let (device, queue) = (&gpu.device, &gpu.queue);
     let uploaded = UploadedGBuffer::new(&gpu.device, &gpu.queue, gb, frame)?;
@@ -83,7 +87,7 @@ pub fn run(
     )?;
     bound.set_lights(queue, lights)?;
     bound.set_camera(queue, camera);
-    stage.bind_shadows(device, &mut bound, maps)?;
+    stage.bind_shadows(device, &mut bound, shadows)?;
     let mut encoder = device.create_command_encoder(&Default::default());
     stage.encode(&bound, &mut encoder, None);
     queue.submit([encoder.finish()]);

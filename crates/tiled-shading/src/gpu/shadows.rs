@@ -35,13 +35,25 @@ use crate::shadows::{ShadowMapConfig, ShadowMaps, ShadowView};
 pub const SHADOW_FORMAT: wgpu::TextureFormat = gbuffer::DEPTH_FORMAT;
 
 /// Group 1 of the light accumulation (`shadows.wgsl`): views, bias and offset, the depth
-/// array, its sampler.
-pub const LOOKUP_BINDINGS: [Binding; 4] = [
+/// array, its sampler; the ManyLoD atlas of paraboloid-shadowed lights and its parameters.
+pub const LOOKUP_BINDINGS: [Binding; 6] = [
     Binding::StorageRead,
     Binding::Uniform,
     Binding::TextureDepthArray,
     Binding::SamplerNonFiltering,
+    Binding::StorageRead,
+    Binding::Uniform,
 ];
+
+/// A ManyLoD atlas of paraboloid shadow views as the lookup binds it: the packed depths
+/// (`manylod::gpu`'s atlas buffer) and a uniform `manylod::lookup::AtlasParams`.
+#[derive(Clone, Copy)]
+pub struct AtlasBindings<'a> {
+    /// The atlas (one `u32` per pixel).
+    pub atlas: &'a wgpu::Buffer,
+    /// Its `AtlasParams`.
+    pub params: &'a wgpu::Buffer,
+}
 
 /// The depth-only pipeline that renders shadow views (`shadow_raster.wgsl`).
 pub struct ShadowMapPass {
@@ -253,18 +265,6 @@ impl GpuShadowMaps {
         &self.texture
     }
 
-    /// The lookup group ([`LOOKUP_BINDINGS`]) of these maps on `layout`.
-    pub(super) fn lookup_group(&self, device: &wgpu::Device, layout: &Layout) -> wgpu::BindGroup {
-        lookup_group(
-            device,
-            layout,
-            &self.views,
-            &self.params,
-            &self.texture,
-            &self.sampler,
-        )
-    }
-
     /// Reads the rendered maps back for the CPU lookup ([`crate::shadows::visibility`]),
     /// with `views` (those given to [`GpuShadowMaps::set_views`]).
     pub fn read(
@@ -282,57 +282,89 @@ impl GpuShadowMaps {
             resolution: self.config.resolution,
             bias: self.config.bias,
             normal_offset: self.config.normal_offset,
+            atlas: None,
         })
     }
 }
 
-/// A lookup group ([`LOOKUP_BINDINGS`]) over `views`, `params` and every layer of `texture`.
-fn lookup_group(
+/// What the light accumulation looks shadows up in: depth-array views
+/// ([`GpuShadowMaps`]) for the lights whose `shadow_count` names layers, and a ManyLoD atlas
+/// for those with [`crate::shadows::PARABOLOID_SHADOW`]. `Default`: neither (every light
+/// unshadowed).
+#[derive(Clone, Copy, Default)]
+pub struct ShadowInputs<'a> {
+    /// The rasterised shadow maps.
+    pub maps: Option<&'a GpuShadowMaps>,
+    /// The ManyLoD atlas.
+    pub atlas: Option<AtlasBindings<'a>>,
+}
+
+/// The lookup group ([`LOOKUP_BINDINGS`]) of `inputs` on `layout`, 1×1 stand-ins (no light
+/// reads them) for what is `None`.
+pub(super) fn lookup_group(
     device: &wgpu::Device,
     layout: &Layout,
-    views: &wgpu::Buffer,
-    params: &wgpu::Buffer,
-    texture: &wgpu::Texture,
-    sampler: &wgpu::Sampler,
-) -> wgpu::BindGroup {
+    ShadowInputs { maps, atlas }: ShadowInputs<'_>,
+) -> Result<wgpu::BindGroup, ShadingError> {
+    let stand_in_maps;
+    let (views, params, texture, sampler) = match maps {
+        Some(m) => (&m.views, &m.params, &m.texture, &m.sampler),
+        None => {
+            stand_in_maps = (
+                transfer::buffer(
+                    device,
+                    "no shadow views",
+                    size_of::<ShadowView>() as u64,
+                    wgpu::BufferUsages::STORAGE,
+                )?,
+                transfer::buffer(device, "no shadow params", 16, wgpu::BufferUsages::UNIFORM)?,
+                transfer::texture_2d(
+                    device,
+                    "no shadow maps",
+                    1,
+                    1,
+                    SHADOW_FORMAT,
+                    wgpu::TextureUsages::TEXTURE_BINDING,
+                ),
+                device.create_sampler(&Default::default()),
+            );
+            let (v, p, t, s) = &stand_in_maps;
+            (v, p, t, s)
+        }
+    };
+    let stand_in_atlas;
+    let atlas = match atlas {
+        Some(a) => a,
+        None => {
+            stand_in_atlas = (
+                transfer::buffer(device, "no atlas", 16, wgpu::BufferUsages::STORAGE)?,
+                transfer::buffer(
+                    device,
+                    "no atlas params",
+                    size_of::<manylod::lookup::AtlasParams>() as u64,
+                    wgpu::BufferUsages::UNIFORM,
+                )?,
+            );
+            AtlasBindings {
+                atlas: &stand_in_atlas.0,
+                params: &stand_in_atlas.1,
+            }
+        }
+    };
     let array = texture.create_view(&wgpu::TextureViewDescriptor {
         label: Some("shadow maps"),
         dimension: Some(wgpu::TextureViewDimension::D2Array),
         ..Default::default()
     });
-    layout.bind(
+    Ok(layout.bind(
         device,
         &[
             views.as_entire_binding(),
             params.as_entire_binding(),
             wgpu::BindingResource::TextureView(&array),
             wgpu::BindingResource::Sampler(sampler),
+            atlas.atlas.as_entire_binding(),
+            atlas.params.as_entire_binding(),
         ],
-    )
-}
-
-/// The lookup group of a frame without shadows: one 1×1 layer no light reads.
-pub(super) fn stand_in_group(
-    device: &wgpu::Device,
-    layout: &Layout,
-) -> Result<wgpu::BindGroup, ShadingError> {
-    let texture = transfer::texture_2d(
-        device,
-        "no shadow maps",
-        1,
-        1,
-        SHADOW_FORMAT,
-        wgpu::TextureUsages::TEXTURE_BINDING,
-    );
-    let views = transfer::buffer(
-        device,
-        "no shadow views",
-        size_of::<ShadowView>() as u64,
-        wgpu::BufferUsages::STORAGE,
-    )?;
-    let params = transfer::buffer(device, "no shadow params", 16, wgpu::BufferUsages::UNIFORM)?;
-    let sampler = device.create_sampler(&Default::default());
-    Ok(lookup_group(
-        device, layout, &views, &params, &texture, &sampler,
     ))
 }

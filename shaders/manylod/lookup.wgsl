@@ -1,0 +1,52 @@
+// #import manylod/common.wgsl
+// Shadow lookup in an atlas of paraboloid views (`manylod::lookup`, Holländer 2013 §3.6),
+// without bindings of its own: the importer finds the texel with `atlas_texel` in its atlas
+// (`array<u32>`, packed depths) and compares with `atlas_test`.
+
+struct AtlasParams {
+    enabled: u32,
+    tile: u32,
+    columns: u32,
+    width: u32,
+    far: f32,
+    lift: f32,
+    bias: f32,
+    // Receivers move this many atlas pixels (at their distance) along their normal.
+    normal_offset: f32,
+};
+
+// Where a receiver falls in a view's tile: the atlas index (`NO_TEXEL` behind the view's base
+// plane) and the receiver's depth with the bias taken off.
+struct AtlasTexel {
+    index: u32,
+    depth: f32,
+};
+
+const NO_TEXEL: u32 = 0xffffffffu;
+
+// The texel of `receiver` (unit normal `n`) in paraboloid view `k`, whose origin is `origin`
+// with unit `normal`; the receiver first moves off its surface by the normal offset.
+fn atlas_texel(a: AtlasParams, k: u32, origin: vec3<f32>, normal: vec3<f32>, receiver: vec3<f32>, n: vec3<f32>) -> AtlasTexel {
+    let to = receiver - origin;
+    let cos_view = max(dot(normal, normalize(to)), 0.0);
+    let p = receiver + n * (length(to) * 2.0 * (1.0 + cos_view) / f32(a.tile) * a.normal_offset);
+    // The paraboloid frame of `manylod::view::paraboloid_frame`.
+    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), abs(normal.z) < 0.9);
+    let t = normalize(cross(helper, normal));
+    let b = cross(normal, t);
+    let d = p - (origin + normal * a.lift);
+    let dist = length(d);
+    let l = vec3<f32>(dot(t, d), dot(b, d), dot(normal, d)) / dist;
+    if l.z <= 0.0 {
+        return AtlasTexel(NO_TEXEL, 0.0);
+    }
+    let uv = l.xy / (1.0 + l.z);
+    let px = min(vec2<u32>((uv * 0.5 + 0.5) * f32(a.tile)), vec2<u32>(a.tile - 1u));
+    let corner = vec2<u32>(k % a.columns, k / a.columns) * a.tile;
+    return AtlasTexel((corner.y + px.y) * a.width + corner.x + px.x, dist / a.far - a.bias);
+}
+
+// 1 when the stored `word` is not nearer than the texel's receiver, else 0.
+fn atlas_test(t: AtlasTexel, word: u32) -> f32 {
+    return select(0.0, 1.0, t.depth <= unpack_depth(word));
+}
