@@ -3,8 +3,11 @@
 //! lights (one view each), 1 to 42 shadowed point lights (six cube faces each, up to the 256
 //! layers of `wgpu::Limits::default()`) — as the GPU time of the `shadow maps` pass (every view
 //! rasterised) and of the light accumulation with the lookup, against the same light
-//! accumulation without shadows measured in the same run. Writes `shadows-<adapter>-<date>`
-//! `.md` and `.json` under `--out`.
+//! accumulation without shadows measured in the same run. Then the same lights (16 to 256
+//! spots, 8 to 256 points) with ManyLoD shadows instead (Holländer 2013 §3.6: one paraboloid
+//! tile per spot, two per point light, 32² and 64², cut and splatted from 2^20 surfels each
+//! frame): the crossover against rasterised maps. Writes `shadows-<adapter>-<date>` `.md` and
+//! `.json` under `--out`.
 
 mod common;
 
@@ -31,17 +34,30 @@ struct Args {
 const SIZE: (u32, u32) = (1920, 1080);
 const SPOTS: [usize; 4] = [1, 16, 64, 256];
 const POINTS: [usize; 3] = [1, 8, 42];
+/// The ManyLoD rows: light kind and count.
+const MANYLOD: [(&str, usize); 6] = [
+    ("spot", 16),
+    ("spot", 64),
+    ("spot", 256),
+    ("point", 8),
+    ("point", 42),
+    ("point", 256),
+];
+/// Tile sizes of the ManyLoD rows.
+const TILES: [u32; 2] = [32, 64];
 
 #[derive(Serialize)]
 struct Row {
     lights: String,
     count: usize,
+    /// `rasterised` (depth views of `--resolution`²) or `ManyLoD <tile>²`.
+    method: String,
     views: usize,
     shadow_maps: Stat,
     shading_shadowed: Stat,
     shading_unshadowed: Stat,
     /// Triangles rasterised per second into the maps (views × scene triangles / time).
-    triangles_per_s: f64,
+    triangles_per_s: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -120,28 +136,59 @@ fn main() -> Result<()> {
     );
     let (d, q) = (&gpu.device, &gpu.queue);
     let mut rows = Vec::new();
-    for (kind, count) in configs {
+    let mut runs: Vec<(&str, usize, Option<u32>)> =
+        configs.into_iter().map(|(k, n)| (k, n, None)).collect();
+    for tile in TILES.iter().take(if once { 1 } else { 2 }) {
+        runs.extend(
+            MANYLOD
+                .iter()
+                .take(if once { 1 } else { MANYLOD.len() })
+                .map(|&(k, n)| (k, n, Some(*tile))),
+        );
+    }
+    for (kind, count, tile) in runs {
         let set = lights(kind, count, scene.bounds());
         let mut renderer = GpuRenderer::new(d, q, &scene, &set, w, h)?;
         let shading = renderer.shading().pass_name();
         let plain = time_passes(&gpu, &mut renderer, &camera, DEFAULT_AMBIENT, frames)?;
-        renderer.set_shadows(d, q, Some(&config))?;
+        let (method, views, passes) = match tile {
+            None => {
+                renderer.set_shadows(d, q, Some(&config))?;
+                let views = renderer.shadow_view_count();
+                ("rasterised".to_string(), views, &["shadow maps"][..])
+            }
+            Some(tile) => {
+                let manylod = instant_radiosity::shadows::ShadowConfig {
+                    tile,
+                    ..Default::default()
+                };
+                renderer.set_manylod_shadows(d, q, &scene, Some(&manylod))?;
+                let per_light = if kind == "point" { 2 } else { 1 };
+                (
+                    format!("ManyLoD {tile}²"),
+                    per_light * count,
+                    &["cut", "splat"][..],
+                )
+            }
+        };
         let shadowed = time_passes(&gpu, &mut renderer, &camera, DEFAULT_AMBIENT, frames)?;
-        let views = renderer.shadow_view_count();
-        let maps = Stat::of(per_frame_sum(&shadowed, &["shadow maps"]));
+        let maps = Stat::of(per_frame_sum(&shadowed, passes));
         let row = Row {
             lights: kind.into(),
             count,
             views,
-            triangles_per_s: views as f64 * scene.triangle_count() as f64 / (maps.median_ms * 1e-3),
+            triangles_per_s: tile
+                .is_none()
+                .then(|| views as f64 * scene.triangle_count() as f64 / (maps.median_ms * 1e-3)),
             shadow_maps: maps,
             shading_shadowed: Stat::of(per_frame_sum(&shadowed, &[shading.as_str()])),
             shading_unshadowed: Stat::of(per_frame_sum(&plain, &[shading.as_str()])),
+            method,
         };
         println!(
-            "{count:>4} {kind:<5} ({views:>3} views): shadow maps {:.3} ms ({:.2} G scene triangles/s), light accumulation {:.3} ms (unshadowed {:.3} ms)",
+            "{count:>4} {kind:<5} {:<12} ({views:>3} views): shadow maps {:.3} ms, light accumulation {:.3} ms (unshadowed {:.3} ms)",
+            row.method,
             row.shadow_maps.median_ms,
-            row.triangles_per_s / 1e9,
             row.shading_shadowed.median_ms,
             row.shading_unshadowed.median_ms
         );
@@ -166,6 +213,7 @@ fn main() -> Result<()> {
 fn markdown(r: &Report) -> String {
     let mut table = bench::Table::new(&[
         "lights",
+        "method",
         "views",
         "shadow maps ms",
         "G scene triangles/s",
@@ -177,18 +225,22 @@ fn markdown(r: &Report) -> String {
         let (maps, shaded) = (&row.shadow_maps, &row.shading_shadowed);
         table.row([
             format!("{} {}", row.count, row.lights),
+            row.method.clone(),
             row.views.to_string(),
-            format!("{:.3} ({:.3})", maps.median_ms, maps.min_ms),
-            format!("{:.2}", row.triangles_per_s / 1e9),
-            format!("{:.3} ({:.3})", shaded.median_ms, shaded.min_ms),
+            maps.to_string(),
+            row.triangles_per_s
+                .map_or("—".into(), |t| format!("{:.2}", t / 1e9)),
+            shaded.to_string(),
             format!("{:.3}", row.shading_unshadowed.median_ms),
             format!("{:.3}", maps.median_ms + shaded.median_ms),
         ]);
     }
     format!(
-        "{}\nScene `{}` ({} triangles), {}×{}, tiled light accumulation (16×16), every view \
-         {}² texels. `shadow maps` = the GPU time of rendering every view (one depth pass per \
-         view, the whole scene each: `G scene triangles/s` = views × scene triangles / time); the light accumulation with the \
+        "{}\nScene `{}` ({} triangles), {}×{}, tiled light accumulation (16×16), rasterised views \
+         {}² texels. `shadow maps` = the GPU time of rendering every view (rasterised: one depth \
+         pass per view, the whole scene each, `G scene triangles/s` = views × scene triangles / \
+         time; ManyLoD: the incremental cut and the splat of 2^20 surfels into paraboloid tiles, \
+         ε 2 px, one tile per spot, two per point light); the light accumulation with the \
          lookup against the same pass without shadows in the same run. Medians (minimum) of \
          GPU timestamps.\n\n{table}",
         r.header.markdown(
