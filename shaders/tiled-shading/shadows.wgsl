@@ -8,7 +8,8 @@
 // A light whose `shadow_count` carries `PARABOLOID_SHADOW` instead owns (count & 0xff)
 // paraboloid views of the ManyLoD atlas from tile `shadow_first` (Holländer 2013 §3.6 for many
 // lights): one around a spot's or hemispherical light's direction, two (±y) for a point light;
-// the receiver is looked up in the one facing it (`manylod/lookup.wgsl`, one texel).
+// the receiver is looked up in the one facing it, or at the seam of a pair in the other
+// (`manylod/lookup.wgsl`, one texel).
 // #import tiled-shading/lighting.wgsl
 // #import tiled-shading/shadow_view.wgsl
 // #import manylod/lookup.wgsl
@@ -47,7 +48,12 @@ fn paraboloid_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if count == 2u && dot(p - light.position, paraboloid_axis(light, 0u)) < 0.0 {
         k = 1u;
     }
-    let t = atlas_texel(atlas_params, light.shadow_first + k, light.position, paraboloid_axis(light, k), p, n);
+    var t = atlas_texel(atlas_params, light.shadow_first + k, light.position, paraboloid_axis(light, k), p, n);
+    // At a pair's seam the normal offset may carry the receiver over to the other view.
+    if t.index == NO_TEXEL && count == 2u {
+        k = 1u - k;
+        t = atlas_texel(atlas_params, light.shadow_first + k, light.position, paraboloid_axis(light, k), p, n);
+    }
     if t.index == NO_TEXEL {
         return 0.0;
     }

@@ -121,6 +121,12 @@ struct Args {
     /// depth is ray-cast through every texel (slow at large RES).
     #[arg(long, value_name = "RES", value_parser = clap::value_parser!(u32).range(8..=16384))]
     shadows: Option<u32>,
+    /// ManyLoD shadows for the point, spot and hemispherical lights instead (GPU only;
+    /// Holländer 2013 §3.6 for many lights): TILE×TILE paraboloid views (one per spot, two per
+    /// point light) cut and splatted from 2^20 surfels, one pass for all lights; directional
+    /// lights keep --shadows' cascades.
+    #[arg(long, value_name = "TILE", value_parser = clap::value_parser!(u32).range(4..=256))]
+    manylod_shadows: Option<u32>,
     /// Stand in for each emissive mesh with N hemispherical lights spread over its area
     /// (with --shadows they draw its penumbrae); default 1, at its centroid.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
@@ -832,6 +838,9 @@ fn run() -> Result<()> {
     if args.vpl_shadows.is_some() && (args.cpu || indirect.is_none()) {
         bail!("--vpl-shadows needs --vpls N and runs on the GPU only (no --cpu)");
     }
+    if args.manylod_shadows.is_some() && args.cpu {
+        bail!("--manylod-shadows runs on the GPU only (no --cpu)");
+    }
     let shadow_config = args
         .shadows
         .map(|resolution| tiled_shading::shadows::ShadowMapConfig {
@@ -857,6 +866,13 @@ fn run() -> Result<()> {
                     pipeline::gpu::GpuRenderer::new(d, q, &scene, &direct_lights, width, height)?;
                 renderer.set_shading(d, q, &shading)?;
                 renderer.set_shadows(d, q, shadow_config.as_ref())?;
+                if let Some(tile) = args.manylod_shadows {
+                    let config = ShadowConfig {
+                        tile,
+                        ..ShadowConfig::default()
+                    };
+                    renderer.set_manylod_shadows(d, q, &scene, Some(&config))?;
+                }
                 if let Some((config, set)) = indirect_ref {
                     match args.vpl_shadows {
                         Some(mode) => renderer.set_vpl_shadows(
@@ -897,6 +913,9 @@ fn run() -> Result<()> {
                 (format!("GPU {}", gpu.describe()), rendered, stages, gbuffer)
             }
             None => {
+                if args.manylod_shadows.is_some() {
+                    bail!("--manylod-shadows needs a GPU (the CPU frame has no ManyLoD cut)");
+                }
                 if u64::from(width) * u64::from(height) > MAX_CPU_PIXELS {
                     bail!(
                         "--size {width}x{height}: the CPU reference renders at most {MAX_CPU_PIXELS} pixels"

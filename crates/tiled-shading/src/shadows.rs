@@ -418,7 +418,8 @@ pub fn paraboloid_plan(lights: &[GpuLight], shadowed: &[bool]) -> (Vec<(Vec3, Ve
 }
 
 /// Visibility of `p` from `light` through its paraboloid tiles of `atlas` (the one facing `p`
-/// of a pair; `paraboloid_visibility` in `shadows.wgsl`).
+/// of a pair, the other where the normal offset crosses the seam; `paraboloid_visibility` in
+/// `shadows.wgsl`).
 fn paraboloid_visibility(
     (atlas, params): &(Vec<u32>, AtlasParams),
     light: &GpuLight,
@@ -428,10 +429,18 @@ fn paraboloid_visibility(
     let views = paraboloid_views(light);
     let count = (light.shadow_count & 0xff) as usize;
     let k = usize::from(count == 2 && (p - views[0].0).dot(views[0].1) < 0.0);
-    match views.get(k) {
-        Some(&view) => lookup::visibility(atlas, params, light.shadow_first + k as u32, view, p, n),
-        None => 1.0,
+    // At a pair's seam the normal offset may carry the receiver over to the other view.
+    let order = if count == 2 { [k, 1 - k] } else { [0, 0] };
+    for k in order {
+        let Some(&view) = views.get(k) else {
+            return 1.0;
+        };
+        let tile = light.shadow_first + k as u32;
+        if lookup::texel(params, tile, view, p, n).is_some() {
+            return lookup::visibility(atlas, params, tile, view, p, n);
+        }
     }
+    0.0
 }
 
 /// The index (among the light's `count` views) of the view that holds `p`: the cube face of
