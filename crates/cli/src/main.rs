@@ -87,6 +87,10 @@ struct Args {
     /// rounded to a multiple of the sub-buffer count.
     #[arg(long, value_parser = parse_vpl_count)]
     vpls: Option<usize>,
+    /// With --vpls: bounces of indirect light the VPLs carry (photons continue by Russian
+    /// roulette and place a VPL at every later hit; the VPL count stays N).
+    #[arg(long, value_name = "B", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    vpl_bounces: u32,
     /// Interleaved sampling pattern NxM: one VPL subset per sub-buffer.
     #[arg(long, default_value = "4x4", requires = "vpls")]
     pattern: Pattern,
@@ -777,6 +781,7 @@ fn run() -> Result<()> {
                     subsets,
                     seed: args.seed,
                     emissive: emissive_photons,
+                    bounces: args.vpl_bounces,
                 },
             )?;
             Some((config, set))

@@ -20,7 +20,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frame = gbuffer::Frame::new(&camera, width, height);
     let uploaded = gbuffer::gpu::UploadedGBuffer::new(&device, &queue, &gb, &frame)?;
     let config = IndirectConfig::new(scene.bounds());
-    let vpls = vpl::VplConfig { count: 256, subsets: config.subsets(), seed: 1, emissive: false };
+    let vpls = vpl::VplConfig {
+        count: 256,
+        subsets: config.subsets(),
+        seed: 1,
+        emissive: false,
+        bounces: 1,
+    };
     let set = vpl::generate(&scene, &scene::Bvh::build(&scene), &scene.lights, &vpls)?;
 
     // new: pipelines once; bind: the caller's G-buffer, VPLs and outputs; encode: only records.

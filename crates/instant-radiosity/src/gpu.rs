@@ -17,6 +17,7 @@
 //!     subsets: config.subsets(),
 //!     seed: 1,
 //!     emissive: false,
+//!     bounces: 1,
 //! })?;
 //! let stages = run(&gpu, &gb, &frame, &set, &config)?;
 //! # Ok::<(), Box<dyn std::error::Error>>(())

@@ -20,6 +20,7 @@
 //!     subsets: config.subsets(),
 //!     seed: 1,
 //!     emissive: false,
+//!     bounces: 1,
 //! })?;
 //! let stages = instant_radiosity::cpu::indirect(&gb, &frame, &set, &config)?;
 //! let (diffuse, _specular) = stages.result();

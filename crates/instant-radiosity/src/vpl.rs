@@ -16,7 +16,7 @@
 //! use instant_radiosity::vpl::{VplConfig, generate};
 //! let scene = scene::cornell_box();
 //! let bvh = scene::Bvh::build(&scene);
-//! let config = VplConfig { count: 256, subsets: 16, seed: 7, emissive: false };
+//! let config = VplConfig { count: 256, subsets: 16, seed: 7, emissive: false, bounces: 1 };
 //! let set = generate(&scene, &bvh, &scene.lights, &config)?;
 //! assert_eq!(set.vpls.len(), 256);
 //! assert_eq!(set.per_subset, 16);
@@ -89,6 +89,10 @@ pub struct VplConfig {
     /// it off when `lights` already stand for them (see [`area_lights`]'s stand-ins, or a
     /// point light placed under a lamp).
     pub emissive: bool,
+    /// VPLs per photon path at most: 1 places them where photons first land (one bounce of
+    /// indirect light); more continue each photon's Lambertian reflection by Russian roulette
+    /// and place one at every later hit (Keller 1997: multi-bounce instant radiosity).
+    pub bounces: u32,
 }
 
 /// Generated VPLs, subset-major: subset `s` is `vpls[s·per_subset .. (s+1)·per_subset]`.
@@ -232,6 +236,7 @@ enum Emitter {
 }
 
 /// One photon: ray, its flux when it hits at distance `d` (`weight(d)`), before the albedo.
+#[derive(Clone, Copy)]
 struct Photon {
     origin: Vec3,
     direction: Vec3,
@@ -461,29 +466,66 @@ fn albedo_at(scene: &Scene, textures: &[LinearTexture], hit: &scene::Hit) -> Vec
     (base * texel).clamp(Vec3::ZERO, Vec3::ONE)
 }
 
-/// The VPL a photon places, if it hits the scene with non-zero flux.
-fn place(scene: &Scene, bvh: &Bvh, textures: &[LinearTexture], photon: &Photon) -> Option<Vpl> {
-    let hit = bvh.closest_hit(photon.origin, photon.direction, photon.t_max)?;
-    let w = if photon.radius.is_finite() {
-        window(hit.t, photon.radius)
-    } else {
-        1.0
-    };
-    let mesh = &scene.meshes[hit.mesh as usize];
-    let i = hit.triangle as usize * 3;
-    let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[mesh.indices[i + k] as usize]);
-    let normal = (b - a).cross(c - a).try_normalize()?;
-    let normal = if normal.dot(photon.direction) > 0.0 {
-        -normal
-    } else {
-        normal
-    };
-    let flux = photon.flux * w * albedo_at(scene, textures, &hit);
-    (flux.max_element() > 0.0 && flux.is_finite()).then_some(Vpl {
-        position: hit.position,
-        normal,
-        flux,
-    })
+/// The VPLs a photon places: one where it first hits the scene with non-zero flux, and with
+/// `bounces` > 1 one more at each later hit of its Lambertian reflection, which continues by
+/// Russian roulette on the albedo (`random(g)`: five uniforms for bounce g).
+fn place(
+    scene: &Scene,
+    bvh: &Bvh,
+    textures: &[LinearTexture],
+    photon: &Photon,
+    bounces: u32,
+    random: impl Fn(u32) -> [f32; 5],
+) -> Vec<Vpl> {
+    let mut vpls = Vec::new();
+    let mut photon = *photon;
+    let reach = 2.0 * scene.bounds().diagonal();
+    for g in 0..bounces {
+        let Some(hit) = bvh.closest_hit(photon.origin, photon.direction, photon.t_max) else {
+            break;
+        };
+        let w = if photon.radius.is_finite() {
+            window(hit.t, photon.radius)
+        } else {
+            1.0
+        };
+        let mesh = &scene.meshes[hit.mesh as usize];
+        let i = hit.triangle as usize * 3;
+        let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[mesh.indices[i + k] as usize]);
+        let Some(normal) = (b - a).cross(c - a).try_normalize() else {
+            break;
+        };
+        let normal = if normal.dot(photon.direction) > 0.0 {
+            -normal
+        } else {
+            normal
+        };
+        let albedo = albedo_at(scene, textures, &hit);
+        let flux = photon.flux * w * albedo;
+        if !(flux.max_element() > 0.0 && flux.is_finite()) {
+            break;
+        }
+        vpls.push(Vpl {
+            position: hit.position,
+            normal,
+            flux,
+        });
+        // The reflected flux leaves cosine-distributed; it survives with probability q and
+        // then carries flux / q (unbiased).
+        let u = random(g);
+        let q = albedo.max_element().min(0.95);
+        if g + 1 == bounces || u[2] >= q {
+            break;
+        }
+        photon = Photon {
+            origin: hit.position + normal * (1e-4 * reach),
+            direction: cosine_direction(normal, u[0], u[1]),
+            t_max: reach,
+            flux: flux / q,
+            radius: f32::INFINITY,
+        };
+    }
+    vpls
 }
 
 /// Generates `config.count` VPLs in `config.subsets` subsets from `lights` and the scene's
@@ -529,6 +571,7 @@ pub fn generate(
         .collect();
     let textures: Vec<LinearTexture> = scene.textures.iter().map(LinearTexture::new).collect();
     let k = config.count / subsets as usize;
+    let bounces = config.bounces.max(1);
 
     let results: Vec<(Vec<Vpl>, u64)> = (0..subsets)
         .into_par_iter()
@@ -539,24 +582,28 @@ pub fn generate(
             let limit = ATTEMPTS * k as u64;
             while vpls.len() < k && shot < limit {
                 let batch = ((k - vpls.len()) as u64).max(64).min(limit - shot);
-                let placed: Vec<Option<Vpl>> = (shot..shot + batch)
+                let placed: Vec<Vec<Vpl>> = (shot..shot + batch)
                     .into_par_iter()
                     .map(|i| {
                         let u = halton(i, &rot);
                         let e = cdf.partition_point(|&c| c <= u[0]).min(emitters.len() - 1);
                         let share = emitters[e].flux(&bounds) * (total / power[e]);
                         let photon = emitters[e].photon(&u, share, &bounds);
-                        place(scene, bvh, &textures, &photon)
+                        // Bounce g of photon i of subset s: its own SplitMix64 stream.
+                        let path = config.seed.rotate_left(24) ^ (u64::from(s) << 48) ^ i;
+                        let random = |g: u32| rotation(path, 1 + g);
+                        place(scene, bvh, &textures, &photon, bounces, random)
                     })
                     .collect();
-                // Photons count up to the one that places the last VPL.
+                // Photons count up to the one that places the last VPL (whose path may be
+                // cut short there).
                 let mut used = batch;
-                for (j, v) in placed.into_iter().enumerate() {
-                    if let Some(v) = v {
+                'photons: for (j, path) in placed.into_iter().enumerate() {
+                    for v in path {
                         vpls.push(v);
                         if vpls.len() == k {
                             used = j as u64 + 1;
-                            break;
+                            break 'photons;
                         }
                     }
                 }
@@ -605,6 +652,7 @@ pub fn generate_from_primary(
         subsets,
         seed,
         emissive,
+        bounces: 1,
     };
     generate(scene, bvh, photon_lights(&lights, emissive), &config)
 }

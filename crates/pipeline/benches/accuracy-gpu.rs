@@ -4,7 +4,8 @@
 //! error and bias (emitters excluded, [`gbuffer::accuracy`]) and FLIP / PSNR against the path
 //! tracer at `--spp` samples — direct light without and with shadow maps (truth: no bounce),
 //! then shadowed direct light plus `--vpls` VPLs without visibility, with ISM and with ManyLoD
-//! visibility (truth: one bounce). Accuracy does not depend on the adapter (the GPU only
+//! visibility (truth: one bounce), and multi-bounce VPLs (photons continue by Russian
+//! roulette; truth: 8 bounces). Accuracy does not depend on the adapter (the GPU only
 //! renders the frame), so the report of any adapter is valid; writes
 //! `accuracy-<adapter>-<date>.{md,json}` under `--out`.
 
@@ -43,6 +44,9 @@ struct Args {
     #[arg(long)]
     picture: Option<std::path::PathBuf>,
 }
+
+/// Bounces of the multi-bounce VPLs and of their truth.
+const MANY_BOUNCES: u32 = 8;
 
 /// The configurations of the docs' picture, left to right after the truth of each half.
 const PICTURE: [&str; 3] = [
@@ -138,12 +142,11 @@ struct Setup<'a> {
     vpls: usize,
 }
 
+/// A scene's rows and the pictures of [`PICTURE`].
+type Measured = (Vec<Row>, Vec<Image<[f32; 4]>>);
+
 /// The rows of `scene` from `camera`, and the frames of [`PICTURE`] with both truths.
-fn measure_scene(
-    setup: &Setup<'_>,
-    scene: &Scene,
-    camera: Camera,
-) -> Result<(Vec<Row>, Vec<Image<[f32; 4]>>)> {
+fn measure_scene(setup: &Setup<'_>, scene: &Scene, camera: Camera) -> Result<Measured> {
     let (d, q) = (&setup.gpu.device, &setup.gpu.queue);
     let (w, h) = setup.size;
     let (lights, emissive, lit_by) = vpl::primary_lights(scene);
@@ -152,17 +155,40 @@ fn measure_scene(
     let true_lights = vpl::photon_lights(&lights, emissive);
     let direct_truth = truth(scene, true_lights, camera, setup.size, 0, setup.spp)?;
     let bounce_truth = truth(scene, true_lights, camera, setup.size, 1, setup.spp)?;
+    let many_truth = truth(
+        scene,
+        true_lights,
+        camera,
+        setup.size,
+        MANY_BOUNCES,
+        setup.spp,
+    )?;
     let config = IndirectConfig::new(scene.bounds());
     let bvh = scene::Bvh::build(scene);
     let set = vpl::generate_from_primary(scene, &bvh, setup.vpls, config.subsets(), 1)?;
+    let many_set = vpl::generate(
+        scene,
+        &bvh,
+        true_lights,
+        &vpl::VplConfig {
+            count: set.vpls.len(),
+            subsets: config.subsets(),
+            seed: 1,
+            emissive,
+            bounces: MANY_BOUNCES,
+        },
+    )?;
     let mut rows = Vec::new();
     let mut pictures = Vec::new();
     // `shadowed`: the lights with shadow maps, an emitter as that many hemispherical samples
     // (else unshadowed, an emitter one point at its centroid).
+    // `bounces`: the VPLs' bounces (the truth's), with `visibility` (`None`: no VPLs).
     let mut measure = |name: &str,
                        shadowed: Option<u32>,
-                       visibility: Option<Option<(VplShadows, u32)>>|
+                       visibility: Option<Option<(VplShadows, u32)>>,
+                       bounces: u32|
      -> Result<()> {
+        let set = if bounces > 1 { &many_set } else { &set };
         let mut r = match shadowed {
             Some(samples) => {
                 let (sampled, _, _) = vpl::primary_lights_sampled(scene, samples);
@@ -174,19 +200,20 @@ fn measure_scene(
         };
         match visibility {
             None => {}
-            Some(None) => r.set_indirect(d, &config, &set)?,
+            Some(None) => r.set_indirect(d, &config, set)?,
             Some(Some((mode, tile))) => {
                 let maps = ShadowConfig {
                     tile,
                     ..ShadowConfig::default()
                 };
-                r.set_vpl_shadows(d, scene, mode, &maps, &config, &set)?
+                r.set_vpl_shadows(d, scene, mode, &maps, &config, set)?
             }
         }
         let image = r.render(d, q, &camera, Vec3::ZERO)?.image;
-        let (truth, truth_name) = match visibility {
-            None => (&direct_truth, "direct light"),
-            Some(_) => (&bounce_truth, "one bounce"),
+        let (truth, truth_name) = match (visibility, bounces) {
+            (None, _) => (&direct_truth, "direct light"),
+            (Some(_), 1) => (&bounce_truth, "one bounce"),
+            (Some(_), _) => (&many_truth, "8 bounces"),
         };
         let Accuracy {
             error,
@@ -213,22 +240,37 @@ fn measure_scene(
         });
         Ok(())
     };
-    measure("direct light (no shadows)", None, None)?;
-    measure("direct light (shadow maps)", Some(1), None)?;
+    measure("direct light (no shadows)", None, None, 0)?;
+    measure("direct light (shadow maps)", Some(1), None, 0)?;
     // Emitters as area lights: 16 shadowed samples each (punctual lights are one sample).
     let samples = if emissive { 16 } else { 1 };
     if emissive {
-        measure(PICTURE[0], Some(samples), None)?;
+        measure(PICTURE[0], Some(samples), None, 0)?;
     }
     let (ism, manylod) = (VplShadows::Ism, VplShadows::ManyLod);
     let bounce = |visibility: &str| format!("shadowed direct light + VPLs, {visibility}");
-    measure(&bounce("no visibility"), Some(samples), Some(None))?;
-    measure(&bounce("ISM"), Some(samples), Some(Some((ism, 32))))?;
-    measure(&bounce("ManyLoD"), Some(samples), Some(Some((manylod, 32))))?;
+    measure(&bounce("no visibility"), Some(samples), Some(None), 1)?;
+    measure(&bounce("ISM"), Some(samples), Some(Some((ism, 32))), 1)?;
     measure(
-        &bounce("ManyLoD 64×64 maps"),
+        &bounce("ManyLoD"),
         Some(samples),
-        Some(Some((manylod, 64))),
+        Some(Some((manylod, 32))),
+        1,
+    )?;
+    let maps64 = Some(Some((manylod, 64)));
+    measure(&bounce("ManyLoD 64×64 maps"), Some(samples), maps64, 1)?;
+    let many = |visibility: &str| format!("shadowed direct light + 8-bounce VPLs, {visibility}");
+    measure(
+        &many("no visibility"),
+        Some(samples),
+        Some(None),
+        MANY_BOUNCES,
+    )?;
+    measure(
+        &many("ManyLoD 64×64 maps"),
+        Some(samples),
+        maps64,
+        MANY_BOUNCES,
     )?;
     if pictures.len() == PICTURE.len() {
         pictures.splice(0..0, [direct_truth.clone()]);
@@ -296,7 +338,7 @@ fn markdown(r: &Report) -> String {
         .markdown("Accuracy against the path-traced ground truth", 1);
     let _ = writeln!(
         s,
-        "{}×{}; truth: `scene::reference` at {} spp (direct light only, or one bounce), emitters \
+        "{}×{}; truth: `scene::reference` at {} spp (direct light only, one bounce, or 8), emitters \
          as area lights; frames: the GPU renderer, tiled shading, no ambient, {} VPLs 4×4 fused \
          with the 5×5 blur, VPL visibility maps 32×32 unless said, direct shadow maps 1024² \
          (an emitter as 16 shadowed samples, a punctual light as itself). Error: relative mean \

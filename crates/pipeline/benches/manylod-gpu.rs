@@ -92,6 +92,7 @@ fn animation(scene: &Scene, bvh: &Bvh, count: usize) -> Result<(Vec<Vec<View>>, 
                     subsets: 1,
                     seed: 1,
                     emissive: false,
+                    bounces: 1,
                 },
             )?)
         })

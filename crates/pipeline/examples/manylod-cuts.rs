@@ -83,7 +83,7 @@ fn main() -> Result<()> {
         &scene,
         &bvh,
         &[spot],
-        &vpl::VplConfig { count: 256, subsets: 1, seed: 1, emissive: false },
+        &vpl::VplConfig { count: 256, subsets: 1, seed: 1, emissive: false, bounces: 1 },
     )?;
     let candidates = vpl_views(&set, TILE, 1e-3 * diagonal);
     let views: Vec<View> = [Vec3::Y, Vec3::X, Vec3::Z]

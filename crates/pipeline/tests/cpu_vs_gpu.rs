@@ -154,6 +154,7 @@ fn cornell_box_with_indirect_light_gpu_matches_cpu() {
             subsets: config.subsets(),
             seed: 4,
             emissive: false,
+            bounces: 1,
         },
     )
     .expect("vpls");
