@@ -137,6 +137,20 @@ fn vpl_generation_is_deterministic_and_complete() {
 
 /// In a closed box with one albedo, every photon of a point light hits a wall, so the VPLs'
 /// flux sums to albedo × the light's flux (4π·I, the window of a huge radius ≈ 1).
+/// The Cornell box's lamp mesh and its area.
+fn lamp_and_area(s: &Scene) -> (&Mesh, f32) {
+    let lamp = s.meshes.iter().find(|m| m.name == "light").expect("lamp");
+    let area = lamp
+        .indices
+        .chunks_exact(3)
+        .map(|t| {
+            let [a, b, c] = [0, 1, 2].map(|k| lamp.positions[t[k] as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    (lamp, area)
+}
+
 /// The Cornell box closed at the front, every surface of `albedo`, its lamp still emissive:
 /// every photon hits it and reflects `albedo` of its flux.
 fn closed_grey_box(albedo: f32) -> Scene {
@@ -159,6 +173,21 @@ fn closed_grey_box(albedo: f32) -> Scene {
     s
 }
 
+/// [`closed_grey_box`] lit only by a point light of `color` × `intensity` at its centre.
+fn point_lit_grey_box(albedo: f32, color: Vec3, intensity: f32) -> Scene {
+    let mut s = closed_grey_box(albedo);
+    for m in &mut s.materials {
+        m.emissive = Vec3::ZERO;
+    }
+    s.lights = vec![Light::Point {
+        position: s.bounds().center(),
+        color,
+        intensity,
+        radius: 1e4,
+    }];
+    s
+}
+
 /// Σ VPL flux against the flux reflected where photons of total flux `emitted` first land.
 fn assert_reflected_flux(set: &VplSet, emitted: Vec3, albedo: f32) {
     let total: Vec3 = set.vpls.iter().map(|v| v.flux).sum();
@@ -178,16 +207,7 @@ fn assert_reflected_flux(set: &VplSet, emitted: Vec3, albedo: f32) {
 #[test]
 fn vpl_flux_sums_to_reflected_light_flux() {
     let albedo = 0.5;
-    let mut s = closed_grey_box(albedo);
-    for m in &mut s.materials {
-        m.emissive = Vec3::ZERO;
-    }
-    s.lights = vec![Light::Point {
-        position: s.bounds().center(),
-        color: Vec3::new(1.0, 0.5, 0.25),
-        intensity: 2.0,
-        radius: 1e4,
-    }];
+    let s = point_lit_grey_box(albedo, Vec3::new(1.0, 0.5, 0.25), 2.0);
     let emitted = Vec3::new(1.0, 0.5, 0.25) * 2.0 * 4.0 * std::f32::consts::PI;
     assert_reflected_flux(&vpls(&s, 1024, 16, 9), emitted, albedo);
 }
@@ -198,16 +218,7 @@ fn vpl_flux_sums_to_reflected_light_flux() {
 #[test]
 fn multi_bounce_vpls_carry_every_bounce() {
     let albedo = 0.5;
-    let mut s = closed_grey_box(albedo);
-    for m in &mut s.materials {
-        m.emissive = Vec3::ZERO;
-    }
-    s.lights = vec![Light::Point {
-        position: s.bounds().center(),
-        color: Vec3::ONE,
-        intensity: 1.0,
-        radius: 1e4,
-    }];
+    let s = point_lit_grey_box(albedo, Vec3::ONE, 1.0);
     let emitted = Vec3::ONE * 4.0 * std::f32::consts::PI;
     let config = VplConfig {
         count: 4096,
@@ -237,15 +248,7 @@ fn emissive_lamp_flux_is_counted_once() {
     let albedo = 0.5;
     let mut s = closed_grey_box(albedo);
     s.lights.clear();
-    let lamp = s.meshes.iter().find(|m| m.name == "light").expect("lamp");
-    let area: f32 = lamp
-        .indices
-        .chunks_exact(3)
-        .map(|t| {
-            let [a, b, c] = [0, 1, 2].map(|k| lamp.positions[t[k] as usize]);
-            0.5 * (b - a).cross(c - a).length()
-        })
-        .sum();
+    let (lamp, area) = lamp_and_area(&s);
     let emitted = s.materials[lamp.material as usize].emissive * std::f32::consts::PI * area;
     assert_reflected_flux(&vpls(&s, 1024, 16, 3), emitted, albedo);
     let bvh = Bvh::build(&s);
@@ -276,15 +279,7 @@ fn emissive_area_lights_emit_photons() {
         direction.y < -0.99,
         "the light opening faces down: {direction}"
     );
-    let lamp = s.meshes.iter().find(|m| m.name == "light").expect("lamp");
-    let area: f32 = lamp
-        .indices
-        .chunks_exact(3)
-        .map(|t| {
-            let [a, b, c] = [0, 1, 2].map(|k| lamp.positions[t[k] as usize]);
-            0.5 * (b - a).cross(c - a).length()
-        })
-        .sum();
+    let (lamp, area) = lamp_and_area(&s);
     let emissive = s.materials[lamp.material as usize].emissive;
     assert!(((color * intensity) - emissive * area).abs().max_element() < 1e-5);
 }

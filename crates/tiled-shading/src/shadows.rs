@@ -639,6 +639,87 @@ pub fn ray_cast_atlas(bvh: &scene::Bvh, views: &[(Vec3, Vec3)], params: &AtlasPa
     atlas
 }
 
+/// How often a shadow lookup agrees with shadow rays ([`ray_agreement`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayAgreement {
+    /// Receiver–light pairs compared.
+    pub pairs: usize,
+    /// Of those, where the lookup and the ray agree.
+    pub agree: usize,
+    /// Of those, occluded by the ray.
+    pub occluded: usize,
+    /// Of the occluded, those the lookup finds occluded too.
+    pub found: usize,
+    /// Pairs left out: the lookup undecided (partly lit) or near a shadow's edge.
+    pub skipped: usize,
+}
+
+impl std::fmt::Display for RayAgreement {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} receiver–light pairs ({} left out): {:.2} % agree with shadow rays; {} of {} occluded found",
+            self.pairs,
+            self.skipped,
+            100.0 * self.fraction(),
+            self.found,
+            self.occluded
+        )
+    }
+}
+
+impl RayAgreement {
+    /// `agree / pairs`.
+    pub fn fraction(&self) -> f64 {
+        self.agree as f64 / self.pairs.max(1) as f64
+    }
+}
+
+/// The ground-truth check of shadows: for every G-buffer pixel of `gb` and every light of
+/// `lights` that reaches its front, the lookup `lit(light, p, n)` (`None`: undecided, e.g.
+/// partly lit) against [`ray_visibility`] through `bvh`; pairs where a point `edge(light, p)`
+/// away on the surface (four directions; 0: no band) gets another ray answer are left out.
+#[allow(clippy::too_many_arguments)]
+pub fn ray_agreement(
+    gb: &gbuffer::GBuffer,
+    frame: &gbuffer::Frame,
+    lights: &[GpuLight],
+    bvh: &scene::Bvh,
+    (lift, reach): (f32, f32),
+    lit: impl Fn(&GpuLight, Vec3, Vec3) -> Option<bool>,
+    edge: impl Fn(&GpuLight, Vec3) -> f32,
+) -> RayAgreement {
+    let mut a = RayAgreement::default();
+    for y in 0..gb.height() {
+        for x in 0..gb.width() {
+            let Some(s) = crate::cpu::sample(gb, frame, x, y) else {
+                continue;
+            };
+            let (p, n) = (s.position, s.normal);
+            for light in lights {
+                let (l, att) = crate::lighting::light_incidence(light, p);
+                if att <= 0.0 || n.dot(l) <= 0.05 {
+                    continue;
+                }
+                let ray = |q: Vec3| ray_visibility(bvh, light, q, n, lift, reach);
+                let truth = ray(p);
+                let e = edge(light, p);
+                let (t, b) = orthonormal_basis(n);
+                let near_edge = e > 0.0 && [t, -t, b, -b].iter().any(|&d| ray(p + d * e) != truth);
+                let Some(says) = lit(light, p, n).filter(|_| !near_edge) else {
+                    a.skipped += 1;
+                    continue;
+                };
+                a.pairs += 1;
+                a.occluded += usize::from(!truth);
+                a.found += usize::from(!truth && !says);
+                a.agree += usize::from(says == truth);
+            }
+        }
+    }
+    a
+}
+
 /// Whether `p` (normal `n`) sees `light`, by a ray through `bvh` (the ground truth the
 /// shadow maps approximate): from `p` lifted by `lift` along `n` to the light's position, or
 /// against a directional light's direction up to `reach`.

@@ -29,6 +29,22 @@ struct Case {
     lights: Vec<GpuLight>,
 }
 
+impl Case {
+    /// The GPU light accumulation of this case with `config`, without shadows.
+    fn run_gpu(&self, g: &::gpu::Gpu, config: &ShadingConfig) -> Shaded {
+        gpu::run(
+            g,
+            &self.gb,
+            &self.frame,
+            &self.camera,
+            &self.lights,
+            config,
+            Default::default(),
+        )
+        .expect("gpu run")
+    }
+}
+
 fn case(scene: &Scene, camera: Camera, lights: &[Light], width: u32, height: u32) -> Case {
     Case {
         gb: gbuffer::cpu::rasterize(scene, &camera, width, height)
@@ -263,16 +279,7 @@ fn normal_cones_remove_exactly_the_lights_behind_a_wall() {
         return;
     };
     let cfg = config(Method::TiledCones, 16);
-    let gpu_cones = gpu::run(
-        g,
-        &c.gb,
-        &c.frame,
-        &c.camera,
-        &c.lights,
-        &cfg,
-        Default::default(),
-    )
-    .expect("gpu run");
+    let gpu_cones = c.run_gpu(g, &cfg);
     same_lists("wall cones", &c, &cfg, &gpu_cones, &cones);
 }
 
@@ -285,18 +292,7 @@ fn normal_cones_never_change_the_image() {
         let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
             continue;
         };
-        let run = |m| {
-            gpu::run(
-                g,
-                &c.gb,
-                &c.frame,
-                &c.camera,
-                &c.lights,
-                &config(m, 16),
-                Default::default(),
-            )
-            .expect("gpu run")
-        };
+        let run = |m| c.run_gpu(g, &config(m, 16));
         compare(
             "gpu cones vs tiled",
             &run(Method::Tiled),
@@ -320,16 +316,7 @@ fn gpu_matches_cpu_images_and_lists() {
                     continue;
                 }
                 let cfg = config(method, tile);
-                let gpu_out = gpu::run(
-                    g,
-                    &c.gb,
-                    &c.frame,
-                    &c.camera,
-                    &c.lights,
-                    &cfg,
-                    Default::default(),
-                )
-                .expect("gpu run");
+                let gpu_out = c.run_gpu(g, &cfg);
                 compare(
                     &format!("gpu {method} {tile} vs brute"),
                     &brute,
@@ -367,16 +354,7 @@ fn lists_longer_than_workgroup_memory_are_shaded_in_flushes() {
         return;
     };
     for method in [Method::Tiled, Method::TiledCones, Method::Clustered] {
-        let out = gpu::run(
-            g,
-            &c.gb,
-            &c.frame,
-            &c.camera,
-            &c.lights,
-            &config(method, 16),
-            Default::default(),
-        )
-        .expect("gpu run");
+        let out = c.run_gpu(g, &config(method, 16));
         let lit: Vec<u32> = out.counts.iter().copied().filter(|&n| n > 0).collect();
         assert!(!lit.is_empty());
         assert!(

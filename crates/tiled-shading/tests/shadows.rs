@@ -10,7 +10,6 @@ use tiled_shading::{
     GpuLight, Method, ShadingConfig,
     cpu::{self, Shaded},
     gpu,
-    lighting::light_incidence,
     shadows::{self, ShadowMapConfig, ShadowMaps},
 };
 
@@ -124,21 +123,27 @@ fn cpu_lookup_on_the_read_back_maps_equals_the_gpu_shading() {
     };
     let cpu_shaded =
         cpu::shade(&view.0, &view.1, &camera, &lights, &config, Some(&maps)).expect("cpu");
-    let peak = cpu_shaded
+    // A comparison within rounding of its threshold may fall the other way on the GPU (one
+    // of the 16 taps: 1/9 of a light's weight at most), so count pixels, not a maximum.
+    assert_same_shading(&cpu_shaded, &gpu_shaded);
+}
+
+/// At most 0.5 % of the pixels of `gpu`'s diffuse light differ from `cpu`'s by more than
+/// 0.1 % of the peak.
+fn assert_same_shading(cpu: &Shaded, gpu: &Shaded) {
+    let peak = cpu
         .diffuse
         .pixels()
         .iter()
         .fold(0.0f32, |m, p| m.max(p.max_element()));
-    // A comparison within rounding of its threshold may fall the other way on the GPU (one
-    // of the 16 taps: 1/9 of a light's weight at most), so count pixels, not a maximum.
-    let differ = cpu_shaded
+    let differ = cpu
         .diffuse
         .pixels()
         .iter()
-        .zip(gpu_shaded.diffuse.pixels())
+        .zip(gpu.diffuse.pixels())
         .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3 * peak)
         .count();
-    let pixels = cpu_shaded.diffuse.pixels().len();
+    let pixels = cpu.diffuse.pixels().len();
     assert!(
         differ * 200 <= pixels,
         "{differ} of {pixels} pixels differ by more than 0.1 % of the peak"
@@ -155,47 +160,24 @@ fn lookup_agrees_with_shadow_rays_outside_the_penumbra() {
     let reach = 2.0 * scene.bounds().diagonal();
     let lift = 1e-3 * scene.bounds().diagonal();
     let (gb, frame) = &view;
-    let (mut pairs, mut agree, mut band, mut occluded) = (0usize, 0usize, 0usize, 0usize);
-
-    for y in 0..gb.height() {
-        for x in 0..gb.width() {
-            let Some(s) = cpu::sample(gb, frame, x, y) else {
-                continue;
-            };
-            for light in &lights {
-                let (l, att) = light_incidence(light, s.position);
-                if att <= 0.0 || s.normal.dot(l) <= 0.05 {
-                    continue;
-                }
-                let v = shadows::visibility(&maps, light, s.position, s.normal);
-                // The tent's weights sum to 1 within rounding.
-                let (lit, dark) = (v >= 1.0 - 1e-5, v <= 1e-5);
-                if !lit && !dark {
-                    band += 1;
-                    continue;
-                }
-                let ray = shadows::ray_visibility(&bvh, light, s.position, s.normal, lift, reach);
-                pairs += 1;
-                occluded += usize::from(!ray);
-                agree += usize::from(lit == ray);
-            }
-        }
-    }
-    let fraction = agree as f64 / pairs as f64;
-    println!(
-        "{pairs} receiver-light pairs outside the band ({band} inside): {:.2} % agree, {occluded} occluded by ray",
-        100.0 * fraction
+    let a = shadows::ray_agreement(
+        gb,
+        frame,
+        &lights,
+        &bvh,
+        (lift, reach),
+        |light, p, n| {
+            let v = shadows::visibility(&maps, light, p, n);
+            // The tent's weights sum to 1 within rounding.
+            (v >= 1.0 - 1e-5 || v <= 1e-5).then_some(v > 0.5)
+        },
+        |_, _| 0.0,
     );
-    assert!(
-        occluded * 20 > pairs,
-        "the scene casts shadows ({occluded} of {pairs})"
-    );
-    assert!(fraction >= 0.99, "{:.2} % agree", 100.0 * fraction);
+    println!("{a}");
+    assert!(a.occluded * 20 > a.pairs, "the scene casts shadows: {a}");
+    assert!(a.fraction() >= 0.99, "{a}");
     // The band (partly lit by the 3-texel tent) stays a minority of the pairs.
-    assert!(
-        band * 4 < pairs,
-        "{band} pairs in the band, {pairs} outside"
-    );
+    assert!(a.skipped * 4 < a.pairs, "{a}");
 }
 
 #[test]
@@ -349,65 +331,21 @@ fn paraboloid_shadows_from_a_ray_cast_atlas() {
         atlas: Some((atlas.clone(), params)),
     };
     let on_cpu = cpu::shade(gb, frame, &camera, &lights, &config, Some(&maps)).expect("cpu");
-    let peak = on_cpu
-        .diffuse
-        .pixels()
-        .iter()
-        .fold(0.0f32, |m, p| m.max(p.max_element()));
-    let differ = on_cpu
-        .diffuse
-        .pixels()
-        .iter()
-        .zip(on_gpu.diffuse.pixels())
-        .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-3 * peak)
-        .count();
-    let pixels = on_cpu.diffuse.pixels().len();
-    assert!(
-        differ * 200 <= pixels,
-        "{differ} of {pixels} pixels differ (GPU vs CPU)"
-    );
+    assert_same_shading(&on_cpu, &on_gpu);
 
     // Against shadow rays, outside the band where a point one texel away on the surface
     // answers otherwise.
     let lift = 1e-3 * diagonal;
-    let (mut pairs, mut agree, mut occluded, mut band) = (0usize, 0usize, 0usize, 0usize);
-    for y in 0..gb.height() {
-        for x in 0..gb.width() {
-            let Some(s) = cpu::sample(gb, frame, x, y) else {
-                continue;
-            };
-            for light in &lights {
-                let (l, att) = light_incidence(light, s.position);
-                if att <= 0.0 || s.normal.dot(l) <= 0.05 {
-                    continue;
-                }
-                let ray = |p: Vec3| shadows::ray_visibility(&bvh, light, p, s.normal, lift, 0.0);
-                let truth = ray(s.position);
-                let to = s.position - Vec3::from(light.position);
-                let texel = to.length() * 4.0 / params.tile as f32;
-                let (t, b) = scene::orthonormal_basis(s.normal);
-                if [t, -t, b, -b]
-                    .iter()
-                    .any(|&d| ray(s.position + d * texel) != truth)
-                {
-                    band += 1;
-                    continue;
-                }
-                let atlas_says = shadows::visibility(&maps, light, s.position, s.normal) > 0.5;
-                pairs += 1;
-                occluded += usize::from(!truth);
-                agree += usize::from(atlas_says == truth);
-            }
-        }
-    }
-    let fraction = agree as f64 / pairs as f64;
-    println!(
-        "{pairs} pairs outside the band ({band} inside): {:.2} % agree, {occluded} occluded",
-        100.0 * fraction
+    let a = shadows::ray_agreement(
+        gb,
+        frame,
+        &lights,
+        &bvh,
+        (lift, 0.0),
+        |light, p, n| Some(shadows::visibility(&maps, light, p, n) > 0.5),
+        |light, p| (p - Vec3::from(light.position)).length() * 4.0 / params.tile as f32,
     );
-    assert!(
-        occluded * 20 > pairs,
-        "the scene casts shadows ({occluded} of {pairs})"
-    );
-    assert!(fraction >= 0.98, "{:.2} % agree", 100.0 * fraction);
+    println!("{a}");
+    assert!(a.occluded * 20 > a.pairs, "the scene casts shadows: {a}");
+    assert!(a.fraction() >= 0.98, "{a}");
 }
