@@ -270,10 +270,11 @@ const USER_DEPENDS_ON: [&str; 4] = [
     "deferred-gbuffer",
     "deferred-scene",
 ];
-const PACKAGE_CLOSURE: [&str; 5] = [
+const PACKAGE_CLOSURE: [&str; 6] = [
     "deferred-gpu",
     "deferred-scene",
     "deferred-gbuffer",
+    "deferred-manylod",
     "deferred-interleave",
     "deferred-tiled-shading",
 ];
