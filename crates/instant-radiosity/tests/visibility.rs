@@ -21,14 +21,16 @@ const SHADOWS: ShadowConfig = ShadowConfig {
     list_bytes: None,
 };
 
-/// The Cornell box from its camera: the scene, its CPU G-buffer and frame at `w × h`.
-fn cornell_box(w: u32, h: u32) -> (Scene, GBuffer, Frame) {
+/// The test GPU and the Cornell box from its camera: the scene, its CPU G-buffer and frame at
+/// `w × h`; `None` (skipped, a failure in CI) without a GPU.
+fn cornell_box(w: u32, h: u32) -> Option<(&'static gpu::Gpu, Scene, GBuffer, Frame)> {
+    let gpu = gpu::test_device(&instant_radiosity::device_needs())?;
     let scene = scene::cornell_box();
     let camera = scene.camera_or_framed();
     let gb = gbuffer::cpu::rasterize(&scene, &camera, w, h)
         .expect("G-buffer")
         .gbuffer;
-    (scene, gb, Frame::new(&camera, w, h))
+    Some((gpu, scene, gb, Frame::new(&camera, w, h)))
 }
 
 fn set(scene: &Scene, subsets: u32) -> VplSet {
@@ -59,11 +61,10 @@ fn irradiance_sum(img: &Image<[f32; 4]>) -> f64 {
 
 #[test]
 fn gpu_shading_with_visibility_matches_its_cpu_twin() {
-    let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) else {
+    let (w, h) = (64, 48);
+    let Some((gpu, scene, gb, frame)) = cornell_box(w, h) else {
         return;
     };
-    let (w, h) = (64, 48);
-    let (scene, gb, frame) = cornell_box(w, h);
     let config = IndirectConfig {
         interleaving: Interleaving::Fused,
         blur: None,
@@ -129,11 +130,10 @@ fn gpu_shading_with_visibility_matches_its_cpu_twin() {
 /// 91.3 % and 90.3 %.
 #[test]
 fn atlas_visibility_agrees_with_ray_casts() {
-    let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) else {
+    let (w, h) = (48, 36);
+    let Some((gpu, scene, gb, frame)) = cornell_box(w, h) else {
         return;
     };
-    let (w, h) = (48, 36);
-    let (scene, gb, frame) = cornell_box(w, h);
     let set = set(&scene, 16);
     let bvh = Bvh::build(&scene);
     let band = 0.03 * scene.bounds().diagonal();
