@@ -63,7 +63,7 @@ pub fn texel(
 }
 
 /// Visibility of `p` (unit normal `n`) from paraboloid view `k` of `atlas` ([`texel`], then
-/// `atlas_test` of `lookup.wgsl`): 1 when the stored depth is not nearer than `p`, 0 behind
+/// [`test`]): 1 when the stored depth is not nearer than `p`, 0 behind
 /// the view's base plane or occluded; always 1 when `params` are disabled.
 pub fn visibility(
     atlas: &[u32],
@@ -76,11 +76,12 @@ pub fn visibility(
     if params.enabled == 0 {
         return 1.0;
     }
-    match texel(params, k, view, p, n) {
-        Some((index, depth)) => {
-            let word = atlas.get(index).copied().unwrap_or(u32::MAX);
-            f32::from(u8::from(depth <= splat::unpack_depth(word)))
-        }
-        None => 0.0,
-    }
+    texel(params, k, view, p, n).map_or(0.0, |t| test(atlas, t))
+}
+
+/// 1 when the stored depth at a [`texel`] of `atlas` is not nearer than its receiver, else
+/// 0 (`atlas_test` of `lookup.wgsl`).
+pub fn test(atlas: &[u32], (index, depth): (usize, f32)) -> f32 {
+    let word = atlas.get(index).copied().unwrap_or(u32::MAX);
+    f32::from(u8::from(depth <= splat::unpack_depth(word)))
 }

@@ -122,11 +122,13 @@ pub struct GpuRenderer {
 
 /// ManyLoD shadows of the point, spot and hemispherical lights (Holländer 2013 §3.6's
 /// many-view cut, as for VPLs): the scene's triangles to sample, the maps' configuration, the
-/// lights' paraboloid views and their maps (`None` while no light has such views).
+/// lights' paraboloid views (which tile each light owns, and the views the maps were built
+/// for) and their maps (`None` while no light has such views).
 struct LightAtlas {
     mesh: (Vec<Vec3>, Vec<u32>),
     config: ShadowConfig,
     plan: shadows::ShadowPlan,
+    views: Vec<manylod::View>,
     maps: Option<VplShadowMaps>,
 }
 
@@ -377,6 +379,7 @@ impl GpuRenderer {
             mesh: instant_radiosity::shadows::scene_mesh(scene),
             config: *config,
             plan: shadows::ShadowPlan::default(),
+            views: Vec::new(),
             maps: None,
         });
         self.plan_shadows(device, queue)
@@ -429,15 +432,21 @@ impl GpuRenderer {
                     size,
                 })
                 .collect();
-            let mesh = (&a.mesh.0[..], &a.mesh.1[..]);
-            a.maps = if views.is_empty() {
-                None
-            } else {
-                let mode = VplShadows::ManyLod;
-                let maps =
-                    VplShadowMaps::from_views(device, mesh, diagonal, views, 0.0, mode, &a.config)?;
-                Some(maps)
-            };
+            // Sampling the surfels and building the hierarchy is CPU work: only when the views
+            // change (new lights), not when the other shadows are set.
+            if views != a.views || a.maps.is_none() {
+                let mesh = (&a.mesh.0[..], &a.mesh.1[..]);
+                a.maps = if views.is_empty() {
+                    None
+                } else {
+                    let (mode, config) = (VplShadows::ManyLod, &a.config);
+                    let v = views.clone();
+                    Some(VplShadowMaps::from_views(
+                        device, mesh, diagonal, v, 0.0, mode, config,
+                    )?)
+                };
+                a.views = views;
+            }
             a.plan = plan;
         }
         if let Some(plan) = self.shadow_plan(device.limits().max_texture_array_layers)? {

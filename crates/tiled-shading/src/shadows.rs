@@ -37,7 +37,9 @@ pub const PARABOLOID_SHADOW: u32 = 0x8000_0000;
 /// five cube faces around their axis.
 pub const MAX_SPOT_VIEW_ANGLE: f32 = 1.0;
 
-/// `GpuLight::kind` of a spot light (`lighting.wgsl`).
+/// `GpuLight::kind` of a point light (`lighting.wgsl`).
+const LIGHT_POINT: u32 = 0;
+/// `GpuLight::kind` of a spot light.
 const LIGHT_SPOT: u32 = 1;
 /// `GpuLight::kind` of a hemispherical light.
 const LIGHT_HEMISPHERICAL: u32 = 3;
@@ -384,13 +386,25 @@ pub fn plan(
 /// (±y) for a point light, none for a directional light (cascades only). The order is the
 /// one `paraboloid_axis` in `shadows.wgsl` assumes.
 pub fn paraboloid_views(light: &GpuLight) -> Vec<(Vec3, Vec3)> {
-    let (p, d) = (Vec3::from(light.position), Vec3::from(light.direction));
-    match light.kind {
-        LIGHT_DIRECTIONAL => Vec::new(),
-        LIGHT_SPOT if light.cos_outer < 0.0 => vec![(p, d), (p, -d)],
-        LIGHT_SPOT | LIGHT_HEMISPHERICAL => vec![(p, d)],
-        _ => vec![(p, Vec3::Y), (p, Vec3::NEG_Y)],
-    }
+    let count = match light.kind {
+        LIGHT_DIRECTIONAL => 0,
+        LIGHT_SPOT if light.cos_outer < 0.0 => 2,
+        LIGHT_SPOT | LIGHT_HEMISPHERICAL => 1,
+        _ => 2,
+    };
+    let p = Vec3::from(light.position);
+    (0..count).map(|k| (p, paraboloid_axis(light, k))).collect()
+}
+
+/// The axis of paraboloid view `k` (0 or 1) of `light`: ±y for a point light, ±its direction
+/// otherwise (`paraboloid_axis` in `shadows.wgsl`).
+fn paraboloid_axis(light: &GpuLight, k: u32) -> Vec3 {
+    let axis = if light.kind == LIGHT_POINT {
+        Vec3::Y
+    } else {
+        Vec3::from(light.direction)
+    };
+    if k == 1 { -axis } else { axis }
 }
 
 /// The paraboloid views of the lights `shadowed` says (one flag per light), numbered from
@@ -426,18 +440,19 @@ fn paraboloid_visibility(
     p: Vec3,
     n: Vec3,
 ) -> f32 {
-    let views = paraboloid_views(light);
-    let count = (light.shadow_count & 0xff) as usize;
-    let k = usize::from(count == 2 && (p - views[0].0).dot(views[0].1) < 0.0);
+    let origin = Vec3::from(light.position);
+    let count = light.shadow_count & 0xff;
+    let first = u32::from(count == 2 && (p - origin).dot(paraboloid_axis(light, 0)) < 0.0);
     // At a pair's seam the normal offset may carry the receiver over to the other view.
-    let order = if count == 2 { [k, 1 - k] } else { [0, 0] };
-    for k in order {
-        let Some(&view) = views.get(k) else {
-            return 1.0;
-        };
-        let tile = light.shadow_first + k as u32;
-        if lookup::texel(params, tile, view, p, n).is_some() {
-            return lookup::visibility(atlas, params, tile, view, p, n);
+    let order: &[u32] = if count == 2 {
+        &[first, 1 - first]
+    } else {
+        &[0]
+    };
+    for &k in order {
+        let view = (origin, paraboloid_axis(light, k));
+        if let Some(t) = lookup::texel(params, light.shadow_first + k, view, p, n) {
+            return lookup::test(atlas, t);
         }
     }
     0.0
