@@ -467,19 +467,18 @@ fn albedo_at(scene: &Scene, textures: &[LinearTexture], hit: &scene::Hit) -> Vec
 }
 
 /// The VPLs a photon places: one where it first hits the scene with non-zero flux, and with
-/// `bounces` > 1 one more at each later hit of its Lambertian reflection, which continues by
-/// Russian roulette on the albedo (`random(g)`: five uniforms for bounce g).
+/// `bounces` > 1 one more at each later hit (within `reach`) of its Lambertian reflection,
+/// which continues by Russian roulette on the albedo (`random(g)`: five uniforms for bounce g).
 fn place(
     scene: &Scene,
     bvh: &Bvh,
     textures: &[LinearTexture],
     photon: &Photon,
-    bounces: u32,
+    (bounces, reach): (u32, f32),
     random: impl Fn(u32) -> [f32; 5],
 ) -> Vec<Vpl> {
     let mut vpls = Vec::new();
     let mut photon = *photon;
-    let reach = 2.0 * scene.bounds().diagonal();
     for g in 0..bounces {
         let Some(hit) = bvh.closest_hit(photon.origin, photon.direction, photon.t_max) else {
             break;
@@ -572,6 +571,7 @@ pub fn generate(
     let textures: Vec<LinearTexture> = scene.textures.iter().map(LinearTexture::new).collect();
     let k = config.count / subsets as usize;
     let bounces = config.bounces.max(1);
+    let reach = 2.0 * bounds.diagonal();
 
     let results: Vec<(Vec<Vpl>, u64)> = (0..subsets)
         .into_par_iter()
@@ -592,7 +592,7 @@ pub fn generate(
                         // Bounce g of photon i of subset s: its own SplitMix64 stream.
                         let path = config.seed.rotate_left(24) ^ (u64::from(s) << 48) ^ i;
                         let random = |g: u32| rotation(path, 1 + g);
-                        place(scene, bvh, &textures, &photon, bounces, random)
+                        place(scene, bvh, &textures, &photon, (bounces, reach), random)
                     })
                     .collect();
                 // Photons count up to the one that places the last VPL (whose path may be
