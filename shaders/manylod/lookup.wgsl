@@ -24,19 +24,23 @@ struct AtlasTexel {
 
 const NO_TEXEL: u32 = 0xffffffffu;
 
+// The paraboloid frame around unit `normal` (`manylod::view::paraboloid_frame`): columns t, b,
+// normal, so `d * paraboloid_frame(normal)` is d in that frame.
+fn paraboloid_frame(normal: vec3<f32>) -> mat3x3<f32> {
+    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), abs(normal.z) < 0.9);
+    let t = normalize(cross(helper, normal));
+    return mat3x3<f32>(t, cross(normal, t), normal);
+}
+
 // The texel of `receiver` (unit normal `n`) in paraboloid view `k`, whose origin is `origin`
 // with unit `normal`; the receiver first moves off its surface by the normal offset.
 fn atlas_texel(a: AtlasParams, k: u32, origin: vec3<f32>, normal: vec3<f32>, receiver: vec3<f32>, n: vec3<f32>) -> AtlasTexel {
     let to = receiver - origin;
     let cos_view = max(dot(normal, normalize(to)), 0.0);
     let p = receiver + n * (length(to) * 2.0 * (1.0 + cos_view) / f32(a.tile) * a.normal_offset);
-    // The paraboloid frame of `manylod::view::paraboloid_frame`.
-    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), abs(normal.z) < 0.9);
-    let t = normalize(cross(helper, normal));
-    let b = cross(normal, t);
     let d = p - (origin + normal * a.lift);
     let dist = length(d);
-    let l = vec3<f32>(dot(t, d), dot(b, d), dot(normal, d)) / dist;
+    let l = d * paraboloid_frame(normal) / dist;
     if l.z <= 0.0 {
         return AtlasTexel(NO_TEXEL, 0.0);
     }

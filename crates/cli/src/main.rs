@@ -135,12 +135,14 @@ struct Args {
     /// (with --shadows they draw its penumbrae); default 1, at its centroid.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
     area_samples: u32,
-    /// VPL visibility from per-VPL shadow maps in an atlas (GPU only; Holländer 2013 §3.6):
-    /// `manylod` (a many-view LoD cut of 2^20 surfels per VPL, incremental after the first frame) or `ism` (imperfect shadow
-    /// maps: 8 k random surfels per VPL). Default: no VPL visibility. Also writes the atlas
-    /// as vpl-shadow-atlas.png.
-    #[arg(long, value_name = "MODE")]
-    vpl_shadows: Option<ShadowMode>,
+    /// VPL visibility from per-VPL shadow maps in an atlas (GPU only): `manylod` (Holländer
+    /// 2013 §3.6: a many-view LoD cut of 2^20 surfels per VPL, incremental after the first
+    /// frame), `ism` (imperfect shadow maps: 8 k random surfels per VPL), `ssm` (exact: every
+    /// VPL's hemicube rasterised, Segovia 2006 §4.3; its cost grows with the triangles) or
+    /// `none` (VPLs light through walls). Default `auto`: `manylod` on the GPU, `none` with
+    /// --cpu (said on stderr). Also writes the atlas as vpl-shadow-atlas.png.
+    #[arg(long, value_name = "MODE", default_value = "auto")]
+    vpl_shadows: ShadowMode,
     /// With --vpl-shadows manylod: the cut threshold ε in micro-view pixels.
     #[arg(long, default_value_t = 2.0)]
     vpl_shadow_epsilon: f32,
@@ -840,9 +842,26 @@ fn run() -> Result<()> {
             m,
         );
     }
-    if args.vpl_shadows.is_some() && (args.cpu || indirect.is_none()) {
-        bail!("--vpl-shadows needs --vpls N and runs on the GPU only (no --cpu)");
-    }
+    let vpl_shadows = match (args.vpl_shadows, args.cpu) {
+        (ShadowMode::Auto, false) => Some(VplShadows::ManyLod),
+        (ShadowMode::Auto, true) => {
+            if indirect.is_some() {
+                eprintln!("note: the CPU path has no VPL visibility: VPLs light through walls");
+            }
+            None
+        }
+        (ShadowMode::None, _) => None,
+        (mode, cpu) => {
+            if cpu || indirect.is_none() {
+                bail!("--vpl-shadows needs --vpls N and runs on the GPU only (no --cpu)");
+            }
+            Some(match mode {
+                ShadowMode::Ism => VplShadows::Ism,
+                ShadowMode::Ssm => VplShadows::Rasterised,
+                _ => VplShadows::ManyLod,
+            })
+        }
+    };
     if args.manylod_shadows.is_some() && args.cpu {
         bail!("--manylod-shadows runs on the GPU only (no --cpu)");
     }
@@ -879,11 +898,11 @@ fn run() -> Result<()> {
                     renderer.set_manylod_shadows(d, q, &scene, Some(&config))?;
                 }
                 if let Some((config, set)) = indirect_ref {
-                    match args.vpl_shadows {
+                    match vpl_shadows {
                         Some(mode) => renderer.set_vpl_shadows(
                             d,
                             &scene,
-                            mode.into(),
+                            mode,
                             &ShadowConfig {
                                 epsilon: args.vpl_shadow_epsilon,
                                 ..ShadowConfig::default()
@@ -1137,21 +1156,18 @@ fn dump_stages(
 }
 
 /// `--vpl-shadows` modes.
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 enum ShadowMode {
+    /// ManyLoD on the GPU, none with --cpu.
+    Auto,
+    /// No VPL visibility.
+    None,
     /// ManyLoDs cuts.
     Manylod,
     /// Imperfect shadow maps.
     Ism,
-}
-
-impl From<ShadowMode> for VplShadows {
-    fn from(m: ShadowMode) -> Self {
-        match m {
-            ShadowMode::Manylod => VplShadows::ManyLod,
-            ShadowMode::Ism => VplShadows::Ism,
-        }
-    }
+    /// Exact: every VPL's hemicube rasterised (Segovia 2006's SSM).
+    Ssm,
 }
 
 /// Writes the VPL shadow-map atlas as a grey image (near = dark, empty = white).

@@ -75,14 +75,14 @@ fn a_failed_run_removes_the_outputs_it_wrote() {
 
 /// VPL visibility for many VPLs renders on a device whose storage bindings are 128 MiB (the
 /// software adapter in CI, and many GPUs): the views are batched to fit (the batched atlas is
-/// bit-identical to one batch: `instant-radiosity/tests/shadow_batches.rs`).
+/// the one batch's: `instant-radiosity/tests/shadow_batches.rs`).
 #[test]
 fn many_vpl_shadow_maps_render_within_the_device_limits() {
     // The shared test-device rule: skipped with a reason without an adapter, a failure in CI.
     if gpu::test_device(&pipeline::device_needs()).is_none() {
         return;
     }
-    for (mode, vpls) in [("manylod", "1024"), ("ism", "4096")] {
+    for (mode, vpls) in [("manylod", "1024"), ("ism", "4096"), ("ssm", "1024")] {
         let out = out_folder(&format!("vpl-shadows-{mode}"));
         let run = Command::new(env!("CARGO_BIN_EXE_deferred"))
             .args([

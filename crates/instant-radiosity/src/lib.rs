@@ -31,6 +31,7 @@
 pub mod cpu;
 pub mod gpu;
 pub mod shadows;
+pub mod ssm;
 pub mod vpl;
 
 use gbuffer::Image;
@@ -42,7 +43,7 @@ use scene::Aabb;
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "instant-radiosity",
     imports: [gbuffer::SHADERS, tiled_shading::SHADERS, manylod::SHADERS, interleave::SHADERS],
-    files: ["vpl_shading.wgsl"],
+    files: ["vpl_shading.wgsl", "ssm.wgsl"],
 );
 
 /// What this crate's kernels need of a device: the interleaving passes' and the VPL
@@ -80,6 +81,12 @@ pub enum IndirectError {
         /// Sub-buffers n·m.
         sub_buffers: u32,
     },
+    /// The direct lights' shadow-map pass failed (the rasterised VPL shadow maps use it).
+    #[error(transparent)]
+    Shadows(#[from] tiled_shading::ShadingError),
+    /// Rasterised VPL shadow maps that the device or the views cannot hold.
+    #[error("rasterised VPL shadow maps: {0}")]
+    Ssm(String),
     /// The VPL clamp distance is negative or not finite.
     #[error("the VPL clamp distance must be finite and >= 0, got {0}")]
     Clamp(f32),

@@ -2,7 +2,8 @@
 //! sampled into surfels with a bounding-sphere hierarchy, every VPL is a paraboloid view
 //! ([`vpl_views`]), and the cut's splats give one small shadow map per VPL in an atlas; the
 //! VPL shading then looks its pixel up there. The imperfect-shadow-map baseline splats a fixed
-//! random subset of the surfels instead.
+//! random subset of the surfels instead; the exact mode rasterises every VPL's hemicube and
+//! reindexes it into the same atlas (Segovia 2006's SSM, [`crate::ssm`]).
 
 use ::gpu::{PassTimer, transfer};
 use glam::Vec3;
@@ -15,6 +16,7 @@ use manylod::{
 use scene::Scene;
 
 use crate::IndirectError;
+use crate::ssm::RasterisedMaps;
 use crate::vpl::{GpuVpl, VplSet};
 
 /// Which VPL shadow maps the indirect light uses.
@@ -24,6 +26,9 @@ pub enum VplShadows {
     ManyLod,
     /// Imperfect shadow maps: a fixed random point subset per VPL.
     Ism,
+    /// Exact: every VPL's hemicube rasterised from the scene's triangles (Segovia 2006 §4.3,
+    /// [`crate::ssm`]); the surfel settings are unused.
+    Rasterised,
 }
 
 /// Settings of the VPL shadow maps.
@@ -42,9 +47,10 @@ pub struct ShadowConfig {
     /// Receivers move off their surface by this many atlas pixels at their distance before
     /// the lookup (normal-offset shadows): without it, a surface's own splats shadow it.
     pub normal_offset: f32,
-    /// The most bytes of one node-view list (ManyLoD's active and cut lists, the ISM list);
-    /// `None`: the device's storage-binding and buffer limits. Views are split into batches
-    /// whose lists fit, all splatting into one atlas, so the atlas is the same either way.
+    /// The most bytes of one node-view list (ManyLoD's active and cut lists, the ISM list),
+    /// or of the hemicube face atlas ([`VplShadows::Rasterised`]); `None`: the device's
+    /// storage-binding, buffer and texture limits. Views are split into batches that fit, all
+    /// writing into one atlas, so the atlas is the same either way.
     pub list_bytes: Option<u64>,
 }
 
@@ -91,10 +97,17 @@ struct Batch {
     ism: Option<GpuIsm>,
 }
 
+/// What fills the atlas: cut batches (ManyLoD, ISM) or rasterised hemicubes.
+enum Source {
+    Cuts(Vec<Batch>),
+    Rasterised(Box<RasterisedMaps>),
+}
+
 /// The VPL shadow maps on the GPU: the hierarchy, the cuts and the atlas (and the ISM points),
-/// in as many batches of views as the device's binding limits need.
+/// in as many batches of views as the device's binding limits need; or the rasterised
+/// hemicubes ([`VplShadows::Rasterised`]).
 pub struct VplShadowMaps {
-    batches: Vec<Batch>,
+    source: Source,
     atlas: wgpu::Buffer,
     layout: AtlasLayout,
     params: wgpu::Buffer,
@@ -125,17 +138,13 @@ impl VplShadowMaps {
     /// lights' ManyLoD shadows (`tiled_shading::shadows::paraboloid_views`).
     pub fn from_views(
         device: &wgpu::Device,
-        (positions, indices): (&[Vec3], &[u32]),
+        mesh: (&[Vec3], &[u32]),
         diagonal: f32,
         views: Vec<View>,
         lift: f32,
         mode: VplShadows,
         config: &ShadowConfig,
     ) -> Result<Self, IndirectError> {
-        let count = 1usize << config.points_log2.min(26);
-        let s = surfels::sample(positions, indices, count, 1)?;
-        let (p, n) = surfels::evaluate(&s, positions, indices);
-        let bsh = Bsh::build(&p, &n, surfels::disc_radius(positions, indices, count))?;
         let layout = vpl_atlas(views.len(), config.tile, diagonal);
         let (width, height) = layout.size();
         let atlas = transfer::buffer(
@@ -146,59 +155,20 @@ impl VplShadowMaps {
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
         )?;
-        let limits = device.limits();
-        let list_bytes = config.list_bytes.unwrap_or(
-            limits
-                .max_storage_buffer_binding_size
-                .min(limits.max_buffer_size),
-        );
-        let ism = match mode {
-            VplShadows::ManyLod => None,
-            VplShadows::Ism => {
-                let leaves = &bsh.nodes[bsh.leaf_count() - 1..];
-                let per_view = config.ism_points.min(leaves.len());
-                Some((per_view, splat::ism(leaves, views.len(), per_view, 1)?))
-            }
-        };
-        // Node-views one view needs in a list: its share of a cut, or its ISM points.
-        let per_view = match &ism {
-            None => (config.tile * config.tile) as usize * NODE_VIEWS_PER_PIXEL,
-            Some((per_view, _)) => *per_view,
-        };
-        let batch_views = (list_bytes / (per_view as u64 * NODE_VIEW_BYTES)).max(1) as usize;
-        let mut batches = Vec::new();
-        for (b, chunk) in views.chunks(batch_views).enumerate() {
-            let first = b * batch_views;
-            let batch_layout = layout.batch(first as u32);
-            // ISM binds no cut lists: ManyLoD's smallest lists suffice.
-            let capacity = match ism {
-                None => chunk.len() * per_view,
-                Some(_) => chunk.len().max(2),
-            };
-            let manylod = GpuManyLod::new(
+        let source = match mode {
+            VplShadows::Rasterised => Source::Rasterised(Box::new(RasterisedMaps::new(
                 device,
-                &bsh,
-                chunk,
-                config.epsilon,
-                batch_layout,
-                capacity,
-                Some(&atlas),
-            )?;
-            let ism = match &ism {
-                None => None,
-                Some((per_view, (points, list))) => {
-                    let own: Vec<_> = list[first * per_view..(first + chunk.len()) * per_view]
-                        .iter()
-                        .map(|nv| manylod::NodeView {
-                            view: nv.view - first as u32,
-                            ..*nv
-                        })
-                        .collect();
-                    Some(GpuIsm::new(device, &manylod, points, &own)?)
-                }
-            };
-            batches.push(Batch { manylod, ism });
-        }
+                mesh,
+                &views,
+                layout,
+                2 * config.tile,
+                &atlas,
+                config.list_bytes,
+            )?)),
+            VplShadows::ManyLod | VplShadows::Ism => Source::Cuts(cut_batches(
+                device, mesh, &views, layout, &atlas, mode, config,
+            )?),
+        };
         let params = AtlasParams {
             enabled: 1,
             tile: layout.tile,
@@ -217,7 +187,7 @@ impl VplShadowMaps {
             wgpu::BufferUsages::UNIFORM,
         )?;
         Ok(Self {
-            batches,
+            source,
             atlas,
             layout,
             params,
@@ -229,7 +199,14 @@ impl VplShadowMaps {
     /// Records this frame's shadow maps, batch after batch (the first clears the atlas): the
     /// cut (basic on the first frame, incremental after) and its splat, or the ISM splat.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        for batch in &mut self.batches {
+        let batches = match &mut self.source {
+            Source::Cuts(batches) => batches,
+            Source::Rasterised(maps) => {
+                maps.encode(encoder, timer);
+                return;
+            }
+        };
+        for batch in batches {
             match &batch.ism {
                 Some(ism) => ism.encode(encoder, &batch.manylod, timer),
                 None => {
@@ -261,10 +238,13 @@ impl VplShadowMaps {
         self.layout
     }
 
-    /// How many batches of views the lists were split into (1 where the device's bindings
-    /// hold every view's list).
+    /// How many batches of views the lists (or the rasterised hemicubes) were split into
+    /// (1 where the device's bindings and textures hold every view).
     pub fn batch_count(&self) -> usize {
-        self.batches.len()
+        match &self.source {
+            Source::Cuts(batches) => batches.len(),
+            Source::Rasterised(maps) => maps.batch_count(),
+        }
     }
 
     /// Reads the atlas back (row-major packed depths); an error when a batch's lists
@@ -274,11 +254,84 @@ impl VplShadowMaps {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<u32>, IndirectError> {
-        for batch in &self.batches {
-            batch.manylod.check_lists(device, queue)?;
+        if let Source::Cuts(batches) = &self.source {
+            for batch in batches {
+                batch.manylod.check_lists(device, queue)?;
+            }
         }
         Ok(transfer::read_pod(device, queue, &self.atlas)?)
     }
+}
+
+/// The ManyLoD cuts (or ISM lists) of `views` over the surfels of `mesh`, splatting into
+/// `atlas`, in batches whose node-view lists fit `config.list_bytes` or the device.
+fn cut_batches(
+    device: &wgpu::Device,
+    (positions, indices): (&[Vec3], &[u32]),
+    views: &[View],
+    layout: AtlasLayout,
+    atlas: &wgpu::Buffer,
+    mode: VplShadows,
+    config: &ShadowConfig,
+) -> Result<Vec<Batch>, IndirectError> {
+    let count = 1usize << config.points_log2.min(26);
+    let s = surfels::sample(positions, indices, count, 1)?;
+    let (p, n) = surfels::evaluate(&s, positions, indices);
+    let bsh = Bsh::build(&p, &n, surfels::disc_radius(positions, indices, count))?;
+    let limits = device.limits();
+    let list_bytes = config.list_bytes.unwrap_or(
+        limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size),
+    );
+    let ism = match mode {
+        VplShadows::ManyLod | VplShadows::Rasterised => None,
+        VplShadows::Ism => {
+            let leaves = &bsh.nodes[bsh.leaf_count() - 1..];
+            let per_view = config.ism_points.min(leaves.len());
+            Some((per_view, splat::ism(leaves, views.len(), per_view, 1)?))
+        }
+    };
+    // Node-views one view needs in a list: its share of a cut, or its ISM points.
+    let per_view = match &ism {
+        None => (config.tile * config.tile) as usize * NODE_VIEWS_PER_PIXEL,
+        Some((per_view, _)) => *per_view,
+    };
+    let batch_views = (list_bytes / (per_view as u64 * NODE_VIEW_BYTES)).max(1) as usize;
+    let mut batches = Vec::new();
+    for (b, chunk) in views.chunks(batch_views).enumerate() {
+        let first = b * batch_views;
+        let batch_layout = layout.batch(first as u32);
+        // ISM binds no cut lists: ManyLoD's smallest lists suffice.
+        let capacity = match ism {
+            None => chunk.len() * per_view,
+            Some(_) => chunk.len().max(2),
+        };
+        let manylod = GpuManyLod::new(
+            device,
+            &bsh,
+            chunk,
+            config.epsilon,
+            batch_layout,
+            capacity,
+            Some(atlas),
+        )?;
+        let ism = match &ism {
+            None => None,
+            Some((per_view, (points, list))) => {
+                let own: Vec<_> = list[first * per_view..(first + chunk.len()) * per_view]
+                    .iter()
+                    .map(|nv| manylod::NodeView {
+                        view: nv.view - first as u32,
+                        ..*nv
+                    })
+                    .collect();
+                Some(GpuIsm::new(device, &manylod, points, &own)?)
+            }
+        };
+        batches.push(Batch { manylod, ism });
+    }
+    Ok(batches)
 }
 
 /// Stand-ins for the shading's shadow bindings when no shadow maps are used (visibility 1).

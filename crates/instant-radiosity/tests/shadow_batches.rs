@@ -1,6 +1,8 @@
 //! VPL shadow maps split into batches of views (devices whose storage bindings cannot hold
-//! every view's node-view list, e.g. llvmpipe's and many GPUs' 128 MiB) give the same atlas,
-//! bit for bit, as one batch: cuts are per view, and every batch splats into the one atlas.
+//! every view's node-view list, e.g. llvmpipe's and many GPUs' 128 MiB, or whose textures
+//! cannot hold every hemicube) give the same atlas, bit for bit, as one batch: cuts and
+//! hemicubes are per view, and every batch writes into the one atlas (hemicubes up to the
+//! rasteriser's sub-pixel rounding).
 
 use instant_radiosity::{
     shadows::{ShadowConfig, VplShadowMaps, VplShadows},
@@ -58,4 +60,24 @@ fn batched_views_give_the_same_atlas_as_one_batch() {
     let (split, batches) = atlas(&gpu, VplShadows::Ism, Some(7 * 512 * 8), 1);
     assert_eq!(batches, 7);
     assert!(one == split, "ISM: batched atlas differs");
+    // Rasterised hemicubes: 5 faces of 32 × 32 depths (4 KiB each) per view; 4 views' faces
+    // per face atlas gives 12 batches.
+    let (one, batches) = atlas(gpu, VplShadows::Rasterised, None, 1);
+    assert_eq!(batches, 1);
+    let (split, batches) = atlas(gpu, VplShadows::Rasterised, Some(4 * 5 * 32 * 32 * 4), 1);
+    assert_eq!(batches, 12);
+    assert!(one.iter().any(|&w| w != u32::MAX), "the atlas holds depths");
+    // Faces sit at other viewport offsets in other batches, so the rasteriser's sub-pixel
+    // rounding may move depths in the last bits (measured: 831 of 12 544 texels, at most
+    // 4.7e-4 of the far distance); coverage (empty or not) must not change.
+    for (a, b) in one.iter().zip(&split) {
+        let (da, db) = (
+            manylod::splat::unpack_depth(*a),
+            manylod::splat::unpack_depth(*b),
+        );
+        assert!(
+            (*a == u32::MAX) == (*b == u32::MAX) && (da - db).abs() <= 1e-3,
+            "rasterised: batched atlas differs ({da} vs {db})"
+        );
+    }
 }

@@ -336,11 +336,35 @@ pub fn light_views(
     } else {
         6
     };
-    let tan = with_margin(1.0, res);
-    cube_axes(direction)[..faces]
+    cube_views(position, direction, depth, res, faces)
+}
+
+/// The first `faces` cube faces around `axis` ([`cube_axes`]) seen from `position`.
+fn cube_views(
+    position: Vec3,
+    axis: Vec3,
+    depth: (f32, f32),
+    resolution: u32,
+    faces: usize,
+) -> Vec<ShadowView> {
+    let tan = with_margin(1.0, resolution);
+    cube_axes(axis)[..faces]
         .iter()
-        .map(|&axis| perspective(position, axis, tan, depth, res))
+        .map(|&axis| perspective(position, axis, tan, depth, resolution))
         .collect()
+}
+
+/// The hemicube of a hemispherical light at `position` with unit `axis`: the five cube faces
+/// +axis and the four sides (the back face sees nothing it lights), `resolution` texels
+/// wide, depth 0 at `near` and 1 at `far` — the views [`light_views`] gives such a light, and
+/// a VPL's exact shadow map (Segovia 2006 §4.3: the hemicube unrolled into a shadow map).
+pub fn hemicube_views(
+    position: Vec3,
+    axis: Vec3,
+    (near, far): (f32, f32),
+    resolution: u32,
+) -> Vec<ShadowView> {
+    cube_views(position, axis, (near, far), resolution, 5)
 }
 
 /// The plan for `lights`, shadowing those `shadowed` says (one flag per light), for

@@ -143,6 +143,17 @@ impl ShadowMapPass {
 }
 
 impl ShadowMapPass {
+    /// The depth-only pipeline: vertex stage `shadow_depth` draws the scene's positions
+    /// (`gbuffer::gpu::GpuVertex`) into the view its instance index names.
+    pub fn pipeline(&self) -> &wgpu::RenderPipeline {
+        &self.pipeline
+    }
+
+    /// The pipeline's bind group over `views` (a storage buffer of [`ShadowView`]s).
+    pub fn bind_views(&self, device: &wgpu::Device, views: &wgpu::Buffer) -> wgpu::BindGroup {
+        self.layout.bind(device, &[views.as_entire_binding()])
+    }
+
     /// Allocates shadow maps of `config.resolution` for `capacity` views (at least one
     /// layer; no views until [`GpuShadowMaps::set_views`]). More layers than the device's
     /// `max_texture_array_layers` is an error naming both.
@@ -212,7 +223,7 @@ impl ShadowMapPass {
             label: Some("shadow maps"),
             ..Default::default()
         });
-        let group = self.layout.bind(device, &[views.as_entire_binding()]);
+        let group = self.bind_views(device, &views);
         Ok(GpuShadowMaps {
             texture,
             layers: layer_views,
