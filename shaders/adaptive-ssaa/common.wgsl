@@ -107,7 +107,7 @@ fn shade_sample(q: vec2<u32>, scale: f32) -> vec3<f32> {
         for (var i = 0u; i < params.light_count; i++) {
             var light = lights[i];
             light.position += jitter;
-            let a = shade_light(light, p, n, v, albedo, roughness, metallic);
+            let a = shade_light(light, p, n, v, albedo, roughness, metallic, material.base_color.a);
             diffuse += a.diffuse;
             specular += a.specular;
         }

@@ -61,7 +61,7 @@ fn fs_main(in: VertexOut) -> GBufferOut {
     let n = select(vec3<f32>(0.0, 0.0, 1.0), in.normal * inverseSqrt(l2), l2 > 1e-30);
     out.normal = pack2x16snorm(encode_octahedral_snorm(n));
     let texel = textureSampleLevel(base_color_texture, base_color_sampler, in.uv, 0.0);
-    out.albedo = vec4<f32>(clamp(material.base_color.rgb * texel.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0);
+    out.albedo = vec4<f32>(clamp(material.base_color.rgb * texel.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), clamp(material.specular, 0.0, 1.0));
     out.material = pack_material(material.roughness, material.metallic, material.id);
     return out;
 }

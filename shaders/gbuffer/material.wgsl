@@ -5,6 +5,6 @@ struct Material {
     roughness: f32,
     metallic: f32,
     id: u32,
-    _pad0: u32,
+    specular: f32,
     _pad1: u32,
 };

@@ -84,7 +84,8 @@ fn shade(texel: vec2<u32>, pixel: vec2<u32>, subset: u32) -> Accumulated {
         let p = position_from_view_ray(frame, pixel, depth);
         let nrm = decode_octahedral_snorm(unpack2x16snorm(textureLoad(normals, texel, 0).x));
         let v = normalize(frame.eye.xyz - p);
-        let albedo = textureLoad(albedos, texel, 0).rgb;
+        let albedo_specular = textureLoad(albedos, texel, 0);
+        let albedo = albedo_specular.rgb;
         let word = textureLoad(materials, texel, 0).x;
         let roughness = f32(word & 0xffu) / 255.0;
         let metallic = f32((word >> 8u) & 0xffu) / 255.0;
@@ -92,7 +93,7 @@ fn shade(texel: vec2<u32>, pixel: vec2<u32>, subset: u32) -> Accumulated {
         for (var k = first; k < first + params.per_subset; k++) {
             var l: vec3<f32>;
             let intensity = vpl_intensity(vpls[k], p, &l) * vpl_visibility(k, vpls[k], p, nrm);
-            let c = reflect_light(intensity, l, nrm, v, albedo, roughness, metallic);
+            let c = reflect_light(intensity, l, nrm, v, albedo, roughness, metallic, albedo_specular.a);
             sum.diffuse += c.diffuse;
             sum.specular += c.specular;
         }

@@ -4,7 +4,8 @@
 //   E = Att · (N·L) · colour · intensity
 //   diffuse  += E / π
 //   specular += E · D_GGX(N·H) · V_SmithGGX(N·L, N·V) · F_Schlick(V·H, F0)
-// with F0 = mix(0.04, albedo, metallic) and α = roughness². Composition (step 4):
+// with F = mix(specular · F_Schlick(0.04), F_Schlick(albedo), metallic) (specular: the
+// material's factor, in the G-buffer albedo's alpha) and α = roughness². Composition (step 4):
 //   colour = albedo · (1 − metallic) · (ambient + diffuse) + specular + emissive.
 // Point, spot and hemispherical attenuation: saturate(1 − (d/r)⁴)² / max(d², 1e-4), exactly zero
 // at r; spot lights fade by smoothstep(cos outer, cos inner, cos θ), hemispherical ones by max(cos θ, 0).
@@ -62,7 +63,7 @@ struct Accumulated {
     specular: vec3<f32>,
 };
 
-fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, roughness: f32, metallic: f32) -> Accumulated {
+fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, roughness: f32, metallic: f32, specular: f32) -> Accumulated {
     let inc = light_incidence(light, p);
     if inc.w <= 0.0 {
         var none: Accumulated;
@@ -70,12 +71,12 @@ fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: v
         none.specular = vec3<f32>(0.0);
         return none;
     }
-    return reflect_light(light.color * inc.w, inc.xyz, n, v, albedo, roughness, metallic);
+    return reflect_light(light.color * inc.w, inc.xyz, n, v, albedo, roughness, metallic, specular);
 }
 
 // Light arriving along `l` with attenuated `intensity` (irradiance intensity · N·L), reflected
 // towards `v`: Lambert E/π and GGX E·D·V·F.
-fn reflect_light(intensity: vec3<f32>, l: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, roughness: f32, metallic: f32) -> Accumulated {
+fn reflect_light(intensity: vec3<f32>, l: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, roughness: f32, metallic: f32, specular: f32) -> Accumulated {
     var out: Accumulated;
     out.diffuse = vec3<f32>(0.0);
     out.specular = vec3<f32>(0.0);
@@ -94,9 +95,10 @@ fn reflect_light(intensity: vec3<f32>, l: vec3<f32>, n: vec3<f32>, v: vec3<f32>,
     let k = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
     let d = a2 * INV_PI / (k * k);
     let vis = 0.5 / (n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2) + n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2));
-    let f0 = mix(vec3<f32>(0.04), albedo, metallic);
     let fw = pow(1.0 - v_dot_h, 5.0);
-    let f = f0 + (vec3<f32>(1.0) - f0) * fw;
+    // Schlick from F0 = 0.04 (dielectric, scaled by the specular factor as in
+    // KHR_materials_specular) or the albedo (metal).
+    let f = mix(vec3<f32>(specular * (0.04 + 0.96 * fw)), albedo + (vec3<f32>(1.0) - albedo) * fw, metallic);
     out.specular = e * (d * vis) * f;
     return out;
 }

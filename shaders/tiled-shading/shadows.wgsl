@@ -141,7 +141,7 @@ fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
 
 // `shade_light` with the light's shadow (`tiled_shading::shadows::shade_shadowed`): the
 // lookup runs only where the light reaches the surface's front.
-fn shade_shadowed(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, roughness: f32, metallic: f32) -> Accumulated {
+fn shade_shadowed(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo: vec3<f32>, roughness: f32, metallic: f32, specular: f32) -> Accumulated {
     var none: Accumulated;
     none.diffuse = vec3<f32>(0.0);
     none.specular = vec3<f32>(0.0);
@@ -153,5 +153,5 @@ fn shade_shadowed(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, albedo
     if visible <= 0.0 {
         return none;
     }
-    return reflect_light(light.color * (inc.w * visible), inc.xyz, n, v, albedo, roughness, metallic);
+    return reflect_light(light.color * (inc.w * visible), inc.xyz, n, v, albedo, roughness, metallic, specular);
 }

@@ -238,19 +238,23 @@ fn load_sample(pixel: vec2<u32>, size: vec2<u32>) -> Sample {
     return s;
 }
 
-// Albedo, roughness and metallic of a pixel (`gbuffer::pack_material`'s word).
+// Albedo, roughness and metallic of a pixel (`gbuffer::pack_material`'s word), and the
+// specular factor (the albedo's alpha).
 struct SurfaceMaterial {
     albedo: vec3<f32>,
     roughness: f32,
     metallic: f32,
+    specular: f32,
 };
 
 fn load_material(pixel: vec2<u32>) -> SurfaceMaterial {
     let word = textureLoad(material_texture, pixel, 0).x;
+    let albedo = textureLoad(albedo_texture, pixel, 0);
     return SurfaceMaterial(
-        textureLoad(albedo_texture, pixel, 0).rgb,
+        albedo.rgb,
         f32(word & 0xffu) / 255.0,
         f32((word >> 8u) & 0xffu) / 255.0,
+        albedo.a,
     );
 }
 
@@ -269,7 +273,7 @@ fn brute_force(@builtin(global_invocation_id) id: vec3<u32>) {
         let v = normalize(frame.eye.xyz - s.position);
         let m = load_material(id.xy);
         for (var i = 0u; i < params.light_count; i++) {
-            let c = shade_shadowed(lights[i], s.position, s.normal, v, m.albedo, m.roughness, m.metallic);
+            let c = shade_shadowed(lights[i], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
             diffuse += c.diffuse;
             specular += c.specular;
         }
@@ -416,7 +420,7 @@ fn shade_tiles(
                         let slice = slice_of(s.depth);
                         for (var j = 0u; j < n; j++) {
                             if ((list_mask[j] >> slice) & 1u) == 1u {
-                                let c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic);
+                                let c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
                                 diffuse[p] += c.diffuse;
                                 specular[p] += c.specular;
                             }

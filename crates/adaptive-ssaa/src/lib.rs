@@ -303,13 +303,14 @@ impl SsaaConfig {
     }
 }
 
-/// A material as `common.wgsl` sees it (`SsaaMaterial`): the base colour factor, the emission
-/// and the texture-array layer of the base colour texture (roughness and metallic come from
-/// the G-buffer's material word).
+/// A material as `common.wgsl` sees it (`SsaaMaterial`): the base colour factor with the
+/// specular factor in its alpha, the emission and the texture-array layer of the base colour
+/// texture (roughness and metallic come from the G-buffer's material word).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SsaaMaterial {
-    /// Linear base colour factor (alpha unused).
+    /// Linear base colour factor; alpha: the material's specular factor
+    /// ([`scene::Material::specular`]).
     pub base_color: [f32; 4],
     /// Emitted radiance.
     pub emissive: [f32; 3],
@@ -324,7 +325,7 @@ impl SsaaMaterial {
             .materials
             .iter()
             .map(|m| Self {
-                base_color: m.base_color.to_array(),
+                base_color: m.base_color.truncate().extend(m.specular).to_array(),
                 emissive: m.emissive.to_array(),
                 layer: TextureArray::layer_of(m.base_color_texture),
             })

@@ -165,6 +165,7 @@ struct FragmentMaterial<'a> {
     base_color: Vec4,
     roughness: f32,
     metallic: f32,
+    specular: f32,
     texture: Option<&'a LinearTexture>,
 }
 
@@ -225,7 +226,12 @@ fn fragment(material: &FragmentMaterial, id: u32, normal: Vec3, uv: Vec2) -> ([u
     let texel = material.texture.map_or(Vec4::ONE, |t| t.sample(uv));
     let rgb = (material.base_color.truncate() * texel.truncate()).clamp(Vec3::ZERO, Vec3::ONE);
     let unorm = |c: f32| (c * 255.0).round() as u8;
-    let albedo = [unorm(rgb.x), unorm(rgb.y), unorm(rgb.z), 255];
+    let albedo = [
+        unorm(rgb.x),
+        unorm(rgb.y),
+        unorm(rgb.z),
+        unorm(material.specular.clamp(0.0, 1.0)),
+    ];
     (
         albedo,
         pack_octahedral(normal),
@@ -404,6 +410,7 @@ pub fn rasterize(
             base_color: m.base_color,
             roughness: m.roughness,
             metallic: m.metallic,
+            specular: m.specular,
             texture: m.base_color_texture.map(|t| &textures[t as usize]),
         })
         .collect();

@@ -239,6 +239,9 @@ pub struct Accuracy {
     pub error: f64,
     /// Mean luminance ratio − 1 (positive: too bright).
     pub bias: f64,
+    /// Relative RMS luminance error: `√(Σ(L − L*)² / n) / (Σ L* / n)` (Segovia 2006 §6.3's
+    /// convergence measure).
+    pub rms: f64,
     /// Pixels compared.
     pub pixels: usize,
 }
@@ -264,7 +267,7 @@ pub fn accuracy(
     };
     let near_emitter =
         |x: i64, y: i64| (-1..=1).any(|dy| (-1..=1).any(|dx| bright(x + dx, y + dy)));
-    let (mut diff, mut sum_truth, mut sum_image, mut pixels) = (0.0, 0.0, 0.0, 0);
+    let (mut diff, mut squared, mut sum_truth, mut sum_image, mut pixels) = (0.0, 0.0, 0.0, 0.0, 0);
     for (i, (t, x)) in truth.pixels().iter().zip(image.pixels()).enumerate() {
         let (lt, lx) = (lum(t), lum(x));
         let (px, py) = (i as i64 % w, i as i64 / w);
@@ -274,6 +277,7 @@ pub fn accuracy(
         // A non-finite pixel is wholly wrong, never skipped.
         let lx = if lx.is_finite() { lx } else { 0.0 };
         diff += (lx - lt).abs();
+        squared += (lx - lt) * (lx - lt);
         sum_truth += lt;
         sum_image += lx;
         pixels += 1;
@@ -282,6 +286,7 @@ pub fn accuracy(
     Accuracy {
         error: diff / total,
         bias: sum_image / total - 1.0,
+        rms: (squared * pixels as f64).sqrt() / total,
         pixels,
     }
 }

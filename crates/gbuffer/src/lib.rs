@@ -127,6 +127,13 @@ pub fn unpack_material(word: u32) -> (f32, f32, u32) {
     )
 }
 
+/// A G-buffer albedo texel as the shading reads it: the linear albedo and, in the alpha, the
+/// material's specular factor ([`scene::Material::specular`]).
+pub fn unpack_albedo(texel: [u8; 4]) -> (glam::Vec3, f32) {
+    let [r, g, b, a] = texel.map(|c| f32::from(c) / 255.0);
+    (glam::Vec3::new(r, g, b), a)
+}
+
 /// Per-frame camera data shared by screen-space passes (WGSL `Frame` in `gbuffer/frame.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

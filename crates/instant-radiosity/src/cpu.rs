@@ -90,8 +90,7 @@ fn shade(
         let p = position::from_view_ray(inputs.frame, px, py, depth);
         let n = unpack_octahedral(gb.normal.get(tx, ty));
         let v = (inputs.frame.eye.truncate() - p).normalize();
-        let a = gb.albedo.get(tx, ty);
-        let albedo = Vec3::new(f32::from(a[0]), f32::from(a[1]), f32::from(a[2])) / 255.0;
+        let (albedo, specular_factor) = gbuffer::unpack_albedo(gb.albedo.get(tx, ty));
         let (roughness, metallic, _) = unpack_material(gb.material.get(tx, ty));
         let surface = Surface {
             p,
@@ -100,6 +99,7 @@ fn shade(
             albedo,
             roughness,
             metallic,
+            specular: specular_factor,
         };
         let first = (subset * inputs.per_subset) as usize;
         for (k, vpl) in inputs

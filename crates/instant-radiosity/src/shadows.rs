@@ -95,6 +95,7 @@ const NODE_VIEW_BYTES: u64 = 8;
 struct Batch {
     manylod: GpuManyLod,
     ism: Option<GpuIsm>,
+    views: usize,
 }
 
 /// What fills the atlas: cut batches (ManyLoD, ISM) or rasterised hemicubes.
@@ -223,6 +224,37 @@ impl VplShadowMaps {
         self.frames += 1;
     }
 
+    /// Moves the maps to another VPL set of as many VPLs (a progressive frame's new set,
+    /// VPLs that follow moving lights): only the views are rewritten; ManyLoD's next cut still
+    /// starts from its last one.
+    pub fn set_vpls(&self, queue: &wgpu::Queue, set: &VplSet) -> Result<(), IndirectError> {
+        self.set_views(
+            queue,
+            &vpl_views(set, self.layout.tile, self.shadow_params.lift),
+        )
+    }
+
+    /// The same for any paraboloid `views` (as many as made, `lift` as made).
+    pub fn set_views(&self, queue: &wgpu::Queue, views: &[View]) -> Result<(), IndirectError> {
+        match &self.source {
+            Source::Rasterised(maps) => maps.set_views(queue, views),
+            Source::Cuts(batches) => {
+                let made: usize = batches.iter().map(|b| b.views).sum();
+                if views.len() != made {
+                    return Err(IndirectError::ManyLod(manylod::ManyLodError::Mismatch(
+                        format!("{} views for shadow maps made for {made}", views.len()),
+                    )));
+                }
+                let mut first = 0;
+                for b in batches {
+                    b.manylod.set_views(queue, &views[first..first + b.views])?;
+                    first += b.views;
+                }
+                Ok(())
+            }
+        }
+    }
+
     /// The atlas and parameter buffers the VPL shading binds.
     pub fn bindings(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
         (&self.atlas, &self.params)
@@ -329,7 +361,11 @@ fn cut_batches(
                 Some(GpuIsm::new(device, &manylod, points, &own)?)
             }
         };
-        batches.push(Batch { manylod, ism });
+        batches.push(Batch {
+            manylod,
+            ism,
+            views: chunk.len(),
+        });
     }
     Ok(batches)
 }

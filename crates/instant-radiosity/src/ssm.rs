@@ -45,6 +45,9 @@ struct Batch {
 /// the face atlas and the reindexing kernel, writing into a paraboloid atlas buffer.
 pub struct RasterisedMaps {
     pass: ShadowMapPass,
+    views: wgpu::Buffer,
+    view_count: usize,
+    far: f32,
     views_group: wgpu::BindGroup,
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
@@ -79,28 +82,13 @@ impl RasterisedMaps {
             )));
         }
         let far = layout.far;
-        let hemicubes: Vec<ShadowView> = views
-            .iter()
-            .flat_map(|v| match *v {
-                View::Paraboloid {
-                    position, normal, ..
-                } => hemicube_views(position, normal, (1e-4 * far, far), face),
-                // `layout.check` let through only tile-sized views; a pinhole has no hemicube.
-                View::Perspective { .. } => Vec::new(),
-            })
-            .collect();
-        if hemicubes.len() != views.len() * FACES as usize {
-            return Err(IndirectError::Ssm(
-                "rasterised shadow maps need paraboloid (VPL) views".into(),
-            ));
-        }
+        let hemicubes = hemicubes(views, face, far)?;
         let pass = ShadowMapPass::new(device)?;
-        let storage = wgpu::BufferUsages::STORAGE;
         let views_buffer = transfer::buffer_init(
             device,
             "hemicube views",
             bytemuck::cast_slice(&hemicubes),
-            storage,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         )?;
         let views_group = pass.bind_views(device, &views_buffer);
         let vertices: Vec<gbuffer::gpu::GpuVertex> = positions
@@ -197,6 +185,9 @@ impl RasterisedMaps {
         }
         Ok(Self {
             pass,
+            views: views_buffer,
+            view_count: views.len(),
+            far,
             views_group,
             vertices: vertex_buffer,
             indices: index_buffer,
@@ -252,8 +243,40 @@ impl RasterisedMaps {
         }
     }
 
+    /// Moves the hemicubes to other paraboloid `views` (as many as made, same tile): the
+    /// next [`RasterisedMaps::encode`] rasterises from there.
+    pub fn set_views(&self, queue: &wgpu::Queue, views: &[View]) -> Result<(), IndirectError> {
+        if views.len() != self.view_count {
+            return Err(IndirectError::Ssm(format!(
+                "{} views for hemicubes made for {}",
+                views.len(),
+                self.view_count
+            )));
+        }
+        let hemicubes = hemicubes(views, self.face, self.far)?;
+        queue.write_buffer(&self.views, 0, bytemuck::cast_slice(&hemicubes));
+        Ok(())
+    }
+
     /// How many batches the hemicubes were split into (1 where the face atlas holds them all).
     pub fn batch_count(&self) -> usize {
         self.batches.len()
     }
+}
+
+/// The hemicubes of paraboloid `views` (their positions are the eyes), `face` texels wide,
+/// depth 1 at `far`: [`FACES`] views each.
+fn hemicubes(views: &[View], face: u32, far: f32) -> Result<Vec<ShadowView>, IndirectError> {
+    views
+        .iter()
+        .map(|v| match *v {
+            View::Paraboloid {
+                position, normal, ..
+            } => Ok(hemicube_views(position, normal, (1e-4 * far, far), face)),
+            View::Perspective { .. } => Err(IndirectError::Ssm(
+                "rasterised shadow maps need paraboloid (VPL) views".into(),
+            )),
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(|h| h.concat())
 }

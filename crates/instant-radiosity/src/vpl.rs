@@ -392,6 +392,15 @@ fn area_emitters(scene: &Scene) -> Vec<Emitter> {
 /// area (the triangles by their share of the area, a Halton coordinate within each) along
 /// their triangle's normal, so shadowed they draw the area light's penumbrae.
 pub fn area_lights(scene: &Scene, samples: u32) -> Vec<Light> {
+    area_lights_frame(scene, samples, 0)
+}
+
+/// [`area_lights`] for frame `frame` of a progressive render (Segovia 2006 §6.3: new light
+/// samples each frame): the stratified positions shift by the frame's base-3 radical inverse
+/// within their stratum and the coordinate within the triangle continues the base-2 sequence,
+/// so the frames' samples together stratify the area ever more finely. Frame 0 is
+/// [`area_lights`]; one sample stays at the centroid in every frame.
+pub fn area_lights_frame(scene: &Scene, samples: u32, frame: u32) -> Vec<Light> {
     let radius = 2.0 * scene.bounds().diagonal().max(1e-3);
     let lift = 1e-4 * radius;
     let mut lights = Vec::new();
@@ -429,16 +438,17 @@ pub fn area_lights(scene: &Scene, samples: u32) -> Vec<Light> {
         }
         let mut start = 0.0;
         let mut t = 0;
+        let shift = (0.5 + radical_inverse(u64::from(frame), 3)).fract();
         for i in 0..samples {
             // Stratified position along the cumulative area, then within its triangle.
-            let u = (i as f32 + 0.5) / samples as f32 * area;
+            let u = (i as f32 + shift) / samples as f32 * area;
             while t + 1 < triangles.len() && start + triangles[t].2 < u {
                 start += triangles[t].2;
                 t += 1;
             }
             let (v, cross, a) = triangles[t];
             let r1 = ((u - start) / a).clamp(0.0, 1.0).sqrt();
-            let r2 = radical_inverse(u64::from(i), 2);
+            let r2 = radical_inverse(u64::from(frame) * u64::from(samples) + u64::from(i), 2);
             let p = v[0] * (1.0 - r1) + v[1] * (r1 * (1.0 - r2)) + v[2] * (r1 * r2);
             lights.push(light(p, cross.normalize(), area / samples as f32));
         }
@@ -677,10 +687,21 @@ pub fn primary_lights_sampled(
     scene: &Scene,
     area_samples: u32,
 ) -> (Vec<Light>, bool, &'static str) {
+    primary_lights_frame(scene, area_samples, 0)
+}
+
+/// [`primary_lights_sampled`] for frame `frame` of a progressive render: the emissive meshes'
+/// samples of [`area_lights_frame`] (punctual lights and the default sun are the same in every
+/// frame).
+pub fn primary_lights_frame(
+    scene: &Scene,
+    area_samples: u32,
+    frame: u32,
+) -> (Vec<Light>, bool, &'static str) {
     if !scene.lights.is_empty() {
         return (scene.lights.clone(), false, "the scene's lights");
     }
-    let area = area_lights(scene, area_samples);
+    let area = area_lights_frame(scene, area_samples, frame);
     if !area.is_empty() {
         return (area, true, "the emissive meshes (as hemispherical lights)");
     }

@@ -81,6 +81,7 @@ struct Row {
     truth: String,
     error: f64,
     bias: f64,
+    rms: f64,
     pixels: usize,
     quality: Quality,
 }
@@ -218,6 +219,7 @@ fn measure_scene(setup: &Setup<'_>, scene: &Scene, camera: Camera) -> Result<Mea
         let Accuracy {
             error,
             bias,
+            rms,
             pixels,
         } = gbuffer::accuracy(truth, &image, 10.0);
         let quality = bench::quality(truth, &image);
@@ -235,6 +237,7 @@ fn measure_scene(setup: &Setup<'_>, scene: &Scene, camera: Camera) -> Result<Mea
             truth: truth_name.into(),
             error,
             bias,
+            rms,
             pixels,
             quality,
         });

@@ -625,6 +625,21 @@ impl GpuRenderer {
         self.set_indirect(device, config, set)
     }
 
+    /// Replaces the indirect light's VPLs (and their shadow maps' views) by another set of as
+    /// many VPLs in as many subsets — a progressive frame's new set, VPLs after the lights
+    /// moved — rebuilding nothing. Without an indirect stage it is an error.
+    pub fn set_vpls(&mut self, queue: &wgpu::Queue, set: &VplSet) -> Result<(), RenderError> {
+        let Some(indirect) = &mut self.indirect else {
+            return Err(RenderError::NoIndirect);
+        };
+        indirect.bound.set_vpls(queue, set)?;
+        if let Some(shadows) = &self.vpl_shadows {
+            shadows.set_vpls(queue, set)?;
+        }
+        indirect.set = set.clone();
+        Ok(())
+    }
+
     /// Shadow views of the direct lights the frame renders (0 without shadows).
     pub fn shadow_view_count(&self) -> usize {
         self.shadows.as_ref().map_or(0, |s| s.maps.count())

@@ -21,6 +21,7 @@
 
 pub mod cpu;
 pub mod gpu;
+pub mod progressive;
 
 use gbuffer::Image;
 use glam::Vec3;
@@ -37,6 +38,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     imports: [gbuffer::SHADERS],
     files: [
         "composition.wgsl",
+        "accumulate.wgsl",
     ],
 );
 
@@ -77,6 +79,9 @@ pub enum RenderError {
     /// The light accumulation failed (tile size, light buffer, GPU).
     #[error(transparent)]
     Shading(tiled_shading::ShadingError),
+    /// VPLs were given to a renderer without an indirect stage.
+    #[error("the renderer has no indirect light: set one (set_indirect) before its VPLs")]
+    NoIndirect,
     /// A light has non-finite or negative parameters.
     #[error("light {index}: {problem}")]
     InvalidLight {

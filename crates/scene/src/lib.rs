@@ -174,6 +174,10 @@ pub struct Material {
     pub metallic: f32,
     /// Emitted radiance (linear).
     pub emissive: Vec3,
+    /// Scale of the dielectric specular reflectance F0 = 0.04 (glTF
+    /// `KHR_materials_specular`'s `specularFactor`; an OBJ material whose `Ks` is black has
+    /// 0: Lambert only). 1 by default.
+    pub specular: f32,
 }
 
 impl Default for Material {
@@ -185,6 +189,7 @@ impl Default for Material {
             roughness: 0.8,
             metallic: 0.0,
             emissive: Vec3::ZERO,
+            specular: 1.0,
         }
     }
 }

@@ -2,7 +2,8 @@
 //! rasteriser but the scene types. It renders what the renderer models, with shadows and
 //! interreflections: the same BRDF (Lambert `albedo·(1 − metallic)/π` plus GGX `D·V·F` with
 //! α = roughness², Smith height-correlated visibility and Schlick's Fresnel from
-//! `F0 = lerp(0.04, albedo, metallic)`), the same punctual lights with their finite-radius
+//! `F0 = lerp(0.04, albedo, metallic)`, the dielectric term scaled by the material's specular
+//! factor), the same punctual lights with their finite-radius
 //! attenuation `saturate(1 − (d/r)⁴)² / max(d², 10⁻⁴)` (spot smoothstep cone, hemispherical
 //! `cos`), and emissive triangles as true area lights (Lambertian, on the side of their
 //! normal) instead of the rasteriser's point stand-ins.
@@ -39,6 +40,10 @@ pub struct ReferenceConfig {
     /// Include the GGX specular lobe (default). `false` leaves the Lambert lobe alone: the
     /// furnace test's analytic case.
     pub specular: bool,
+    /// Jitter the camera rays over each pixel (default: the pixel's box-filtered radiance).
+    /// `false` traces through pixel centres only, where a rasteriser without antialiasing
+    /// samples: per-pixel measures (RMS) then compare like with like at silhouettes.
+    pub jitter: bool,
 }
 
 impl Default for ReferenceConfig {
@@ -48,6 +53,7 @@ impl Default for ReferenceConfig {
             max_bounces: 1,
             seed: 1,
             specular: true,
+            jitter: true,
         }
     }
 }
@@ -121,9 +127,25 @@ struct Surface {
     albedo: Vec3,
     roughness: f32,
     metallic: f32,
+    /// Scale of the dielectric F0 ([`crate::Material::specular`]).
+    specular: f32,
 }
 
 impl Surface {
+    /// The Fresnel reflectance at normal incidence (the dielectric's scaled by the specular
+    /// factor).
+    fn f0(&self) -> Vec3 {
+        Vec3::splat(0.04 * self.specular).lerp(self.albedo, self.metallic)
+    }
+
+    /// Schlick's Fresnel at `v_dot_h`: dielectric (scaled by the specular factor, as in
+    /// `KHR_materials_specular`) blended with metal by the metalness.
+    fn fresnel(&self, v_dot_h: f32) -> Vec3 {
+        let fw = (1.0 - v_dot_h).powi(5);
+        let metal = self.albedo + (Vec3::ONE - self.albedo) * fw;
+        Vec3::splat(self.specular * (0.04 + 0.96 * fw)).lerp(metal, self.metallic)
+    }
+
     fn alpha(&self) -> f32 {
         (self.roughness * self.roughness).max(1e-3)
     }
@@ -148,8 +170,7 @@ impl Surface {
         let vis = 0.5
             / (n_dot_l * (n_dot_v * n_dot_v * (1.0 - a2) + a2).sqrt()
                 + n_dot_v * (n_dot_l * n_dot_l * (1.0 - a2) + a2).sqrt());
-        let f0 = Vec3::splat(0.04).lerp(self.albedo, self.metallic);
-        let f = f0 + (Vec3::ONE - f0) * (1.0 - v_dot_h).powi(5);
+        let f = self.fresnel(v_dot_h);
         diffuse + f * (d * vis)
     }
 
@@ -159,7 +180,10 @@ impl Surface {
             return 0.0;
         }
         let w_d = luminance(self.albedo) * (1.0 - self.metallic);
-        let w_s = luminance(Vec3::splat(0.04).lerp(self.albedo, self.metallic));
+        let w_s = luminance(self.f0());
+        if w_s <= 0.0 {
+            return 0.0;
+        }
         (w_s / (w_d + w_s).max(1e-6)).clamp(0.1, 0.9)
     }
 
@@ -322,8 +346,13 @@ impl<'s> PathTracer<'s> {
         let up = right.cross(forward);
         let tan = (c.fov_y * 0.5).tan();
         let aspect = self.width as f32 / self.height as f32;
-        let sx = (2.0 * (x as f32 + rng.f()) / self.width as f32 - 1.0) * tan * aspect;
-        let sy = (1.0 - 2.0 * (y as f32 + rng.f()) / self.height as f32) * tan;
+        let (jx, jy) = if self.config.jitter {
+            (rng.f(), rng.f())
+        } else {
+            (0.5, 0.5)
+        };
+        let sx = (2.0 * (x as f32 + jx) / self.width as f32 - 1.0) * tan * aspect;
+        let sy = (1.0 - 2.0 * (y as f32 + jy) / self.height as f32) * tan;
         (c.eye, (forward + right * sx + up * sy).normalize())
     }
 
@@ -361,6 +390,7 @@ impl<'s> PathTracer<'s> {
                 albedo: albedo.clamp(Vec3::ZERO, Vec3::ONE),
                 roughness: mat.roughness,
                 metallic: mat.metallic,
+                specular: mat.specular,
             },
             mat.emissive,
         )
@@ -601,6 +631,7 @@ mod tests {
                 albedo: Vec3::splat(albedo),
                 roughness,
                 metallic,
+                specular: 1.0,
             };
             let v = Vec3::new((theta as f32).sin(), 0.0, (theta as f32).cos());
             let mut rng = Rng::new(7, 0, 0);

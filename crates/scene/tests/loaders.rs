@@ -106,6 +106,31 @@ fn cornell_obj_keeps_its_emissive_light() {
     );
 }
 
+/// `Ks 0 0 0` states a material without specular reflection (the Cornell box's, which the
+/// path tracer and the renderer then both shade Lambert only); any other or no `Ks` keeps
+/// the default dielectric specular.
+#[test]
+fn obj_black_ks_means_no_specular() {
+    std::fs::write(
+        tmp("ks.mtl"),
+        "newmtl matte\nKd 1 0 0\nKs 0 0 0\nnewmtl shiny\nKd 1 0 0\nKs 0.5 0.5 0.5\n\
+         newmtl plain\nKd 1 0 0\n",
+    )
+    .expect("mtl");
+    let obj = tmp("ks.obj");
+    std::fs::write(
+        &obj,
+        "mtllib ks.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl matte\nf 1 2 3\nusemtl shiny\n\
+         f 1 2 3\nusemtl plain\nf 1 2 3\n",
+    )
+    .expect("obj");
+    let s = Scene::load(&obj).expect("obj");
+    let specular = |name: &str| s.materials.iter().find(|m| m.name == name).map(|m| m.specular);
+    assert_eq!(specular("matte"), Some(0.0));
+    assert_eq!(specular("shiny"), Some(1.0));
+    assert_eq!(specular("plain"), Some(1.0));
+}
+
 #[test]
 fn missing_file_names_the_file() {
     let e = Scene::load("/no/such/scene.gltf").unwrap_err();

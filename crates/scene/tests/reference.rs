@@ -14,6 +14,7 @@ fn material(albedo: f32, emissive: f32) -> Material {
         roughness: 1.0,
         metallic: 0.0,
         emissive: Vec3::splat(emissive),
+        specular: 1.0,
     }
 }
 

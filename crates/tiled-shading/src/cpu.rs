@@ -405,8 +405,7 @@ fn shade_pixel(
     slice: u32,
 ) -> (Vec3, Vec3) {
     let v = (frame.eye.truncate() - s.position).normalize();
-    let p = gb.albedo.get(x, y);
-    let albedo = Vec3::new(f32::from(p[0]), f32::from(p[1]), f32::from(p[2])) / 255.0;
+    let (albedo, specular) = gbuffer::unpack_albedo(gb.albedo.get(x, y));
     let (roughness, metallic, _) = unpack_material(gb.material.get(x, y));
     let surface = Surface {
         p: s.position,
@@ -415,6 +414,7 @@ fn shade_pixel(
         albedo,
         roughness,
         metallic,
+        specular,
     };
     list.iter().filter(|(_, mask)| mask >> slice & 1 == 1).fold(
         (Vec3::ZERO, Vec3::ZERO),

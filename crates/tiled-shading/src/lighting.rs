@@ -58,6 +58,9 @@ pub struct Surface {
     pub roughness: f32,
     /// Metalness (F0 from 0.04 to the albedo).
     pub metallic: f32,
+    /// The material's specular factor (the G-buffer albedo's alpha): it scales the dielectric
+    /// Fresnel term, as `KHR_materials_specular` does.
+    pub specular: f32,
 }
 
 /// One light's (diffuse, specular) contribution at `s` (`shade_light`).
@@ -80,6 +83,7 @@ pub fn reflect_light(intensity: Vec3, l: Vec3, s: &Surface) -> (Vec3, Vec3) {
         albedo,
         roughness,
         metallic,
+        specular,
         ..
     } = *s;
     let n_dot_l = n.dot(l).clamp(0.0, 1.0);
@@ -98,7 +102,8 @@ pub fn reflect_light(intensity: Vec3, l: Vec3, s: &Surface) -> (Vec3, Vec3) {
     let vis = 0.5
         / (n_dot_l * (n_dot_v * n_dot_v * (1.0 - a2) + a2).sqrt()
             + n_dot_v * (n_dot_l * n_dot_l * (1.0 - a2) + a2).sqrt());
-    let f0 = Vec3::splat(0.04).lerp(albedo, metallic);
-    let f = f0 + (Vec3::ONE - f0) * (1.0 - v_dot_h).powi(5);
+    let fw = (1.0 - v_dot_h).powi(5);
+    let f = Vec3::splat(specular * (0.04 + 0.96 * fw))
+        .lerp(albedo + (Vec3::ONE - albedo) * fw, metallic);
     (e * FRAC_1_PI, e * (d * vis) * f)
 }

@@ -140,6 +140,7 @@ pub fn shade_sample(inp: &ShadingInputs, config: &SsaaConfig, q: [u32; 2], scale
         albedo,
         roughness,
         metallic,
+        specular: material.base_color[3],
     };
     let (mut diffuse, mut specular) = (Vec3::ZERO, Vec3::ZERO);
     for light in inp.lights {

@@ -41,8 +41,10 @@ pub struct GpuMaterial {
     pub metallic: f32,
     /// Index in the scene's material list (the G-buffer's material id).
     pub id: u32,
+    /// Specular factor (written to the G-buffer albedo's alpha).
+    pub specular: f32,
     /// Padding to 16-byte alignment.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 
 impl GpuMaterial {
@@ -54,7 +56,8 @@ impl GpuMaterial {
             roughness: m.roughness,
             metallic: m.metallic,
             id,
-            _pad: [0; 2],
+            specular: m.specular,
+            _pad: 0,
         }
     }
 }

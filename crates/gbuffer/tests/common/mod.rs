@@ -57,6 +57,7 @@ pub fn random_scene(seed: u64, triangles: usize) -> Scene {
             roughness: next(),
             metallic: next(),
             emissive: Vec3::ZERO,
+            specular: next(),
         });
     }
     for k in 0..3u32 {

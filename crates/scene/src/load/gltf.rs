@@ -70,6 +70,9 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
                 roughness: pbr.roughness_factor().clamp(0.0, 1.0),
                 metallic: pbr.metallic_factor().clamp(0.0, 1.0),
                 emissive,
+                specular: m
+                    .specular()
+                    .map_or(1.0, |s| s.specular_factor().clamp(0.0, 1.0)),
             }
         })
         .collect();

@@ -74,6 +74,12 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
             roughness: (2.0 / (shininess + 2.0)).sqrt().sqrt().clamp(0.0, 1.0),
             metallic: 0.0,
             emissive: Vec3::from(m.emissive.unwrap_or([0.0; 3])),
+            // An explicit black `Ks` says the material has no specular reflection.
+            specular: if m.specular == Some([0.0; 3]) {
+                0.0
+            } else {
+                1.0
+            },
         });
     }
     let default_material = scene.materials.len() as u32;
