@@ -363,6 +363,37 @@ impl SceneOption {
     }
 }
 
+/// `file` of `../shared/fixtures` and its view from views.json (the Cornell box's is issue
+/// 21's: eye (0, 1, 3.9), target (0, 1, 0), fov 39.3°).
+pub fn fixture(file: &str) -> anyhow::Result<(scene::Scene, scene::Camera)> {
+    let dir =
+        scene::shared_fixtures().ok_or_else(|| anyhow::anyhow!("../shared/fixtures not found"))?;
+    let path = dir.join(file);
+    let scene = scene::Scene::load(&path)?;
+    let camera = scene::preset_view(&path, &scene)
+        .ok_or_else(|| anyhow::anyhow!("no view of {} in views.json", path.display()))?;
+    Ok((scene, camera))
+}
+
+/// The path tracer's image (`scene::reference`) of `scene` lit by `lights` and its emissive
+/// triangles, from `camera` at `(w, h)` with `config`, at `spp` samples per pixel.
+pub fn path_traced(
+    scene: &scene::Scene,
+    lights: &[scene::Light],
+    camera: scene::Camera,
+    (w, h): (u32, u32),
+    config: scene::reference::ReferenceConfig,
+    spp: u32,
+) -> anyhow::Result<gbuffer::Image<[f32; 4]>> {
+    let mut pt = scene::reference::PathTracer::new(scene, camera, w, h, lights, config);
+    pt.add_samples(spp);
+    Ok(gbuffer::Image::from_vec(
+        w,
+        h,
+        pt.image().iter().map(|c| [c.x, c.y, c.z, 1.0]).collect(),
+    )?)
+}
+
 /// Image error against a reference, on what a PNG shows (RGB clamped to \[0, 1\], sRGB).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Quality {

@@ -3,9 +3,11 @@
 //! Dabrovic Sponza (the default sun): per configuration, the relative mean absolute luminance
 //! error and bias (emitters excluded, [`gbuffer::accuracy`]) and FLIP / PSNR against the path
 //! tracer at `--spp` samples — direct light without and with shadow maps (truth: no bounce),
-//! then shadowed direct light plus `--vpls` VPLs without visibility, with ISM and with ManyLoD
-//! visibility (truth: one bounce), and multi-bounce VPLs (photons continue by Russian
-//! roulette; truth: 8 bounces). Accuracy does not depend on the adapter (the GPU only
+//! then shadowed direct light plus `--vpls` VPLs without visibility, with ISM, with ManyLoD
+//! and with exact rasterised (SSM) visibility (truth: one bounce), multi-bounce VPLs (photons
+//! continue by Russian roulette; truth: 8 bounces), and the progressive mode's mean after
+//! `--progressive-frames` frames (`pipeline::progressive`; a quarter of the VPLs per frame on
+//! Sponza). Accuracy does not depend on the adapter (the GPU only
 //! renders the frame), so the report of any adapter is valid; writes
 //! `accuracy-<adapter>-<date>.{md,json}` under `--out`.
 
@@ -20,10 +22,8 @@ use instant_radiosity::{
     vpl,
 };
 use pipeline::gpu::GpuRenderer;
-use scene::{
-    Camera, Scene,
-    reference::{PathTracer, ReferenceConfig},
-};
+use pipeline::progressive::{Progressive, ProgressiveConfig};
+use scene::{Camera, Scene, reference::ReferenceConfig};
 use serde::Serialize;
 use tiled_shading::shadows::ShadowMapConfig;
 
@@ -39,6 +39,9 @@ struct Args {
     /// VPLs of the indirect configurations.
     #[arg(long, default_value_t = 1024)]
     vpls: usize,
+    /// Frames of the progressive row.
+    #[arg(long, default_value_t = 64)]
+    progressive_frames: u32,
     /// Also write the docs' picture (PNG): the truth and the renderer side by side — direct
     /// light, then one bounce without and with ManyLoD visibility, on the Cornell box.
     #[arg(long)]
@@ -102,23 +105,11 @@ struct Report {
     scenes: Vec<SceneRows>,
 }
 
-/// `file` of `../shared/fixtures` from its view in `scene`'s views.json (the Cornell box's is
-/// the issue's: eye (0, 1, 3.9), target (0, 1, 0), fov 39.3°).
-fn fixture(file: &str) -> Result<(Scene, Camera)> {
-    let dir =
-        scene::shared_fixtures().ok_or_else(|| anyhow::anyhow!("../shared/fixtures not found"))?;
-    let path = dir.join(file);
-    let scene = Scene::load(&path)?;
-    let camera = scene::preset_view(&path, &scene)
-        .ok_or_else(|| anyhow::anyhow!("no view of {} in views.json", path.display()))?;
-    Ok((scene, camera))
-}
-
 fn truth(
     scene: &Scene,
     lights: &[scene::Light],
     camera: Camera,
-    (w, h): (u32, u32),
+    size: (u32, u32),
     bounces: u32,
     spp: u32,
 ) -> Result<Image<[f32; 4]>> {
@@ -126,21 +117,44 @@ fn truth(
         max_bounces: bounces,
         ..ReferenceConfig::default()
     };
-    let mut pt = PathTracer::new(scene, camera, w, h, lights, config);
-    pt.add_samples(spp);
-    Ok(Image::from_vec(
-        w,
-        h,
-        pt.image().iter().map(|c| [c.x, c.y, c.z, 1.0]).collect(),
-    )?)
+    bench::path_traced(scene, lights, camera, size, config, spp)
+}
+
+/// The row of configuration `name`'s `image` against `truth` (named).
+fn row(name: &str, (truth_name, truth): (&str, &Image<[f32; 4]>), image: &Image<[f32; 4]>) -> Row {
+    let Accuracy {
+        error,
+        bias,
+        rms,
+        pixels,
+    } = gbuffer::accuracy(truth, image, 10.0);
+    let quality = bench::quality(truth, image);
+    println!(
+        "{name:<48} vs {truth_name:<12}: error {error:.3}, bias {:+.1} %, FLIP {:.4}, PSNR {:.1} dB",
+        100.0 * bias,
+        quality.flip_mean,
+        quality.psnr
+    );
+    Row {
+        configuration: name.into(),
+        truth: truth_name.into(),
+        error,
+        bias,
+        rms,
+        pixels,
+        quality,
+    }
 }
 
 /// What one scene's rows are measured with.
+#[derive(Clone, Copy)]
 struct Setup<'a> {
     gpu: &'a gpu::Gpu,
     size: (u32, u32),
     spp: u32,
     vpls: usize,
+    progressive_vpls: usize,
+    progressive_frames: u32,
 }
 
 /// A scene's rows and the pictures of [`PICTURE`].
@@ -211,36 +225,20 @@ fn measure_scene(setup: &Setup<'_>, scene: &Scene, camera: Camera) -> Result<Mea
             }
         }
         let image = r.render(d, q, &camera, Vec3::ZERO)?.image;
-        let (truth, truth_name) = match (visibility, bounces) {
-            (None, _) => (&direct_truth, "direct light"),
-            (Some(_), 1) => (&bounce_truth, "one bounce"),
-            (Some(_), _) => (&many_truth, "8 bounces"),
+        let truth_name = match (visibility, bounces) {
+            (None, _) => "direct light",
+            (Some(_), 1) => "one bounce",
+            (Some(_), _) => "8 bounces",
         };
-        let Accuracy {
-            error,
-            bias,
-            rms,
-            pixels,
-        } = gbuffer::accuracy(truth, &image, 10.0);
-        let quality = bench::quality(truth, &image);
-        println!(
-            "{name:<48} vs {truth_name:<12}: error {error:.3}, bias {:+.1} %, FLIP {:.4}, PSNR {:.1} dB",
-            100.0 * bias,
-            quality.flip_mean,
-            quality.psnr
-        );
+        let truth = match truth_name {
+            "direct light" => &direct_truth,
+            "one bounce" => &bounce_truth,
+            _ => &many_truth,
+        };
+        rows.push(row(name, (truth_name, truth), &image));
         if PICTURE.contains(&name) {
             pictures.push(image);
         }
-        rows.push(Row {
-            configuration: name.into(),
-            truth: truth_name.into(),
-            error,
-            bias,
-            rms,
-            pixels,
-            quality,
-        });
         Ok(())
     };
     measure("direct light (no shadows)", None, None, 0)?;
@@ -275,6 +273,30 @@ fn measure_scene(setup: &Setup<'_>, scene: &Scene, camera: Camera) -> Result<Mea
         maps64,
         MANY_BOUNCES,
     )?;
+    let ssm = Some(Some((VplShadows::Rasterised, 64)));
+    measure(&bounce("exact SSM 64×64 maps"), Some(samples), ssm, 1)?;
+    measure(
+        &many("exact SSM 64×64 maps"),
+        Some(samples),
+        ssm,
+        MANY_BOUNCES,
+    )?;
+    // The progressive mode: its own lights, VPLs and maps every frame, averaged.
+    let mut config = ProgressiveConfig::new(scene);
+    config.vpls = setup.progressive_vpls;
+    let mut progressive = Progressive::new(d, q, scene, camera, setup.size, &config)?;
+    for _ in 0..setup.progressive_frames {
+        progressive.frame(d, q)?;
+    }
+    let image = progressive.read(d, q)?;
+    rows.push(row(
+        &format!(
+            "progressive (exact SSM, 2×2 + blur, {} VPLs/frame), {} frames",
+            config.vpls, setup.progressive_frames
+        ),
+        ("8 bounces", &many_truth),
+        &image,
+    ));
     if pictures.len() == PICTURE.len() {
         pictures.splice(0..0, [direct_truth.clone()]);
         pictures.insert(2, bounce_truth);
@@ -291,6 +313,8 @@ fn main() -> Result<()> {
         size: if once { (32, 32) } else { (256, 256) },
         spp: if once { 4 } else { args.spp },
         vpls: if once { 64 } else { args.vpls },
+        progressive_vpls: 0,
+        progressive_frames: if once { 2 } else { args.progressive_frames },
     };
     let mut scenes = Vec::new();
     for (file, label) in [
@@ -304,7 +328,18 @@ fn main() -> Result<()> {
         ),
     ] {
         println!("{label}");
-        let (scene, camera) = fixture(file)?;
+        let (scene, camera) = bench::fixture(file)?;
+        // The exact maps rasterise every triangle five times per VPL: fewer VPLs per frame on
+        // the larger scene.
+        let per_frame = if file.starts_with("cornell") {
+            setup.vpls
+        } else {
+            setup.vpls / 4
+        };
+        let setup = Setup {
+            progressive_vpls: per_frame.max(16),
+            ..setup
+        };
         let (rows, pictures) = measure_scene(&setup, &scene, camera)?;
         if let (Some(path), true) = (&args.picture, file.starts_with("cornell")) {
             let strip: Vec<&Image<[f32; 4]>> = pictures.iter().collect();

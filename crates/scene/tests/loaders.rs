@@ -125,7 +125,12 @@ fn obj_black_ks_means_no_specular() {
     )
     .expect("obj");
     let s = Scene::load(&obj).expect("obj");
-    let specular = |name: &str| s.materials.iter().find(|m| m.name == name).map(|m| m.specular);
+    let specular = |name: &str| {
+        s.materials
+            .iter()
+            .find(|m| m.name == name)
+            .map(|m| m.specular)
+    };
     assert_eq!(specular("matte"), Some(0.0));
     assert_eq!(specular("shiny"), Some(1.0));
     assert_eq!(specular("plain"), Some(1.0));

@@ -1,0 +1,350 @@
+//! `progressive-gpu`: Segovia 2006 Table 5 on today's GPU — how long the progressive
+//! physically based mode ([`pipeline::progressive`]: new VPLs, light samples and exact
+//! rasterised VPL shadow maps every frame, averaged) takes until its mean is within `--target`
+//! RMS (1 %) of the path tracer, without and with interleaving, on the Cornell box, Dabrovic
+//! Sponza and a larger scene (Sponza with the Stanford dragon and bunny). The truth is traced
+//! through pixel centres (where the rasteriser samples) in two halves of `--spp` with other
+//! seeds: their difference measures its own noise, which is taken off the measured RMS
+//! (`rms² − noise²`, the mean-square error against the noiseless image). Writes
+//! `progressive-<adapter>-<date>.{md,json}` under `--out`.
+
+use anyhow::Result;
+use bench::{Header, Stat};
+use clap::Parser;
+use gbuffer::{Accuracy, Image};
+use glam::{Mat4, Vec3};
+use instant_radiosity::{Interleaving, vpl};
+use interleave::Pattern;
+use pipeline::progressive::{Progressive, ProgressiveConfig};
+use scene::{Camera, Scene, reference::ReferenceConfig};
+use serde::Serialize;
+
+/// Time to a target RMS error of the progressive mode; writes docs/bench/progressive-*.
+#[derive(Parser, Debug)]
+#[command(version, about)]
+struct Args {
+    #[command(flatten)]
+    options: bench::Options,
+    /// Frame size.
+    #[arg(long, default_value = "128x128", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Path-tracer samples per pixel of the truth (two halves).
+    #[arg(long, default_value_t = 4096)]
+    spp: u32,
+    /// RMS error (relative, noise of the truth taken off) to reach.
+    #[arg(long, default_value_t = 0.01)]
+    target: f64,
+    /// Seconds of frames per configuration before giving up.
+    #[arg(long, default_value_t = 60.0)]
+    seconds: f64,
+    /// Scenes: cornell, sponza, large (comma-separated).
+    #[arg(long, default_value = "cornell,sponza,large", value_delimiter = ',')]
+    scenes: Vec<String>,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once('x').ok_or("WxH")?;
+    Ok((
+        w.parse().map_err(|e| format!("{e}"))?,
+        h.parse().map_err(|e| format!("{e}"))?,
+    ))
+}
+
+/// Bounces of the VPL paths and of the truth.
+const BOUNCES: u32 = 8;
+
+#[derive(Serialize)]
+struct Row {
+    scene: String,
+    triangles: usize,
+    vpls_per_frame: usize,
+    interleaving: String,
+    reached: bool,
+    frames: u32,
+    gpu_ms_per_frame: Stat,
+    ssm_ms_per_frame: f64,
+    gpu_seconds: f64,
+    wall_seconds: f64,
+    rms: f64,
+    rms_without_truth_noise: f64,
+    error: f64,
+    bias: f64,
+}
+
+#[derive(Serialize)]
+struct Report {
+    #[serde(flatten)]
+    header: Header,
+    size: (u32, u32),
+    spp: u32,
+    target: f64,
+    seconds: f64,
+    truth_noise: Vec<(String, f64)>,
+    rows: Vec<Row>,
+}
+
+/// Sponza with the Stanford dragon (100 k triangles) and bunny standing on its floor: a scene
+/// of about 235 k triangles, like Segovia's conference room (228 k).
+fn large_scene() -> Result<(Scene, Camera)> {
+    let (mut scene, camera) = bench::fixture("sponza/dabrovic/sponza.gltf")?;
+    let dir =
+        scene::shared_fixtures().ok_or_else(|| anyhow::anyhow!("../shared/fixtures not found"))?;
+    let bvh = scene::Bvh::build(&scene);
+    let top = scene.bounds().center() + Vec3::Y * 5.0;
+    let floor = bvh
+        .closest_hit(top, Vec3::NEG_Y, 100.0)
+        .map_or(scene.bounds().min.y, |h| h.position.y);
+    for (file, height, at) in [
+        ("stanford/dragon-100k.ply", 4.0, Vec3::new(-3.0, 0.0, 0.0)),
+        ("stanford/stanford-bunny.obj", 3.0, Vec3::new(4.0, 0.0, 0.0)),
+    ] {
+        let model = Scene::load(dir.join(file))?;
+        let b = model.bounds();
+        let s = height / (b.max.y - b.min.y);
+        let base = Vec3::new(b.center().x, b.min.y, b.center().z);
+        let place = Mat4::from_translation(Vec3::new(at.x, floor, at.z))
+            * Mat4::from_scale(Vec3::splat(s))
+            * Mat4::from_translation(-base);
+        let offset = scene.materials.len() as u32;
+        scene.materials.extend(model.materials);
+        for mut mesh in model.meshes {
+            for p in &mut mesh.positions {
+                *p = place.transform_point3(*p);
+            }
+            mesh.material += offset;
+            scene.meshes.push(mesh);
+        }
+    }
+    Ok((scene, camera))
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse_from(bench::args());
+    let gpu = args.options.gpu()?;
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let once = bench::run_once();
+    let size = if once { (24, 24) } else { args.size };
+    let spp = if once { 4 } else { args.spp };
+    let mut rows = Vec::new();
+    let mut noise_rows = Vec::new();
+    for name in &args.scenes {
+        // VPLs per frame: the exact maps rasterise every triangle five times per VPL.
+        let ((scene, camera), vpls, label) = match name.as_str() {
+            "cornell" => (
+                bench::fixture("cornell/CornellBox-Original.obj")?,
+                1024,
+                "Cornell box (its ceiling lamp)",
+            ),
+            "sponza" => (
+                bench::fixture("sponza/dabrovic/sponza.gltf")?,
+                64,
+                "Dabrovic Sponza (the default sun)",
+            ),
+            "large" => (
+                large_scene()?,
+                64,
+                "Sponza + dragon + bunny (the default sun)",
+            ),
+            other => anyhow::bail!("unknown scene {other}: cornell, sponza or large"),
+        };
+        let vpls = if once { 16 } else { vpls };
+        println!("{label}: {} triangles", scene.triangle_count());
+        let (lights, emissive, _) = vpl::primary_lights(&scene);
+        let photon_lights = vpl::photon_lights(&lights, emissive);
+        let half = |seed: u64| {
+            let config = ReferenceConfig {
+                max_bounces: BOUNCES,
+                seed,
+                jitter: false,
+                ..ReferenceConfig::default()
+            };
+            bench::path_traced(&scene, photon_lights, camera, size, config, spp / 2)
+        };
+        let (a, b) = (half(1)?, half(2)?);
+        let truth = Image::from_vec(
+            size.0,
+            size.1,
+            a.pixels()
+                .iter()
+                .zip(b.pixels())
+                .map(|(x, y)| std::array::from_fn(|k| 0.5 * (x[k] + y[k])))
+                .collect(),
+        )?;
+        // Each half's relative RMS against the other is √2 × its noise; the mean of the two
+        // halves has half that variance.
+        let noise = gbuffer::accuracy(&a, &b, 10.0).rms / 2.0;
+        println!("  truth noise {:.4} (relative RMS)", noise);
+        noise_rows.push((label.to_owned(), noise));
+        let interleavings: &[(&str, Option<u32>)] = if name == "cornell" {
+            &[
+                ("none", None),
+                ("2×2 + blur", Some(2)),
+                ("4×4 + blur", Some(4)),
+            ]
+        } else {
+            &[("none", None), ("2×2 + blur", Some(2))]
+        };
+        for &(interleaving, pattern) in interleavings {
+            let mut config = ProgressiveConfig::new(&scene);
+            config.vpls = vpls;
+            match pattern {
+                None => {
+                    config.indirect.interleaving = Interleaving::Reference;
+                    config.indirect.blur = None;
+                }
+                Some(n) => config.indirect.pattern = Pattern { n, m: n },
+            }
+            if once {
+                config.vpl_maps.tile = 16;
+                config.direct_maps.resolution = 128;
+            }
+            let mut p = Progressive::new(d, q, &scene, camera, size, &config)?;
+            let (mut gpu_ms, mut ssm_ms, mut wall) = (Vec::new(), 0.0, 0.0);
+            let mut last = (
+                Accuracy {
+                    error: 0.0,
+                    bias: 0.0,
+                    rms: f64::INFINITY,
+                    pixels: 0,
+                },
+                f64::INFINITY,
+            );
+            let limit = if once { 2 } else { u32::MAX };
+            while p.frames() < limit && wall < args.seconds {
+                let start = std::time::Instant::now();
+                let timings = p.frame(d, q)?;
+                wall += start.elapsed().as_secs_f64();
+                gpu_ms.push(timings.iter().map(|t| t.ms).sum::<f64>());
+                ssm_ms += timings
+                    .iter()
+                    .filter(|t| t.name.starts_with("SSM"))
+                    .map(|t| t.ms)
+                    .sum::<f64>();
+                let n = p.frames();
+                // Evaluated every frame up to 16, then every 4th, 16th and 64th.
+                let step = match n {
+                    0..=16 => 1,
+                    17..=64 => 4,
+                    65..=256 => 16,
+                    _ => 64,
+                };
+                if n % step == 0 {
+                    let a = gbuffer::accuracy(&truth, &p.read(d, q)?, 10.0);
+                    let clean = (a.rms * a.rms - noise * noise).max(0.0).sqrt();
+                    last = (a, clean);
+                    if clean < args.target {
+                        break;
+                    }
+                }
+            }
+            let (a, clean) = last;
+            let frames = p.frames();
+            let row = Row {
+                scene: label.to_owned(),
+                triangles: scene.triangle_count(),
+                vpls_per_frame: config.vpls,
+                interleaving: interleaving.to_owned(),
+                reached: clean < args.target,
+                frames,
+                gpu_seconds: gpu_ms.iter().sum::<f64>() / 1e3,
+                gpu_ms_per_frame: Stat::of(gpu_ms),
+                ssm_ms_per_frame: ssm_ms / f64::from(frames.max(1)),
+                wall_seconds: wall,
+                rms: a.rms,
+                rms_without_truth_noise: clean,
+                error: a.error,
+                bias: a.bias,
+            };
+            println!(
+                "  {interleaving:<12} {} after {frames} frames ({:.1} s GPU, {:.1} s wall): RMS {:.4} ({:.4} without the truth's noise), error {:.4}, bias {:+.2} %",
+                if row.reached {
+                    "reached"
+                } else {
+                    "NOT reached"
+                },
+                row.gpu_seconds,
+                row.wall_seconds,
+                a.rms,
+                clean,
+                a.error,
+                100.0 * a.bias
+            );
+            rows.push(row);
+        }
+    }
+    let report = Report {
+        header: Header::new(&gpu),
+        size,
+        spp,
+        target: args.target,
+        seconds: args.seconds,
+        truth_noise: noise_rows,
+        rows,
+    };
+    args.options
+        .write_report(&report.header, "progressive-", &report, &markdown(&report))
+}
+
+fn markdown(r: &Report) -> String {
+    use std::fmt::Write;
+    let mut s = r.header.markdown(
+        "Progressive mode: time to < 1 % RMS against the path tracer",
+        1,
+    );
+    let _ = writeln!(
+        s,
+        "{}×{}; truth: `scene::reference`, {BOUNCES} bounces, {} spp through pixel centres (two \
+         halves of other seeds; its relative noise, taken off the RMS: {}); frames: \
+         `pipeline::progressive` — per frame new VPLs ({BOUNCES} bounces, Russian roulette), 16 \
+         new shadowed samples per emissive mesh, exact rasterised VPL maps (64×64 paraboloid \
+         tiles from 128² hemicube faces), direct shadow maps 1024², VPL clamp 0.5 % of the \
+         diagonal; stopped at RMS < {:.1} % or after {} s of frames. GPU time: the sum of the \
+         frames' pass timestamps (ms per frame: the median); wall: the frames' \
+         latency on the CPU (VPL tracing, encoding, submission, waiting), evaluation read-backs \
+         excluded. The timing line above does not apply.\n",
+        r.size.0,
+        r.size.1,
+        r.spp,
+        r.truth_noise
+            .iter()
+            .map(|(scene, n)| format!("{scene} {:.2} %", 100.0 * n))
+            .collect::<Vec<_>>()
+            .join(", "),
+        100.0 * r.target,
+        r.seconds
+    );
+    let mut table = bench::Table::new(&[
+        "scene",
+        "triangles",
+        "VPLs/frame",
+        "interleaving",
+        "< 1 % RMS",
+        "frames",
+        "GPU ms/frame",
+        "SSM ms/frame",
+        "GPU s",
+        "wall s",
+        "RMS (noise off)",
+        "error",
+        "bias",
+    ]);
+    for row in &r.rows {
+        table.row([
+            row.scene.clone(),
+            row.triangles.to_string(),
+            row.vpls_per_frame.to_string(),
+            row.interleaving.clone(),
+            if row.reached { "yes" } else { "no" }.into(),
+            row.frames.to_string(),
+            format!("{:.2}", row.gpu_ms_per_frame.median_ms),
+            format!("{:.2}", row.ssm_ms_per_frame),
+            format!("{:.2}", row.gpu_seconds),
+            format!("{:.2}", row.wall_seconds),
+            format!("{:.4} ({:.4})", row.rms, row.rms_without_truth_noise),
+            format!("{:.4}", row.error),
+            format!("{:+.2} %", 100.0 * row.bias),
+        ]);
+    }
+    let _ = write!(s, "{table}");
+    s
+}
