@@ -15,11 +15,10 @@ struct TexcoordOut {
 };
 
 @fragment
-fn fs_texcoord(in: VertexOut) -> TexcoordOut {
+fn fs_texcoord(in: VertexOut, @builtin(front_facing) front: bool) -> TexcoordOut {
     var out: TexcoordOut;
     out.linear_depth = in.view_depth;
-    let l2 = dot(in.normal, in.normal);
-    let n = select(vec3<f32>(0.0, 0.0, 1.0), in.normal * inverseSqrt(l2), l2 > 1e-30);
+    let n = facing_normal(in.normal, front);
     out.normal = pack2x16snorm(encode_octahedral_snorm(n));
     out.uv = in.uv;
     out.uv_grad = vec4<f32>(dpdxFine(in.uv), dpdyFine(in.uv));

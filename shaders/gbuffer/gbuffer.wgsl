@@ -53,12 +53,20 @@ fn pack_material(roughness: f32, metallic: f32, id: u32) -> u32 {
     return r | (m << 8u) | (id << 16u);
 }
 
+// The interpolated normal, unit, turned towards the camera on a back face: every surface is
+// two-sided (nothing is culled), and its back is lit from the side it is seen from, as the
+// path tracer's normals face the incoming ray.
+fn facing_normal(normal: vec3<f32>, front: bool) -> vec3<f32> {
+    let l2 = dot(normal, normal);
+    let n = select(vec3<f32>(0.0, 0.0, 1.0), normal * inverseSqrt(l2), l2 > 1e-30);
+    return select(-n, n, front);
+}
+
 @fragment
-fn fs_main(in: VertexOut) -> GBufferOut {
+fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
     var out: GBufferOut;
     out.linear_depth = in.view_depth;
-    let l2 = dot(in.normal, in.normal);
-    let n = select(vec3<f32>(0.0, 0.0, 1.0), in.normal * inverseSqrt(l2), l2 > 1e-30);
+    let n = facing_normal(in.normal, front);
     out.normal = pack2x16snorm(encode_octahedral_snorm(n));
     let texel = textureSampleLevel(base_color_texture, base_color_sampler, in.uv, 0.0);
     out.albedo = vec4<f32>(clamp(material.base_color.rgb * texel.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), clamp(material.specular, 0.0, 1.0));

@@ -70,6 +70,8 @@ struct SetupTriangle {
     inv_w: [f32; 3],
     normal_over_w: [Vec3; 3],
     uv_over_w: [Vec2; 3],
+    /// Whether the camera sees the triangle's front (counter-clockwise on screen).
+    front: bool,
     /// Inclusive pixel bounds, clamped to the image.
     bounds: [u32; 4],
 }
@@ -156,6 +158,7 @@ fn setup(
         inv_w,
         normal_over_w: [0, 1, 2].map(|i| vs[i].normal * inv_w[i]),
         uv_over_w: [0, 1, 2].map(|i| vs[i].uv * inv_w[i]),
+        front: area < 0,
         bounds: [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
     })
 }
@@ -302,6 +305,8 @@ fn raster_tile(
                     + tri.normal_over_w[1] * l[1]
                     + tri.normal_over_w[2] * l[2])
                     * w;
+                // A back face is shaded from the side the camera sees (`facing_normal`).
+                let normal = if tri.front { normal } else { -normal };
                 let uv =
                     (tri.uv_over_w[0] * l[0] + tri.uv_over_w[1] * l[1] + tri.uv_over_w[2] * l[2])
                         * w;

@@ -84,6 +84,29 @@ fn coverage_is_watertight_and_never_doubled() {
     );
 }
 
+/// Surfaces are two-sided: the grid's normals (+z, counter-clockwise seen from +z) face a camera
+/// in front, and are turned to face a camera behind it (as the path tracer's face its rays).
+#[test]
+fn back_faces_get_normals_towards_the_camera() {
+    let scene = grid_scene(3);
+    for (z, sign) in [(3.0, 1.0), (-3.0, -1.0)] {
+        let camera = Camera {
+            eye: Vec3::new(0.0, 0.0, z),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y: 50f32.to_radians(),
+            near: 0.5,
+            far: 10.0,
+        };
+        let r = cpu::rasterize(&scene, &camera, 32, 24).expect("raster");
+        for (&word, &id) in r.gbuffer.normal.pixels().iter().zip(r.triangle_id.pixels()) {
+            assert_ne!(id, u32::MAX, "the grid fills the view");
+            let n = gbuffer::normal::unpack_octahedral(word);
+            assert!(n.z * sign > 0.99, "camera at z = {z}: normal {n}");
+        }
+    }
+}
+
 #[test]
 fn position_from_depth_both_ways_agrees_with_ray_casts() {
     let scene = scene::cornell_box();

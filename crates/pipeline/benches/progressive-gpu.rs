@@ -69,6 +69,8 @@ struct Row {
     rms_without_truth_noise: f64,
     error: f64,
     bias: f64,
+    /// (frames, RMS without the truth's noise) at every evaluation.
+    trajectory: Vec<(u32, f64)>,
 }
 
 #[derive(Serialize)]
@@ -200,6 +202,7 @@ fn main() -> Result<()> {
             }
             let mut p = Progressive::new(d, q, &scene, camera, size, &config)?;
             let (mut gpu_ms, mut ssm_ms, mut wall) = (Vec::new(), 0.0, 0.0);
+            let mut trajectory = Vec::new();
             let mut last = (
                 Accuracy {
                     error: 0.0,
@@ -231,6 +234,7 @@ fn main() -> Result<()> {
                 if n % step == 0 {
                     let a = gbuffer::accuracy(&truth, &p.read(d, q)?, 10.0);
                     let clean = (a.rms * a.rms - noise * noise).max(0.0).sqrt();
+                    trajectory.push((n, clean));
                     last = (a, clean);
                     if clean < args.target {
                         break;
@@ -254,6 +258,7 @@ fn main() -> Result<()> {
                 rms_without_truth_noise: clean,
                 error: a.error,
                 bias: a.bias,
+                trajectory,
             };
             println!(
                 "  {interleaving:<12} {} after {frames} frames ({:.1} s GPU, {:.1} s wall): RMS {:.4} ({:.4} without the truth's noise), error {:.4}, bias {:+.2} %",
@@ -325,6 +330,7 @@ fn markdown(r: &Report) -> String {
         "GPU s",
         "wall s",
         "RMS (noise off)",
+        "RMS at 16 / 256 frames",
         "error",
         "bias",
     ]);
@@ -341,6 +347,14 @@ fn markdown(r: &Report) -> String {
             format!("{:.2}", row.gpu_seconds),
             format!("{:.2}", row.wall_seconds),
             format!("{:.4} ({:.4})", row.rms, row.rms_without_truth_noise),
+            [16, 256]
+                .map(|f| {
+                    row.trajectory
+                        .iter()
+                        .find(|t| t.0 == f)
+                        .map_or("–".into(), |t| format!("{:.4}", t.1))
+                })
+                .join(" / "),
             format!("{:.4}", row.error),
             format!("{:+.2} %", 100.0 * row.bias),
         ]);
