@@ -381,19 +381,28 @@ fn markdown(r: &Report) -> String {
          with the 5×5 blur, VPL visibility maps 32×32 unless said, direct shadow maps 1024² \
          (an emitter as 16 shadowed samples, a punctual light as itself). Error: relative mean \
          absolute luminance error over the pixels the truth lights, emitters (luminance > 10) \
-         and their neighbours excluded; bias: mean luminance ratio − 1. The timing line above \
+         and their neighbours excluded; bias: mean luminance ratio − 1; RMS: relative \
+         root-mean-square luminance error. The timing line above \
          does not apply: nothing here is timed.\n",
         r.size.0, r.size.1, r.spp, r.vpls
     );
     for scene in &r.scenes {
-        let mut table =
-            bench::Table::new(&["configuration", "truth", "error", "bias", "FLIP", "PSNR dB"]);
+        let mut table = bench::Table::new(&[
+            "configuration",
+            "truth",
+            "error",
+            "bias",
+            "RMS",
+            "FLIP",
+            "PSNR dB",
+        ]);
         for row in &scene.rows {
             table.row([
                 row.configuration.clone(),
                 row.truth.clone(),
                 format!("{:.3}", row.error),
                 format!("{:+.1} %", 100.0 * row.bias),
+                format!("{:.3}", row.rms),
                 format!("{:.4}", row.quality.flip_mean),
                 format!("{:.1}", row.quality.psnr),
             ]);
