@@ -4,55 +4,18 @@
 //! light through the boxes (too bright), and VPL visibility removes most of that leak. The
 //! measured errors are in docs/ground-truth.md.
 
-use gbuffer::{Image, accuracy};
+use gbuffer::accuracy;
 use instant_radiosity::{
     IndirectConfig,
     shadows::{ShadowConfig, VplShadows},
     vpl,
 };
 use pipeline::gpu::GpuRenderer;
-use scene::reference::{PathTracer, ReferenceConfig};
 use tiled_shading::shadows::ShadowMapConfig;
 
-/// The test GPU, the Cornell box of the shared fixtures and its view; `None` (skipped, a
-/// failure in CI) without a GPU or the fixtures.
-fn cornell() -> Option<(&'static gpu::Gpu, scene::Scene, scene::Camera)> {
-    let gpu = gpu::test_device(&pipeline::device_needs())?;
-    let Some(fixtures) = scene::shared_fixtures() else {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs ../shared/fixtures"
-        );
-        eprintln!("skipped: no ../shared/fixtures");
-        return None;
-    };
-    let path = fixtures.join("cornell/CornellBox-Original.obj");
-    let scene = scene::Scene::load(&path).expect("cornell");
-    let camera = scene::preset_view(&path, &scene).expect("the Cornell view of views.json");
-    Some((gpu, scene, camera))
-}
+mod common;
 
-/// The path tracer's image of `scene` with `bounces` after the first surface.
-fn truth(
-    scene: &scene::Scene,
-    camera: scene::Camera,
-    (w, h): (u32, u32),
-    bounces: u32,
-    spp: u32,
-) -> Image<[f32; 4]> {
-    let config = ReferenceConfig {
-        max_bounces: bounces,
-        ..ReferenceConfig::default()
-    };
-    let mut pt = PathTracer::new(scene, camera, w, h, &scene.lights, config);
-    pt.add_samples(spp);
-    Image::from_vec(
-        w,
-        h,
-        pt.image().iter().map(|c| [c.x, c.y, c.z, 1.0]).collect(),
-    )
-    .expect("truth")
-}
+use common::cornell;
 
 #[test]
 fn shadowed_area_light_samples_match_the_path_traced_direct_light() {
@@ -61,7 +24,7 @@ fn shadowed_area_light_samples_match_the_path_traced_direct_light() {
     };
     let (d, q) = (&gpu.device, &gpu.queue);
     let size = (64, 64);
-    let truth = truth(&scene, camera, size, 0, 1024);
+    let truth = common::truth(&scene, camera, size, (0, true), 1024);
     let frame = |samples: u32, shadows: Option<&ShadowMapConfig>| {
         let (lights, _, _) = vpl::primary_lights_sampled(&scene, samples);
         let mut r = GpuRenderer::new(d, q, &scene, &lights, size.0, size.1).expect("renderer");
@@ -106,7 +69,7 @@ fn vpl_visibility_removes_the_leak_through_the_boxes() {
     let (d, q) = (&gpu.device, &gpu.queue);
     let (w, h) = (64, 64);
     // Direct light plus one bounce, as the VPLs approximate.
-    let truth = truth(&scene, camera, (w, h), 1, 1024);
+    let truth = common::truth(&scene, camera, (w, h), (1, true), 1024);
     let (lights, _, _) = vpl::primary_lights_sampled(&scene, 16);
     let config = IndirectConfig::new(scene.bounds());
     let bvh = scene::Bvh::build(&scene);

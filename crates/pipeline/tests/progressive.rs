@@ -3,11 +3,12 @@
 //! new VPLs, light samples and exact shadow maps every frame make the error fall as frames
 //! accumulate (the estimator's noise averages away; a fixed set would keep its error).
 
-use gbuffer::{Image, accuracy};
+use gbuffer::accuracy;
 use instant_radiosity::{Interleaving, shadows::ShadowConfig};
 use pipeline::progressive::{self, Progressive, ProgressiveConfig};
-use scene::reference::{PathTracer, ReferenceConfig};
 use tiled_shading::shadows::ShadowMapConfig;
+
+mod common;
 
 /// A small configuration for the test adapter: `vpls` VPLs of `bounces`, 16×16 VPL maps,
 /// 256² direct maps, 4 area samples.
@@ -60,54 +61,18 @@ fn gpu_mean_matches_its_cpu_twin() {
     }
 }
 
-/// The path tracer's image with `bounces` after the first surface at `spp`.
-fn truth(
-    scene: &scene::Scene,
-    camera: scene::Camera,
-    (w, h): (u32, u32),
-    bounces: u32,
-    spp: u32,
-) -> Image<[f32; 4]> {
-    // Through pixel centres, where the rasteriser samples: RMS compares like with like.
-    let config = ReferenceConfig {
-        max_bounces: bounces,
-        jitter: false,
-        ..ReferenceConfig::default()
-    };
-    let lights = instant_radiosity::vpl::photon_lights(&scene.lights, scene.lights.is_empty());
-    let mut pt = PathTracer::new(scene, camera, w, h, lights, config);
-    pt.add_samples(spp);
-    Image::from_vec(
-        w,
-        h,
-        pt.image().iter().map(|c| [c.x, c.y, c.z, 1.0]).collect(),
-    )
-    .expect("truth")
-}
-
 /// The original Cornell box at 64² (no interleaving, 256 VPLs of 8 bounces per frame, 32×32
 /// exact maps) against 8-bounce path tracing at 1024 spp: 16 frames' mean has a clearly lower
 /// RMS error than one frame, and its bias stays small. Measured 2026-12-02 on llvmpipe: RMS
 /// 0.144 → 0.080, bias −4.7 % → −2.1 % (the truth's own noise at 1024 spp is part of the RMS).
 #[test]
 fn progressive_mean_converges_to_the_path_tracer() {
-    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
-        return;
-    };
-    let Some(fixtures) = scene::shared_fixtures() else {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs ../shared/fixtures"
-        );
-        eprintln!("skipped: no ../shared/fixtures");
+    let Some((gpu, scene, camera)) = common::cornell() else {
         return;
     };
     let (d, q) = (&gpu.device, &gpu.queue);
-    let path = fixtures.join("cornell/CornellBox-Original.obj");
-    let scene = scene::Scene::load(&path).expect("cornell");
-    let camera = scene::preset_view(&path, &scene).expect("view");
     let size = (64, 64);
-    let truth = truth(&scene, camera, size, 8, 1024);
+    let truth = common::truth(&scene, camera, size, (8, false), 1024);
     let mut config = small(&scene, 256, 8);
     config.indirect.interleaving = Interleaving::Reference;
     config.indirect.blur = None;
