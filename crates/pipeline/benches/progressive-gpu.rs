@@ -25,9 +25,9 @@ use serde::Serialize;
 struct Args {
     #[command(flatten)]
     options: bench::Options,
-    /// Frame size.
-    #[arg(long, default_value = "128x128", value_parser = parse_size)]
-    size: (u32, u32),
+    /// Frame side (square frames).
+    #[arg(long, default_value_t = 128)]
+    side: u32,
     /// Path-tracer samples per pixel of the truth (two halves).
     #[arg(long, default_value_t = 4096)]
     spp: u32,
@@ -40,14 +40,6 @@ struct Args {
     /// Scenes: cornell, sponza, large (comma-separated).
     #[arg(long, default_value = "cornell,sponza,large", value_delimiter = ',')]
     scenes: Vec<String>,
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once('x').ok_or("WxH")?;
-    Ok((
-        w.parse().map_err(|e| format!("{e}"))?,
-        h.parse().map_err(|e| format!("{e}"))?,
-    ))
 }
 
 /// Bounces of the VPL paths and of the truth.
@@ -125,7 +117,11 @@ fn main() -> Result<()> {
     let gpu = args.options.gpu()?;
     let (d, q) = (&gpu.device, &gpu.queue);
     let once = bench::run_once();
-    let size = if once { (24, 24) } else { args.size };
+    let size = if once {
+        (24, 24)
+    } else {
+        (args.side, args.side)
+    };
     let spp = if once { 4 } else { args.spp };
     let mut rows = Vec::new();
     let mut noise_rows = Vec::new();

@@ -30,7 +30,7 @@ use instant_radiosity::{
     shadows::{ShadowConfig, VplShadows},
     vpl::{self, VplConfig},
 };
-use scene::{Bvh, Camera, Scene};
+use scene::{Bvh, Camera, Light, Scene};
 use tiled_shading::shadows::ShadowMapConfig;
 
 use crate::gpu::GpuRenderer;
@@ -100,6 +100,8 @@ pub struct Progressive<'s> {
     bvh: Bvh,
     config: ProgressiveConfig,
     emissive: bool,
+    /// The lights photons leave besides the emissive triangles ([`vpl::photon_lights`]).
+    photon_lights: Vec<Light>,
     frames: u32,
     accumulate: Kernel,
     group: wgpu::BindGroup,
@@ -125,7 +127,8 @@ impl<'s> Progressive<'s> {
         renderer.set_shadows(device, queue, Some(&config.direct_maps))?;
         renderer.set_camera(queue, &camera)?;
         renderer.set_ambient(queue, Vec3::ZERO);
-        let set = vpl_set(scene, &bvh, config, emissive, 0)?;
+        let photon_lights = vpl::photon_lights(&lights, emissive).to_vec();
+        let set = vpl_set(scene, &bvh, config, (&photon_lights, emissive), 0)?;
         match config.visibility {
             Some(mode) => renderer.set_vpl_shadows(
                 device,
@@ -173,6 +176,7 @@ impl<'s> Progressive<'s> {
             bvh,
             config: *config,
             emissive,
+            photon_lights,
             frames: 0,
             accumulate,
             group,
@@ -197,7 +201,8 @@ impl<'s> Progressive<'s> {
                     vpl::primary_lights_frame(self.scene, self.config.area_samples, f);
                 self.renderer.set_lights(device, queue, &lights)?;
             }
-            let set = vpl_set(self.scene, &self.bvh, &self.config, self.emissive, f)?;
+            let photons = (&self.photon_lights[..], self.emissive);
+            let set = vpl_set(self.scene, &self.bvh, &self.config, photons, f)?;
             self.renderer.set_vpls(queue, &set)?;
         }
         let params = AccumulateParams {
@@ -242,16 +247,15 @@ impl<'s> Progressive<'s> {
     }
 }
 
-/// Frame `frame`'s VPLs: seed `frame`, the primary lights' photons (the emissive triangles'
-/// where `emissive`).
+/// Frame `frame`'s VPLs: seed `frame`, photons from `photon_lights` (and the emissive
+/// triangles where `emissive`).
 fn vpl_set(
     scene: &Scene,
     bvh: &Bvh,
     config: &ProgressiveConfig,
-    emissive: bool,
+    (photon_lights, emissive): (&[Light], bool),
     frame: u32,
 ) -> Result<vpl::VplSet, RenderError> {
-    let (lights, _, _) = vpl::primary_lights(scene);
     let subsets = config.indirect.subsets();
     let vpl_config = VplConfig {
         count: vpl::per_subset(config.vpls, subsets) as usize * subsets as usize,
@@ -260,8 +264,7 @@ fn vpl_set(
         emissive,
         bounces: config.bounces,
     };
-    let photons = vpl::photon_lights(&lights, emissive);
-    Ok(vpl::generate(scene, bvh, photons, &vpl_config)
+    Ok(vpl::generate(scene, bvh, photon_lights, &vpl_config)
         .map_err(instant_radiosity::IndirectError::from)?)
 }
 
