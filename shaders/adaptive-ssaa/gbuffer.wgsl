@@ -15,10 +15,10 @@ struct TexcoordOut {
 };
 
 @fragment
-fn fs_texcoord(in: VertexOut, @builtin(front_facing) front: bool) -> TexcoordOut {
+fn fs_texcoord(in: VertexOut) -> TexcoordOut {
     var out: TexcoordOut;
     out.linear_depth = in.view_depth;
-    let n = facing_normal(in.normal, front);
+    let n = facing_normal(in.normal, in.to_eye);
     out.normal = pack2x16snorm(encode_octahedral_snorm(n));
     out.uv = in.uv;
     out.uv_grad = vec4<f32>(dpdxFine(in.uv), dpdyFine(in.uv));

@@ -15,6 +15,8 @@ struct VertexOut {
     @location(0) normal: vec3<f32>,
     @location(1) uv: vec2<f32>,
     @location(2) view_depth: f32,
+    // The eye relative to the vertex (small near the camera, for precise derivatives).
+    @location(3) to_eye: vec3<f32>,
 };
 
 @vertex
@@ -24,6 +26,7 @@ fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>, @lo
     out.normal = normal;
     out.uv = uv;
     out.view_depth = out.clip.w;
+    out.to_eye = frame.eye.xyz - position;
     return out;
 }
 
@@ -53,20 +56,24 @@ fn pack_material(roughness: f32, metallic: f32, id: u32) -> u32 {
     return r | (m << 8u) | (id << 16u);
 }
 
-// The interpolated normal, unit, turned towards the camera on a back face: every surface is
-// two-sided (nothing is culled), and its back is lit from the side it is seen from, as the
-// path tracer's normals face the incoming ray.
-fn facing_normal(normal: vec3<f32>, front: bool) -> vec3<f32> {
+// The interpolated normal, unit, on the camera's side of the triangle's plane: every surface
+// is two-sided (nothing is culled) and lit from the side it is seen from, and a vertex normal
+// bent behind its triangle is turned as the path tracer turns it (`scene::reference`: the
+// shading normal goes to the side of the geometric normal that faces the ray). The geometric
+// normal comes from the screen derivatives of the position, which lie in the triangle's plane:
+// with x right and y down, cross(∂p/∂y, ∂p/∂x) points towards the camera on every triangle.
+fn facing_normal(normal: vec3<f32>, to_eye: vec3<f32>) -> vec3<f32> {
     let l2 = dot(normal, normal);
     let n = select(vec3<f32>(0.0, 0.0, 1.0), normal * inverseSqrt(l2), l2 > 1e-30);
-    return select(-n, n, front);
+    let geometric = cross(dpdyFine(to_eye), dpdxFine(to_eye));
+    return select(n, -n, dot(n, geometric) < 0.0);
 }
 
 @fragment
-fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBufferOut {
+fn fs_main(in: VertexOut) -> GBufferOut {
     var out: GBufferOut;
     out.linear_depth = in.view_depth;
-    let n = facing_normal(in.normal, front);
+    let n = facing_normal(in.normal, in.to_eye);
     out.normal = pack2x16snorm(encode_octahedral_snorm(n));
     let texel = textureSampleLevel(base_color_texture, base_color_sampler, in.uv, 0.0);
     out.albedo = vec4<f32>(clamp(material.base_color.rgb * texel.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), clamp(material.specular, 0.0, 1.0));

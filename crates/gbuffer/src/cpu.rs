@@ -70,8 +70,8 @@ struct SetupTriangle {
     inv_w: [f32; 3],
     normal_over_w: [Vec3; 3],
     uv_over_w: [Vec2; 3],
-    /// Whether the camera sees the triangle's front (counter-clockwise on screen).
-    front: bool,
+    /// The triangle's geometric normal (not unit) on the side the camera sees.
+    towards_camera: Vec3,
     /// Inclusive pixel bounds, clamped to the image.
     bounds: [u32; 4],
 }
@@ -104,8 +104,10 @@ fn is_top_left(a: [i64; 2], b: [i64; 2]) -> bool {
     dy < 0 || (dy == 0 && dx > 0)
 }
 
+/// `geometric` is the world-space normal of the counter-clockwise winding (not unit).
 fn setup(
     verts: [ClipVertex; 3],
+    geometric: Vec3,
     id: u32,
     material: u32,
     width: u32,
@@ -158,7 +160,8 @@ fn setup(
         inv_w,
         normal_over_w: [0, 1, 2].map(|i| vs[i].normal * inv_w[i]),
         uv_over_w: [0, 1, 2].map(|i| vs[i].uv * inv_w[i]),
-        front: area < 0,
+        // Counter-clockwise on screen (y down): the camera sees the winding's front.
+        towards_camera: if area < 0 { geometric } else { -geometric },
         bounds: [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
     })
 }
@@ -305,8 +308,12 @@ fn raster_tile(
                     + tri.normal_over_w[1] * l[1]
                     + tri.normal_over_w[2] * l[2])
                     * w;
-                // A back face is shaded from the side the camera sees (`facing_normal`).
-                let normal = if tri.front { normal } else { -normal };
+                // Shaded from the side of the plane the camera sees (`facing_normal`).
+                let normal = if normal.dot(tri.towards_camera) < 0.0 {
+                    -normal
+                } else {
+                    normal
+                };
                 let uv =
                     (tri.uv_over_w[0] * l[0] + tri.uv_over_w[1] * l[1] + tri.uv_over_w[2] * l[2])
                         * w;
@@ -380,10 +387,13 @@ pub fn rasterize(
                         }
                     }
                     let id = first + t as u32;
+                    let [p0, p1, p2] = [0, 1, 2].map(|k| mesh.positions[idx[k] as usize]);
+                    let geometric = (p1 - p0).cross(p2 - p0);
                     (1..poly.len().saturating_sub(1))
                         .filter_map(|k| {
                             setup(
                                 [poly[0], poly[k], poly[k + 1]],
+                                geometric,
                                 id,
                                 mesh.material,
                                 width,

@@ -7,8 +7,9 @@ use gbuffer::{Frame, GBufferError, cpu, normal::NormalEncoding, position};
 use glam::{Vec2, Vec3};
 use scene::{Camera, Material, Mesh, Scene};
 
-/// A screen-filling grid of `n × n` quads (2 triangles each) at z = 0, seen head-on.
-fn grid_scene(n: u32) -> Scene {
+/// A screen-filling grid of `n × n` quads (2 triangles each) at z = 0, seen head-on, wound
+/// counter-clockwise seen from +z, with vertex normals `normal`.
+fn grid_scene(n: u32, normal: Vec3) -> Scene {
     let mut mesh = Mesh {
         name: "grid".into(),
         ..Default::default()
@@ -26,7 +27,7 @@ fn grid_scene(n: u32) -> Scene {
                 j as f32 / n as f32 * 4.0 - 2.0 - jitter,
                 0.0,
             ));
-            mesh.normals.push(Vec3::Z);
+            mesh.normals.push(normal);
             mesh.uvs.push(Vec2::ZERO);
         }
     }
@@ -46,7 +47,7 @@ fn grid_scene(n: u32) -> Scene {
 
 #[test]
 fn coverage_is_watertight_and_never_doubled() {
-    let scene = grid_scene(7);
+    let scene = grid_scene(7, Vec3::Z);
     let camera = Camera {
         eye: Vec3::new(0.0, 0.0, 3.0),
         target: Vec3::ZERO,
@@ -84,25 +85,34 @@ fn coverage_is_watertight_and_never_doubled() {
     );
 }
 
-/// Surfaces are two-sided: the grid's normals (+z, counter-clockwise seen from +z) face a camera
-/// in front, and are turned to face a camera behind it (as the path tracer's face its rays).
+/// Surfaces are two-sided and shaded from the side they are seen from, as the path tracer
+/// turns the shading normal to the side of the geometric normal that faces its ray: the
+/// grid's normals face a camera in front of it and one behind it, whether the vertex normals
+/// agree with the winding (+z, counter-clockwise seen from +z), oppose it (−z), or lean
+/// beyond the plane on one side.
 #[test]
-fn back_faces_get_normals_towards_the_camera() {
-    let scene = grid_scene(3);
-    for (z, sign) in [(3.0, 1.0), (-3.0, -1.0)] {
-        let camera = Camera {
-            eye: Vec3::new(0.0, 0.0, z),
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_y: 50f32.to_radians(),
-            near: 0.5,
-            far: 10.0,
-        };
-        let r = cpu::rasterize(&scene, &camera, 32, 24).expect("raster");
-        for (&word, &id) in r.gbuffer.normal.pixels().iter().zip(r.triangle_id.pixels()) {
-            assert_ne!(id, u32::MAX, "the grid fills the view");
-            let n = gbuffer::normal::unpack_octahedral(word);
-            assert!(n.z * sign > 0.99, "camera at z = {z}: normal {n}");
+fn normals_face_the_camera_side_of_their_triangle() {
+    for normal in [Vec3::Z, -Vec3::Z, Vec3::new(0.3, 0.0, -0.2).normalize()] {
+        let scene = grid_scene(3, normal);
+        for (z, sign) in [(3.0, 1.0), (-3.0, -1.0)] {
+            let camera = Camera {
+                eye: Vec3::new(0.0, 0.0, z),
+                target: Vec3::ZERO,
+                up: Vec3::Y,
+                fov_y: 50f32.to_radians(),
+                near: 0.5,
+                far: 10.0,
+            };
+            let r = cpu::rasterize(&scene, &camera, 32, 24).expect("raster");
+            for (&word, &id) in r.gbuffer.normal.pixels().iter().zip(r.triangle_id.pixels()) {
+                assert_ne!(id, u32::MAX, "the grid fills the view");
+                let n = gbuffer::normal::unpack_octahedral(word);
+                let want = normal * normal.z.signum() * sign;
+                assert!(
+                    n.dot(want) > 0.999,
+                    "vertex normal {normal}, camera at z = {z}: normal {n}, want {want}"
+                );
+            }
         }
     }
 }

@@ -24,8 +24,28 @@ const LINEAR_DEPTH_REL_TOL: f32 = 1e-4;
 const NORMAL_TOL_DEG: f32 = 0.05;
 /// Albedo, 8-bit steps: GPU bilinear filtering uses fixed-point weights.
 const ALBEDO_TOL: i32 = 3;
+/// |cos| between the shading normal and its triangle's plane normal below which the GPU may
+/// turn the normal the other way than the CPU: the GPU's geometric normal comes from screen
+/// derivatives of interpolated positions, the CPU's from the triangle's vertices.
+const PLANE_COS_TOL: f32 = 0.01;
 
-fn pixel_matches(cpu: &GBuffer, gpu: &GBuffer, x: u32, y: u32) -> bool {
+/// Unit geometric normals of `scene`'s triangles, numbered as the rasteriser's ids.
+fn plane_normals(scene: &scene::Scene) -> Vec<Vec3> {
+    scene
+        .meshes
+        .iter()
+        .flat_map(|m| {
+            m.indices.chunks_exact(3).map(|t| {
+                let [a, b, c] = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
+                (b - a).cross(c - a).normalize_or_zero()
+            })
+        })
+        .collect()
+}
+
+/// `either_side`: the normal may also be the CPU's turned round (it lies nearly in its
+/// triangle's plane).
+fn pixel_matches(cpu: &GBuffer, gpu: &GBuffer, x: u32, y: u32, either_side: bool) -> bool {
     let (dc, dg) = (cpu.depth.get(x, y), gpu.depth.get(x, y));
     if (dc - dg).abs() > DEPTH_TOL {
         return false;
@@ -34,10 +54,12 @@ fn pixel_matches(cpu: &GBuffer, gpu: &GBuffer, x: u32, y: u32) -> bool {
         return gpu.material.get(x, y) == gbuffer::NO_MATERIAL;
     }
     let (lc, lg) = (cpu.linear_depth.get(x, y), gpu.linear_depth.get(x, y));
-    let normal_ok = normal::angle_deg(
+    let (nc, ng) = (
         normal::unpack_octahedral(cpu.normal.get(x, y)),
         normal::unpack_octahedral(gpu.normal.get(x, y)),
-    ) <= NORMAL_TOL_DEG;
+    );
+    let normal_ok = normal::angle_deg(nc, ng) <= NORMAL_TOL_DEG
+        || (either_side && normal::angle_deg(-nc, ng) <= NORMAL_TOL_DEG);
     let albedo_ok = cpu
         .albedo
         .get(x, y)
@@ -79,9 +101,16 @@ fn compare(
     let actual = run(gpu, scene, camera, w, h).map_err(|e| e.to_string())?;
     let (mut matched, mut bad_interior) = (0u32, Vec::new());
     let mut diff = vec![[0u8, 0, 0, 255]; (w * h) as usize];
+    let planes = plane_normals(scene);
     for y in 0..h {
         for x in 0..w {
-            if pixel_matches(&expected.gbuffer, &actual, x, y) {
+            let either_side = planes
+                .get(expected.triangle_id.get(x, y) as usize)
+                .is_some_and(|g| {
+                    let n = normal::unpack_octahedral(expected.gbuffer.normal.get(x, y));
+                    n.dot(*g).abs() <= PLANE_COS_TOL
+                });
+            if pixel_matches(&expected.gbuffer, &actual, x, y, either_side) {
                 matched += 1;
             } else if is_edge(&expected.triangle_id, x, y) {
                 diff[(y * w + x) as usize] = [255, 255, 0, 255];
@@ -127,6 +156,28 @@ fn compare(
 fn cornell_box_gbuffer_matches_cpu() {
     let s = scene::cornell_box();
     compare("cornell", &s, &s.camera.expect("camera"), 160, 120).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// The shading normal goes to the camera's side of its triangle's plane, so turning every
+/// vertex normal round changes nothing, on the GPU as on the CPU (a sign error in the GPU's
+/// derivative-based plane normal would turn every normal away from the camera).
+#[test]
+fn reversed_vertex_normals_give_the_same_gbuffer() {
+    let Some(gpu) = gpu::test_device(&gbuffer::device_needs()) else {
+        return;
+    };
+    let s = scene::cornell_box();
+    let mut reversed = s.clone();
+    for n in reversed.meshes.iter_mut().flat_map(|m| &mut m.normals) {
+        *n = -*n;
+    }
+    let camera = s.camera.expect("camera");
+    compare("reversed normals", &reversed, &camera, 96, 72).unwrap_or_else(|e| panic!("{e}"));
+    let (plain, turned) = (
+        run(gpu, &s, &camera, 96, 72).expect("gpu"),
+        run(gpu, &reversed, &camera, 96, 72).expect("gpu"),
+    );
+    assert!(plain == turned, "reversed vertex normals changed the GPU G-buffer");
 }
 
 #[test]
