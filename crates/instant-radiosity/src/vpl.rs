@@ -387,7 +387,7 @@ fn area_emitters(scene: &Scene) -> Vec<Emitter> {
 /// Hemispherical point lights standing in for the scene's emissive meshes in direct shading
 /// (photons are then shot from the triangles themselves with [`VplConfig::emissive`]):
 /// `samples` per mesh, each with intensity `radiance × area / samples` (a small Lambertian
-/// emitter's intensity along its normal), reaching twice the scene diagonal. One sample sits
+/// emitter's intensity along its normal), reaching eight scene diagonals. One sample sits
 /// at the mesh's area-weighted centroid along its mean normal; more are stratified over its
 /// area (the triangles by their share of the area, a Halton coordinate within each) along
 /// their triangle's normal, so shadowed they draw the area light's penumbrae.
@@ -396,13 +396,20 @@ pub fn area_lights(scene: &Scene, samples: u32) -> Vec<Light> {
 }
 
 /// [`area_lights`] for frame `frame` of a progressive render (Segovia 2006 §6.3: new light
-/// samples each frame): the stratified positions shift by the frame's base-3 radical inverse
-/// within their stratum and the coordinate within the triangle continues the base-2 sequence,
-/// so the frames' samples together stratify the area ever more finely. Frame 0 is
-/// [`area_lights`]; one sample stays at the centroid in every frame.
+/// samples each frame): sample `i` keeps its stratum of the area, and within it both of its
+/// coordinates (along the stratum, and across its triangle: base-2 radical inverse of `i`)
+/// shift by the frame's point of the 2-D Halton sequence in bases 3 and 5 (a Cranley–Patterson
+/// rotation), so over the frames every stratum is covered uniformly and the mean converges to
+/// the area light. (Continuing one base-2 sequence across frames for the second coordinate
+/// would not: its first digits are those of `i`, so each stratum would only ever see one band
+/// of it.) Frame 0 is [`area_lights`]; a single sample stays at the centroid in every frame.
 pub fn area_lights_frame(scene: &Scene, samples: u32, frame: u32) -> Vec<Light> {
-    let radius = 2.0 * scene.bounds().diagonal().max(1e-3);
-    let lift = 1e-4 * radius;
+    // The distance window `(1 − (d/r)⁴)²` the lights share is ≥ 0.9995 within the scene at
+    // 8 diagonals (an emitter has none), and the shadow views' near plane is r / 1000. The
+    // lift off the surface moves a grazing receiver's cos θ by lift / height, so it is tiny.
+    let diagonal = scene.bounds().diagonal().max(1e-3);
+    let radius = 8.0 * diagonal;
+    let lift = 1e-5 * diagonal;
     let mut lights = Vec::new();
     for (mesh, material) in emissive_meshes(scene) {
         let triangles: Vec<([Vec3; 3], Vec3, f32)> = mesh
@@ -448,7 +455,8 @@ pub fn area_lights_frame(scene: &Scene, samples: u32, frame: u32) -> Vec<Light> 
             }
             let (v, cross, a) = triangles[t];
             let r1 = ((u - start) / a).clamp(0.0, 1.0).sqrt();
-            let r2 = radical_inverse(u64::from(frame) * u64::from(samples) + u64::from(i), 2);
+            let r2 = (radical_inverse(u64::from(i), 2) + radical_inverse(u64::from(frame), 5))
+                .fract();
             let p = v[0] * (1.0 - r1) + v[1] * (r1 * (1.0 - r2)) + v[2] * (r1 * r2);
             lights.push(light(p, cross.normalize(), area / samples as f32));
         }

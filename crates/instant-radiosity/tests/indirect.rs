@@ -285,6 +285,98 @@ fn emissive_area_lights_emit_photons() {
     assert!(((color * intensity) - emissive * area).abs().max_element() < 1e-5);
 }
 
+/// The progressive mode's frames of area-light samples converge to the area light itself:
+/// the irradiance their mean gives receivers near the Cornell box's lamp (grazing ones under
+/// the ceiling, where a sample's placement matters most, and the floor) equals the lamp's
+/// integral by a fine midpoint rule over its triangles within 0.2 % after 64 frames (frames
+/// whose in-triangle coordinate continued one base-2 sequence were 4 % off at the grazing
+/// receivers, samples lifted 10⁻⁴ of the light's reach off the lamp 0.7 %).
+#[test]
+fn area_light_frames_converge_to_the_area_light() {
+    let mut s = scene::cornell_box();
+    s.lights.clear();
+    let (lamp, _) = lamp_and_area(&s);
+    let radiance = f64::from(s.materials[lamp.material as usize].emissive.max_element());
+    let b = s.bounds();
+    let h = b.max.y - b.min.y;
+    let centre = lamp.positions.iter().copied().sum::<Vec3>() / lamp.positions.len() as f32;
+    let receivers = [
+        (centre + Vec3::new(0.45, -0.05, 0.0) * h, -Vec3::X),
+        (centre + Vec3::new(0.0, -0.05, -0.45) * h, Vec3::Z),
+        (centre + Vec3::new(0.3, -0.5, 0.2) * h, -Vec3::X),
+        (centre + Vec3::new(0.1, -0.95, 0.1) * h, Vec3::Y),
+    ];
+    // E = ∫ L cos θ_e cos θ_r / d² dA (lamp facing down), each triangle cut into n² pieces.
+    let exact = |(p, n): (Vec3, Vec3)| -> f64 {
+        let n_sub = 96;
+        let mut e = 0.0;
+        for t in lamp.indices.chunks_exact(3) {
+            let [a, b, c] = [0, 1, 2].map(|k| lamp.positions[t[k] as usize].as_dvec3());
+            let normal = (b - a).cross(c - a);
+            let area = 0.5 * normal.length() / f64::from(n_sub * n_sub);
+            let normal = normal.normalize();
+            let normal = if normal.y > 0.0 { -normal } else { normal };
+            for i in 0..n_sub {
+                for j in 0..n_sub - i {
+                    // The upright and (where it exists) the inverted piece of cell (i, j).
+                    let mut pieces = vec![[(i, j), (i + 1, j), (i, j + 1)]];
+                    if i + j + 1 < n_sub {
+                        pieces.push([(i + 1, j), (i + 1, j + 1), (i, j + 1)]);
+                    }
+                    for piece in pieces {
+                        let q = piece
+                            .iter()
+                            .map(|&(u, v)| {
+                                let (u, v) = (f64::from(u) / f64::from(n_sub), f64::from(v) / f64::from(n_sub));
+                                a + (b - a) * u + (c - a) * v
+                            })
+                            .sum::<glam::DVec3>()
+                            / 3.0;
+                        let to = p.as_dvec3() - q;
+                        let d2 = to.length_squared();
+                        let l = to / d2.sqrt();
+                        let (ce, cr) = (normal.dot(l), -n.as_dvec3().dot(l));
+                        if ce > 0.0 && cr > 0.0 {
+                            e += radiance * ce * cr / d2 * area;
+                        }
+                    }
+                }
+            }
+        }
+        e
+    };
+    let frames = 64;
+    for (k, &receiver) in receivers.iter().enumerate() {
+        let (p, n) = receiver;
+        let mut sum = 0.0;
+        for f in 0..frames {
+            for light in vpl::area_lights_frame(&s, 16, f) {
+                let Light::Hemispherical {
+                    position,
+                    direction,
+                    intensity,
+                    ..
+                } = light
+                else {
+                    panic!("hemispherical light expected");
+                };
+                let to = (p - position).as_dvec3();
+                let d2 = to.length_squared();
+                let l = to / d2.sqrt();
+                let (ce, cr) = (direction.as_dvec3().dot(l), -n.as_dvec3().dot(l));
+                if ce > 0.0 && cr > 0.0 {
+                    sum += f64::from(intensity) * ce * cr / d2;
+                }
+            }
+        }
+        let (mean, want) = (sum / f64::from(frames), exact(receiver));
+        assert!(
+            (mean / want - 1.0).abs() < 2e-3,
+            "receiver {k} at {p}: {mean} from the frames' samples, {want} from the lamp"
+        );
+    }
+}
+
 #[test]
 fn bad_vpl_requests_are_errors() {
     let s = scene::cornell_box();
