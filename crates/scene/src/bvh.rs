@@ -33,6 +33,21 @@ pub struct Bvh {
     origin: Vec<(u32, u32)>,
 }
 
+/// The barycentric coordinates (weights of `v1` and `v2`) where the ray meets the plane of
+/// `tri` (Möller–Trumbore). obvhs 0.4's `Triangle::compute_barycentric` divides by the
+/// *normalised* normal's cosine, so its coordinates are off by the triangle's doubled area.
+fn barycentrics(tri: &Triangle, origin: Vec3, direction: Vec3) -> Vec2 {
+    let (v0, v1, v2) = (Vec3::from(tri.v0), Vec3::from(tri.v1), Vec3::from(tri.v2));
+    let (e1, e2) = (v1 - v0, v2 - v0);
+    let p = direction.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return Vec2::ZERO;
+    }
+    let s = origin - v0;
+    Vec2::new(s.dot(p), direction.dot(s.cross(e1))) / det
+}
+
 impl Bvh {
     /// Builds the BVH (PLOC with reinsertion, obvhs' "medium" preset).
     pub fn build(scene: &Scene) -> Self {
@@ -79,7 +94,7 @@ impl Bvh {
             t: hit.t,
             mesh,
             triangle,
-            barycentrics: tri.compute_barycentric(&ray),
+            barycentrics: barycentrics(tri, origin, direction),
             position: origin + direction * hit.t,
         })
     }
