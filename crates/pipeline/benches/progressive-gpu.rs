@@ -40,6 +40,16 @@ struct Args {
     /// Scenes: cornell, sponza, large (comma-separated).
     #[arg(long, default_value = "cornell,sponza,large", value_delimiter = ',')]
     scenes: Vec<String>,
+    /// Interleaving patterns n (n×n + blur; 1 = none), comma-separated; default: 1, 2, 4 on
+    /// the Cornell box, 1, 2 elsewhere.
+    #[arg(long, value_delimiter = ',')]
+    patterns: Vec<u32>,
+    /// Side of the VPLs' paraboloid tiles (hemicube faces are twice as wide).
+    #[arg(long, default_value_t = ProgressiveConfig::new(&Scene::default()).vpl_maps.tile)]
+    vpl_tile: u32,
+    /// Factor on the progressive mode's VPL clamp distance (0.5 % of the scene diagonal).
+    #[arg(long, default_value_t = 1.0)]
+    clamp_scale: f32,
 }
 
 /// Bounces of the VPL paths and of the truth.
@@ -74,6 +84,8 @@ struct Report {
     target: f64,
     seconds: f64,
     truth_noise: Vec<(String, f64)>,
+    vpl_tile: u32,
+    clamp_scale: f32,
     rows: Vec<Row>,
 }
 
@@ -173,25 +185,28 @@ fn main() -> Result<()> {
         let noise = gbuffer::accuracy(&a, &b, 10.0).rms / 2.0;
         println!("  truth noise {:.4} (relative RMS)", noise);
         noise_rows.push((label.to_owned(), noise));
-        let interleavings: &[(&str, Option<u32>)] = if name == "cornell" {
-            &[
-                ("none", None),
-                ("2×2 + blur", Some(2)),
-                ("4×4 + blur", Some(4)),
-            ]
-        } else {
-            &[("none", None), ("2×2 + blur", Some(2))]
+        let patterns: &[u32] = match (&args.patterns[..], name.as_str()) {
+            ([], "cornell") => &[1, 2, 4],
+            ([], _) => &[1, 2],
+            (chosen, _) => chosen,
         };
-        for &(interleaving, pattern) in interleavings {
+        for &n in patterns {
+            let interleaving = if n <= 1 {
+                "none".to_owned()
+            } else {
+                format!("{n}×{n} + blur")
+            };
+            let interleaving = interleaving.as_str();
             let mut config = ProgressiveConfig::new(&scene);
             config.vpls = vpls;
-            match pattern {
-                None => {
-                    config.indirect.interleaving = Interleaving::Reference;
-                    config.indirect.blur = None;
-                }
-                Some(n) => config.indirect.pattern = Pattern { n, m: n },
+            if n <= 1 {
+                config.indirect.interleaving = Interleaving::Reference;
+                config.indirect.blur = None;
+            } else {
+                config.indirect.pattern = Pattern { n, m: n };
             }
+            config.vpl_maps.tile = args.vpl_tile;
+            config.indirect.clamp_distance *= args.clamp_scale;
             if once {
                 config.vpl_maps.tile = 16;
                 config.direct_maps.resolution = 128;
@@ -280,6 +295,8 @@ fn main() -> Result<()> {
         target: args.target,
         seconds: args.seconds,
         truth_noise: noise_rows,
+        vpl_tile: args.vpl_tile,
+        clamp_scale: args.clamp_scale,
         rows,
     };
     args.options
@@ -297,8 +314,8 @@ fn markdown(r: &Report) -> String {
         "{}×{}; truth: `scene::reference`, {BOUNCES} bounces, {} spp through pixel centres (two \
          halves of other seeds; its relative noise, taken off the RMS: {}); frames: \
          `pipeline::progressive` — per frame new VPLs ({BOUNCES} bounces, Russian roulette), 16 \
-         new shadowed samples per emissive mesh, exact rasterised VPL maps (64×64 paraboloid \
-         tiles from 128² hemicube faces), direct shadow maps 1024², VPL clamp 0.5 % of the \
+         new shadowed samples per emissive mesh, exact rasterised VPL maps ({t}×{t} paraboloid \
+         tiles from {f}² hemicube faces), direct shadow maps 1024², VPL clamp {c:.2} % of the \
          diagonal; stopped at RMS < {:.1} % or after {} s of frames. GPU time: the sum of the \
          frames' pass timestamps (ms per frame: the median); wall: the frames' \
          latency on the CPU (VPL tracing, encoding, submission, waiting), evaluation read-backs \
@@ -312,7 +329,10 @@ fn markdown(r: &Report) -> String {
             .collect::<Vec<_>>()
             .join(", "),
         100.0 * r.target,
-        r.seconds
+        r.seconds,
+        t = r.vpl_tile,
+        f = 2 * r.vpl_tile,
+        c = 0.5 * r.clamp_scale,
     );
     let mut table = bench::Table::new(&[
         "scene",
