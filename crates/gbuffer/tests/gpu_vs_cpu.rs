@@ -177,7 +177,10 @@ fn reversed_vertex_normals_give_the_same_gbuffer() {
         run(gpu, &s, &camera, 96, 72).expect("gpu"),
         run(gpu, &reversed, &camera, 96, 72).expect("gpu"),
     );
-    assert!(plain == turned, "reversed vertex normals changed the GPU G-buffer");
+    assert!(
+        plain == turned,
+        "reversed vertex normals changed the GPU G-buffer"
+    );
 }
 
 #[test]

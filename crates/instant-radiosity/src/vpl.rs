@@ -455,8 +455,8 @@ pub fn area_lights_frame(scene: &Scene, samples: u32, frame: u32) -> Vec<Light> 
             }
             let (v, cross, a) = triangles[t];
             let r1 = ((u - start) / a).clamp(0.0, 1.0).sqrt();
-            let r2 = (radical_inverse(u64::from(i), 2) + radical_inverse(u64::from(frame), 5))
-                .fract();
+            let r2 =
+                (radical_inverse(u64::from(i), 2) + radical_inverse(u64::from(frame), 5)).fract();
             let p = v[0] * (1.0 - r1) + v[1] * (r1 * (1.0 - r2)) + v[2] * (r1 * r2);
             lights.push(light(p, cross.normalize(), area / samples as f32));
         }

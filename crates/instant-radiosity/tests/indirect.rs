@@ -327,7 +327,10 @@ fn area_light_frames_converge_to_the_area_light() {
                         let q = piece
                             .iter()
                             .map(|&(u, v)| {
-                                let (u, v) = (f64::from(u) / f64::from(n_sub), f64::from(v) / f64::from(n_sub));
+                                let (u, v) = (
+                                    f64::from(u) / f64::from(n_sub),
+                                    f64::from(v) / f64::from(n_sub),
+                                );
                                 a + (b - a) * u + (c - a) * v
                             })
                             .sum::<glam::DVec3>()

@@ -38,7 +38,11 @@ fn hit_barycentrics_give_the_point_aimed_at() {
         };
         let bvh = Bvh::build(&scene);
         let (a, b) = (next(), next());
-        let (a, b) = if a + b > 1.0 { (1.0 - a, 1.0 - b) } else { (a, b) };
+        let (a, b) = if a + b > 1.0 {
+            (1.0 - a, 1.0 - b)
+        } else {
+            (a, b)
+        };
         let target = v[0] * (1.0 - a - b) + v[1] * a + v[2] * b;
         let origin = centre + (Vec3::new(next(), next(), next()) - 0.5) * 8.0 * scale.max(1.0);
         let to = target - origin;
