@@ -3,8 +3,8 @@
 // receiver moves `normal_offset` texels of its footprint along its normal, is projected into
 // the view that holds it (the cube face of the largest axis; the first cascade containing it),
 // and a 3×3 tent (bilinear taps at −1, 0, +1 texel: weights (1−f, 1, 1, f)/3 per axis over
-// 4×4 texels, four gathers) counts the texels whose linear depth + `bias` texels is not in
-// front of the receiver.
+// 4×4 texels, four gathers) counts the texels whose linear depth + `bias` texels + the
+// receiver's slope tolerance (`slope_texels`) is not in front of the receiver.
 // A light whose `shadow_count` carries `PARABOLOID_SHADOW` instead owns (count & 0xff)
 // paraboloid views of the ManyLoD atlas from tile `shadow_first` (Holländer 2013 §3.6 for many
 // lights): one around a spot's or hemispherical light's direction, two (±y) for a point light;
@@ -88,6 +88,20 @@ fn pick_shadow_view(light: Light, p: vec3<f32>, resolution: f32) -> u32 {
     return best;
 }
 
+// The tolerance a tilted receiver needs (`tiled_shading::shadows::slope_texels`): its plane
+// moves tan θ texels of depth per texel across the map (θ between n and the light), and the
+// tent reaches 2 texels from the receiver; at most `MAX_SLOPE_TEXELS`.
+const MAX_SLOPE_TEXELS: f32 = 6.0;
+
+fn slope_texels(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    var l = -light.direction;
+    if light.kind != LIGHT_DIRECTIONAL {
+        l = normalize(light.position - p);
+    }
+    let c = clamp(dot(n, l), 1e-3, 1.0);
+    return min(2.0 * sqrt(1.0 - c * c) / c, MAX_SLOPE_TEXELS);
+}
+
 fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if light.shadow_count == 0u {
         return 1.0;
@@ -110,7 +124,7 @@ fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
         return 1.0;
     }
     let ndc = clip.xyz / clip.w;
-    let receiver = linear_shadow_depth(v, clamp(ndc.z, 0.0, 1.0)) - shadow_params.bias * footprint;
+    let receiver = linear_shadow_depth(v, clamp(ndc.z, 0.0, 1.0)) - (shadow_params.bias + slope_texels(light, p, n)) * footprint;
     let xy = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * resolution - 0.5;
     let b = floor(xy);
     let f = xy - b;

@@ -10,7 +10,8 @@
 //! in the map, which removes the self-shadowing of surfaces at grazing angles), is projected
 //! into the view that holds it (the cube face of the largest axis; the first cascade that
 //! contains it), and each of the 4×4 texels under the tent compares the receiver's linear
-//! depth with the stored one plus `bias` texels. The penumbra this filter draws is 3 texels
+//! depth with the stored one plus `bias` texels and the receiver's slope tolerance
+//! ([`slope_texels`]: what its tilted plane gains across the tent). The penumbra this filter draws is 3 texels
 //! wide (the tent's support) whatever the light's size: a hard-shadow filter, not a soft
 //! shadow; area lights get their penumbrae from several shadowed points
 //! (`instant_radiosity::vpl::area_lights`, see `docs/shadows.md`).
@@ -524,6 +525,24 @@ pub struct ShadowMaps {
     pub atlas: Option<(Vec<u32>, AtlasParams)>,
 }
 
+/// Most texels of [`slope_texels`].
+pub const MAX_SLOPE_TEXELS: f32 = 6.0;
+
+/// The depth tolerance (texels of the footprint) a receiver tilted by θ from the direction to
+/// `light` needs so its own surface does not shadow it in the tent filter: its plane moves
+/// tan θ texels of depth per texel across the map and the tent's taps reach 2 texels away;
+/// at most [`MAX_SLOPE_TEXELS`] (`slope_texels` in `shadows.wgsl`). Without it, walls the
+/// sun grazes at 75° lost up to a fifth of their light.
+pub fn slope_texels(light: &GpuLight, p: Vec3, n: Vec3) -> f32 {
+    let l = if light.kind == LIGHT_DIRECTIONAL {
+        -Vec3::from(light.direction)
+    } else {
+        (Vec3::from(light.position) - p).normalize_or_zero()
+    };
+    let c = n.dot(l).clamp(1e-3, 1.0);
+    (2.0 * (1.0 - c * c).sqrt() / c).min(MAX_SLOPE_TEXELS)
+}
+
 /// Fraction of `light` that reaches `p` (normal `n`) through `maps`: 1 for an unshadowed
 /// light, else the tent-filtered comparison described in the module docs (`shadow_visibility`
 /// in `shadows.wgsl`).
@@ -555,7 +574,8 @@ pub fn visibility(maps: &ShadowMaps, light: &GpuLight, p: Vec3, n: Vec3) -> f32 
         return 1.0;
     }
     let ndc = clip.xyz() / clip.w;
-    let receiver = v.linear_depth(ndc.z.clamp(0.0, 1.0)) - maps.bias * footprint;
+    let receiver =
+        v.linear_depth(ndc.z.clamp(0.0, 1.0)) - (maps.bias + slope_texels(light, p, n)) * footprint;
     let res = maps.resolution as i32;
     let x = (ndc.x * 0.5 + 0.5) * res as f32 - 0.5;
     let y = (0.5 - ndc.y * 0.5) * res as f32 - 0.5;
