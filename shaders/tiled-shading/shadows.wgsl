@@ -94,11 +94,7 @@ fn pick_shadow_view(light: Light, p: vec3<f32>, resolution: f32) -> u32 {
 const MAX_SLOPE_TEXELS: f32 = 6.0;
 
 fn slope_texels(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
-    var l = -light.direction;
-    if light.kind != LIGHT_DIRECTIONAL {
-        l = normalize(light.position - p);
-    }
-    let c = clamp(dot(n, l), 1e-3, 1.0);
+    let c = clamp(dot(n, light_incidence(light, p).xyz), 1e-3, 1.0);
     return min(2.0 * sqrt(1.0 - c * c) / c, MAX_SLOPE_TEXELS);
 }
 

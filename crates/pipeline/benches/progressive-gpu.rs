@@ -196,7 +196,6 @@ fn main() -> Result<()> {
             } else {
                 format!("{n}×{n} + blur")
             };
-            let interleaving = interleaving.as_str();
             let mut config = ProgressiveConfig::new(&scene);
             config.vpls = vpls;
             if n <= 1 {
@@ -258,7 +257,7 @@ fn main() -> Result<()> {
                 scene: label.to_owned(),
                 triangles: scene.triangle_count(),
                 vpls_per_frame: config.vpls,
-                interleaving: interleaving.to_owned(),
+                interleaving: interleaving.clone(),
                 reached: clean < args.target,
                 frames,
                 gpu_seconds: gpu_ms.iter().sum::<f64>() / 1e3,

@@ -534,11 +534,7 @@ pub const MAX_SLOPE_TEXELS: f32 = 6.0;
 /// at most [`MAX_SLOPE_TEXELS`] (`slope_texels` in `shadows.wgsl`). Without it, walls the
 /// sun grazes at 75° lost up to a fifth of their light.
 pub fn slope_texels(light: &GpuLight, p: Vec3, n: Vec3) -> f32 {
-    let l = if light.kind == LIGHT_DIRECTIONAL {
-        -Vec3::from(light.direction)
-    } else {
-        (Vec3::from(light.position) - p).normalize_or_zero()
-    };
+    let (l, _) = crate::lighting::light_incidence(light, p);
     let c = n.dot(l).clamp(1e-3, 1.0);
     (2.0 * (1.0 - c * c).sqrt() / c).min(MAX_SLOPE_TEXELS)
 }
