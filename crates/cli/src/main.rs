@@ -905,7 +905,7 @@ fn run() -> Result<()> {
                             mode,
                             &ShadowConfig {
                                 epsilon: args.vpl_shadow_epsilon,
-                                ..ShadowConfig::default()
+                                ..ShadowConfig::for_mode(mode)
                             },
                             config,
                             set,

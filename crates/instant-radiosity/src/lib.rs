@@ -87,6 +87,14 @@ pub enum IndirectError {
     /// Rasterised VPL shadow maps that the device or the views cannot hold.
     #[error("rasterised VPL shadow maps: {0}")]
     Ssm(String),
+    /// A VPL shadow-map bias, normal offset or slope tolerance is negative or not finite.
+    #[error("the VPL shadow maps' {what} must be finite and >= 0, got {value}")]
+    ShadowLookup {
+        /// Which setting.
+        what: &'static str,
+        /// Its value.
+        value: f32,
+    },
     /// The VPL clamp distance is negative or not finite.
     #[error("the VPL clamp distance must be finite and >= 0, got {0}")]
     Clamp(f32),

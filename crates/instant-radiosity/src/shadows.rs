@@ -47,6 +47,9 @@ pub struct ShadowConfig {
     /// Receivers move off their surface by this many atlas pixels at their distance before
     /// the lookup (normal-offset shadows): without it, a surface's own splats shadow it.
     pub normal_offset: f32,
+    /// Slope-scaled depth tolerance: atlas pixels per unit of tan θ of the receiver
+    /// ([`AtlasParams::slope`]).
+    pub slope: f32,
     /// The most bytes of one node-view list (ManyLoD's active and cut lists, the ISM list),
     /// or of the hemicube face atlas ([`VplShadows::Rasterised`]); `None`: the device's
     /// storage-binding, buffer and texture limits. Views are split into batches that fit, all
@@ -56,7 +59,8 @@ pub struct ShadowConfig {
 
 impl Default for ShadowConfig {
     /// 2^20 surfels, ε = 2 px, 32×32 micro-views, 8 k ISM points, bias 1 % of the diagonal,
-    /// a normal offset of one atlas pixel, lists as large as the device allows.
+    /// a normal offset of one atlas pixel and no slope tolerance (the splats' discs need the
+    /// offset), lists as large as the device allows.
     fn default() -> Self {
         Self {
             points_log2: 20,
@@ -65,8 +69,44 @@ impl Default for ShadowConfig {
             ism_points: 8192,
             bias: 0.01,
             normal_offset: 1.0,
+            slope: 0.0,
             list_bytes: None,
         }
+    }
+}
+
+impl ShadowConfig {
+    /// The defaults for `mode`: [`Default`] for the splatted maps; for the rasterised
+    /// hemicubes, whose depths are the surfaces' own, no normal offset, a bias of 0.1 % of the
+    /// diagonal and 1.5 pixels of tolerance per unit of tan θ. Against a ray per (receiver,
+    /// VPL) pair (`CornellBox-Original.obj`, 1024 VPLs, 64² tiles, 64² pixels), the relative
+    /// RMS of one frame's visible VPL light away from the lamp's 1 cm gap falls from 1.9 % to
+    /// 1.2 % (the offset and the 1 % bias carry receivers past occluders at contacts).
+    pub fn for_mode(mode: VplShadows) -> Self {
+        match mode {
+            VplShadows::ManyLod | VplShadows::Ism => Self::default(),
+            VplShadows::Rasterised => Self {
+                bias: 0.001,
+                normal_offset: 0.0,
+                slope: 1.5,
+                ..Self::default()
+            },
+        }
+    }
+
+    /// An error naming the first bias, normal offset or slope tolerance that is negative or
+    /// not finite.
+    pub fn validate(&self) -> Result<(), IndirectError> {
+        for (what, value) in [
+            ("bias", self.bias),
+            ("normal offset", self.normal_offset),
+            ("slope tolerance", self.slope),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(IndirectError::ShadowLookup { what, value });
+            }
+        }
+        Ok(())
     }
 }
 
@@ -146,6 +186,7 @@ impl VplShadowMaps {
         mode: VplShadows,
         config: &ShadowConfig,
     ) -> Result<Self, IndirectError> {
+        config.validate()?;
         let layout = vpl_atlas(views.len(), config.tile, diagonal);
         let (width, height) = layout.size();
         let atlas = transfer::buffer(
@@ -179,6 +220,7 @@ impl VplShadowMaps {
             lift,
             bias: config.bias,
             normal_offset: config.normal_offset,
+            slope: config.slope,
         };
         let shadow_params = params;
         let params = transfer::buffer_init(

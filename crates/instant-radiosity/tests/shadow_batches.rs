@@ -23,7 +23,7 @@ fn atlas(
         tile: 16,
         ism_points: 512,
         list_bytes,
-        ..ShadowConfig::default()
+        ..ShadowConfig::for_mode(mode)
     };
     let mut maps =
         VplShadowMaps::new(&gpu.device, &scene, &set, mode, &config).expect("shadow maps");

@@ -28,14 +28,23 @@ pub struct AtlasParams {
     pub bias: f32,
     /// Normal offset of receivers, in atlas pixels at their distance.
     pub normal_offset: f32,
+    /// Slope-scaled depth tolerance: atlas pixels (at the receiver's distance) per unit of
+    /// tan θ, θ between the receiver's normal and the direction to the view (at most
+    /// [`MAX_SLOPE_TAN`]); a receiver's own plane moves that much depth across its pixel.
+    pub slope: f32,
 }
+
+/// Largest tan θ of [`AtlasParams::slope`] (80.5°): past it a receiver is lit by a sliver.
+pub const MAX_SLOPE_TAN: f32 = 6.0;
 
 /// Where `p` (unit normal `n`) falls in paraboloid view `k` of an atlas, whose origin is
 /// `origin` with unit `normal` (`atlas_texel` of `lookup.wgsl`): the atlas index and the
-/// receiver's depth with the bias taken off; `None` behind the view's base plane. The
+/// receiver's depth with the biases taken off; `None` behind the view's surface. The
 /// receiver first moves off its surface by `normal_offset` atlas pixels at its distance (a
 /// paraboloid pixel spans 2·(1 + cos θ)/tile radians), so the splats of its own surface in its
-/// pixel do not shadow it.
+/// pixel do not shadow it. A receiver in front of the view's surface but behind its lifted
+/// origin's base plane (a contact, within `lift` of the surface) is looked up on the rim,
+/// along the surface: the view sees it there.
 pub fn texel(
     params: &AtlasParams,
     k: u32,
@@ -44,14 +53,20 @@ pub fn texel(
     n: Vec3,
 ) -> Option<(usize, f32)> {
     let to = p - origin;
-    let cos = normal.dot(to.normalize_or_zero()).max(0.0);
-    let p = p + n * (to.length() * 2.0 * (1.0 + cos) / params.tile as f32 * params.normal_offset);
+    let distance = to.length();
+    let dir = to / distance.max(1e-30);
+    let cos = normal.dot(dir).max(0.0);
+    let pixel = distance * 2.0 * (1.0 + cos) / params.tile as f32;
+    let p = p + n * (pixel * params.normal_offset);
     let (t, b) = paraboloid_frame(normal);
     let d = p - (origin + normal * params.lift);
     let dist = d.length();
-    let l = Vec3::new(t.dot(d), b.dot(d), normal.dot(d)) / dist;
+    let mut l = Vec3::new(t.dot(d), b.dot(d), normal.dot(d)) / dist;
     if l.z <= 0.0 {
-        return None;
+        if normal.dot(p - origin) <= 0.0 || l.truncate() == glam::Vec2::ZERO {
+            return None;
+        }
+        l = l.with_z(0.0).normalize();
     }
     let uv = l.truncate() / (1.0 + l.z);
     let px = ((uv * 0.5 + 0.5) * params.tile as f32)
@@ -59,7 +74,10 @@ pub fn texel(
         .min(UVec2::splat(params.tile - 1));
     let corner = UVec2::new(k % params.columns, k / params.columns) * params.tile;
     let index = (corner.y + px.y) * params.width + corner.x + px.x;
-    Some((index as usize, dist / params.far - params.bias))
+    let c = n.dot(-dir).clamp(1e-3, 1.0);
+    let tan = ((1.0 - c * c).sqrt() / c).min(MAX_SLOPE_TAN);
+    let slope = params.slope * tan * pixel / params.far;
+    Some((index as usize, dist / params.far - params.bias - slope))
 }
 
 /// Visibility of `p` (unit normal `n`) from paraboloid view `k` of `atlas` ([`texel`], then
@@ -84,4 +102,72 @@ pub fn visibility(
 pub fn test(atlas: &[u32], (index, depth): (usize, f32)) -> f32 {
     let word = atlas.get(index).copied().unwrap_or(u32::MAX);
     f32::from(u8::from(depth <= splat::unpack_depth(word)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One 8×8 view at the origin looking up (+y), lifted 1 cm, over an empty atlas.
+    fn params() -> AtlasParams {
+        AtlasParams {
+            enabled: 1,
+            tile: 8,
+            columns: 1,
+            width: 8,
+            far: 10.0,
+            lift: 0.01,
+            ..AtlasParams::default()
+        }
+    }
+
+    #[test]
+    fn contacts_within_the_lift_are_looked_up_on_the_rim() {
+        let (params, atlas) = (params(), vec![splat::CLEAR; 64]);
+        let view = (Vec3::ZERO, Vec3::Y);
+        // A wall 0.5 m away, facing the view: a point 5 mm up lies below the lifted origin.
+        let wall = Vec3::NEG_X;
+        let (index, _) = texel(&params, 0, view, Vec3::new(0.5, 0.005, 0.0), wall)
+            .expect("a receiver in front of the view's surface has a texel");
+        // On the rim: the row through the tile's centre, the first column (the frame's t is −x).
+        assert_eq!(paraboloid_frame(Vec3::Y).0, Vec3::NEG_X);
+        assert_eq!(index, 4 * 8);
+        assert_eq!(
+            visibility(&atlas, &params, 0, view, Vec3::new(0.5, 0.005, 0.0), wall),
+            1.0
+        );
+        // Behind the view's surface nothing is seen.
+        assert_eq!(
+            texel(&params, 0, view, Vec3::new(0.5, -0.005, 0.0), wall),
+            None
+        );
+        assert_eq!(
+            visibility(&atlas, &params, 0, view, Vec3::new(0.5, -0.005, 0.0), wall),
+            0.0
+        );
+    }
+
+    #[test]
+    fn slope_tolerance_grows_with_the_receivers_tilt() {
+        let params = AtlasParams {
+            slope: 1.0,
+            ..params()
+        };
+        let view = (Vec3::ZERO, Vec3::Y);
+        let p = Vec3::new(0.0, 2.0, 0.0);
+        let depth = |n: Vec3| texel(&params, 0, view, p, n).expect("texel").1;
+        let (facing, tilted) = (
+            depth(Vec3::NEG_Y),
+            depth(Vec3::new(1.0, -1.0, 0.0).normalize()),
+        );
+        // A pixel at the centre spans 4/8 rad: at 2 m, 1 m; tan 45° = 1 → 1 m / far less depth.
+        assert!((facing - (2.0 - 0.01) / 10.0).abs() < 1e-6, "{facing}");
+        assert!((facing - tilted - 0.1).abs() < 1e-5, "{facing} vs {tilted}");
+        // Grazing receivers stop at MAX_SLOPE_TAN.
+        let grazing = depth(Vec3::new(1.0, -1e-4, 0.0).normalize());
+        assert!(
+            (facing - grazing - 0.1 * MAX_SLOPE_TAN).abs() < 1e-4,
+            "{grazing}"
+        );
+    }
 }

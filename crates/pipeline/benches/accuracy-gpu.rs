@@ -219,7 +219,7 @@ fn measure_scene(setup: &Setup<'_>, scene: &Scene, camera: Camera) -> Result<Mea
             Some(Some((mode, tile))) => {
                 let maps = ShadowConfig {
                     tile,
-                    ..ShadowConfig::default()
+                    ..ShadowConfig::for_mode(mode)
                 };
                 r.set_vpl_shadows(d, scene, mode, &maps, &config, set)?
             }

@@ -77,7 +77,7 @@ impl ProgressiveConfig {
             visibility: Some(VplShadows::Rasterised),
             vpl_maps: ShadowConfig {
                 tile: 64,
-                ..ShadowConfig::default()
+                ..ShadowConfig::for_mode(VplShadows::Rasterised)
             },
             direct_maps: ShadowMapConfig::default(),
         }

@@ -89,7 +89,7 @@ fn vpl_visibility_removes_the_leak_through_the_boxes() {
                     mode,
                     &ShadowConfig {
                         points_log2: 16,
-                        ..Default::default()
+                        ..ShadowConfig::for_mode(mode)
                     },
                     &config,
                     &set,

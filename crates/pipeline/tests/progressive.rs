@@ -19,7 +19,7 @@ fn small(scene: &scene::Scene, vpls: usize, bounces: u32) -> ProgressiveConfig {
         area_samples: 4,
         vpl_maps: ShadowConfig {
             tile: 16,
-            ..ShadowConfig::default()
+            ..ShadowConfig::for_mode(instant_radiosity::shadows::VplShadows::Rasterised)
         },
         direct_maps: ShadowMapConfig {
             resolution: 256,

@@ -294,6 +294,7 @@ fn paraboloid_shadows_from_a_ray_cast_atlas() {
         lift: 0.0,
         bias: 0.002,
         normal_offset: 1.0,
+        slope: 0.0,
     };
     let atlas = shadows::ray_cast_atlas(&bvh, &views, &params);
     let upload = |label, bytes: &[u8], usage| {
