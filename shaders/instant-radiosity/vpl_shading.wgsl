@@ -3,6 +3,7 @@
 // #import tiled-shading/lighting.wgsl
 // #import manylod/lookup.wgsl
 // #import interleave/pattern.wgsl
+// #import instant-radiosity/rays.wgsl
 // SNSM — shading with no shadow map (Segovia 2006 §4.3, §6.2): each pixel sums the diffuse and
 // glossy light reflected from the hemispherical VPLs of its subset, visibility ignored. Twin of
 // `instant_radiosity::cpu::shade_vpls`.
@@ -18,7 +19,9 @@
 //
 // With VPL shadow maps (`atlas_params.enabled`, Holländer 2013 §3.6 SSM mode), VPL k's light is
 // multiplied by its visibility: p is looked up in micro-view k of the ManyLoDs / ISM atlas
-// (paraboloid around the VPL normal, `manylod::View::splat`'s projection).
+// (paraboloid around the VPL normal, `manylod::View::splat`'s projection). With rays
+// (`ray_offset` > 0) it is instead 0 when a triangle of `ray_nodes`/`ray_triangles` lies between
+// p and the VPL, each moved `ray_offset` off its surface (`instant_radiosity::rays`).
 
 struct Vpl {
     position: vec3<f32>,
@@ -33,7 +36,7 @@ struct ShadingParams {
     per_subset: u32,
     scale: f32,
     clamp_squared: f32,
-    _pad: u32,
+    ray_offset: f32,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -49,9 +52,17 @@ struct ShadingParams {
 // The VPL shadow maps (`manylod/lookup.wgsl`'s atlas; `manylod::lookup::AtlasParams`).
 @group(0) @binding(9) var<storage, read> atlas: array<u32>;
 @group(0) @binding(10) var<uniform> atlas_params: AtlasParams;
+// The scene's BVH for visibility by rays (`instant_radiosity::rays::RayBvh`).
+@group(0) @binding(11) var<storage, read> ray_nodes: array<RayNode>;
+@group(0) @binding(12) var<storage, read> ray_triangles: array<RayTriangle>;
 
-// Visibility of p (normal n) from VPL k in its atlas tile (`instant_radiosity::shadows::vpl_visibility`).
+// Visibility of p (normal n) from VPL k: by a ray (`instant_radiosity::rays::visibility`) or
+// in its atlas tile (`instant_radiosity::shadows::vpl_visibility`).
 fn vpl_visibility(k: u32, vpl: Vpl, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    if params.ray_offset > 0.0 {
+        let start = p + n * params.ray_offset;
+        return select(1.0, 0.0, occluded(start, vpl.position + vpl.normal * params.ray_offset - start));
+    }
     if atlas_params.enabled == 0u {
         return 1.0;
     }

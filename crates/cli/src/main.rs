@@ -858,6 +858,7 @@ fn run() -> Result<()> {
             Some(match mode {
                 ShadowMode::Ism => VplShadows::Ism,
                 ShadowMode::Ssm => VplShadows::Rasterised,
+                ShadowMode::Rays => VplShadows::Rays,
                 _ => VplShadows::ManyLod,
             })
         }
@@ -915,7 +916,10 @@ fn run() -> Result<()> {
                 }
                 renderer.render(d, q, &camera, ambient)?; // warm-up: first use of pipelines and caches
                 let rendered = renderer.render(d, q, &camera, ambient)?;
-                if let Some(shadows) = renderer.vpl_shadows() {
+                if let Some(shadows) = renderer
+                    .vpl_shadows()
+                    .filter(|s| s.mode() != VplShadows::Rays)
+                {
                     write_shadow_atlas(&args, gpu, shadows)?;
                 }
                 if args.heatmap {
@@ -1168,6 +1172,8 @@ enum ShadowMode {
     Ism,
     /// Exact: every VPL's hemicube rasterised (Segovia 2006's SSM).
     Ssm,
+    /// Exact without maps: a ray per pixel and VPL through a BVH of the scene on the GPU.
+    Rays,
 }
 
 /// Writes the VPL shadow-map atlas as a grey image (near = dark, empty = white).

@@ -10,6 +10,7 @@ use interleave::{SplitLayout, SplitVariant};
 use rayon::prelude::*;
 
 use crate::IndirectError;
+use crate::rays::RayBvh;
 use crate::shadows::vpl_visibility;
 use crate::{IndirectConfig, IndirectStages, Interleaving, vpl::GpuVpl, vpl::VplSet};
 use gpu::PassTiming;
@@ -29,6 +30,17 @@ pub fn vpl_intensity(vpl: &GpuVpl, p: Vec3, clamp_squared: f32) -> (Vec3, Vec3) 
     )
 }
 
+/// VPL visibility on the CPU: a shadow-map atlas (read back from
+/// [`crate::shadows::VplShadowMaps`]) and its parameters, or rays through the scene's BVH whose
+/// ends leave their surfaces by the offset ([`crate::rays::visibility`]).
+#[derive(Clone, Copy)]
+pub enum Visibility<'a> {
+    /// Looked up in the atlas ([`vpl_visibility`]).
+    Atlas(&'a [u32], AtlasParams),
+    /// Traced ([`crate::rays::visibility`]).
+    Rays(&'a RayBvh, f32),
+}
+
 /// Inputs of the shading pass besides the G-buffer images.
 pub struct ShadingInputs<'a> {
     /// Camera data.
@@ -43,9 +55,8 @@ pub struct ShadingInputs<'a> {
     pub scale: f32,
     /// Square of the clamp distance.
     pub clamp_squared: f32,
-    /// VPL visibility: a shadow-map atlas (read back from [`crate::shadows::VplShadowMaps`])
-    /// and its parameters; `None` shades without visibility (SNSM).
-    pub shadows: Option<(&'a [u32], AtlasParams)>,
+    /// VPL visibility; `None` shades without visibility (SNSM).
+    pub shadows: Option<Visibility<'a>>,
 }
 
 /// SNSM on split G-buffer images (`shade_split`): texel (x, y) of the split layout shades the
@@ -110,9 +121,16 @@ fn shade(
             .take(inputs.per_subset as usize)
         {
             let (mut intensity, l) = vpl_intensity(vpl, p, inputs.clamp_squared);
-            if let Some((atlas, params)) = &inputs.shadows {
-                intensity *= vpl_visibility(atlas, params, k as u32, vpl, p, n);
-            }
+            intensity *= match inputs.shadows {
+                None => 1.0,
+                Some(Visibility::Atlas(atlas, params)) => {
+                    vpl_visibility(atlas, &params, k as u32, vpl, p, n)
+                }
+                Some(Visibility::Rays(bvh, offset)) => {
+                    let q = (Vec3::from(vpl.position), Vec3::from(vpl.normal));
+                    crate::rays::visibility(bvh, (p, n), q, offset)
+                }
+            };
             let (d, s) = reflect_light(intensity, l, &surface);
             diffuse += d;
             specular += s;
@@ -148,14 +166,14 @@ pub fn indirect(
     indirect_with_shadows(gb, frame, set, config, None)
 }
 
-/// [`indirect`] with VPL visibility from `shadows` (an atlas read back from
-/// [`crate::shadows::VplShadowMaps::read_atlas`] and its [`crate::shadows::VplShadowMaps::params`]).
+/// [`indirect`] with VPL visibility from `shadows` (e.g.
+/// [`crate::shadows::VplShadowMaps::cpu_visibility`] of the maps' read-back atlas).
 pub fn indirect_with_shadows(
     gb: &GBuffer,
     frame: &Frame,
     set: &VplSet,
     config: &IndirectConfig,
-    shadows: Option<(&[u32], AtlasParams)>,
+    shadows: Option<Visibility<'_>>,
 ) -> Result<IndirectStages, IndirectError> {
     config.validate(set)?;
     let (w, h) = (gb.width(), gb.height());

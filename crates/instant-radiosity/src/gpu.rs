@@ -41,7 +41,7 @@ use interleave::{
 use crate::IndirectError;
 use crate::{
     IndirectConfig, IndirectStages, Interleaving,
-    shadows::{VplShadowMaps, disabled_bindings},
+    shadows::{DisabledBindings, VplShadowMaps},
     vpl::VplSet,
 };
 
@@ -52,18 +52,19 @@ struct ShadingParams {
     per_subset: u32,
     scale: f32,
     clamp_squared: f32,
-    _pad: u32,
+    ray_offset: f32,
 }
 
 const USAGE: wgpu::TextureUsages = ::gpu::transfer::STORAGE_ANY;
 
 /// `vpl_shading.wgsl`: frame, params, VPLs; the G-buffer; diffuse and specular outputs;
-/// shadow atlas and its parameters.
+/// shadow atlas and its parameters; the rays' BVH nodes and triangles.
 fn vpl_shading_bindings() -> Vec<Binding> {
     let mut bindings = vec![Binding::Uniform, Binding::Uniform, Binding::StorageRead];
     bindings.extend(GBUFFER_BINDINGS);
     bindings.extend([Binding::StorageTexture(IRRADIANCE_FORMAT); 2]);
     bindings.extend([Binding::StorageRead, Binding::Uniform]);
+    bindings.extend([Binding::StorageRead; 2]);
     bindings
 }
 
@@ -95,6 +96,7 @@ pub struct BoundIndirect {
     params: wgpu::Buffer,
     config: IndirectConfig,
     vpl_count: usize,
+    ray_offset: f32,
     split_normal: Option<wgpu::Texture>,
     shaded_diffuse: wgpu::Texture,
     gathered: [wgpu::Texture; 2],
@@ -200,11 +202,11 @@ impl IndirectStage {
             )?;
         }
         let disabled;
-        let (shadow_atlas, shadow_params) = match shadows {
+        let visibility = match shadows {
             Some(s) => s.bindings(),
             None => {
-                disabled = disabled_bindings(device)?;
-                (&disabled.0, &disabled.1)
+                disabled = DisabledBindings::new(device)?;
+                disabled.bindings()
             }
         };
         let layout = &self.layout;
@@ -218,7 +220,7 @@ impl IndirectStage {
         let params = transfer::buffer_init(
             device,
             "vpl shading params",
-            bytemuck::bytes_of(&shading_params(config, set)),
+            bytemuck::bytes_of(&shading_params(config, set, visibility.ray_offset)),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
         let shading = |name: &str, g: [&wgpu::Texture; 4], out: [&wgpu::Texture; 2]| {
@@ -237,8 +239,10 @@ impl IndirectStage {
                     tv(&views[3]),
                     tv(&outs[0]),
                     tv(&outs[1]),
-                    shadow_atlas.as_entire_binding(),
-                    shadow_params.as_entire_binding(),
+                    visibility.atlas.as_entire_binding(),
+                    visibility.params.as_entire_binding(),
+                    visibility.ray_nodes.as_entire_binding(),
+                    visibility.ray_triangles.as_entire_binding(),
                 ],
             );
             let workgroups = Workgroups::covering(split_size.0, split_size.1, 8);
@@ -325,6 +329,7 @@ impl IndirectStage {
             params,
             config: *config,
             vpl_count: set.vpls.len(),
+            ray_offset: visibility.ray_offset,
             split_normal,
             shaded_diffuse,
             gathered,
@@ -345,12 +350,12 @@ impl IndirectStage {
     }
 }
 
-fn shading_params(config: &IndirectConfig, set: &VplSet) -> ShadingParams {
+fn shading_params(config: &IndirectConfig, set: &VplSet, ray_offset: f32) -> ShadingParams {
     ShadingParams {
         per_subset: config.per_invocation(set),
         scale: config.scale(set),
         clamp_squared: config.clamp_distance * config.clamp_distance,
-        _pad: 0,
+        ray_offset,
     }
 }
 
@@ -369,7 +374,7 @@ impl BoundIndirect {
         queue.write_buffer(
             &self.params,
             0,
-            bytemuck::bytes_of(&shading_params(&self.config, set)),
+            bytemuck::bytes_of(&shading_params(&self.config, set, self.ray_offset)),
         );
         Ok(())
     }

@@ -30,6 +30,7 @@
 
 pub mod cpu;
 pub mod gpu;
+pub mod rays;
 pub mod shadows;
 pub mod ssm;
 pub mod vpl;
@@ -43,7 +44,7 @@ use scene::Aabb;
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "instant-radiosity",
     imports: [gbuffer::SHADERS, tiled_shading::SHADERS, manylod::SHADERS, interleave::SHADERS],
-    files: ["vpl_shading.wgsl", "ssm.wgsl"],
+    files: ["vpl_shading.wgsl", "ssm.wgsl", "rays.wgsl"],
 );
 
 /// What this crate's kernels need of a device: the interleaving passes' and the VPL
@@ -84,6 +85,9 @@ pub enum IndirectError {
     /// The direct lights' shadow-map pass failed (the rasterised VPL shadow maps use it).
     #[error(transparent)]
     Shadows(#[from] tiled_shading::ShadingError),
+    /// VPL visibility by rays that the scene cannot give (no triangles, too deep a tree).
+    #[error("VPL visibility by rays: {0}")]
+    Rays(String),
     /// Rasterised VPL shadow maps that the device or the views cannot hold.
     #[error("rasterised VPL shadow maps: {0}")]
     Ssm(String),

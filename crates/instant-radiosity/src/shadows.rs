@@ -16,6 +16,8 @@ use manylod::{
 use scene::Scene;
 
 use crate::IndirectError;
+use crate::cpu::Visibility;
+use crate::rays::RayBvh;
 use crate::ssm::RasterisedMaps;
 use crate::vpl::{GpuVpl, VplSet};
 
@@ -29,6 +31,9 @@ pub enum VplShadows {
     /// Exact: every VPL's hemicube rasterised from the scene's triangles (Segovia 2006 §4.3,
     /// [`crate::ssm`]); the surfel settings are unused.
     Rasterised,
+    /// Exact without maps: a ray per (receiver, VPL) pair through a BVH of the scene's
+    /// triangles ([`crate::rays`]); the map settings are unused.
+    Rays,
 }
 
 /// Settings of the VPL shadow maps.
@@ -76,7 +81,8 @@ impl Default for ShadowConfig {
 }
 
 impl ShadowConfig {
-    /// The defaults for `mode`: [`Default`] for the splatted maps; for the rasterised
+    /// The defaults for `mode`: [`Default`] for the splatted maps (and rays, which use none of
+    /// it); for the rasterised
     /// hemicubes, whose depths are the surfaces' own, no normal offset, a bias of 0.1 % of the
     /// diagonal and 1.5 pixels of tolerance per unit of tan θ. Against a ray per (receiver,
     /// VPL) pair (`CornellBox-Original.obj`, 1024 VPLs, 64² tiles, 64² pixels), the relative
@@ -84,7 +90,7 @@ impl ShadowConfig {
     /// 1.2 % (the offset and the 1 % bias carry receivers past occluders at contacts).
     pub fn for_mode(mode: VplShadows) -> Self {
         match mode {
-            VplShadows::ManyLod | VplShadows::Ism => Self::default(),
+            VplShadows::ManyLod | VplShadows::Ism | VplShadows::Rays => Self::default(),
             VplShadows::Rasterised => Self {
                 bias: 0.001,
                 normal_offset: 0.0,
@@ -138,11 +144,33 @@ struct Batch {
     views: usize,
 }
 
-/// What fills the atlas: cut batches (ManyLoD, ISM) or rasterised hemicubes.
+/// What fills the atlas: cut batches (ManyLoD, ISM) or rasterised hemicubes; or no atlas but
+/// the scene's BVH for rays.
 enum Source {
     Cuts(Vec<Batch>),
     Rasterised(Box<RasterisedMaps>),
+    Rays(Box<RayBvh>),
 }
+
+/// What the VPL shading binds for visibility (`vpl_shading.wgsl`'s bindings 9–12): the atlas
+/// and its parameters, the BVH's nodes and triangles, and the rays' offset off both surfaces
+/// (0: no rays).
+pub struct VisibilityBindings<'a> {
+    /// Packed depths.
+    pub atlas: &'a wgpu::Buffer,
+    /// Uniform `AtlasParams`.
+    pub params: &'a wgpu::Buffer,
+    /// [`crate::rays::RayNode`]s.
+    pub ray_nodes: &'a wgpu::Buffer,
+    /// [`crate::rays::RayTriangle`]s.
+    pub ray_triangles: &'a wgpu::Buffer,
+    /// Offset of the rays' ends off their surfaces; 0 looks the atlas up instead.
+    pub ray_offset: f32,
+}
+
+/// Offset of a VPL visibility ray's ends off their surfaces, as a fraction of the scene
+/// diagonal (the path tracer's shadow rays leave as close).
+const RAY_OFFSET: f32 = 1e-4;
 
 /// The VPL shadow maps on the GPU: the hierarchy, the cuts and the atlas (and the ISM points),
 /// in as many batches of views as the device's binding limits need; or the rasterised
@@ -153,6 +181,10 @@ pub struct VplShadowMaps {
     layout: AtlasLayout,
     params: wgpu::Buffer,
     shadow_params: AtlasParams,
+    ray_nodes: wgpu::Buffer,
+    ray_triangles: wgpu::Buffer,
+    ray_offset: f32,
+    mode: VplShadows,
     frames: u32,
 }
 
@@ -168,10 +200,41 @@ impl VplShadowMaps {
     ) -> Result<Self, IndirectError> {
         let diagonal = scene.bounds().diagonal();
         let lift = 1e-3 * diagonal;
-        let views = vpl_views(set, config.tile, lift);
         let (positions, indices) = scene_mesh(scene);
         let mesh = (&positions[..], &indices[..]);
+        if mode == VplShadows::Rays {
+            return Self::rays(device, mesh, RAY_OFFSET * diagonal);
+        }
+        let views = vpl_views(set, config.tile, lift);
         Self::from_views(device, mesh, diagonal, views, lift, mode, config)
+    }
+
+    /// Visibility by rays through the BVH of `mesh`, whose ends leave their surfaces by
+    /// `offset`: no atlas (a disabled one binds in its place).
+    fn rays(
+        device: &wgpu::Device,
+        mesh: (&[Vec3], &[u32]),
+        offset: f32,
+    ) -> Result<Self, IndirectError> {
+        let bvh = RayBvh::new(mesh)?;
+        let storage = |label, bytes: &[u8]| {
+            transfer::buffer_init(device, label, bytes, wgpu::BufferUsages::STORAGE)
+        };
+        let ray_nodes = storage("vpl ray nodes", bytemuck::cast_slice(&bvh.nodes))?;
+        let ray_triangles = storage("vpl ray triangles", bytemuck::cast_slice(&bvh.triangles))?;
+        let (atlas, params) = disabled_atlas(device)?;
+        Ok(Self {
+            source: Source::Rays(Box::new(bvh)),
+            atlas,
+            layout: vpl_atlas(0, 1, 1.0),
+            params,
+            shadow_params: AtlasParams::default(),
+            ray_nodes,
+            ray_triangles,
+            ray_offset: offset,
+            mode: VplShadows::Rays,
+            frames: 0,
+        })
     }
 
     /// The same for any paraboloid `views` (each `config.tile` pixels, set `lift` off its
@@ -187,6 +250,11 @@ impl VplShadowMaps {
         config: &ShadowConfig,
     ) -> Result<Self, IndirectError> {
         config.validate()?;
+        if mode == VplShadows::Rays {
+            return Err(IndirectError::Rays(
+                "rays need VPLs (VplShadowMaps::new), not views".into(),
+            ));
+        }
         let layout = vpl_atlas(views.len(), config.tile, diagonal);
         let (width, height) = layout.size();
         let atlas = transfer::buffer(
@@ -207,7 +275,7 @@ impl VplShadowMaps {
                 &atlas,
                 config.list_bytes,
             )?)),
-            VplShadows::ManyLod | VplShadows::Ism => Source::Cuts(cut_batches(
+            VplShadows::ManyLod | VplShadows::Ism | VplShadows::Rays => Source::Cuts(cut_batches(
                 device, mesh, &views, layout, &atlas, mode, config,
             )?),
         };
@@ -229,12 +297,17 @@ impl VplShadowMaps {
             bytemuck::bytes_of(&params),
             wgpu::BufferUsages::UNIFORM,
         )?;
+        let (ray_nodes, ray_triangles) = disabled_rays(device)?;
         Ok(Self {
             source,
             atlas,
             layout,
             params,
             shadow_params,
+            ray_nodes,
+            ray_triangles,
+            ray_offset: 0.0,
+            mode,
             frames: 0,
         })
     }
@@ -248,6 +321,7 @@ impl VplShadowMaps {
                 maps.encode(encoder, timer);
                 return;
             }
+            Source::Rays(_) => return,
         };
         for batch in batches {
             match &batch.ism {
@@ -280,6 +354,7 @@ impl VplShadowMaps {
     pub fn set_views(&self, queue: &wgpu::Queue, views: &[View]) -> Result<(), IndirectError> {
         match &self.source {
             Source::Rasterised(maps) => maps.set_views(queue, views),
+            Source::Rays(_) => Ok(()),
             Source::Cuts(batches) => {
                 let made: usize = batches.iter().map(|b| b.views).sum();
                 if views.len() != made {
@@ -297,9 +372,29 @@ impl VplShadowMaps {
         }
     }
 
-    /// The atlas and parameter buffers the VPL shading binds.
-    pub fn bindings(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
-        (&self.atlas, &self.params)
+    /// Which visibility these are.
+    pub fn mode(&self) -> VplShadows {
+        self.mode
+    }
+
+    /// What the VPL shading binds.
+    pub fn bindings(&self) -> VisibilityBindings<'_> {
+        VisibilityBindings {
+            atlas: &self.atlas,
+            params: &self.params,
+            ray_nodes: &self.ray_nodes,
+            ray_triangles: &self.ray_triangles,
+            ray_offset: self.ray_offset,
+        }
+    }
+
+    /// The CPU twin's visibility: the rays' BVH, or `atlas` (read back by
+    /// [`Self::read_atlas`]) with [`Self::params`].
+    pub fn cpu_visibility<'a>(&'a self, atlas: &'a [u32]) -> Visibility<'a> {
+        match &self.source {
+            Source::Rays(bvh) => Visibility::Rays(bvh, self.ray_offset),
+            _ => Visibility::Atlas(atlas, self.shadow_params),
+        }
     }
 
     /// What the shading's lookup needs ([`vpl_visibility`]).
@@ -318,20 +413,25 @@ impl VplShadowMaps {
         match &self.source {
             Source::Cuts(batches) => batches.len(),
             Source::Rasterised(maps) => maps.batch_count(),
+            Source::Rays(_) => 1,
         }
     }
 
-    /// Reads the atlas back (row-major packed depths); an error when a batch's lists
-    /// overflowed (the atlas then misses splats).
+    /// Reads the atlas back (row-major packed depths; empty for rays, which have none); an
+    /// error when a batch's lists overflowed (the atlas then misses splats).
     pub fn read_atlas(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<u32>, IndirectError> {
-        if let Source::Cuts(batches) = &self.source {
-            for batch in batches {
-                batch.manylod.check_lists(device, queue)?;
+        match &self.source {
+            Source::Cuts(batches) => {
+                for batch in batches {
+                    batch.manylod.check_lists(device, queue)?;
+                }
             }
+            Source::Rays(_) => return Ok(Vec::new()),
+            Source::Rasterised(_) => {}
         }
         Ok(transfer::read_pod(device, queue, &self.atlas)?)
     }
@@ -359,7 +459,7 @@ fn cut_batches(
             .min(limits.max_buffer_size),
     );
     let ism = match mode {
-        VplShadows::ManyLod | VplShadows::Rasterised => None,
+        VplShadows::ManyLod | VplShadows::Rasterised | VplShadows::Rays => None,
         VplShadows::Ism => {
             let leaves = &bsh.nodes[bsh.leaf_count() - 1..];
             let per_view = config.ism_points.min(leaves.len());
@@ -412,10 +512,8 @@ fn cut_batches(
     Ok(batches)
 }
 
-/// Stand-ins for the shading's shadow bindings when no shadow maps are used (visibility 1).
-pub fn disabled_bindings(
-    device: &wgpu::Device,
-) -> Result<(wgpu::Buffer, wgpu::Buffer), IndirectError> {
+/// The atlas and parameter buffers of shading without maps (the shading then ignores them).
+fn disabled_atlas(device: &wgpu::Device) -> Result<(wgpu::Buffer, wgpu::Buffer), IndirectError> {
     let atlas = transfer::buffer(device, "no vpl shadows", 16, wgpu::BufferUsages::STORAGE)?;
     let params = transfer::buffer_init(
         device,
@@ -424,6 +522,45 @@ pub fn disabled_bindings(
         wgpu::BufferUsages::UNIFORM,
     )?;
     Ok((atlas, params))
+}
+
+/// The node and triangle buffers of shading without rays (the shading then ignores them).
+fn disabled_rays(device: &wgpu::Device) -> Result<(wgpu::Buffer, wgpu::Buffer), IndirectError> {
+    let nodes = transfer::buffer(device, "no vpl ray nodes", 32, wgpu::BufferUsages::STORAGE)?;
+    let triangles = transfer::buffer(
+        device,
+        "no vpl ray triangles",
+        48,
+        wgpu::BufferUsages::STORAGE,
+    )?;
+    Ok((nodes, triangles))
+}
+
+/// What the VPL shading binds without visibility: a disabled atlas and no rays.
+pub struct DisabledBindings {
+    atlas: (wgpu::Buffer, wgpu::Buffer),
+    rays: (wgpu::Buffer, wgpu::Buffer),
+}
+
+impl DisabledBindings {
+    /// The buffers.
+    pub fn new(device: &wgpu::Device) -> Result<Self, IndirectError> {
+        Ok(Self {
+            atlas: disabled_atlas(device)?,
+            rays: disabled_rays(device)?,
+        })
+    }
+
+    /// As [`VplShadowMaps::bindings`] gives them.
+    pub fn bindings(&self) -> VisibilityBindings<'_> {
+        VisibilityBindings {
+            atlas: &self.atlas.0,
+            params: &self.atlas.1,
+            ray_nodes: &self.rays.0,
+            ray_triangles: &self.rays.1,
+            ray_offset: 0.0,
+        }
+    }
 }
 
 /// All meshes of `scene` as one triangle list (world-space positions, indices).

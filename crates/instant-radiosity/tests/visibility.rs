@@ -4,7 +4,8 @@
 
 use gbuffer::{Frame, GBuffer, Image, position};
 use instant_radiosity::{
-    IndirectConfig, Interleaving, cpu,
+    IndirectConfig, Interleaving,
+    cpu::{self, Visibility},
     gpu::IndirectStage,
     shadows::{ShadowConfig, VplShadowMaps, VplShadows, vpl_visibility},
     vpl::{self, VplSet},
@@ -72,7 +73,12 @@ fn gpu_shading_with_visibility_matches_its_cpu_twin() {
         ..IndirectConfig::new(scene.bounds())
     };
     let set = set(&scene, config.subsets());
-    for mode in [VplShadows::ManyLod, VplShadows::Ism, VplShadows::Rasterised] {
+    for mode in [
+        VplShadows::ManyLod,
+        VplShadows::Ism,
+        VplShadows::Rasterised,
+        VplShadows::Rays,
+    ] {
         let (maps, atlas) = maps(gpu, &scene, &set, mode);
         let uploaded =
             gbuffer::gpu::UploadedGBuffer::new(&gpu.device, &gpu.queue, &gb, &frame).expect("gb");
@@ -92,9 +98,14 @@ fn gpu_shading_with_visibility_matches_its_cpu_twin() {
         stage.encode(&bound, &mut encoder, None);
         gpu.queue.submit([encoder.finish()]);
         let got = bound.read(&gpu.device, &gpu.queue).expect("read");
-        let want =
-            cpu::indirect_with_shadows(&gb, &frame, &set, &config, Some((&atlas, maps.params())))
-                .expect("cpu");
+        let want = cpu::indirect_with_shadows(
+            &gb,
+            &frame,
+            &set,
+            &config,
+            Some(maps.cpu_visibility(&atlas)),
+        )
+        .expect("cpu");
         let unshadowed = cpu::indirect(&gb, &frame, &set, &config).expect("cpu");
         // A VPL whose receiver lies exactly at the stored depth may flip between the two
         // (positions from depth differ in the last bits): pixels, not all, must agree.
@@ -333,6 +344,38 @@ fn rasterised_maps_light_receivers_as_ray_casts_do() {
         (sums.iter().map(|s| (s[i] - s[0]).powi(2)).sum::<f64>() / sums.len() as f64).sqrt() / mean
     };
     let (exact_rms, splat_rms) = (rms(1), rms(2));
+    // Rays through the GPU traversal's CPU twin see what the independent BVH sees.
+    let (rays, _) = crate::maps(gpu, &scene, &set, VplShadows::Rays);
+    let Visibility::Rays(bvh_rays, offset) = rays.cpu_visibility(&[]) else {
+        panic!("rays give ray visibility");
+    };
+    let mut traced = 0.0f64;
+    for y in 0..h {
+        for x in 0..w {
+            let depth = gb.linear_depth.get(x, y);
+            if depth <= 0.0 {
+                continue;
+            }
+            let p = position::from_view_ray(&frame, x, y, depth);
+            let n = gbuffer::normal::unpack_octahedral(gb.normal.get(x, y));
+            for v in &vpls {
+                let (intensity, l) = cpu::vpl_intensity(v, p, clamp * clamp);
+                let q = (glam::Vec3::from(v.position), glam::Vec3::from(v.normal));
+                traced += f64::from(intensity.y * n.dot(l).max(0.0))
+                    * f64::from(instant_radiosity::rays::visibility(
+                        bvh_rays,
+                        (p, n),
+                        q,
+                        offset,
+                    ));
+            }
+        }
+    }
+    let total_rays: f64 = sums.iter().map(|s| s[0]).sum();
+    assert!(
+        (traced - total_rays).abs() <= 1e-3 * total_rays,
+        "rays: {traced} vs {total_rays}"
+    );
     println!(
         "visible VPL light against rays: rasterised defaults {:.2} % RMS, splats' lookup {:.2} %",
         100.0 * exact_rms,

@@ -1,6 +1,7 @@
 //! `progressive-gpu`: Segovia 2006 Table 5 on today's GPU — how long the progressive
 //! physically based mode ([`pipeline::progressive`]: new VPLs, light samples and exact
-//! rasterised VPL shadow maps every frame, averaged) takes until its mean is within `--target`
+//! rasterised VPL shadow maps every frame, averaged; or `--visibility rays`: a ray per pixel
+//! and VPL instead of the maps) takes until its mean is within `--target`
 //! RMS (1 %) of the path tracer, without and with interleaving, on the Cornell box, Dabrovic
 //! Sponza and a larger scene (Sponza with the Stanford dragon and bunny). The truth is traced
 //! through pixel centres (where the rasteriser samples) in two halves of `--spp` with other
@@ -13,7 +14,7 @@ use bench::{Header, Stat};
 use clap::Parser;
 use gbuffer::{Accuracy, Image};
 use glam::{Mat4, Vec3};
-use instant_radiosity::{Interleaving, vpl};
+use instant_radiosity::{Interleaving, shadows::VplShadows, vpl};
 use interleave::Pattern;
 use pipeline::progressive::{Progressive, ProgressiveConfig};
 use scene::{Camera, Scene, reference::ReferenceConfig};
@@ -50,6 +51,19 @@ struct Args {
     /// Factor on the progressive mode's VPL clamp distance (0.5 % of the scene diagonal).
     #[arg(long, default_value_t = 1.0)]
     clamp_scale: f32,
+    /// The VPLs' visibility: the paper's rasterised maps, or rays through the scene's BVH.
+    #[arg(long, value_enum, default_value_t = Visibility::Ssm)]
+    visibility: Visibility,
+}
+
+/// `--visibility`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+enum Visibility {
+    /// Exact rasterised VPL maps (Segovia 2006's SSM).
+    Ssm,
+    /// A ray per pixel and VPL ([`VplShadows::Rays`]).
+    Rays,
 }
 
 /// Bounces of the VPL paths and of the truth.
@@ -86,6 +100,7 @@ struct Report {
     truth_noise: Vec<(String, f64)>,
     vpl_tile: u32,
     clamp_scale: f32,
+    visibility: Visibility,
     rows: Vec<Row>,
 }
 
@@ -205,6 +220,9 @@ fn main() -> Result<()> {
                 config.indirect.pattern = Pattern { n, m: n };
             }
             config.vpl_maps.tile = args.vpl_tile;
+            if args.visibility == Visibility::Rays {
+                config.visibility = Some(VplShadows::Rays);
+            }
             config.indirect.clamp_distance *= args.clamp_scale;
             if once {
                 config.vpl_maps.tile = 16;
@@ -296,6 +314,7 @@ fn main() -> Result<()> {
         truth_noise: noise_rows,
         vpl_tile: args.vpl_tile,
         clamp_scale: args.clamp_scale,
+        visibility: args.visibility,
         rows,
     };
     args.options
@@ -313,9 +332,8 @@ fn markdown(r: &Report) -> String {
         "{}×{}; truth: `scene::reference`, {BOUNCES} bounces, {} spp through pixel centres (two \
          halves of other seeds; its relative noise, taken off the RMS: {}); frames: \
          `pipeline::progressive` — per frame new VPLs ({BOUNCES} bounces, Russian roulette), 16 \
-         new shadowed samples per emissive mesh, exact rasterised VPL maps ({t}×{t} paraboloid \
-         tiles from {f}² hemicube faces), direct shadow maps 1024², VPL clamp {c:.2} % of the \
-         diagonal; stopped at RMS < {:.1} % or after {} s of frames. GPU time: the sum of the \
+         new shadowed samples per emissive mesh, {v}, direct shadow maps 1024², VPL clamp \
+         {c:.2} % of the diagonal; stopped at RMS < {:.1} % or after {} s of frames. GPU time: the sum of the \
          frames' pass timestamps (ms per frame: the median); wall: the frames' \
          latency on the CPU (VPL tracing, encoding, submission, waiting), evaluation read-backs \
          excluded. The timing line above does not apply.\n",
@@ -329,8 +347,16 @@ fn markdown(r: &Report) -> String {
             .join(", "),
         100.0 * r.target,
         r.seconds,
-        t = r.vpl_tile,
-        f = 2 * r.vpl_tile,
+        v = match r.visibility {
+            Visibility::Ssm => format!(
+                "exact rasterised VPL maps ({t}×{t} paraboloid tiles from {f}² hemicube faces)",
+                t = r.vpl_tile,
+                f = 2 * r.vpl_tile
+            ),
+            Visibility::Rays => "VPL visibility by a ray per pixel and VPL (a BVH of the scene \
+                                 traversed in the shading kernel, `VplShadows::Rays`)"
+                .into(),
+        },
         c = 0.5 * r.clamp_scale,
     );
     let mut table = bench::Table::new(&[

@@ -394,8 +394,11 @@ impl GpuRenderer {
                 .as_ref()
                 .and_then(|a| a.maps.as_ref())
                 .map(|m| {
-                    let (atlas, params) = m.bindings();
-                    AtlasBindings { atlas, params }
+                    let b = m.bindings();
+                    AtlasBindings {
+                        atlas: b.atlas,
+                        params: b.params,
+                    }
                 }),
         };
         Ok(self

@@ -1,0 +1,73 @@
+// Exact visibility by rays (`instant_radiosity::rays`): a flattened BVH2 of the scene's
+// triangles, traversed with a stack for any hit on a segment. The importer binds `ray_nodes`
+// and `ray_triangles`.
+
+struct RayNode {
+    min: vec3<f32>,
+    // Triangles of a leaf; 0 for an inner node (children `first`, `first + 1`).
+    count: u32,
+    max: vec3<f32>,
+    first: u32,
+};
+
+struct RayTriangle {
+    v0: vec4<f32>,
+    e1: vec4<f32>,
+    e2: vec4<f32>,
+};
+
+const RAY_STACK: u32 = 64u;
+
+// Whether the segment's parameter range [0, 1] meets the node's box.
+fn ray_slab(node: RayNode, origin: vec3<f32>, inv: vec3<f32>) -> bool {
+    let t0 = (node.min - origin) * inv;
+    let t1 = (node.max - origin) * inv;
+    let lo = min(t0, t1);
+    let hi = max(t0, t1);
+    let near = max(max(max(lo.x, lo.y), lo.z), 0.0);
+    let far = min(min(min(hi.x, hi.y), hi.z), 1.0);
+    return near <= far;
+}
+
+// Möller–Trumbore: whether the segment meets the triangle at 0 < t < 1.
+fn ray_hits(tri: RayTriangle, origin: vec3<f32>, to: vec3<f32>) -> bool {
+    let p = cross(to, tri.e2.xyz);
+    let det = dot(tri.e1.xyz, p);
+    if abs(det) < 1e-30 {
+        return false;
+    }
+    let inv_det = 1.0 / det;
+    let s = origin - tri.v0.xyz;
+    let u = dot(s, p) * inv_det;
+    let q = cross(s, tri.e1.xyz);
+    let v = dot(to, q) * inv_det;
+    let t = dot(tri.e2.xyz, q) * inv_det;
+    return u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < 1.0;
+}
+
+// Whether a triangle meets the open segment from `origin` to `origin + to`.
+fn occluded(origin: vec3<f32>, to: vec3<f32>) -> bool {
+    let inv = 1.0 / select(to, vec3<f32>(1e-30), to == vec3<f32>(0.0));
+    var stack: array<u32, RAY_STACK>;
+    stack[0] = 0u;
+    var top = 1u;
+    while top > 0u {
+        top -= 1u;
+        let node = ray_nodes[stack[top]];
+        if !ray_slab(node, origin, inv) {
+            continue;
+        }
+        if node.count == 0u {
+            stack[top] = node.first;
+            stack[top + 1u] = node.first + 1u;
+            top += 2u;
+            continue;
+        }
+        for (var i = node.first; i < node.first + node.count; i++) {
+            if ray_hits(ray_triangles[i], origin, to) {
+                return true;
+            }
+        }
+    }
+    return false;
+}
