@@ -394,6 +394,95 @@ pub fn path_traced(
     )?)
 }
 
+/// [`path_traced`], kept in the folder `cache` when one is given: a truth traced once (here,
+/// where CPU time is free) is read back by later runs (on the lent GPU, whose time is not).
+/// The file is named by a hash of everything the image depends on — the meshes, materials,
+/// lights, camera, size, configuration and `spp` — but not the path tracer's code: empty the
+/// folder when `scene::reference` changes. A file that does not hold a whole image of the
+/// size is an error, never a truth.
+#[allow(clippy::too_many_arguments)]
+pub fn path_traced_cached(
+    cache: Option<&std::path::Path>,
+    scene: &scene::Scene,
+    lights: &[scene::Light],
+    camera: scene::Camera,
+    (w, h): (u32, u32),
+    config: scene::reference::ReferenceConfig,
+    spp: u32,
+) -> anyhow::Result<gbuffer::Image<[f32; 4]>> {
+    let Some(dir) = cache else {
+        return path_traced(scene, lights, camera, (w, h), config, spp);
+    };
+    let path = dir.join(format!(
+        "truth-{w}x{h}-{spp}spp-{:016x}.f32",
+        truth_key(scene, lights, camera, (w, h), config, spp)
+    ));
+    let bytes = 16 * w as usize * h as usize;
+    if let Ok(data) = std::fs::read(&path) {
+        anyhow::ensure!(
+            data.len() == bytes,
+            "{}: {} bytes, not a {w}×{h} RGBA f32 image ({bytes})",
+            path.display(),
+            data.len()
+        );
+        let pixels = data
+            .chunks_exact(16)
+            .map(|p| {
+                std::array::from_fn(|c| f32::from_le_bytes([0, 1, 2, 3].map(|b| p[4 * c + b])))
+            })
+            .collect();
+        println!("  truth read from {}", path.display());
+        return Ok(gbuffer::Image::from_vec(w, h, pixels)?);
+    }
+    let image = path_traced(scene, lights, camera, (w, h), config, spp)?;
+    std::fs::create_dir_all(dir)?;
+    gbuffer::write_atomically(&path, |tmp| {
+        let data: Vec<u8> = image
+            .pixels()
+            .iter()
+            .flatten()
+            .flat_map(|c| c.to_le_bytes())
+            .collect();
+        std::fs::write(tmp, data).map_err(|e| e.to_string())
+    })?;
+    println!("  truth written to {}", path.display());
+    Ok(image)
+}
+
+/// FNV-1a over what a path-traced image depends on ([`path_traced_cached`]).
+fn truth_key(
+    scene: &scene::Scene,
+    lights: &[scene::Light],
+    camera: scene::Camera,
+    size: (u32, u32),
+    config: scene::reference::ReferenceConfig,
+    spp: u32,
+) -> u64 {
+    let mut hash = 0xcbf2_9ce4_8422_2325_u64;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            hash = (hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    for mesh in &scene.meshes {
+        eat(bytemuck::cast_slice(&mesh.positions));
+        eat(bytemuck::cast_slice(&mesh.normals));
+        eat(bytemuck::cast_slice(&mesh.uvs));
+        eat(bytemuck::cast_slice(&mesh.indices));
+        eat(&mesh.material.to_le_bytes());
+    }
+    for texture in &scene.textures {
+        eat(&texture.width.to_le_bytes());
+        eat(&texture.rgba8);
+    }
+    eat(format!(
+        "{:?}{lights:?}{camera:?}{size:?}{config:?}{spp}",
+        scene.materials
+    )
+    .as_bytes());
+    hash
+}
+
 /// Image error against a reference, on what a PNG shows (RGB clamped to \[0, 1\], sRGB).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Quality {

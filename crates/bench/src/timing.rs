@@ -117,7 +117,8 @@ pub fn scene_labels(path: &std::path::Path, camera: &Camera) -> (String, String)
     )
 }
 
-/// Writes `<stem>.json` (the serialized report) and `<stem>.md` under `out` and says so.
+/// Writes `<stem>.json` (the serialized report) and `<stem>.md` under `out`, each atomically
+/// (a report rewritten as rows come in is never seen half-written), and says so.
 pub fn write_report(
     out: &std::path::Path,
     stem: &str,
@@ -125,10 +126,15 @@ pub fn write_report(
     markdown: &str,
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(out)?;
+    let write = |path: &std::path::Path, text: &str| {
+        gbuffer::write_atomically(path, |tmp| {
+            std::fs::write(tmp, text).map_err(|e| e.to_string())
+        })
+    };
     let json = out.join(format!("{stem}.json"));
-    std::fs::write(&json, serde_json::to_string_pretty(report)?)?;
+    write(&json, &serde_json::to_string_pretty(report)?)?;
     let md = out.join(format!("{stem}.md"));
-    std::fs::write(&md, markdown)?;
+    write(&md, markdown)?;
     println!("wrote {} and {}", md.display(), json.display());
     Ok(())
 }

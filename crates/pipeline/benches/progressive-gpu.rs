@@ -7,7 +7,8 @@
 //! through pixel centres (where the rasteriser samples) in two halves of `--spp` with other
 //! seeds: their difference measures its own noise, which is taken off the measured RMS
 //! (`rms² − noise²`, the mean-square error against the noiseless image). Writes
-//! `progressive-<adapter>-<date>.{md,json}` under `--out`.
+//! `progressive-<adapter>-<date>.{md,json}` (`progressive-rays-…` with `--visibility rays`)
+//! under `--out`, again after every configuration.
 
 use anyhow::Result;
 use bench::{Header, Stat};
@@ -54,6 +55,14 @@ struct Args {
     /// The VPLs' visibility: the paper's rasterised maps, or rays through the scene's BVH.
     #[arg(long, value_enum, default_value_t = Visibility::Ssm)]
     visibility: Visibility,
+    /// Folder that keeps the truths between runs ([`bench::path_traced_cached`]): trace them
+    /// once on a machine with CPU time to spare, carry the folder to the GPU.
+    #[arg(long)]
+    truth_cache: Option<std::path::PathBuf>,
+    /// Folder for each scene's truth and each configuration's final mean as linear EXR
+    /// (`<scene>-truth.exr`, `<scene>-<n>x<n>.exr`), to look at where the error lies.
+    #[arg(long)]
+    images: Option<std::path::PathBuf>,
 }
 
 /// `--visibility`.
@@ -90,18 +99,18 @@ struct Row {
 }
 
 #[derive(Serialize)]
-struct Report {
+struct Report<'a> {
     #[serde(flatten)]
     header: Header,
     size: (u32, u32),
     spp: u32,
     target: f64,
     seconds: f64,
-    truth_noise: Vec<(String, f64)>,
+    truth_noise: &'a [(String, f64)],
     vpl_tile: u32,
     clamp_scale: f32,
     visibility: Visibility,
-    rows: Vec<Row>,
+    rows: &'a [Row],
 }
 
 /// Sponza with the Stanford dragon (100 k triangles) and bunny standing on its floor: a scene
@@ -183,7 +192,8 @@ fn main() -> Result<()> {
                 jitter: false,
                 ..ReferenceConfig::default()
             };
-            bench::path_traced(&scene, photon_lights, camera, size, config, spp / 2)
+            let cache = args.truth_cache.as_deref();
+            bench::path_traced_cached(cache, &scene, photon_lights, camera, size, config, spp / 2)
         };
         let (a, b) = (half(1)?, half(2)?);
         let truth = Image::from_vec(
@@ -199,6 +209,10 @@ fn main() -> Result<()> {
         // halves has half that variance.
         let noise = gbuffer::accuracy(&a, &b, 10.0).rms / 2.0;
         println!("  truth noise {:.4} (relative RMS)", noise);
+        if let Some(dir) = &args.images {
+            std::fs::create_dir_all(dir)?;
+            truth.write_exr(&dir.join(format!("{name}-truth.exr")))?;
+        }
         noise_rows.push((label.to_owned(), noise));
         let patterns: &[u32] = match (&args.patterns[..], name.as_str()) {
             ([], "cornell") => &[1, 2, 4],
@@ -271,6 +285,10 @@ fn main() -> Result<()> {
             }
             let (a, clean) = last;
             let frames = p.frames();
+            if let Some(dir) = &args.images {
+                p.read(d, q)?
+                    .write_exr(&dir.join(format!("{name}-{n}x{n}.exr")))?;
+            }
             let row = Row {
                 scene: label.to_owned(),
                 triangles: scene.triangle_count(),
@@ -303,22 +321,28 @@ fn main() -> Result<()> {
                 100.0 * a.bias
             );
             rows.push(row);
+            // After every row: a run cut short keeps the rows it measured.
+            let report = Report {
+                header: Header::new(&gpu),
+                size,
+                spp,
+                target: args.target,
+                seconds: args.seconds,
+                truth_noise: &noise_rows,
+                vpl_tile: args.vpl_tile,
+                clamp_scale: args.clamp_scale,
+                visibility: args.visibility,
+                rows: &rows,
+            };
+            let prefix = match args.visibility {
+                Visibility::Ssm => "progressive-",
+                Visibility::Rays => "progressive-rays-",
+            };
+            args.options
+                .write_report(&report.header, prefix, &report, &markdown(&report))?;
         }
     }
-    let report = Report {
-        header: Header::new(&gpu),
-        size,
-        spp,
-        target: args.target,
-        seconds: args.seconds,
-        truth_noise: noise_rows,
-        vpl_tile: args.vpl_tile,
-        clamp_scale: args.clamp_scale,
-        visibility: args.visibility,
-        rows,
-    };
-    args.options
-        .write_report(&report.header, "progressive-", &report, &markdown(&report))
+    Ok(())
 }
 
 fn markdown(r: &Report) -> String {
@@ -375,7 +399,7 @@ fn markdown(r: &Report) -> String {
         "error",
         "bias",
     ]);
-    for row in &r.rows {
+    for row in r.rows {
         table.row([
             row.scene.clone(),
             row.triangles.to_string(),
@@ -384,7 +408,10 @@ fn markdown(r: &Report) -> String {
             if row.reached { "yes" } else { "no" }.into(),
             row.frames.to_string(),
             format!("{:.2}", row.gpu_ms_per_frame.median_ms),
-            format!("{:.2}", row.ssm_ms_per_frame),
+            match r.visibility {
+                Visibility::Ssm => format!("{:.2}", row.ssm_ms_per_frame),
+                Visibility::Rays => "–".into(),
+            },
             format!("{:.2}", row.gpu_seconds),
             format!("{:.2}", row.wall_seconds),
             format!("{:.4} ({:.4})", row.rms, row.rms_without_truth_noise),
