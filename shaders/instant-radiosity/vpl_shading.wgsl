@@ -3,7 +3,7 @@
 // #import tiled-shading/lighting.wgsl
 // #import manylod/lookup.wgsl
 // #import interleave/pattern.wgsl
-// #import instant-radiosity/rays.wgsl
+// #import tiled-shading/rays.wgsl
 // SNSM — shading with no shadow map (Segovia 2006 §4.3, §6.2): each pixel sums the diffuse and
 // glossy light reflected from the hemispherical VPLs of its subset, visibility ignored. Twin of
 // `instant_radiosity::cpu::shade_vpls`.
@@ -21,7 +21,7 @@
 // multiplied by its visibility: p is looked up in micro-view k of the ManyLoDs / ISM atlas
 // (paraboloid around the VPL normal, `manylod::View::splat`'s projection). With rays
 // (`ray_offset` > 0) it is instead 0 when a triangle of `ray_nodes`/`ray_triangles` lies between
-// p and the VPL, each moved `ray_offset` off its surface (`instant_radiosity::rays`).
+// p and the VPL, each moved `ray_offset` off its surface (`tiled_shading::rays`).
 
 struct Vpl {
     position: vec3<f32>,
@@ -52,9 +52,8 @@ struct ShadingParams {
 // The VPL shadow maps (`manylod/lookup.wgsl`'s atlas; `manylod::lookup::AtlasParams`).
 @group(0) @binding(9) var<storage, read> atlas: array<u32>;
 @group(0) @binding(10) var<uniform> atlas_params: AtlasParams;
-// The scene's BVH for visibility by rays (`instant_radiosity::rays::RayBvh`).
-@group(0) @binding(11) var<storage, read> ray_nodes: array<RayNode>;
-@group(0) @binding(12) var<storage, read> ray_triangles: array<RayTriangle>;
+// The scene's BVH for visibility by rays (`tiled_shading::rays::RayBvh`): `ray_nodes` and
+// `ray_triangles` of `rays.wgsl` at bindings 11 and 12 (`instant_radiosity::gpu::shading_rays`).
 
 // Visibility of p (normal n) from VPL k: by a ray (`instant_radiosity::rays::visibility`) or
 // in its atlas tile (`instant_radiosity::shadows::vpl_visibility`).

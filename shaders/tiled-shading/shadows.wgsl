@@ -10,7 +10,12 @@
 // lights): one around a spot's or hemispherical light's direction, two (±y) for a point light;
 // the receiver is looked up in the one facing it, or at the seam of a pair in the other
 // (`manylod/lookup.wgsl`, one texel).
+// A light whose `shadow_count` is `RAY_SHADOW` casts a ray per receiver through the scene's
+// BVH (`rays.wgsl`; `tiled_shading::rays::RayShadows`): to its position, or towards a
+// directional light for `ray_params.reach`, from the receiver moved `ray_params.offset` along
+// its normal.
 // #import tiled-shading/lighting.wgsl
+// #import tiled-shading/rays.wgsl
 // #import tiled-shading/shadow_view.wgsl
 // #import manylod/lookup.wgsl
 
@@ -30,8 +35,29 @@ struct ShadowParams {
 // The ManyLoD atlas of the lights with paraboloid shadows (a stand-in without them).
 @group(1) @binding(4) var<storage, read> atlas: array<u32>;
 @group(1) @binding(5) var<uniform> atlas_params: AtlasParams;
+// The scene's BVH for the lights with ray shadows (stand-ins without them): nodes and
+// triangles at bindings 6 and 7 (`rays.wgsl`), and:
+@group(1) @binding(8) var<uniform> ray_params: RayParams;
+
+struct RayParams {
+    offset: f32,
+    reach: f32,
+    _pad0: f32,
+    _pad1: f32,
+};
 
 const PARABOLOID_SHADOW: u32 = 0x80000000u;
+const RAY_SHADOW: u32 = 0x40000000u;
+
+// Whether p (normal n) sees `light` along a ray through the BVH: 1 or 0.
+fn ray_shadow(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let origin = p + n * ray_params.offset;
+    var to = light.position - origin;
+    if light.kind == LIGHT_DIRECTIONAL {
+        to = -light.direction * ray_params.reach;
+    }
+    return select(1.0, 0.0, occluded(origin, to));
+}
 
 // The axis of paraboloid view `k` (0 or 1) of `light` (`tiled_shading::shadows::paraboloid_views`).
 fn paraboloid_axis(light: Light, k: u32) -> vec3<f32> {
@@ -101,6 +127,9 @@ fn slope_texels(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
 fn shadow_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if light.shadow_count == 0u {
         return 1.0;
+    }
+    if light.shadow_count == RAY_SHADOW {
+        return ray_shadow(light, p, n);
     }
     if (light.shadow_count & PARABOLOID_SHADOW) != 0u {
         return paraboloid_visibility(light, p, n);

@@ -131,6 +131,10 @@ struct Args {
     /// lights keep --shadows' cascades.
     #[arg(long, value_name = "TILE", value_parser = clap::value_parser!(u32).range(4..=256))]
     manylod_shadows: Option<u32>,
+    /// Exact hard shadows for every direct light instead of maps: a ray per pixel and light
+    /// through a BVH of the scene's triangles, as the path tracer's shadow rays (GPU only).
+    #[arg(long, conflicts_with_all = ["shadows", "manylod_shadows"])]
+    ray_shadows: bool,
     /// Stand in for each emissive mesh with N hemispherical lights spread over its area
     /// (with --shadows they draw its penumbrae); default 1, at its centroid.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
@@ -866,6 +870,9 @@ fn run() -> Result<()> {
     if args.manylod_shadows.is_some() && args.cpu {
         bail!("--manylod-shadows runs on the GPU only (no --cpu)");
     }
+    if args.ray_shadows && args.cpu {
+        bail!("--ray-shadows runs on the GPU only (no --cpu)");
+    }
     let shadow_config = args
         .shadows
         .map(|resolution| tiled_shading::shadows::ShadowMapConfig {
@@ -897,6 +904,9 @@ fn run() -> Result<()> {
                         ..ShadowConfig::default()
                     };
                     renderer.set_manylod_shadows(d, q, &scene, Some(&config))?;
+                }
+                if args.ray_shadows {
+                    renderer.set_ray_shadows(d, q, Some(&scene))?;
                 }
                 if let Some((config, set)) = indirect_ref {
                     match vpl_shadows {
@@ -943,6 +953,9 @@ fn run() -> Result<()> {
             None => {
                 if args.manylod_shadows.is_some() {
                     bail!("--manylod-shadows needs a GPU (the CPU frame has no ManyLoD cut)");
+                }
+                if args.ray_shadows {
+                    bail!("--ray-shadows needs a GPU (the CPU frame has no ray shadows)");
                 }
                 if u64::from(width) * u64::from(height) > MAX_CPU_PIXELS {
                     bail!(

@@ -106,3 +106,35 @@ fn many_vpl_shadow_maps_render_within_the_device_limits() {
         assert!(out.join("render.png").is_file() && out.join("vpl-shadow-atlas.png").is_file());
     }
 }
+
+/// Exact visibility by rays — the direct lights' (`--ray-shadows`) and the VPLs'
+/// (`--vpl-shadows rays`) — renders on the GPU (no atlas to write) and is refused on the CPU
+/// with a clear line.
+#[test]
+fn exact_shadows_by_rays_render_on_the_gpu_and_are_refused_on_the_cpu() {
+    let out = out_folder("rays-cpu");
+    let run = deferred(&out, &["--ray-shadows"]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("--ray-shadows"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    if gpu::test_device(&pipeline::device_needs()).is_none() {
+        return;
+    }
+    let out = out_folder("rays");
+    let run = Command::new(env!("CARGO_BIN_EXE_deferred"))
+        .args(["--size", "96x72", "--vpls", "256", "--vpl-shadows", "rays"])
+        .args(["--ray-shadows", "--out"])
+        .arg(&out)
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .expect("the deferred program runs");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(out.join("render.png").is_file() && !out.join("vpl-shadow-atlas.png").exists());
+}

@@ -24,6 +24,7 @@
 //! ```
 
 use ::gpu::kernel::{Binding, Kernel, Passes, Workgroups, check_texture};
+use ::gpu::shader::Specialisation;
 use ::gpu::{Gpu, PassTimer, transfer, wgpu};
 use gbuffer::{
     Frame, GBuffer, Image,
@@ -104,6 +105,15 @@ pub struct BoundIndirect {
     outputs: [wgpu::Texture; 2],
 }
 
+/// `vpl_shading.wgsl`'s specialisation: the BVH buffers of `rays.wgsl` at bindings 11 and 12
+/// of its one group.
+pub fn shading_rays() -> Specialisation {
+    Specialisation::default()
+        .set("RAY_GROUP", "0u")
+        .set("RAY_NODES", "11u")
+        .set("RAY_TRIANGLES", "12u")
+}
+
 impl IndirectStage {
     /// Builds the pipelines of `config` for frames of `size` (width, height). The VPL count
     /// is not part of the pipelines: any set of `config.subsets()` subsets binds.
@@ -114,7 +124,7 @@ impl IndirectStage {
     ) -> Result<Self, IndirectError> {
         config.validate_alone()?;
         let layout = SplitLayout::new(size.0, size.1, config.shading_pattern())?;
-        let module = crate::SHADERS.module(device, "vpl_shading.wgsl")?;
+        let module = crate::SHADERS.module_with(device, "vpl_shading.wgsl", &shading_rays())?;
         let constants = [
             ("width", f64::from(size.0)),
             ("height", f64::from(size.1)),

@@ -44,7 +44,7 @@ use scene::Aabb;
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "instant-radiosity",
     imports: [gbuffer::SHADERS, tiled_shading::SHADERS, manylod::SHADERS, interleave::SHADERS],
-    files: ["vpl_shading.wgsl", "ssm.wgsl", "rays.wgsl"],
+    files: ["vpl_shading.wgsl", "ssm.wgsl"],
 );
 
 /// What this crate's kernels need of a device: the interleaving passes' and the VPL

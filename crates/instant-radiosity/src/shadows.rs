@@ -20,6 +20,9 @@ use crate::cpu::Visibility;
 use crate::rays::RayBvh;
 use crate::ssm::RasterisedMaps;
 use crate::vpl::{GpuVpl, VplSet};
+use tiled_shading::gpu::shadows::GpuRays;
+use tiled_shading::rays::RayParams;
+pub use tiled_shading::rays::scene_mesh;
 
 /// Which VPL shadow maps the indirect light uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -168,10 +171,6 @@ pub struct VisibilityBindings<'a> {
     pub ray_offset: f32,
 }
 
-/// Offset of a VPL visibility ray's ends off their surfaces, as a fraction of the scene
-/// diagonal (the path tracer's shadow rays leave as close).
-const RAY_OFFSET: f32 = 1e-4;
-
 /// The VPL shadow maps on the GPU: the hierarchy, the cuts and the atlas (and the ISM points),
 /// in as many batches of views as the device's binding limits need; or the rasterised
 /// hemicubes ([`VplShadows::Rasterised`]).
@@ -181,8 +180,7 @@ pub struct VplShadowMaps {
     layout: AtlasLayout,
     params: wgpu::Buffer,
     shadow_params: AtlasParams,
-    ray_nodes: wgpu::Buffer,
-    ray_triangles: wgpu::Buffer,
+    rays: GpuRays,
     ray_offset: f32,
     mode: VplShadows,
     frames: u32,
@@ -203,7 +201,7 @@ impl VplShadowMaps {
         let (positions, indices) = scene_mesh(scene);
         let mesh = (&positions[..], &indices[..]);
         if mode == VplShadows::Rays {
-            return Self::rays(device, mesh, RAY_OFFSET * diagonal);
+            return Self::rays(device, mesh, tiled_shading::rays::RAY_OFFSET * diagonal);
         }
         let views = vpl_views(set, config.tile, lift);
         Self::from_views(device, mesh, diagonal, views, lift, mode, config)
@@ -217,11 +215,8 @@ impl VplShadowMaps {
         offset: f32,
     ) -> Result<Self, IndirectError> {
         let bvh = RayBvh::new(mesh)?;
-        let storage = |label, bytes: &[u8]| {
-            transfer::buffer_init(device, label, bytes, wgpu::BufferUsages::STORAGE)
-        };
-        let ray_nodes = storage("vpl ray nodes", bytemuck::cast_slice(&bvh.nodes))?;
-        let ray_triangles = storage("vpl ray triangles", bytemuck::cast_slice(&bvh.triangles))?;
+        // The VPL shading takes its offset from its own parameters.
+        let rays = GpuRays::new(device, &bvh, RayParams::default())?;
         let (atlas, params) = disabled_atlas(device)?;
         Ok(Self {
             source: Source::Rays(Box::new(bvh)),
@@ -229,8 +224,7 @@ impl VplShadowMaps {
             layout: vpl_atlas(0, 1, 1.0),
             params,
             shadow_params: AtlasParams::default(),
-            ray_nodes,
-            ray_triangles,
+            rays,
             ray_offset: offset,
             mode: VplShadows::Rays,
             frames: 0,
@@ -297,15 +291,13 @@ impl VplShadowMaps {
             bytemuck::bytes_of(&params),
             wgpu::BufferUsages::UNIFORM,
         )?;
-        let (ray_nodes, ray_triangles) = disabled_rays(device)?;
         Ok(Self {
             source,
             atlas,
             layout,
             params,
             shadow_params,
-            ray_nodes,
-            ray_triangles,
+            rays: GpuRays::none(device)?,
             ray_offset: 0.0,
             mode,
             frames: 0,
@@ -382,8 +374,8 @@ impl VplShadowMaps {
         VisibilityBindings {
             atlas: &self.atlas,
             params: &self.params,
-            ray_nodes: &self.ray_nodes,
-            ray_triangles: &self.ray_triangles,
+            ray_nodes: &self.rays.nodes,
+            ray_triangles: &self.rays.triangles,
             ray_offset: self.ray_offset,
         }
     }
@@ -524,22 +516,10 @@ fn disabled_atlas(device: &wgpu::Device) -> Result<(wgpu::Buffer, wgpu::Buffer),
     Ok((atlas, params))
 }
 
-/// The node and triangle buffers of shading without rays (the shading then ignores them).
-fn disabled_rays(device: &wgpu::Device) -> Result<(wgpu::Buffer, wgpu::Buffer), IndirectError> {
-    let nodes = transfer::buffer(device, "no vpl ray nodes", 32, wgpu::BufferUsages::STORAGE)?;
-    let triangles = transfer::buffer(
-        device,
-        "no vpl ray triangles",
-        48,
-        wgpu::BufferUsages::STORAGE,
-    )?;
-    Ok((nodes, triangles))
-}
-
 /// What the VPL shading binds without visibility: a disabled atlas and no rays.
 pub struct DisabledBindings {
     atlas: (wgpu::Buffer, wgpu::Buffer),
-    rays: (wgpu::Buffer, wgpu::Buffer),
+    rays: GpuRays,
 }
 
 impl DisabledBindings {
@@ -547,7 +527,7 @@ impl DisabledBindings {
     pub fn new(device: &wgpu::Device) -> Result<Self, IndirectError> {
         Ok(Self {
             atlas: disabled_atlas(device)?,
-            rays: disabled_rays(device)?,
+            rays: GpuRays::none(device)?,
         })
     }
 
@@ -556,23 +536,11 @@ impl DisabledBindings {
         VisibilityBindings {
             atlas: &self.atlas.0,
             params: &self.atlas.1,
-            ray_nodes: &self.rays.0,
-            ray_triangles: &self.rays.1,
+            ray_nodes: &self.rays.nodes,
+            ray_triangles: &self.rays.triangles,
             ray_offset: 0.0,
         }
     }
-}
-
-/// All meshes of `scene` as one triangle list (world-space positions, indices).
-pub fn scene_mesh(scene: &Scene) -> (Vec<Vec3>, Vec<u32>) {
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    for m in &scene.meshes {
-        let base = positions.len() as u32;
-        positions.extend_from_slice(&m.positions);
-        indices.extend(m.indices.iter().map(|i| base + i));
-    }
-    (positions, indices)
 }
 
 /// One `tile × tile` paraboloid view per VPL, on its hemisphere, lifted off the surface by

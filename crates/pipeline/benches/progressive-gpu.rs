@@ -55,6 +55,10 @@ struct Args {
     /// The VPLs' visibility: the paper's rasterised maps, or rays through the scene's BVH.
     #[arg(long, value_enum, default_value_t = Visibility::Ssm)]
     visibility: Visibility,
+    /// The direct lights' shadows: maps (1024², the renderer's default), or a ray per pixel
+    /// and light.
+    #[arg(long, value_enum, default_value_t = Direct::Maps)]
+    direct: Direct,
     /// Folder that keeps the truths between runs ([`bench::path_traced_cached`]): trace them
     /// once on a machine with CPU time to spare, carry the folder to the GPU.
     #[arg(long)]
@@ -72,6 +76,16 @@ enum Visibility {
     /// Exact rasterised VPL maps (Segovia 2006's SSM).
     Ssm,
     /// A ray per pixel and VPL ([`VplShadows::Rays`]).
+    Rays,
+}
+
+/// `--direct`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+enum Direct {
+    /// Shadow maps (`ProgressiveConfig::direct_maps`).
+    Maps,
+    /// A ray per pixel and light (`GpuRenderer::set_ray_shadows`).
     Rays,
 }
 
@@ -110,6 +124,7 @@ struct Report<'a> {
     vpl_tile: u32,
     clamp_scale: f32,
     visibility: Visibility,
+    direct: Direct,
     rows: &'a [Row],
 }
 
@@ -237,6 +252,7 @@ fn main() -> Result<()> {
             if args.visibility == Visibility::Rays {
                 config.visibility = Some(VplShadows::Rays);
             }
+            config.direct_rays = args.direct == Direct::Rays;
             config.indirect.clamp_distance *= args.clamp_scale;
             if once {
                 config.vpl_maps.tile = 16;
@@ -332,11 +348,13 @@ fn main() -> Result<()> {
                 vpl_tile: args.vpl_tile,
                 clamp_scale: args.clamp_scale,
                 visibility: args.visibility,
+                direct: args.direct,
                 rows: &rows,
             };
-            let prefix = match args.visibility {
-                Visibility::Ssm => "progressive-",
-                Visibility::Rays => "progressive-rays-",
+            let prefix = match (args.visibility, args.direct) {
+                (Visibility::Ssm, Direct::Maps) => "progressive-",
+                (Visibility::Rays, Direct::Maps) => "progressive-rays-",
+                (_, Direct::Rays) => "progressive-all-rays-",
             };
             args.options
                 .write_report(&report.header, prefix, &report, &markdown(&report))?;
@@ -356,7 +374,7 @@ fn markdown(r: &Report) -> String {
         "{}×{}; truth: `scene::reference`, {BOUNCES} bounces, {} spp through pixel centres (two \
          halves of other seeds; its relative noise, taken off the RMS: {}); frames: \
          `pipeline::progressive` — per frame new VPLs ({BOUNCES} bounces, Russian roulette), 16 \
-         new shadowed samples per emissive mesh, {v}, direct shadow maps 1024², VPL clamp \
+         new shadowed samples per emissive mesh, {v}, {direct}, VPL clamp \
          {c:.2} % of the diagonal; stopped at RMS < {:.1} % or after {} s of frames. GPU time: the sum of the \
          frames' pass timestamps (ms per frame: the median); wall: the frames' \
          latency on the CPU (VPL tracing, encoding, submission, waiting), evaluation read-backs \
@@ -382,6 +400,10 @@ fn markdown(r: &Report) -> String {
                 .into(),
         },
         c = 0.5 * r.clamp_scale,
+        direct = match r.direct {
+            Direct::Maps => "direct shadow maps 1024²",
+            Direct::Rays => "direct shadows by a ray per pixel and light",
+        },
     );
     let mut table = bench::Table::new(&[
         "scene",

@@ -19,8 +19,11 @@ use instant_radiosity::{
     shadows::{ShadowConfig, VplShadowMaps, VplShadows},
     vpl::VplSet,
 };
-use tiled_shading::gpu::shadows::{AtlasBindings, GpuShadowMaps, ShadowInputs, ShadowMapPass};
+use tiled_shading::gpu::shadows::{
+    AtlasBindings, GpuRays, GpuShadowMaps, ShadowInputs, ShadowMapPass,
+};
 use tiled_shading::gpu::{ACCUMULATION_FORMAT, BoundShading, LightShading};
+use tiled_shading::rays::RayShadows;
 use tiled_shading::shadows::{self, ShadowMapConfig};
 
 fn view(t: &wgpu::Texture) -> wgpu::TextureView {
@@ -116,6 +119,7 @@ pub struct GpuRenderer {
     vpl_shadows: Option<VplShadowMaps>,
     shadows: Option<DirectShadows>,
     light_atlas: Option<LightAtlas>,
+    ray_shadows: Option<GpuRays>,
     bounds: scene::Aabb,
     timer: PassTimer,
 }
@@ -245,6 +249,7 @@ impl GpuRenderer {
             vpl_shadows: None,
             shadows: None,
             light_atlas: None,
+            ray_shadows: None,
             bounds: scene.bounds(),
             timer: PassTimer::new(device, 32),
         })
@@ -385,6 +390,26 @@ impl GpuRenderer {
         self.plan_shadows(device, queue)
     }
 
+    /// Gives every direct light exact hard shadows by a ray per pixel through a BVH of
+    /// `scene`'s triangles (`Some`: [`tiled_shading::rays::RayShadows`], the path tracer's
+    /// shadows, no maps drawn), or takes them away (`None`: the maps and ManyLoD shadows set
+    /// with [`GpuRenderer::set_shadows`] and [`GpuRenderer::set_manylod_shadows`] again).
+    pub fn set_ray_shadows(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: Option<&Scene>,
+    ) -> Result<(), RenderError> {
+        self.ray_shadows = match scene {
+            Some(scene) => {
+                let rays = RayShadows::new(scene)?;
+                Some(GpuRays::new(device, &rays.bvh, rays.params)?)
+            }
+            None => None,
+        };
+        self.plan_shadows(device, queue)
+    }
+
     /// Binds the light accumulation's shadow lookup to the current maps and atlas.
     fn bind_shadow_lookup(&mut self, device: &wgpu::Device) -> Result<(), RenderError> {
         let inputs = ShadowInputs {
@@ -400,6 +425,7 @@ impl GpuRenderer {
                         params: b.params,
                     }
                 }),
+            rays: self.ray_shadows.as_ref(),
         };
         Ok(self
             .shading
@@ -416,7 +442,15 @@ impl GpuRenderer {
     ) -> Result<(), RenderError> {
         for l in &mut self.lights {
             l.shadow_first = 0;
-            l.shadow_count = shadows::NO_SHADOW;
+            l.shadow_count = if self.ray_shadows.is_some() {
+                shadows::RAY_SHADOW
+            } else {
+                shadows::NO_SHADOW
+            };
+        }
+        if self.ray_shadows.is_some() {
+            self.shading_bound.set_lights(queue, &self.lights)?;
+            return self.bind_shadow_lookup(device);
         }
         let diagonal = self.bounds.diagonal();
         if let Some(a) = &mut self.light_atlas {
@@ -480,9 +514,9 @@ impl GpuRenderer {
 
     /// The shadow views of every light (the directional ones only when ManyLoD shadows the
     /// others) for the current camera (or one framing the scene before the first camera), at
-    /// most `max_views`; `None` without shadow maps.
+    /// most `max_views`; `None` without shadow maps or with ray shadows.
     fn shadow_plan(&self, max_views: u32) -> Result<Option<shadows::ShadowPlan>, RenderError> {
-        let Some(s) = &self.shadows else {
+        let Some(s) = self.shadows.as_ref().filter(|_| self.ray_shadows.is_none()) else {
             return Ok(None);
         };
         let camera = self.camera.unwrap_or_else(|| Camera::framing(self.bounds));
@@ -645,7 +679,10 @@ impl GpuRenderer {
 
     /// Shadow views of the direct lights the frame renders (0 without shadows).
     pub fn shadow_view_count(&self) -> usize {
-        self.shadows.as_ref().map_or(0, |s| s.maps.count())
+        self.shadows
+            .as_ref()
+            .filter(|_| self.ray_shadows.is_none())
+            .map_or(0, |s| s.maps.count())
     }
 
     /// The direct lights' ManyLoD shadow maps, if set and some light has paraboloid views.
@@ -694,11 +731,16 @@ impl GpuRenderer {
         {
             shadows.encode(encoder, Some(&self.timer));
         }
-        if let Some(s) = &self.shadows {
+        if let Some(s) = self.shadows.as_ref().filter(|_| self.ray_shadows.is_none()) {
             s.pass
                 .encode(&s.maps, &self.scene, encoder, Some(&self.timer));
         }
-        if let Some(maps) = self.light_atlas.as_mut().and_then(|a| a.maps.as_mut()) {
+        if let Some(maps) = self
+            .light_atlas
+            .as_mut()
+            .and_then(|a| a.maps.as_mut())
+            .filter(|_| self.ray_shadows.is_none())
+        {
             maps.encode(encoder, Some(&self.timer));
         }
         self.shading

@@ -54,6 +54,9 @@ pub struct ProgressiveConfig {
     pub vpl_maps: ShadowConfig,
     /// The direct lights' shadow maps.
     pub direct_maps: ShadowMapConfig,
+    /// Exact direct shadows by a ray per pixel and light instead of the maps
+    /// ([`GpuRenderer::set_ray_shadows`]).
+    pub direct_rays: bool,
 }
 
 impl ProgressiveConfig {
@@ -80,6 +83,7 @@ impl ProgressiveConfig {
                 ..ShadowConfig::for_mode(VplShadows::Rasterised)
             },
             direct_maps: ShadowMapConfig::default(),
+            direct_rays: false,
         }
     }
 }
@@ -124,7 +128,11 @@ impl<'s> Progressive<'s> {
         let bvh = Bvh::build(scene);
         let (lights, emissive, _) = vpl::primary_lights_frame(scene, config.area_samples, 0);
         let mut renderer = GpuRenderer::new(device, queue, scene, &lights, width, height)?;
-        renderer.set_shadows(device, queue, Some(&config.direct_maps))?;
+        if config.direct_rays {
+            renderer.set_ray_shadows(device, queue, Some(scene))?;
+        } else {
+            renderer.set_shadows(device, queue, Some(&config.direct_maps))?;
+        }
         renderer.set_camera(queue, &camera)?;
         renderer.set_ambient(queue, Vec3::ZERO);
         let photon_lights = vpl::photon_lights(&lights, emissive).to_vec();

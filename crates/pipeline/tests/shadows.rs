@@ -163,6 +163,7 @@ fn manylod_light_shadows_agree_with_shadow_rays() {
         bias: 0.0,
         normal_offset: 0.0,
         atlas: Some((atlas, params)),
+        rays: None,
     };
     let gb = gbuffer::cpu::rasterize(&scene, &camera, w, h)
         .expect("G-buffer")

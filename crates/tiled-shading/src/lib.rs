@@ -26,6 +26,7 @@
 pub mod cpu;
 pub mod gpu;
 pub mod lighting;
+pub mod rays;
 pub mod shadows;
 
 use std::fmt;
@@ -40,6 +41,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     imports: [gbuffer::SHADERS, manylod::SHADERS],
     files: [
         "lighting.wgsl",
+        "rays.wgsl",
         "shadow_view.wgsl",
         "shadows.wgsl",
         "shadow_raster.wgsl",
@@ -296,6 +298,9 @@ pub enum ShadingError {
     /// Bad shadow-map settings, or more shadow views than the device holds.
     #[error("shadow maps: {0}")]
     InvalidShadows(String),
+    /// A scene the ray traversal cannot take ([`rays::RayBvh`]).
+    #[error("rays: {0}")]
+    Rays(String),
     /// A GPU resource could not be created or read.
     #[error(transparent)]
     Gpu(#[from] ::gpu::GpuError),

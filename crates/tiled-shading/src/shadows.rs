@@ -20,6 +20,10 @@
 //! many-view cut that renders the VPLs' shadow maps): [`paraboloid_views`] gives a light's
 //! paraboloid views, [`paraboloid_plan`] numbers them, and a light whose `shadow_count` carries
 //! [`PARABOLOID_SHADOW`] is looked up there ([`manylod::lookup`], one texel, no filter).
+//!
+//! Or no map at all: a light whose `shadow_count` is [`RAY_SHADOW`] casts a ray through the
+//! scene's BVH per receiver ([`crate::rays::RayShadows`]) — exact hard shadows, the path
+//! tracer's.
 
 use glam::{Mat4, Vec3, Vec4Swizzles};
 use manylod::lookup::{self, AtlasParams};
@@ -33,6 +37,10 @@ pub const NO_SHADOW: u32 = 0;
 /// Flag of `GpuLight::shadow_count`: the light's (count & 0xff) views are paraboloid tiles of
 /// the ManyLoD atlas from tile `shadow_first`, not depth-array layers.
 pub const PARABOLOID_SHADOW: u32 = 0x8000_0000;
+
+/// `GpuLight::shadow_count` of a light whose visibility is a ray through the scene's BVH
+/// ([`crate::rays::RayShadows`]); no views.
+pub const RAY_SHADOW: u32 = 0x4000_0000;
 
 /// Widest spot cone (half angle, radians) drawn into one perspective view; wider spots use
 /// five cube faces around their axis.
@@ -523,6 +531,8 @@ pub struct ShadowMaps {
     pub normal_offset: f32,
     /// The ManyLoD atlas of the lights with [`PARABOLOID_SHADOW`] and its parameters.
     pub atlas: Option<(Vec<u32>, AtlasParams)>,
+    /// The BVH the lights with [`RAY_SHADOW`] cast their rays through.
+    pub rays: Option<crate::rays::RayShadows>,
 }
 
 /// Most texels of [`slope_texels`].
@@ -545,6 +555,12 @@ pub fn slope_texels(light: &GpuLight, p: Vec3, n: Vec3) -> f32 {
 pub fn visibility(maps: &ShadowMaps, light: &GpuLight, p: Vec3, n: Vec3) -> f32 {
     if light.shadow_count == NO_SHADOW {
         return 1.0;
+    }
+    if light.shadow_count == RAY_SHADOW {
+        return maps
+            .rays
+            .as_ref()
+            .map_or(1.0, |rays| rays.visibility(light, p, n));
     }
     if light.shadow_count & PARABOLOID_SHADOW != 0 {
         return maps
@@ -653,6 +669,7 @@ pub fn ray_cast_maps(
         bias: config.bias,
         normal_offset: config.normal_offset,
         atlas: None,
+        rays: None,
     }
 }
 

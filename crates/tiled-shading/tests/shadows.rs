@@ -10,6 +10,7 @@ use tiled_shading::{
     GpuLight, Method, ShadingConfig,
     cpu::{self, Shaded},
     gpu,
+    rays::RayShadows,
     shadows::{self, ShadowMapConfig, ShadowMaps},
 };
 
@@ -320,6 +321,7 @@ fn paraboloid_shadows_from_a_ray_cast_atlas() {
             atlas: &atlas_buffer,
             params: &params_buffer,
         }),
+        rays: None,
     };
     let (gb, frame) = &view;
     let on_gpu = gpu::run(g, gb, frame, &camera, &lights, &config, inputs).expect("gpu");
@@ -330,6 +332,7 @@ fn paraboloid_shadows_from_a_ray_cast_atlas() {
         bias: 0.0,
         normal_offset: 0.0,
         atlas: Some((atlas.clone(), params)),
+        rays: None,
     };
     let on_cpu = cpu::shade(gb, frame, &camera, &lights, &config, Some(&maps)).expect("cpu");
     assert_same_shading(&on_cpu, &on_gpu);
@@ -349,4 +352,63 @@ fn paraboloid_shadows_from_a_ray_cast_atlas() {
     println!("{a}");
     assert!(a.occluded * 20 > a.pairs, "the scene casts shadows: {a}");
     assert!(a.fraction() >= 0.98, "{a}");
+}
+
+#[test]
+fn ray_shadows_equal_their_cpu_twin_and_the_shadow_rays_of_an_independent_bvh() {
+    let Some((g, scene, camera, mut lights, view)) = setup(96, 64) else {
+        return;
+    };
+    for l in &mut lights {
+        l.shadow_first = 0;
+        l.shadow_count = shadows::RAY_SHADOW;
+    }
+    let rays = RayShadows::new(&scene).expect("rays");
+    let gpu_rays = gpu::shadows::GpuRays::new(&g.device, &rays.bvh, rays.params).expect("gpu rays");
+    let config = ShadingConfig {
+        method: Method::Tiled,
+        tile_size: 16,
+    };
+    let inputs = gpu::shadows::ShadowInputs {
+        rays: Some(&gpu_rays),
+        ..Default::default()
+    };
+    let (gb, frame) = &view;
+    let on_gpu = gpu::run(g, gb, frame, &camera, &lights, &config, inputs).expect("gpu");
+    let maps = ShadowMaps {
+        views: Vec::new(),
+        depth: Vec::new(),
+        resolution: 1,
+        bias: 0.0,
+        normal_offset: 0.0,
+        atlas: None,
+        rays: Some(rays.clone()),
+    };
+    let on_cpu = cpu::shade(gb, frame, &camera, &lights, &config, Some(&maps)).expect("cpu");
+    assert_same_shading(&on_cpu, &on_gpu);
+    // Against `scene::Bvh` (another builder and intersector) from the same lift: only pairs
+    // whose ray grazes an edge may differ.
+    let a = shadows::ray_agreement(
+        gb,
+        frame,
+        &lights,
+        &Bvh::build(&scene),
+        (rays.params.offset, rays.params.reach),
+        |light, p, n| Some(rays.visibility(light, p, n) > 0.5),
+        |_, _| 0.0,
+    );
+    println!("{a}");
+    assert!(a.occluded * 20 > a.pairs, "the scene casts shadows: {a}");
+    assert_eq!(a.skipped, 0, "{a}");
+    assert!(a.fraction() >= 0.999, "{a}");
+    // Shadows by rays darken the frame as the maps do.
+    let lit = gpu::run(g, gb, frame, &camera, &lights, &config, Default::default());
+    let total = |s: &Shaded| {
+        s.diffuse
+            .pixels()
+            .iter()
+            .map(|p| p.element_sum())
+            .sum::<f32>()
+    };
+    assert!(total(&on_gpu) < 0.95 * total(&lit.expect("unshadowed")));
 }

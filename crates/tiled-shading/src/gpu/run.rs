@@ -54,6 +54,7 @@ pub fn run_shadowed(
     let inputs = ShadowInputs {
         maps: Some(&maps),
         atlas: None,
+        rays: None,
     };
     let shaded = run(gpu, gb, frame, camera, &lights, config, inputs)?;
     Ok((shaded, maps.read(device, queue, &plan.views)?, lights))

@@ -29,21 +29,83 @@ use ::gpu::{PassTimer, transfer};
 use gbuffer::gpu::GpuScene;
 
 use crate::ShadingError;
+use crate::rays::{RayBvh, RayNode, RayParams, RayTriangle};
 use crate::shadows::{ShadowMapConfig, ShadowMaps, ShadowView};
 
 /// Format of the shadow-map array.
 pub const SHADOW_FORMAT: wgpu::TextureFormat = gbuffer::DEPTH_FORMAT;
 
 /// Group 1 of the light accumulation (`shadows.wgsl`): views, bias and offset, the depth
-/// array, its sampler; the ManyLoD atlas of paraboloid-shadowed lights and its parameters.
-pub const LOOKUP_BINDINGS: [Binding; 6] = [
+/// array, its sampler; the ManyLoD atlas of paraboloid-shadowed lights and its parameters;
+/// the BVH of ray-shadowed lights (nodes, triangles, [`crate::rays::RayParams`]).
+pub const LOOKUP_BINDINGS: [Binding; 9] = [
     Binding::StorageRead,
     Binding::Uniform,
     Binding::TextureDepthArray,
     Binding::SamplerNonFiltering,
     Binding::StorageRead,
     Binding::Uniform,
+    Binding::StorageRead,
+    Binding::StorageRead,
+    Binding::Uniform,
 ];
+
+/// The scene's BVH on the GPU for visibility by rays ([`crate::rays`]): its nodes, its
+/// triangles and the shadow rays' [`RayParams`] (`rays.wgsl`, `shadows.wgsl`).
+pub struct GpuRays {
+    /// [`crate::rays::RayNode`]s.
+    pub nodes: wgpu::Buffer,
+    /// [`crate::rays::RayTriangle`]s.
+    pub triangles: wgpu::Buffer,
+    /// Uniform [`RayParams`].
+    pub params: wgpu::Buffer,
+}
+
+impl GpuRays {
+    /// Uploads `bvh` with `params`.
+    pub fn new(
+        device: &wgpu::Device,
+        bvh: &RayBvh,
+        params: RayParams,
+    ) -> Result<Self, ShadingError> {
+        let storage = |label, bytes: &[u8]| {
+            transfer::buffer_init(device, label, bytes, wgpu::BufferUsages::STORAGE)
+        };
+        Ok(Self {
+            nodes: storage("ray nodes", bytemuck::cast_slice(&bvh.nodes))?,
+            triangles: storage("ray triangles", bytemuck::cast_slice(&bvh.triangles))?,
+            params: transfer::buffer_init(
+                device,
+                "ray params",
+                bytemuck::bytes_of(&params),
+                wgpu::BufferUsages::UNIFORM,
+            )?,
+        })
+    }
+
+    /// Stand-ins for shading that casts no rays (one zeroed node and triangle).
+    pub fn none(device: &wgpu::Device) -> Result<Self, ShadingError> {
+        let zeroed =
+            |label, size: usize, usage| transfer::buffer(device, label, size as u64, usage);
+        Ok(Self {
+            nodes: zeroed(
+                "no ray nodes",
+                size_of::<RayNode>(),
+                wgpu::BufferUsages::STORAGE,
+            )?,
+            triangles: zeroed(
+                "no ray triangles",
+                size_of::<RayTriangle>(),
+                wgpu::BufferUsages::STORAGE,
+            )?,
+            params: zeroed(
+                "no ray params",
+                size_of::<RayParams>(),
+                wgpu::BufferUsages::UNIFORM,
+            )?,
+        })
+    }
+}
 
 /// A ManyLoD atlas of paraboloid shadow views as the lookup binds it: the packed depths
 /// (`manylod::gpu`'s atlas buffer) and a uniform `manylod::lookup::AtlasParams`.
@@ -294,20 +356,23 @@ impl GpuShadowMaps {
             bias: self.config.bias,
             normal_offset: self.config.normal_offset,
             atlas: None,
+            rays: None,
         })
     }
 }
 
 /// What the light accumulation looks shadows up in: depth-array views
-/// ([`GpuShadowMaps`]) for the lights whose `shadow_count` names layers, and a ManyLoD atlas
-/// for those with [`crate::shadows::PARABOLOID_SHADOW`]. `Default`: neither (every light
-/// unshadowed).
+/// ([`GpuShadowMaps`]) for the lights whose `shadow_count` names layers, a ManyLoD atlas
+/// for those with [`crate::shadows::PARABOLOID_SHADOW`], the scene's BVH for those with
+/// [`crate::shadows::RAY_SHADOW`]. `Default`: none (every light unshadowed).
 #[derive(Clone, Copy, Default)]
 pub struct ShadowInputs<'a> {
     /// The rasterised shadow maps.
     pub maps: Option<&'a GpuShadowMaps>,
     /// The ManyLoD atlas.
     pub atlas: Option<AtlasBindings<'a>>,
+    /// The BVH for rays.
+    pub rays: Option<&'a GpuRays>,
 }
 
 /// The lookup group ([`LOOKUP_BINDINGS`]) of `inputs` on `layout`, 1×1 stand-ins (no light
@@ -315,8 +380,16 @@ pub struct ShadowInputs<'a> {
 pub(super) fn lookup_group(
     device: &wgpu::Device,
     layout: &Layout,
-    ShadowInputs { maps, atlas }: ShadowInputs<'_>,
+    ShadowInputs { maps, atlas, rays }: ShadowInputs<'_>,
 ) -> Result<wgpu::BindGroup, ShadingError> {
+    let stand_in_rays;
+    let rays = match rays {
+        Some(r) => r,
+        None => {
+            stand_in_rays = GpuRays::none(device)?;
+            &stand_in_rays
+        }
+    };
     let stand_in_maps;
     let (views, params, texture, sampler) = match maps {
         Some(m) => (&m.views, &m.params, &m.texture, &m.sampler),
@@ -376,6 +449,9 @@ pub(super) fn lookup_group(
             wgpu::BindingResource::Sampler(sampler),
             atlas.atlas.as_entire_binding(),
             atlas.params.as_entire_binding(),
+            rays.nodes.as_entire_binding(),
+            rays.triangles.as_entire_binding(),
+            rays.params.as_entire_binding(),
         ],
     ))
 }

@@ -2,8 +2,8 @@
 //! `scene::Bvh`, an independent BVH and intersector.
 
 use glam::Vec3;
-use instant_radiosity::{rays::RayBvh, shadows::scene_mesh};
 use scene::Bvh;
+use tiled_shading::rays::{RayBvh, scene_mesh};
 
 /// A deterministic point in the scene's box (xorshift).
 fn point(state: &mut u64, lo: Vec3, hi: Vec3) -> Vec3 {

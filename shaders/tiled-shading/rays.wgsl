@@ -1,6 +1,7 @@
-// Exact visibility by rays (`instant_radiosity::rays`): a flattened BVH2 of the scene's
-// triangles, traversed with a stack for any hit on a segment. The importer binds `ray_nodes`
-// and `ray_triangles`.
+// Exact visibility by rays (`tiled_shading::rays`): a flattened BVH2 of the scene's
+// triangles, traversed with a stack for any hit on a segment. Its two buffers sit where the
+// light accumulation's shadow group has them (`shadows.wgsl`); another importer specialises
+// `RAY_GROUP`, `RAY_NODES` and `RAY_TRIANGLES` to its own layout.
 
 struct RayNode {
     min: vec3<f32>,
@@ -17,6 +18,12 @@ struct RayTriangle {
 };
 
 const RAY_STACK: u32 = 64u;
+
+const RAY_GROUP: u32 = 1u;
+const RAY_NODES: u32 = 6u;
+const RAY_TRIANGLES: u32 = 7u;
+@group(RAY_GROUP) @binding(RAY_NODES) var<storage, read> ray_nodes: array<RayNode>;
+@group(RAY_GROUP) @binding(RAY_TRIANGLES) var<storage, read> ray_triangles: array<RayTriangle>;
 
 // Whether the segment's parameter range [0, 1] meets the node's box.
 fn ray_slab(node: RayNode, origin: vec3<f32>, inv: vec3<f32>) -> bool {
