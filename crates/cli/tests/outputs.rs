@@ -22,6 +22,18 @@ fn deferred(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
         .expect("the deferred program runs")
 }
 
+/// `deferred` on the GPU at 96×72 with `extra`.
+fn deferred_on_gpu(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_deferred"))
+        .args(["--size", "96x72"])
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .expect("the deferred program runs")
+}
+
 #[test]
 fn a_run_writes_its_outputs_and_nothing_else() {
     let out = out_folder("ok");
@@ -84,20 +96,7 @@ fn many_vpl_shadow_maps_render_within_the_device_limits() {
     }
     for (mode, vpls) in [("manylod", "1024"), ("ism", "4096"), ("ssm", "1024")] {
         let out = out_folder(&format!("vpl-shadows-{mode}"));
-        let run = Command::new(env!("CARGO_BIN_EXE_deferred"))
-            .args([
-                "--size",
-                "96x72",
-                "--vpls",
-                vpls,
-                "--vpl-shadows",
-                mode,
-                "--out",
-            ])
-            .arg(&out)
-            .env_remove("RUST_BACKTRACE")
-            .output()
-            .expect("the deferred program runs");
+        let run = deferred_on_gpu(&out, &["--vpls", vpls, "--vpl-shadows", mode]);
         assert!(
             run.status.success(),
             "--vpl-shadows {mode} --vpls {vpls}: {}",
@@ -124,13 +123,10 @@ fn exact_shadows_by_rays_render_on_the_gpu_and_are_refused_on_the_cpu() {
         return;
     }
     let out = out_folder("rays");
-    let run = Command::new(env!("CARGO_BIN_EXE_deferred"))
-        .args(["--size", "96x72", "--vpls", "256", "--vpl-shadows", "rays"])
-        .args(["--ray-shadows", "--out"])
-        .arg(&out)
-        .env_remove("RUST_BACKTRACE")
-        .output()
-        .expect("the deferred program runs");
+    let run = deferred_on_gpu(
+        &out,
+        &["--vpls", "256", "--vpl-shadows", "rays", "--ray-shadows"],
+    );
     assert!(
         run.status.success(),
         "{}",

@@ -129,6 +129,27 @@ fn cpu_lookup_on_the_read_back_maps_equals_the_gpu_shading() {
     assert_same_shading(&cpu_shaded, &gpu_shaded);
 }
 
+/// The sum of a shading's diffuse light.
+fn total(s: &Shaded) -> f32 {
+    s.diffuse.pixels().iter().map(|p| p.element_sum()).sum()
+}
+
+/// CPU shadows with no depth views: a ManyLoD atlas and/or rays.
+fn without_views(
+    atlas: Option<(Vec<u32>, manylod::lookup::AtlasParams)>,
+    rays: Option<RayShadows>,
+) -> ShadowMaps {
+    ShadowMaps {
+        views: Vec::new(),
+        depth: Vec::new(),
+        resolution: 1,
+        bias: 0.0,
+        normal_offset: 0.0,
+        atlas,
+        rays,
+    }
+}
+
 /// At most 0.5 % of the pixels of `gpu`'s diffuse light differ from `cpu`'s by more than
 /// 0.1 % of the peak.
 fn assert_same_shading(cpu: &Shaded, gpu: &Shaded) {
@@ -201,13 +222,6 @@ fn shadows_only_remove_light_and_do_remove_it() {
     )
     .expect("unshadowed");
     let (shadowed, _, _) = shaded_gpu(g, &scene, &view, &camera, &lights);
-    let total = |s: &Shaded| {
-        s.diffuse
-            .pixels()
-            .iter()
-            .map(|p| p.element_sum())
-            .sum::<f32>()
-    };
     for (a, b) in lit.diffuse.pixels().iter().zip(shadowed.diffuse.pixels()) {
         assert!(
             b.cmple(*a * (1.0 + 1e-4) + Vec3::splat(1e-6)).all(),
@@ -325,15 +339,7 @@ fn paraboloid_shadows_from_a_ray_cast_atlas() {
     };
     let (gb, frame) = &view;
     let on_gpu = gpu::run(g, gb, frame, &camera, &lights, &config, inputs).expect("gpu");
-    let maps = ShadowMaps {
-        views: Vec::new(),
-        depth: Vec::new(),
-        resolution: 1,
-        bias: 0.0,
-        normal_offset: 0.0,
-        atlas: Some((atlas.clone(), params)),
-        rays: None,
-    };
+    let maps = without_views(Some((atlas.clone(), params)), None);
     let on_cpu = cpu::shade(gb, frame, &camera, &lights, &config, Some(&maps)).expect("cpu");
     assert_same_shading(&on_cpu, &on_gpu);
 
@@ -375,15 +381,7 @@ fn ray_shadows_equal_their_cpu_twin_and_the_shadow_rays_of_an_independent_bvh() 
     };
     let (gb, frame) = &view;
     let on_gpu = gpu::run(g, gb, frame, &camera, &lights, &config, inputs).expect("gpu");
-    let maps = ShadowMaps {
-        views: Vec::new(),
-        depth: Vec::new(),
-        resolution: 1,
-        bias: 0.0,
-        normal_offset: 0.0,
-        atlas: None,
-        rays: Some(rays.clone()),
-    };
+    let maps = without_views(None, Some(rays.clone()));
     let on_cpu = cpu::shade(gb, frame, &camera, &lights, &config, Some(&maps)).expect("cpu");
     assert_same_shading(&on_cpu, &on_gpu);
     // Against `scene::Bvh` (another builder and intersector) from the same lift: only pairs
@@ -403,12 +401,5 @@ fn ray_shadows_equal_their_cpu_twin_and_the_shadow_rays_of_an_independent_bvh() 
     assert!(a.fraction() >= 0.999, "{a}");
     // Shadows by rays darken the frame as the maps do.
     let lit = gpu::run(g, gb, frame, &camera, &lights, &config, Default::default());
-    let total = |s: &Shaded| {
-        s.diffuse
-            .pixels()
-            .iter()
-            .map(|p| p.element_sum())
-            .sum::<f32>()
-    };
     assert!(total(&on_gpu) < 0.95 * total(&lit.expect("unshadowed")));
 }
