@@ -2,9 +2,10 @@
 //! (`scene::reference`, issue 21's measure) on the Cornell box (its ceiling lamp) and
 //! Dabrovic Sponza (the default sun): per configuration, the relative mean absolute luminance
 //! error and bias (emitters excluded, [`gbuffer::accuracy`]) and FLIP / PSNR against the path
-//! tracer at `--spp` samples — direct light without and with shadow maps (truth: no bounce),
-//! then shadowed direct light plus `--vpls` VPLs without visibility, with ISM, with ManyLoD
-//! and with exact rasterised (SSM) visibility (truth: one bounce), multi-bounce VPLs (photons
+//! tracer at `--spp` samples — direct light without and with shadow maps or ray shadows
+//! (truth: no bounce), then shadowed direct light plus `--vpls` VPLs without visibility, with
+//! ISM, with ManyLoD, with exact rasterised (SSM) visibility and with rays (truth: one
+//! bounce), multi-bounce VPLs (photons
 //! continue by Russian roulette; truth: 8 bounces), and the progressive mode's mean after
 //! `--progressive-frames` frames (`pipeline::progressive`; a quarter of the VPLs per frame on
 //! Sponza). Accuracy does not depend on the adapter (the GPU only
@@ -157,6 +158,15 @@ struct Setup<'a> {
     progressive_frames: u32,
 }
 
+/// How a measured frame shadows its direct lights.
+#[derive(Clone, Copy)]
+enum Direct {
+    /// Shadow maps (`ShadowMapConfig::default()`).
+    Maps,
+    /// A ray per pixel and light (`GpuRenderer::set_ray_shadows`).
+    Rays,
+}
+
 /// A scene's rows and the pictures of [`PICTURE`].
 type Measured = (Vec<Row>, Vec<Image<[f32; 4]>>);
 
@@ -195,20 +205,23 @@ fn measure_scene(setup: &Setup<'_>, scene: &Scene, camera: Camera) -> Result<Mea
     )?;
     let mut rows = Vec::new();
     let mut pictures = Vec::new();
-    // `shadowed`: the lights with shadow maps, an emitter as that many hemispherical samples
-    // (else unshadowed, an emitter one point at its centroid).
+    // `shadowed`: the lights with shadow maps (`Direct::Maps`) or rays, an emitter as that
+    // many hemispherical samples (else unshadowed, an emitter one point at its centroid).
     // `bounces`: the VPLs' bounces (the truth's), with `visibility` (`None`: no VPLs).
     let mut measure = |name: &str,
-                       shadowed: Option<u32>,
+                       shadowed: Option<(u32, Direct)>,
                        visibility: Option<Option<(VplShadows, u32)>>,
                        bounces: u32|
      -> Result<()> {
         let set = if bounces > 1 { &many_set } else { &set };
         let mut r = match shadowed {
-            Some(samples) => {
+            Some((samples, direct)) => {
                 let (sampled, _, _) = vpl::primary_lights_sampled(scene, samples);
                 let mut r = GpuRenderer::new(d, q, scene, &sampled, w, h)?;
-                r.set_shadows(d, q, Some(&ShadowMapConfig::default()))?;
+                match direct {
+                    Direct::Maps => r.set_shadows(d, q, Some(&ShadowMapConfig::default()))?,
+                    Direct::Rays => r.set_ray_shadows(d, q, Some(scene))?,
+                }
                 r
             }
             None => GpuRenderer::new(d, q, scene, &lights, w, h)?,
@@ -242,45 +255,38 @@ fn measure_scene(setup: &Setup<'_>, scene: &Scene, camera: Camera) -> Result<Mea
         Ok(())
     };
     measure("direct light (no shadows)", None, None, 0)?;
-    measure("direct light (shadow maps)", Some(1), None, 0)?;
+    measure(
+        "direct light (shadow maps)",
+        Some((1, Direct::Maps)),
+        None,
+        0,
+    )?;
     // Emitters as area lights: 16 shadowed samples each (punctual lights are one sample).
     let samples = if emissive { 16 } else { 1 };
     if emissive {
-        measure(PICTURE[0], Some(samples), None, 0)?;
+        measure(PICTURE[0], Some((samples, Direct::Maps)), None, 0)?;
     }
+    let rays = Some((samples, Direct::Rays));
+    measure("direct light (shadows by rays)", rays, None, 0)?;
+    let samples = Some((samples, Direct::Maps));
     let (ism, manylod) = (VplShadows::Ism, VplShadows::ManyLod);
     let bounce = |visibility: &str| format!("shadowed direct light + VPLs, {visibility}");
-    measure(&bounce("no visibility"), Some(samples), Some(None), 1)?;
-    measure(&bounce("ISM"), Some(samples), Some(Some((ism, 32))), 1)?;
-    measure(
-        &bounce("ManyLoD"),
-        Some(samples),
-        Some(Some((manylod, 32))),
-        1,
-    )?;
+    measure(&bounce("no visibility"), samples, Some(None), 1)?;
+    measure(&bounce("ISM"), samples, Some(Some((ism, 32))), 1)?;
+    measure(&bounce("ManyLoD"), samples, Some(Some((manylod, 32))), 1)?;
     let maps64 = Some(Some((manylod, 64)));
-    measure(&bounce("ManyLoD 64×64 maps"), Some(samples), maps64, 1)?;
+    measure(&bounce("ManyLoD 64×64 maps"), samples, maps64, 1)?;
     let many = |visibility: &str| format!("shadowed direct light + 8-bounce VPLs, {visibility}");
-    measure(
-        &many("no visibility"),
-        Some(samples),
-        Some(None),
-        MANY_BOUNCES,
-    )?;
-    measure(
-        &many("ManyLoD 64×64 maps"),
-        Some(samples),
-        maps64,
-        MANY_BOUNCES,
-    )?;
+    measure(&many("no visibility"), samples, Some(None), MANY_BOUNCES)?;
+    measure(&many("ManyLoD 64×64 maps"), samples, maps64, MANY_BOUNCES)?;
     let ssm = Some(Some((VplShadows::Rasterised, 64)));
-    measure(&bounce("exact SSM 64×64 maps"), Some(samples), ssm, 1)?;
-    measure(
-        &many("exact SSM 64×64 maps"),
-        Some(samples),
-        ssm,
-        MANY_BOUNCES,
-    )?;
+    measure(&bounce("exact SSM 64×64 maps"), samples, ssm, 1)?;
+    measure(&many("exact SSM 64×64 maps"), samples, ssm, MANY_BOUNCES)?;
+    let vpl_rays = Some(Some((VplShadows::Rays, 0)));
+    measure(&bounce("rays"), samples, vpl_rays, 1)?;
+    measure(&many("rays"), samples, vpl_rays, MANY_BOUNCES)?;
+    let all_rays = |v: &str| format!("direct light by rays + 8-bounce VPLs, {v}");
+    measure(&all_rays("rays"), rays, vpl_rays, MANY_BOUNCES)?;
     // The progressive mode: its own lights, VPLs and maps every frame, averaged.
     let mut config = ProgressiveConfig::new(scene);
     config.vpls = setup.progressive_vpls;
