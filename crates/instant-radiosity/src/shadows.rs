@@ -167,7 +167,8 @@ pub struct VisibilityBindings<'a> {
     pub ray_nodes: &'a wgpu::Buffer,
     /// [`crate::rays::RayTriangle`]s.
     pub ray_triangles: &'a wgpu::Buffer,
-    /// Offset of the rays' ends off their surfaces; 0 looks the atlas up instead.
+    /// Factor on [`crate::rays::ray_lift`] by which the rays' ends leave their surfaces (1);
+    /// 0 looks the atlas up instead.
     pub ray_offset: f32,
 }
 
@@ -201,14 +202,14 @@ impl VplShadowMaps {
         let (positions, indices) = scene_mesh(scene);
         let mesh = (&positions[..], &indices[..]);
         if mode == VplShadows::Rays {
-            return Self::rays(device, mesh, tiled_shading::rays::RAY_OFFSET * diagonal);
+            return Self::rays(device, mesh, 1.0);
         }
         let views = vpl_views(set, config.tile, lift);
         Self::from_views(device, mesh, diagonal, views, lift, mode, config)
     }
 
     /// Visibility by rays through the BVH of `mesh`, whose ends leave their surfaces by
-    /// `offset`: no atlas (a disabled one binds in its place).
+    /// `offset` × [`crate::rays::ray_lift`]: no atlas (a disabled one binds in its place).
     fn rays(
         device: &wgpu::Device,
         mesh: (&[Vec3], &[u32]),

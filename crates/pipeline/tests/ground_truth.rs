@@ -162,10 +162,10 @@ fn ray_shadows_give_the_path_tracers_direct_light() {
     let (maps, rays) = (frame(false), frame(true));
     println!("direct light of delta lights against the path tracer: maps {maps:?}, rays {rays:?}");
     // Measured 2026-12-02 (llvmpipe; the image does not depend on the adapter): maps error
-    // 0.0036, RMS 0.032; rays 0.0014, RMS 0.022 — the rays' RMS is one pixel on a shadow's
-    // edge (the G-buffer's position from depth and the path tracer's hit differ in the last
-    // bits, and the two rays pass on either side of the occluder's edge).
-    assert!(rays.error <= 0.003, "{rays:?}");
+    // 0.0036, RMS 0.032; rays 0.00065, RMS 0.0042 (with rays lifted by 10⁻⁴ of the
+    // diagonal instead of the path tracer's `ray_lift`: 0.0014 and 0.022, one pixel whose
+    // ray passed an occluder the path tracer's met).
+    assert!(rays.error <= 0.002 && rays.rms <= 0.01, "{rays:?}");
     assert!(
         rays.error < 0.5 * maps.error,
         "rays {rays:?}, maps {maps:?}"

@@ -177,7 +177,7 @@ fn manylod_light_shadows_agree_with_shadow_rays() {
         &frame,
         &gpu_lights,
         &bvh,
-        (lift, 0.0),
+        (|_| lift, 0.0),
         |light, p, n| Some(shadows::visibility(&cpu_maps, light, p, n) > 0.5),
         |light, p| (p - Vec3::from(light.position)).length() * 8.0 / 64.0,
     );

@@ -30,6 +30,14 @@ use rayon::prelude::*;
 
 use crate::{Bvh, Camera, Light, Scene};
 
+/// How far a ray leaves a surface at `p`: 10⁻⁴ of (1 + its largest coordinate), so the
+/// surface does not hit itself in f32 at any distance from the origin. The renderer's shadow
+/// and VPL rays leave by the same rule (`tiled_shading::rays`), so both see the same
+/// occluders a few millimetres off a wall.
+pub fn ray_lift(p: Vec3) -> f32 {
+    1e-4 * (1.0 + p.abs().max_element())
+}
+
 /// How the reference renders.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReferenceConfig {
@@ -396,10 +404,9 @@ impl<'s> PathTracer<'s> {
         )
     }
 
-    /// A point just off the surface on the side of `dir`.
+    /// A point just off the surface on the side of `dir` ([`ray_lift`]).
     fn offset(s: &Surface, dir: Vec3) -> Vec3 {
-        let scale = 1e-4 * (1.0 + s.p.abs().max_element());
-        s.p + s.ng * scale * dir.dot(s.ng).signum()
+        s.p + s.ng * ray_lift(s.p) * dir.dot(s.ng).signum()
     }
 
     fn visible(&self, s: &Surface, to: Vec3) -> bool {

@@ -192,7 +192,8 @@ pub fn scene_mesh(scene: &Scene) -> (Vec<Vec3>, Vec<u32>) {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct RayParams {
-    /// Offset of the ray's origin off the receiver, along its normal.
+    /// 1 to move the ray's origin off the receiver along its normal by [`ray_lift`] (the
+    /// path tracer's rule), 0 not at all.
     pub offset: f32,
     /// Length of a directional light's ray (towards the light).
     pub reach: f32,
@@ -212,19 +213,23 @@ pub struct RayShadows {
     pub params: RayParams,
 }
 
-/// Offset of a shadow ray's origin off its receiver, as a fraction of the scene's diagonal
-/// (as close as the path tracer's shadow rays leave).
-pub const RAY_OFFSET: f32 = 1e-4;
+/// How far a ray leaves a surface at `p` (`ray_lift` in `rays.wgsl`): the path tracer's rule,
+/// [`scene::reference::ray_lift`]. A lift in proportion to the scene's size instead (10⁻⁴ of
+/// Sponza's diagonal, 4 mm) carried the sun's rays past ledges that stand a few millimetres
+/// off Sponza's walls: lit pixels the path tracer has in shadow.
+pub fn ray_lift(p: Vec3) -> f32 {
+    scene::reference::ray_lift(p)
+}
 
 impl RayShadows {
-    /// The BVH of `scene` ([`RayBvh::new`]) with offsets for its size.
+    /// The BVH of `scene` ([`RayBvh::new`]), rays lifted by [`ray_lift`].
     pub fn new(scene: &Scene) -> Result<Self, ShadingError> {
         let (positions, indices) = scene_mesh(scene);
         let diagonal = scene.bounds().diagonal().max(1e-6);
         Ok(Self {
             bvh: RayBvh::new((&positions, &indices))?,
             params: RayParams {
-                offset: RAY_OFFSET * diagonal,
+                offset: 1.0,
                 reach: 2.0 * diagonal,
                 _pad: [0.0; 2],
             },
@@ -233,7 +238,7 @@ impl RayShadows {
 
     /// Whether `p` (unit normal `n`) sees `light`: 1 or 0 (`ray_shadow` in `shadows.wgsl`).
     pub fn visibility(&self, light: &crate::GpuLight, p: Vec3, n: Vec3) -> f32 {
-        let origin = p + n * self.params.offset;
+        let origin = p + n * (self.params.offset * ray_lift(p));
         let to = if light.kind == crate::LIGHT_DIRECTIONAL {
             -Vec3::from(light.direction) * self.params.reach
         } else {

@@ -749,15 +749,16 @@ impl RayAgreement {
 
 /// The ground-truth check of shadows: for every G-buffer pixel of `gb` and every light of
 /// `lights` that reaches its front, the lookup `lit(light, p, n)` (`None`: undecided, e.g.
-/// partly lit) against [`ray_visibility`] through `bvh`; pairs where a point `edge(light, p)`
-/// away on the surface (four directions; 0: no band) gets another ray answer are left out.
+/// partly lit) against [`ray_visibility`] through `bvh` from `p` lifted by `lift(p)`; pairs
+/// where a point `edge(light, p)` away on the surface (four directions; 0: no band) gets
+/// another ray answer are left out.
 #[allow(clippy::too_many_arguments)]
 pub fn ray_agreement(
     gb: &gbuffer::GBuffer,
     frame: &gbuffer::Frame,
     lights: &[GpuLight],
     bvh: &scene::Bvh,
-    (lift, reach): (f32, f32),
+    (lift, reach): (impl Fn(Vec3) -> f32, f32),
     lit: impl Fn(&GpuLight, Vec3, Vec3) -> Option<bool>,
     edge: impl Fn(&GpuLight, Vec3) -> f32,
 ) -> RayAgreement {
@@ -773,7 +774,7 @@ pub fn ray_agreement(
                 if att <= 0.0 || n.dot(l) <= 0.05 {
                     continue;
                 }
-                let ray = |q: Vec3| ray_visibility(bvh, light, q, n, lift, reach);
+                let ray = |q: Vec3| ray_visibility(bvh, light, q, n, lift(q), reach);
                 let truth = ray(p);
                 let e = edge(light, p);
                 let (t, b) = orthonormal_basis(n);

@@ -187,7 +187,7 @@ fn lookup_agrees_with_shadow_rays_outside_the_penumbra() {
         frame,
         &lights,
         &bvh,
-        (lift, reach),
+        (|_| lift, reach),
         |light, p, n| {
             let v = shadows::visibility(&maps, light, p, n);
             // The tent's weights sum to 1 within rounding.
@@ -351,7 +351,7 @@ fn paraboloid_shadows_from_a_ray_cast_atlas() {
         frame,
         &lights,
         &bvh,
-        (lift, 0.0),
+        (|_| lift, 0.0),
         |light, p, n| Some(shadows::visibility(&maps, light, p, n) > 0.5),
         |light, p| (p - Vec3::from(light.position)).length() * 4.0 / params.tile as f32,
     );
@@ -391,7 +391,7 @@ fn ray_shadows_equal_their_cpu_twin_and_the_shadow_rays_of_an_independent_bvh() 
         frame,
         &lights,
         &Bvh::build(&scene),
-        (rays.params.offset, rays.params.reach),
+        (tiled_shading::rays::ray_lift, rays.params.reach),
         |light, p, n| Some(rays.visibility(light, p, n) > 0.5),
         |_, _| 0.0,
     );
