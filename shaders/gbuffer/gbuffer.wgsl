@@ -62,11 +62,24 @@ fn pack_material(roughness: f32, metallic: f32, id: u32) -> u32 {
 // shading normal goes to the side of the geometric normal that faces the ray). The geometric
 // normal comes from the screen derivatives of the position, which lie in the triangle's plane:
 // with x right and y down, cross(∂p/∂y, ∂p/∂x) points towards the camera on every triangle.
+// A normal within `BENT_NORMAL_COS` of the plane is replaced by the plane's normal
+// (`scene::facing_shading_normal`, the path tracer's rule too).
+const BENT_NORMAL_COS: f32 = 0.01;
+
 fn facing_normal(normal: vec3<f32>, to_eye: vec3<f32>) -> vec3<f32> {
     let l2 = dot(normal, normal);
     let n = select(vec3<f32>(0.0, 0.0, 1.0), normal * inverseSqrt(l2), l2 > 1e-30);
     let geometric = cross(dpdyFine(to_eye), dpdxFine(to_eye));
-    return select(n, -n, dot(n, geometric) < 0.0);
+    let g2 = dot(geometric, geometric);
+    if g2 <= 1e-30 {
+        return n;
+    }
+    let facing = geometric * inverseSqrt(g2);
+    let c = dot(n, facing);
+    if abs(c) < BENT_NORMAL_COS {
+        return facing;
+    }
+    return select(n, -n, c < 0.0);
 }
 
 @fragment

@@ -21,7 +21,7 @@
 // multiplied by its visibility: p is looked up in micro-view k of the ManyLoDs / ISM atlas
 // (paraboloid around the VPL normal, `manylod::View::splat`'s projection). With rays
 // (`ray_offset` > 0) it is instead 0 when a triangle of `ray_nodes`/`ray_triangles` lies between
-// p and the VPL, each moved `ray_offset` off its surface (`tiled_shading::rays`).
+// p and the VPL, each lifted off its surface by `ray_offset` × `ray_lift` (`tiled_shading::rays`).
 
 struct Vpl {
     position: vec3<f32>,
@@ -59,8 +59,9 @@ struct ShadingParams {
 // in its atlas tile (`instant_radiosity::shadows::vpl_visibility`).
 fn vpl_visibility(k: u32, vpl: Vpl, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if params.ray_offset > 0.0 {
-        let start = p + n * params.ray_offset;
-        return select(1.0, 0.0, occluded(start, vpl.position + vpl.normal * params.ray_offset - start));
+        let start = p + n * (params.ray_offset * ray_lift(p));
+        let end = vpl.position + vpl.normal * (params.ray_offset * ray_lift(vpl.position));
+        return select(1.0, 0.0, occluded(start, end - start));
     }
     if atlas_params.enabled == 0u {
         return 1.0;

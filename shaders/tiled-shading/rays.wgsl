@@ -19,6 +19,12 @@ struct RayTriangle {
 
 const RAY_STACK: u32 = 64u;
 
+// How far a ray leaves a surface at p (`tiled_shading::rays::ray_lift`, the path tracer's rule).
+fn ray_lift(p: vec3<f32>) -> f32 {
+    let a = abs(p);
+    return 1e-4 * (1.0 + max(max(a.x, a.y), a.z));
+}
+
 const RAY_GROUP: u32 = 1u;
 const RAY_NODES: u32 = 6u;
 const RAY_TRIANGLES: u32 = 7u;

@@ -12,8 +12,8 @@
 // (`manylod/lookup.wgsl`, one texel).
 // A light whose `shadow_count` is `RAY_SHADOW` casts a ray per receiver through the scene's
 // BVH (`rays.wgsl`; `tiled_shading::rays::RayShadows`): to its position, or towards a
-// directional light for `ray_params.reach`, from the receiver moved `ray_params.offset` along
-// its normal.
+// directional light for `ray_params.reach`, from the receiver lifted along its normal by
+// `ray_lift` (× `ray_params.offset`, 1).
 // #import tiled-shading/lighting.wgsl
 // #import tiled-shading/rays.wgsl
 // #import tiled-shading/shadow_view.wgsl
@@ -51,7 +51,7 @@ const RAY_SHADOW: u32 = 0x40000000u;
 
 // Whether p (normal n) sees `light` along a ray through the BVH: 1 or 0.
 fn ray_shadow(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
-    let origin = p + n * ray_params.offset;
+    let origin = p + n * (ray_params.offset * ray_lift(p));
     var to = light.position - origin;
     if light.kind == LIGHT_DIRECTIONAL {
         to = -light.direction * ray_params.reach;

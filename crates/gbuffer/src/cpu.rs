@@ -309,11 +309,10 @@ fn raster_tile(
                     + tri.normal_over_w[2] * l[2])
                     * w;
                 // Shaded from the side of the plane the camera sees (`facing_normal`).
-                let normal = if normal.dot(tri.towards_camera) < 0.0 {
-                    -normal
-                } else {
-                    normal
-                };
+                let normal = scene::facing_shading_normal(
+                    normal.normalize_or(Vec3::Z),
+                    tri.towards_camera.normalize_or(Vec3::Z),
+                );
                 let uv =
                     (tri.uv_over_w[0] * l[0] + tri.uv_over_w[1] * l[1] + tri.uv_over_w[2] * l[2])
                         * w;

@@ -24,10 +24,12 @@ const LINEAR_DEPTH_REL_TOL: f32 = 1e-4;
 const NORMAL_TOL_DEG: f32 = 0.05;
 /// Albedo, 8-bit steps: GPU bilinear filtering uses fixed-point weights.
 const ALBEDO_TOL: i32 = 3;
-/// |cos| between the shading normal and its triangle's plane normal below which the GPU may
-/// turn the normal the other way than the CPU: the GPU's geometric normal comes from screen
-/// derivatives of interpolated positions, the CPU's from the triangle's vertices.
-const PLANE_COS_TOL: f32 = 0.01;
+/// |cos| between the shading normal and its triangle's plane normal within which the GPU may
+/// decide otherwise than the CPU whether a normal is bent into its plane
+/// (`scene::BENT_NORMAL_COS`, the plane's normal then) or which side it goes to: the GPU's
+/// geometric normal comes from screen derivatives of interpolated positions, the CPU's from
+/// the triangle's vertices.
+const PLANE_COS_TOL: f32 = 2.0 * scene::BENT_NORMAL_COS;
 
 /// Unit geometric normals of `scene`'s triangles, numbered as the rasteriser's ids.
 fn plane_normals(scene: &scene::Scene) -> Vec<Vec3> {
@@ -43,9 +45,10 @@ fn plane_normals(scene: &scene::Scene) -> Vec<Vec3> {
         .collect()
 }
 
-/// `either_side`: the normal may also be the CPU's turned round (it lies nearly in its
-/// triangle's plane).
-fn pixel_matches(cpu: &GBuffer, gpu: &GBuffer, x: u32, y: u32, either_side: bool) -> bool {
+/// `plane`: the unit plane normal of the pixel's triangle. Where the CPU's normal lies nearly
+/// in that plane, the GPU's may also be it turned round or the plane's normal; where the CPU
+/// took the plane's normal, the GPU's may lie nearly in the plane.
+fn pixel_matches(cpu: &GBuffer, gpu: &GBuffer, x: u32, y: u32, plane: Option<Vec3>) -> bool {
     let (dc, dg) = (cpu.depth.get(x, y), gpu.depth.get(x, y));
     if (dc - dg).abs() > DEPTH_TOL {
         return false;
@@ -58,8 +61,13 @@ fn pixel_matches(cpu: &GBuffer, gpu: &GBuffer, x: u32, y: u32, either_side: bool
         normal::unpack_octahedral(cpu.normal.get(x, y)),
         normal::unpack_octahedral(gpu.normal.get(x, y)),
     );
-    let normal_ok = normal::angle_deg(nc, ng) <= NORMAL_TOL_DEG
-        || (either_side && normal::angle_deg(-nc, ng) <= NORMAL_TOL_DEG);
+    let close = |a: Vec3| normal::angle_deg(a, ng) <= NORMAL_TOL_DEG;
+    let normal_ok = close(nc)
+        || plane.is_some_and(|g| {
+            let in_plane = |n: Vec3| n.dot(g).abs() <= PLANE_COS_TOL;
+            (in_plane(nc) && (close(-nc) || close(g) || close(-g)))
+                || (nc.dot(g).abs() >= 1.0 - 1e-4 && in_plane(ng))
+        });
     let albedo_ok = cpu
         .albedo
         .get(x, y)
@@ -104,13 +112,8 @@ fn compare(
     let planes = plane_normals(scene);
     for y in 0..h {
         for x in 0..w {
-            let either_side = planes
-                .get(expected.triangle_id.get(x, y) as usize)
-                .is_some_and(|g| {
-                    let n = normal::unpack_octahedral(expected.gbuffer.normal.get(x, y));
-                    n.dot(*g).abs() <= PLANE_COS_TOL
-                });
-            if pixel_matches(&expected.gbuffer, &actual, x, y, either_side) {
+            let plane = planes.get(expected.triangle_id.get(x, y) as usize).copied();
+            if pixel_matches(&expected.gbuffer, &actual, x, y, plane) {
                 matched += 1;
             } else if is_edge(&expected.triangle_id, x, y) {
                 diff[(y * w + x) as usize] = [255, 255, 0, 255];
@@ -181,6 +184,62 @@ fn reversed_vertex_normals_give_the_same_gbuffer() {
         plain == turned,
         "reversed vertex normals changed the GPU G-buffer"
     );
+}
+
+/// Vertex normals that lie in their triangle's plane (an asset's error: no side owns them)
+/// are replaced by the plane's normal on the camera's side, on the GPU as on the CPU — the
+/// path tracer's rule (`scene::facing_shading_normal`), so both shade such points alike.
+#[test]
+fn normals_in_their_plane_become_the_plane_normal() {
+    let Some(gpu) = gpu::test_device(&gbuffer::device_needs()) else {
+        return;
+    };
+    // The flat meshes (the walls: every triangle in one plane) get normals in their plane.
+    let mut s = scene::cornell_box();
+    let mut bent = Vec::new();
+    for m in &mut s.meshes {
+        let planes: Vec<Vec3> = m
+            .indices
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [0, 1, 2].map(|k| m.positions[t[k] as usize]);
+                (b - a).cross(c - a).normalize()
+            })
+            .collect();
+        let flat = planes.iter().all(|p| p.dot(planes[0]).abs() > 0.9999);
+        if flat {
+            let inside = scene::orthonormal_basis(planes[0]).0;
+            m.normals.iter_mut().for_each(|n| *n = inside);
+        }
+        bent.extend(std::iter::repeat_n(flat, planes.len()));
+    }
+    let camera = s.camera.expect("camera");
+    let (w, h) = (96, 72);
+    let cpu = cpu::rasterize(&s, &camera, w, h).expect("cpu");
+    let on_gpu = run(gpu, &s, &camera, w, h).expect("gpu");
+    let planes = plane_normals(&s);
+    let frame = gbuffer::Frame::new(&camera, w, h);
+    let (mut checked, mut off) = (0, Vec::new());
+    for y in 0..h {
+        for x in 0..w {
+            let id = cpu.triangle_id.get(x, y) as usize;
+            let Some(g) = planes.get(id).filter(|_| bent[id]) else {
+                continue;
+            };
+            let p =
+                gbuffer::position::from_view_ray(&frame, x, y, cpu.gbuffer.linear_depth.get(x, y));
+            let facing = if g.dot(camera.eye - p) < 0.0 { -*g } else { *g };
+            for (side, gb) in [("CPU", &cpu.gbuffer), ("GPU", &on_gpu)] {
+                let n = normal::unpack_octahedral(gb.normal.get(x, y));
+                if normal::angle_deg(n, facing) > 0.5 && !is_edge(&cpu.triangle_id, x, y) {
+                    off.push((side, x, y));
+                }
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 1000, "{checked} pixels");
+    assert!(off.is_empty(), "not the plane's normal: {off:?}");
 }
 
 #[test]

@@ -32,6 +32,27 @@ pub use light::{Light, scatter_point_lights};
 
 use glam::{Vec2, Vec3, Vec4};
 
+/// |cos| between a shading normal and its triangle's plane normal under which the shading
+/// normal is taken for an asset's error ([`facing_shading_normal`]).
+pub const BENT_NORMAL_COS: f32 = 0.01;
+
+/// The shading normal `n` (unit) turned to the side of its triangle that the viewer sees
+/// (`facing`: the unit plane normal on that side) — or, where `n` lies within
+/// [`BENT_NORMAL_COS`] of the plane (normals that no side owns: Sponza's `object5_1`, or a
+/// wall's normals on its neighbour at a corner), `facing` itself. The path tracer and the
+/// G-buffer (CPU and `facing_normal` of `gbuffer.wgsl`) share this rule, so both shade such
+/// points alike.
+pub fn facing_shading_normal(n: Vec3, facing: Vec3) -> Vec3 {
+    let c = n.dot(facing);
+    if c.abs() < BENT_NORMAL_COS {
+        facing
+    } else if c < 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
 /// Two unit vectors completing unit `n` to a right-handed orthonormal basis, continuous in `n`
 /// (Duff et al. 2017, "Building an orthonormal basis, revisited").
 pub fn orthonormal_basis(n: Vec3) -> (Vec3, Vec3) {

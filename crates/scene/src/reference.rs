@@ -378,9 +378,7 @@ impl<'s> PathTracer<'s> {
         if ng.dot(dir) > 0.0 {
             ng = -ng;
         }
-        if n.dot(ng) < 0.0 {
-            n = -n;
-        }
+        n = crate::facing_shading_normal(n, ng);
         let uv: Vec2 = (0..3).map(|k| m.uvs[idx[k]] * w[k]).sum();
         let mat = &self.scene.materials[m.material as usize];
         let mut albedo = mat.base_color.truncate();
