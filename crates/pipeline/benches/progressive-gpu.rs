@@ -64,7 +64,8 @@ struct Args {
     #[arg(long)]
     truth_cache: Option<std::path::PathBuf>,
     /// Folder for each scene's truth and each configuration's final mean as linear EXR
-    /// (`<scene>-truth.exr`, `<scene>-<n>x<n>.exr`), to look at where the error lies.
+    /// (`<scene>-truth.exr`, `<scene>-<n>x<n>.exr`) and the mean's error map
+    /// (`<scene>-<n>x<n>-error.png`), to look at where the error lies.
     #[arg(long)]
     images: Option<std::path::PathBuf>,
 }
@@ -302,8 +303,10 @@ fn main() -> Result<()> {
             let (a, clean) = last;
             let frames = p.frames();
             if let Some(dir) = &args.images {
-                p.read(d, q)?
-                    .write_exr(&dir.join(format!("{name}-{n}x{n}.exr")))?;
+                let mean = p.read(d, q)?;
+                mean.write_exr(&dir.join(format!("{name}-{n}x{n}.exr")))?;
+                error_map(&truth, &mean)?
+                    .write_png(&dir.join(format!("{name}-{n}x{n}-error.png")))?;
             }
             let row = Row {
                 scene: label.to_owned(),
@@ -361,6 +364,28 @@ fn main() -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Where `image` is off `truth`: per pixel the luminance error over the truth's mean
+/// luminance, red too bright, blue too dark, full at ±50 %; 4× enlarged (nearest).
+fn error_map(truth: &Image<[f32; 4]>, image: &Image<[f32; 4]>) -> Result<Image<[f32; 4]>> {
+    const SCALE: u32 = 4;
+    let lum = |p: &[f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+    let mean = truth.pixels().iter().map(lum).sum::<f32>() / truth.pixels().len().max(1) as f32;
+    let (w, h) = (truth.width(), truth.height());
+    let pixels = (0..h * SCALE)
+        .flat_map(|y| (0..w * SCALE).map(move |x| (x / SCALE, y / SCALE)))
+        .map(|(x, y)| {
+            let e = (lum(&image.get(x, y)) - lum(&truth.get(x, y))) / mean.max(1e-12);
+            [
+                (2.0 * e).clamp(0.0, 1.0),
+                0.0,
+                (-2.0 * e).clamp(0.0, 1.0),
+                1.0,
+            ]
+        })
+        .collect();
+    Ok(Image::from_vec(w * SCALE, h * SCALE, pixels)?)
 }
 
 fn markdown(r: &Report) -> String {
