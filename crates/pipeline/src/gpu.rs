@@ -516,7 +516,7 @@ impl GpuRenderer {
     /// others) for the current camera (or one framing the scene before the first camera), at
     /// most `max_views`; `None` without shadow maps or with ray shadows.
     fn shadow_plan(&self, max_views: u32) -> Result<Option<shadows::ShadowPlan>, RenderError> {
-        let Some(s) = self.shadows.as_ref().filter(|_| self.ray_shadows.is_none()) else {
+        let Some(s) = self.drawn_maps() else {
             return Ok(None);
         };
         let camera = self.camera.unwrap_or_else(|| Camera::framing(self.bounds));
@@ -679,10 +679,12 @@ impl GpuRenderer {
 
     /// Shadow views of the direct lights the frame renders (0 without shadows).
     pub fn shadow_view_count(&self) -> usize {
-        self.shadows
-            .as_ref()
-            .filter(|_| self.ray_shadows.is_none())
-            .map_or(0, |s| s.maps.count())
+        self.drawn_maps().map_or(0, |s| s.maps.count())
+    }
+
+    /// The direct lights' shadow maps where they are drawn: set, and not replaced by rays.
+    fn drawn_maps(&self) -> Option<&DirectShadows> {
+        self.shadows.as_ref().filter(|_| self.ray_shadows.is_none())
     }
 
     /// The direct lights' ManyLoD shadow maps, if set and some light has paraboloid views.
@@ -731,7 +733,7 @@ impl GpuRenderer {
         {
             shadows.encode(encoder, Some(&self.timer));
         }
-        if let Some(s) = self.shadows.as_ref().filter(|_| self.ray_shadows.is_none()) {
+        if let Some(s) = self.drawn_maps() {
             s.pass
                 .encode(&s.maps, &self.scene, encoder, Some(&self.timer));
         }

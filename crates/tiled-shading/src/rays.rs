@@ -213,13 +213,11 @@ pub struct RayShadows {
     pub params: RayParams,
 }
 
-/// How far a ray leaves a surface at `p` (`ray_lift` in `rays.wgsl`): the path tracer's rule,
-/// [`scene::reference::ray_lift`]. A lift in proportion to the scene's size instead (10⁻⁴ of
-/// Sponza's diagonal, 4 mm) carried the sun's rays past ledges that stand a few millimetres
-/// off Sponza's walls: lit pixels the path tracer has in shadow.
-pub fn ray_lift(p: Vec3) -> f32 {
-    scene::reference::ray_lift(p)
-}
+/// How far a ray leaves a surface (`ray_lift` in `rays.wgsl`): the path tracer's rule. A lift
+/// in proportion to the scene's size instead (10⁻⁴ of Sponza's diagonal, 4 mm) carried the
+/// sun's rays past ledges that stand a few millimetres off Sponza's walls: lit pixels the
+/// path tracer has in shadow.
+pub use scene::reference::ray_lift;
 
 impl RayShadows {
     /// The BVH of `scene` ([`RayBvh::new`]), rays lifted by [`ray_lift`].
