@@ -4,6 +4,7 @@
 // #import manylod/lookup.wgsl
 // #import interleave/pattern.wgsl
 // #import tiled-shading/rays.wgsl
+// #import instant-radiosity/vpl.wgsl
 // SNSM — shading with no shadow map (Segovia 2006 §4.3, §6.2): each pixel sums the diffuse and
 // glossy light reflected from the hemispherical VPLs of its subset, visibility ignored. Twin of
 // `instant_radiosity::cpu::shade_vpls`.
@@ -22,15 +23,6 @@
 // (paraboloid around the VPL normal, `manylod::View::splat`'s projection). With rays
 // (`ray_offset` > 0) it is instead 0 when a triangle of `ray_nodes`/`ray_triangles` lies between
 // p and the VPL, each lifted off its surface by `ray_offset` × `ray_lift` (`tiled_shading::rays`).
-
-struct Vpl {
-    position: vec3<f32>,
-    _pad0: f32,
-    normal: vec3<f32>,
-    _pad1: f32,
-    flux: vec3<f32>,
-    _pad2: f32,
-};
 
 struct ShadingParams {
     per_subset: u32,
@@ -73,18 +65,6 @@ fn vpl_visibility(k: u32, vpl: Vpl, p: vec3<f32>, n: vec3<f32>) -> f32 {
     return atlas_test(t, atlas[t.index]);
 }
 
-const INV_PI_VPL: f32 = 0.318309886183791;
-
-// The clamped intensity of `vpl` towards p; the direction to it goes to `l`.
-fn vpl_intensity(vpl: Vpl, p: vec3<f32>, l: ptr<function, vec3<f32>>) -> vec3<f32> {
-    let to_vpl = vpl.position - p;
-    let d2 = dot(to_vpl, to_vpl);
-    let dir = to_vpl * inverseSqrt(max(d2, 1e-30));
-    *l = dir;
-    let cos_vpl = max(-dot(vpl.normal, dir), 0.0);
-    return vpl.flux * (INV_PI_VPL * cos_vpl / max(d2, params.clamp_squared));
-}
-
 // Sums the subset's VPLs at G-buffer texel `texel`, which holds image pixel `pixel`, scaled.
 fn shade(texel: vec2<u32>, pixel: vec2<u32>, subset: u32) -> Accumulated {
     var sum: Accumulated;
@@ -103,7 +83,7 @@ fn shade(texel: vec2<u32>, pixel: vec2<u32>, subset: u32) -> Accumulated {
         let first = subset * params.per_subset;
         for (var k = first; k < first + params.per_subset; k++) {
             var l: vec3<f32>;
-            let intensity = vpl_intensity(vpls[k], p, &l) * vpl_visibility(k, vpls[k], p, nrm);
+            let intensity = vpl_intensity(vpls[k], p, params.clamp_squared, &l) * vpl_visibility(k, vpls[k], p, nrm);
             let c = reflect_light(intensity, l, nrm, v, albedo, roughness, metallic, albedo_specular.a);
             sum.diffuse += c.diffuse;
             sum.specular += c.specular;

@@ -1,8 +1,9 @@
 // #import gbuffer/material.wgsl
 // Composition (Ishmukhametov 2013 §1.3 step 4; Segovia 2006 Figure 3g): albedo × (ambient +
 // diffuse + indirect diffuse) + specular + indirect specular, plus the material's emissive
-// radiance. The albedo multiplies the indirect light only here, after its blur. Twin of
-// `pipeline::cpu::composition`.
+// radiance. The albedo multiplies the indirect light only here, after its blur. The VPLs' near
+// field (`instant_radiosity::near_field`, zero when not set) is indirect diffuse light too. Twin
+// of `pipeline::cpu::composition` (whose indirect diffuse image holds the near field).
 
 struct CompositionParams {
     ambient: vec4<f32>,
@@ -17,6 +18,7 @@ struct CompositionParams {
 @group(0) @binding(6) var radiance_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(7) var indirect_diffuse_in: texture_2d<f32>;
 @group(0) @binding(8) var indirect_specular_in: texture_2d<f32>;
+@group(0) @binding(9) var near_field_in: texture_2d<f32>;
 
 @compute @workgroup_size(8, 8)
 fn composition_main(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -28,7 +30,8 @@ fn composition_main(@builtin(global_invocation_id) id: vec3<u32>) {
     if word != 0xffffffffu {
         let albedo = textureLoad(albedo_in, pixel, 0).rgb;
         let metallic = f32((word >> 8u) & 0xffu) / 255.0;
-        let diffuse = textureLoad(diffuse_in, pixel, 0).rgb + textureLoad(indirect_diffuse_in, pixel, 0).rgb;
+        let diffuse = textureLoad(diffuse_in, pixel, 0).rgb + textureLoad(indirect_diffuse_in, pixel, 0).rgb
+            + textureLoad(near_field_in, pixel, 0).rgb;
         let specular = textureLoad(specular_in, pixel, 0).rgb + textureLoad(indirect_specular_in, pixel, 0).rgb;
         let emissive = materials[word >> 16u].emissive;
         out = vec4<f32>(albedo * (1.0 - metallic) * (composition.ambient.rgb + diffuse) + specular + emissive, 1.0);

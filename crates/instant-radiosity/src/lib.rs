@@ -30,6 +30,7 @@
 
 pub mod cpu;
 pub mod gpu;
+pub mod near_field;
 pub mod rays;
 pub mod shadows;
 pub mod ssm;
@@ -44,7 +45,7 @@ use scene::Aabb;
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "instant-radiosity",
     imports: [gbuffer::SHADERS, tiled_shading::SHADERS, manylod::SHADERS, interleave::SHADERS],
-    files: ["vpl_shading.wgsl", "ssm.wgsl"],
+    files: ["vpl.wgsl", "vpl_shading.wgsl", "near_field.wgsl", "ssm.wgsl"],
 );
 
 /// What this crate's kernels need of a device: the interleaving passes' and the VPL
@@ -88,6 +89,9 @@ pub enum IndirectError {
     /// VPL visibility by rays that the scene cannot give (no triangles, too deep a tree).
     #[error("VPL visibility by rays: {0}")]
     Rays(String),
+    /// A VPL set that does not fit the near field it replaces.
+    #[error("the VPLs' near field: {0}")]
+    NearField(String),
     /// Rasterised VPL shadow maps that the device or the views cannot hold.
     #[error("rasterised VPL shadow maps: {0}")]
     Ssm(String),

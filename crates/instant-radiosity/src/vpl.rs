@@ -44,7 +44,7 @@ pub struct Vpl {
     pub flux: Vec3,
 }
 
-/// A VPL as the shaders see it (WGSL `Vpl` in `instant-radiosity/vpl_shading.wgsl`).
+/// A VPL as the shaders see it (WGSL `Vpl` in `instant-radiosity/vpl.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuVpl {
@@ -464,18 +464,23 @@ pub fn area_lights_frame(scene: &Scene, samples: u32, frame: u32) -> Vec<Light> 
     lights
 }
 
-/// Linear albedo of the surface at a hit: base colour × base-colour texture at the hit's UV.
-fn albedo_at(scene: &Scene, textures: &[LinearTexture], hit: &scene::Hit) -> Vec3 {
-    let mesh = &scene.meshes[hit.mesh as usize];
+/// Linear albedo of the surface at barycentrics `(u, v)` of `triangle` of mesh `mesh`: base
+/// colour × base-colour texture at that UV.
+pub(crate) fn albedo_at(
+    scene: &Scene,
+    textures: &[LinearTexture],
+    (mesh, triangle): (u32, u32),
+    (u, v): (f32, f32),
+) -> Vec3 {
+    let mesh = &scene.meshes[mesh as usize];
     let Some(material) = scene.materials.get(mesh.material as usize) else {
         return Vec3::ZERO;
     };
     let base = material.base_color.truncate();
     let texel = match (material.base_color_texture, mesh.uvs.is_empty()) {
         (Some(t), false) if (t as usize) < textures.len() => {
-            let i = hit.triangle as usize * 3;
+            let i = triangle as usize * 3;
             let [a, b, c] = [0, 1, 2].map(|k| mesh.uvs[mesh.indices[i + k] as usize]);
-            let (u, v) = (hit.barycentrics.x, hit.barycentrics.y);
             let uv: Vec2 = a * (1.0 - u - v) + b * u + c * v;
             textures[t as usize].sample(uv).truncate()
         }
@@ -517,7 +522,12 @@ fn place(
         } else {
             normal
         };
-        let albedo = albedo_at(scene, textures, &hit);
+        let albedo = albedo_at(
+            scene,
+            textures,
+            (hit.mesh, hit.triangle),
+            (hit.barycentrics.x, hit.barycentrics.y),
+        );
         let flux = photon.flux * w * albedo;
         if !(flux.max_element() > 0.0 && flux.is_finite()) {
             break;

@@ -16,6 +16,7 @@ use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
 use instant_radiosity::{
     IndirectConfig,
     gpu::{BoundIndirect, IndirectStage},
+    near_field::{BoundNearField, NearField},
     shadows::{ShadowConfig, VplShadowMaps, VplShadows},
     vpl::VplSet,
 };
@@ -31,8 +32,8 @@ fn view(t: &wgpu::Texture) -> wgpu::TextureView {
 }
 
 /// `composition.wgsl`: ambient, materials; albedo, material, direct diffuse and specular;
-/// radiance output; indirect diffuse and specular.
-const COMPOSITION_BINDINGS: [Binding; 9] = [
+/// radiance output; indirect diffuse and specular; the VPLs' near field.
+const COMPOSITION_BINDINGS: [Binding; 10] = [
     Binding::Uniform,
     Binding::StorageRead,
     Binding::TextureUnfilterable,
@@ -40,6 +41,7 @@ const COMPOSITION_BINDINGS: [Binding; 9] = [
     Binding::TextureUnfilterable,
     Binding::TextureUnfilterable,
     Binding::StorageTexture(RADIANCE_FORMAT),
+    Binding::TextureUnfilterable,
     Binding::TextureUnfilterable,
     Binding::TextureUnfilterable,
 ];
@@ -68,7 +70,7 @@ fn composition_group(
     targets: &GBufferTargets,
     direct: [&wgpu::Texture; 2],
     radiance: &wgpu::Texture,
-    indirect: [&wgpu::Texture; 2],
+    indirect: [&wgpu::Texture; 3],
 ) -> wgpu::BindGroup {
     let views = [
         view(&targets.albedo),
@@ -78,6 +80,7 @@ fn composition_group(
         view(radiance),
         view(indirect[0]),
         view(indirect[1]),
+        view(indirect[2]),
     ];
     let mut resources = vec![ambient.as_entire_binding(), materials.as_entire_binding()];
     resources.extend(views.iter().map(wgpu::BindingResource::TextureView));
@@ -120,6 +123,7 @@ pub struct GpuRenderer {
     shadows: Option<DirectShadows>,
     light_atlas: Option<LightAtlas>,
     ray_shadows: Option<GpuRays>,
+    near_field: Option<NearFieldStage>,
     bounds: scene::Aabb,
     timer: PassTimer,
 }
@@ -153,6 +157,13 @@ struct Indirect {
     outputs: [wgpu::Texture; 2],
     config: IndirectConfig,
     set: VplSet,
+}
+
+/// The VPLs' near field as the renderer holds it ([`GpuRenderer::set_near_field`]): the kernel
+/// for the scene, its binding to the current targets, lights and VPLs, and its output.
+struct NearFieldStage {
+    kernel: NearField,
+    bound: Option<(BoundNearField, wgpu::Texture)>,
 }
 
 /// Textures of one frame size: G-buffer targets, radiance, direct light, no indirect light.
@@ -232,7 +243,11 @@ impl GpuRenderer {
             &sized.targets,
             [&sized.direct[0], &sized.direct[1]],
             &sized.radiance,
-            [&sized.no_indirect[0], &sized.no_indirect[1]],
+            [
+                &sized.no_indirect[0],
+                &sized.no_indirect[1],
+                &sized.no_indirect[0],
+            ],
         );
         Ok(Self {
             gbuffer_pass,
@@ -250,6 +265,7 @@ impl GpuRenderer {
             shadows: None,
             light_atlas: None,
             ray_shadows: None,
+            near_field: None,
             bounds: scene.bounds(),
             timer: PassTimer::new(device, 32),
         })
@@ -297,9 +313,17 @@ impl GpuRenderer {
 
     /// Rebinds the composition to the current targets and indirect stage.
     fn bind_composition(&mut self, device: &wgpu::Device) {
+        let [no_diffuse, no_specular] = &self.sized.no_indirect;
+        let near_field = match &self.near_field {
+            Some(NearFieldStage {
+                bound: Some((_, output)),
+                ..
+            }) => output,
+            _ => no_diffuse,
+        };
         let indirect = match &self.indirect {
-            Some(i) => [&i.outputs[0], &i.outputs[1]],
-            None => [&self.sized.no_indirect[0], &self.sized.no_indirect[1]],
+            Some(i) => [&i.outputs[0], &i.outputs[1], near_field],
+            None => [no_diffuse, no_specular, no_diffuse],
         };
         self.composition_group = composition_group(
             device,
@@ -338,6 +362,15 @@ impl GpuRenderer {
         self.lights = lights;
         if rebind {
             self.rebind(device, queue)?;
+        }
+        if let Some(NearFieldStage {
+            bound: Some((bound, _)),
+            ..
+        }) = &mut self.near_field
+            && !bound.set_lights(queue, &self.lights)
+        {
+            self.bind_near_field(device)?;
+            self.bind_composition(device);
         }
         self.plan_shadows(device, queue)
     }
@@ -641,7 +674,61 @@ impl GpuRenderer {
             config: *config,
             set: set.clone(),
         });
+        self.bind_near_field(device)?;
         self.bind_composition(device);
+        Ok(())
+    }
+
+    /// Adds the VPLs' near field (`Some(scene)`: Kollig & Keller 2004's compensation of the
+    /// VPL clamp, [`instant_radiosity::near_field`] — a ray of the clamp's length per pixel
+    /// through a BVH of `scene`, its light added to the indirect diffuse light), or removes it
+    /// (`None`). It follows the indirect stage's VPLs and clamp and the direct lights; each
+    /// new VPL set ([`GpuRenderer::set_vpls`]) draws another sample. Without an indirect
+    /// stage it is an error.
+    pub fn set_near_field(
+        &mut self,
+        device: &wgpu::Device,
+        scene: Option<&Scene>,
+    ) -> Result<(), RenderError> {
+        if self.indirect.is_none() && scene.is_some() {
+            return Err(RenderError::NoIndirect);
+        }
+        self.near_field = match scene {
+            Some(scene) => Some(NearFieldStage {
+                kernel: NearField::new(device, scene)?,
+                bound: None,
+            }),
+            None => None,
+        };
+        self.bind_near_field(device)?;
+        self.bind_composition(device);
+        Ok(())
+    }
+
+    /// Binds the near field, if set, to the current targets, lights and indirect stage.
+    fn bind_near_field(&mut self, device: &wgpu::Device) -> Result<(), RenderError> {
+        let (Some(stage), Some(indirect)) = (&mut self.near_field, &self.indirect) else {
+            return Ok(());
+        };
+        let (w, h) = (self.sized.targets.width, self.sized.targets.height);
+        let output = transfer::texture_2d(
+            device,
+            "near field",
+            w,
+            h,
+            interleave::gpu::IRRADIANCE_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+        );
+        let bound = stage.kernel.bind(
+            device,
+            self.gbuffer_pass.frame_buffer(),
+            (&self.sized.targets).into(),
+            &self.lights,
+            &indirect.set,
+            indirect.config.clamp_distance,
+            &output,
+        )?;
+        stage.bound = Some((bound, output));
         Ok(())
     }
 
@@ -672,6 +759,13 @@ impl GpuRenderer {
         indirect.bound.set_vpls(queue, set)?;
         if let Some(shadows) = &self.vpl_shadows {
             shadows.set_vpls(queue, set)?;
+        }
+        if let Some(NearFieldStage {
+            bound: Some((bound, _)),
+            ..
+        }) = &mut self.near_field
+        {
+            bound.set_vpls(queue, set)?;
         }
         indirect.set = set.clone();
         Ok(())
@@ -749,6 +843,13 @@ impl GpuRenderer {
             .encode(&self.shading_bound, encoder, Some(&self.timer));
         if let Some(i) = &self.indirect {
             i.stage.encode(&i.bound, encoder, Some(&self.timer));
+        }
+        if let Some(NearFieldStage {
+            bound: Some((bound, _)),
+            ..
+        }) = &self.near_field
+        {
+            bound.encode(encoder, Some(&self.timer));
         }
         let (w, h) = self.size();
         Passes::one(

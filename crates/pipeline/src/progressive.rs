@@ -57,6 +57,9 @@ pub struct ProgressiveConfig {
     /// Exact direct shadows by a ray per pixel and light instead of the maps
     /// ([`GpuRenderer::set_ray_shadows`]).
     pub direct_rays: bool,
+    /// The VPLs' near field: the light the clamp takes away, by a short ray per pixel and
+    /// frame ([`GpuRenderer::set_near_field`], Kollig & Keller 2004).
+    pub near_field: bool,
 }
 
 impl ProgressiveConfig {
@@ -84,6 +87,7 @@ impl ProgressiveConfig {
             },
             direct_maps: ShadowMapConfig::default(),
             direct_rays: false,
+            near_field: false,
         }
     }
 }
@@ -147,6 +151,9 @@ impl<'s> Progressive<'s> {
                 &set,
             )?,
             None => renderer.set_indirect(device, &config.indirect, &set)?,
+        }
+        if config.near_field {
+            renderer.set_near_field(device, Some(scene))?;
         }
         let module = crate::SHADERS.module(device, "accumulate.wgsl")?;
         use Binding::{Storage, TextureUnfilterable, Uniform};

@@ -2,8 +2,9 @@
 //! VPLs' (`instant_radiosity::shadows::VplShadows::Rays`), beyond shadow maps, which are exact
 //! only up to their resolution (docs/ground-truth.md): a BVH2 of the scene's triangles (obvhs'
 //! PLOC builder), flattened for the GPU and traversed per (receiver, light) pair by
-//! `rays.wgsl`. [`RayBvh::occluded`] is the CPU twin of its traversal, node for node;
-//! `scene::Bvh` is the independent reference.
+//! `rays.wgsl`. [`RayBvh::occluded`] (any hit) and [`RayBvh::nearest`] (the closest hit, for
+//! the VPLs' near field, `instant_radiosity::near_field`) are the CPU twins of its traversals,
+//! node for node; `scene::Bvh` is the independent reference.
 
 use glam::Vec3;
 use obvhs::{BvhBuildParams, triangle::Triangle};
@@ -30,13 +31,15 @@ pub struct RayNode {
     pub first: u32,
 }
 
-/// A triangle as the traversal tests it (`RayTriangle` of `rays.wgsl`): a vertex and the two
-/// edges from it (w unused).
+/// A triangle as the traversal tests it (`RayTriangle` of `rays.wgsl`): a vertex, its index in
+/// the mesh the BVH was built from, and the two edges from the vertex (w unused).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct RayTriangle {
     /// Vertex 0.
-    pub v0: [f32; 4],
+    pub v0: [f32; 3],
+    /// The triangle's index in the mesh (`indices[3·index ..]`).
+    pub index: u32,
     /// v1 − v0.
     pub e1: [f32; 4],
     /// v2 − v0.
@@ -89,7 +92,8 @@ impl RayBvh {
                 let t = &triangles[i as usize];
                 let (v0, v1, v2) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
                 RayTriangle {
-                    v0: four(v0),
+                    v0: v0.into(),
+                    index: i,
                     e1: four(v1 - v0),
                     e2: four(v2 - v0),
                 }
@@ -113,7 +117,7 @@ impl RayBvh {
         while top > 0 {
             top -= 1;
             let node = self.nodes[stack[top] as usize];
-            if !slab(&node, origin, inv) {
+            if !slab(&node, origin, inv, 1.0) {
                 continue;
             }
             if node.count == 0 {
@@ -123,11 +127,43 @@ impl RayBvh {
                 continue;
             }
             let leaf = node.first as usize..(node.first + node.count) as usize;
-            if self.triangles[leaf].iter().any(|t| hits(t, origin, to)) {
+            if self.triangles[leaf]
+                .iter()
+                .any(|t| hit_t(t, origin, to) < 1.0)
+            {
                 return true;
             }
         }
         false
+    }
+
+    /// The first triangle the segment from `origin` to `origin + to` meets: its parameter
+    /// `t` in (0, 1) and its slot in [`RayBvh::triangles`] (`nearest` of `rays.wgsl`).
+    pub fn nearest(&self, origin: Vec3, to: Vec3) -> Option<(f32, usize)> {
+        let inv = to.map(|c| 1.0 / if c == 0.0 { 1e-30 } else { c });
+        let mut stack = [0u32; STACK];
+        let mut top = 1;
+        let (mut best, mut index) = (1.0, None);
+        while top > 0 {
+            top -= 1;
+            let node = self.nodes[stack[top] as usize];
+            if !slab(&node, origin, inv, best) {
+                continue;
+            }
+            if node.count == 0 {
+                stack[top] = node.first;
+                stack[top + 1] = node.first + 1;
+                top += 2;
+                continue;
+            }
+            for slot in node.first as usize..(node.first + node.count) as usize {
+                let t = hit_t(&self.triangles[slot], origin, to);
+                if t < best {
+                    (best, index) = (t, Some(slot));
+                }
+            }
+        }
+        index.map(|i| (best, i))
     }
 }
 
@@ -145,26 +181,27 @@ fn depth(nodes: &[RayNode]) -> usize {
     deepest
 }
 
-/// Whether the segment's parameter range [0, 1] meets the node's box.
-fn slab(node: &RayNode, origin: Vec3, inv: Vec3) -> bool {
+/// Whether the segment's parameter range [0, `end`] meets the node's box.
+fn slab(node: &RayNode, origin: Vec3, inv: Vec3, end: f32) -> bool {
     let t0 = (Vec3::from(node.min) - origin) * inv;
     let t1 = (Vec3::from(node.max) - origin) * inv;
     let near = t0.min(t1).max_element().max(0.0);
-    let far = t0.max(t1).min_element().min(1.0);
+    let far = t0.max(t1).min_element().min(end);
     near <= far
 }
 
-/// Möller–Trumbore: whether the segment meets the triangle at 0 < t < 1.
-fn hits(t: &RayTriangle, origin: Vec3, to: Vec3) -> bool {
+/// Möller–Trumbore: the segment's parameter t where it meets the triangle, if 0 < t < 1;
+/// else 2 (`ray_t` of `rays.wgsl`).
+fn hit_t(t: &RayTriangle, origin: Vec3, to: Vec3) -> f32 {
     let (v0, e1, e2) = (
-        Vec3::from_slice(&t.v0),
+        Vec3::from(t.v0),
         Vec3::from_slice(&t.e1),
         Vec3::from_slice(&t.e2),
     );
     let p = to.cross(e2);
     let det = e1.dot(p);
     if det.abs() < 1e-30 {
-        return false;
+        return MISS;
     }
     let inv_det = 1.0 / det;
     let s = origin - v0;
@@ -172,8 +209,15 @@ fn hits(t: &RayTriangle, origin: Vec3, to: Vec3) -> bool {
     let q = s.cross(e1);
     let v = to.dot(q) * inv_det;
     let t = e2.dot(q) * inv_det;
-    u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < 1.0
+    if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < 1.0 {
+        t
+    } else {
+        MISS
+    }
 }
+
+/// [`hit_t`] of a segment that misses.
+const MISS: f32 = 2.0;
 
 /// All meshes of `scene` as one triangle list (world-space positions, indices).
 pub fn scene_mesh(scene: &Scene) -> (Vec<Vec3>, Vec<u32>) {
@@ -259,6 +303,7 @@ mod tests {
         assert_eq!(std::mem::offset_of!(RayNode, max), 16);
         assert_eq!(std::mem::offset_of!(RayNode, first), 28);
         assert_eq!(size_of::<RayTriangle>(), 48);
+        assert_eq!(std::mem::offset_of!(RayTriangle, index), 12);
         assert_eq!(std::mem::offset_of!(RayTriangle, e2), 32);
         assert_eq!(size_of::<RayParams>(), 16);
         assert_eq!(std::mem::offset_of!(RayParams, reach), 4);
