@@ -7,7 +7,8 @@
 //! through pixel centres (where the rasteriser samples) in two halves of `--spp` with other
 //! seeds: their difference measures its own noise, which is taken off the measured RMS
 //! (`rms² − noise²`, the mean-square error against the noiseless image). Writes
-//! `progressive-<adapter>-<date>.{md,json}` (`progressive-rays-…` with `--visibility rays`)
+//! `progressive-<adapter>-<date>.{md,json}` (`progressive-rays-…` with `--visibility rays`,
+//! `progressive-all-rays-…` with `--direct rays` too, `…-near-field-…` with `--near-field`)
 //! under `--out`, again after every configuration.
 
 use anyhow::Result;
@@ -59,6 +60,9 @@ struct Args {
     /// and light.
     #[arg(long, value_enum, default_value_t = Direct::Maps)]
     direct: Direct,
+    /// Add the VPLs' near field (the clamp's bias compensation, `ProgressiveConfig::near_field`).
+    #[arg(long)]
+    near_field: bool,
     /// Folder that keeps the truths between runs ([`bench::path_traced_cached`]): trace them
     /// once on a machine with CPU time to spare, carry the folder to the GPU.
     #[arg(long)]
@@ -126,6 +130,7 @@ struct Report<'a> {
     clamp_scale: f32,
     visibility: Visibility,
     direct: Direct,
+    near_field: bool,
     rows: &'a [Row],
 }
 
@@ -254,6 +259,7 @@ fn main() -> Result<()> {
                 config.visibility = Some(VplShadows::Rays);
             }
             config.direct_rays = args.direct == Direct::Rays;
+            config.near_field = args.near_field;
             config.indirect.clamp_distance *= args.clamp_scale;
             if once {
                 config.vpl_maps.tile = 16;
@@ -352,12 +358,16 @@ fn main() -> Result<()> {
                 clamp_scale: args.clamp_scale,
                 visibility: args.visibility,
                 direct: args.direct,
+                near_field: args.near_field,
                 rows: &rows,
             };
-            let prefix = match (args.visibility, args.direct) {
-                (Visibility::Ssm, Direct::Maps) => "progressive-",
-                (Visibility::Rays, Direct::Maps) => "progressive-rays-",
-                (_, Direct::Rays) => "progressive-all-rays-",
+            let prefix = match (args.visibility, args.direct, args.near_field) {
+                (Visibility::Ssm, Direct::Maps, false) => "progressive-",
+                (Visibility::Rays, Direct::Maps, false) => "progressive-rays-",
+                (_, Direct::Rays, false) => "progressive-all-rays-",
+                (Visibility::Ssm, Direct::Maps, true) => "progressive-near-field-",
+                (Visibility::Rays, Direct::Maps, true) => "progressive-rays-near-field-",
+                (_, Direct::Rays, true) => "progressive-all-rays-near-field-",
             };
             args.options
                 .write_report(&report.header, prefix, &report, &markdown(&report))?;
@@ -400,7 +410,7 @@ fn markdown(r: &Report) -> String {
          halves of other seeds; its relative noise, taken off the RMS: {}); frames: \
          `pipeline::progressive` — per frame new VPLs ({BOUNCES} bounces, Russian roulette), 16 \
          new shadowed samples per emissive mesh, {v}, {direct}, VPL clamp \
-         {c:.2} % of the diagonal; stopped at RMS < {:.1} % or after {} s of frames. GPU time: the sum of the \
+         {c:.2} % of the diagonal{near}; stopped at RMS < {:.1} % or after {} s of frames. GPU time: the sum of the \
          frames' pass timestamps (ms per frame: the median); wall: the frames' \
          latency on the CPU (VPL tracing, encoding, submission, waiting), evaluation read-backs \
          excluded. The timing line above does not apply.\n",
@@ -428,6 +438,12 @@ fn markdown(r: &Report) -> String {
         direct = match r.direct {
             Direct::Maps => "direct shadow maps 1024²",
             Direct::Rays => "direct shadows by a ray per pixel and light",
+        },
+        near = if r.near_field {
+            " with its near field (`instant_radiosity::near_field`: the clamp's bias \
+             compensation, a ray of the clamp's length per pixel and frame)"
+        } else {
+            ""
         },
     );
     let mut table = bench::Table::new(&[
