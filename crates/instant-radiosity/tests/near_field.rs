@@ -268,8 +268,7 @@ fn clamped_vpls_plus_near_field_light_a_corner_as_the_analytic_truth() {
             let (intensity, l) = instant_radiosity::cpu::vpl_intensity(v, p, c * c);
             let q = (Vec3::from(v.position), Vec3::from(v.normal));
             let seen = instant_radiosity::rays::visibility(&rays, (p, n), q, 1.0);
-            vpl_sum += f64::from((intensity * n.dot(l).max(0.0) * seen).x)
-                / std::f64::consts::PI;
+            vpl_sum += f64::from((intensity * n.dot(l).max(0.0) * seen).x) / std::f64::consts::PI;
         }
         let inputs = NearFieldInputs {
             bvh: &rays,
@@ -297,6 +296,13 @@ fn clamped_vpls_plus_near_field_light_a_corner_as_the_analytic_truth() {
         vpls + near,
         100.0 * ((vpls + near) / want - 1.0)
     );
-    assert!(vpls < 0.9 * want, "the clamp takes light away: {vpls} vs {want}");
-    assert!(((vpls + near) / want - 1.0).abs() < 0.05, "{} vs {want}", vpls + near);
+    assert!(
+        vpls < 0.9 * want,
+        "the clamp takes light away: {vpls} vs {want}"
+    );
+    assert!(
+        ((vpls + near) / want - 1.0).abs() < 0.05,
+        "{} vs {want}",
+        vpls + near
+    );
 }
