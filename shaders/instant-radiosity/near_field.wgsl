@@ -11,8 +11,8 @@
 // One cosine-distributed ray of length c per pixel and frame estimates it: at its first hit y,
 // L(y) (1 − d²/c²), with L(y) = ρ_y/π · (the lights' irradiance at y by shadow rays + one random
 // VPL subset's clamped irradiance, × subsets, by rays): Lambert at both ends, y's albedo its
-// triangle's (`near_field::triangle_albedos`). The output is diffuse E/π, as the composition
-// adds it to the indirect diffuse light.
+// triangle's (`near_field::triangle_albedos`); a hit within the ray's lift is x's own contact.
+// The output is diffuse E/π, as the composition adds it to the indirect diffuse light.
 
 struct NearFieldParams {
     clamp_squared: f32,
@@ -112,7 +112,9 @@ fn near_field(p: vec3<f32>, n: vec3<f32>, pixel: vec2<u32>) -> vec3<f32> {
     let origin = p + n * ray_lift(p);
     let to = dir * sqrt(params.clamp_squared);
     let hit = nearest(origin, to);
-    if hit.slot == RAY_NONE {
+    // A surface within the lift is the receiver's own contact, as for every ray that leaves
+    // it: a pixel centre on an edge must not see the other face at distance 0.
+    if hit.slot == RAY_NONE || hit.t * sqrt(params.clamp_squared) < ray_lift(p) {
         return vec3<f32>(0.0);
     }
     let tri = ray_triangles[hit.slot];

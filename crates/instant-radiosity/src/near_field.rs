@@ -187,11 +187,17 @@ pub fn near_field(inputs: &NearFieldInputs<'_>, p: Vec3, n: Vec3, (x, y): (u32, 
     h = pcg(h);
     let subset = h % params.subsets;
     let dir = cosine_direction(n, u1, u2);
-    let origin = p + n * ray_lift(p);
+    let lift = ray_lift(p);
+    let origin = p + n * lift;
     let to = dir * params.clamp_squared.sqrt();
     let Some((t, slot)) = inputs.bvh.nearest(origin, to) else {
         return Vec3::ZERO;
     };
+    // A surface within the lift is the receiver's own contact, as for every ray that leaves
+    // it: a pixel centre on an edge must not see the other face at distance 0.
+    if t * params.clamp_squared.sqrt() < lift {
+        return Vec3::ZERO;
+    }
     let tri = &inputs.bvh.triangles[slot];
     let mut n_y = Vec3::from_slice(&tri.e1)
         .cross(Vec3::from_slice(&tri.e2))
