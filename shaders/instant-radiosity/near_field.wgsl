@@ -9,15 +9,15 @@
 //   E_lost(x)/π = 1/π ∫ L(y(ω)) cos θ (1 − d²/c²)⁺ dω   (d = |x − y(ω)|),
 // the light of surfaces within c — most of what a receiver h above a floor gets when h ≪ c.
 // One cosine-distributed ray of length c per pixel and frame estimates it: at its first hit y,
-// L(y) (1 − d²/c²), with L(y) = ρ_y/π · (the lights' irradiance at y by shadow rays + one random
-// VPL subset's clamped irradiance, × subsets, by rays): Lambert at both ends, y's albedo its
+// L(y) (1 − d²/c²), with L(y) = ρ_y/π · (the lights' irradiance at y by shadow rays + the clamped
+// irradiance of `samples` VPLs from a random start, × vpls / samples, by rays): Lambert at both ends, y's albedo its
 // triangle's (`near_field::triangle_albedos`); a hit within the ray's lift is x's own contact.
 // The output is diffuse E/π, as the composition adds it to the indirect diffuse light.
 
 struct NearFieldParams {
     clamp_squared: f32,
-    per_subset: u32,
-    subsets: u32,
+    samples: u32,
+    vpls: u32,
     seed: u32,
     // Length of a directional light's shadow ray.
     reach: f32,
@@ -60,8 +60,8 @@ fn cosine_direction(n: vec3<f32>, u1: f32, u2: f32) -> vec3<f32> {
     return t * (r * cos(phi)) + bt * (r * sin(phi)) + n * sqrt(max(1.0 - u1, 0.0));
 }
 
-// Irradiance / π at y (normal n): the lights by shadow rays, the VPLs of `subset` by rays.
-fn irradiance_at(y: vec3<f32>, n: vec3<f32>, subset: u32) -> vec3<f32> {
+// Irradiance / π at y (normal n): the lights by shadow rays, `samples` VPLs from `first` by rays.
+fn irradiance_at(y: vec3<f32>, n: vec3<f32>, first: u32) -> vec3<f32> {
     let origin = y + n * ray_lift(y);
     var e = vec3<f32>(0.0);
     for (var i = 0u; i < params.lights; i++) {
@@ -79,10 +79,9 @@ fn irradiance_at(y: vec3<f32>, n: vec3<f32>, subset: u32) -> vec3<f32> {
             e += light.color * (inc.w * cos_y);
         }
     }
-    let first = subset * params.per_subset;
     var indirect = vec3<f32>(0.0);
-    for (var k = first; k < first + params.per_subset; k++) {
-        let vpl = vpls[k];
+    for (var i = 0u; i < params.samples; i++) {
+        let vpl = vpls[(first + i) % params.vpls];
         var l: vec3<f32>;
         let intensity = vpl_intensity(vpl, y, params.clamp_squared, &l);
         let cos_y = dot(n, l);
@@ -94,7 +93,7 @@ fn irradiance_at(y: vec3<f32>, n: vec3<f32>, subset: u32) -> vec3<f32> {
             indirect += intensity * cos_y;
         }
     }
-    return (e + indirect * f32(params.subsets)) * INV_PI;
+    return (e + indirect * (f32(params.vpls) / f32(params.samples))) * INV_PI;
 }
 
 // E_lost/π at p (normal n), pixel `pixel`'s sample of this frame.
@@ -107,7 +106,7 @@ fn near_field(p: vec3<f32>, n: vec3<f32>, pixel: vec2<u32>) -> vec3<f32> {
     h = pcg(h);
     let u2 = unit(h);
     h = pcg(h);
-    let subset = h % params.subsets;
+    let first = h % params.vpls;
     let dir = cosine_direction(n, u1, u2);
     let origin = p + n * ray_lift(p);
     let to = dir * sqrt(params.clamp_squared);
@@ -124,7 +123,7 @@ fn near_field(p: vec3<f32>, n: vec3<f32>, pixel: vec2<u32>) -> vec3<f32> {
     }
     let y = origin + to * hit.t;
     let albedo = unpack4x8unorm(albedos[tri.index]).rgb;
-    return albedo * irradiance_at(y, n_y, subset) * (1.0 - hit.t * hit.t);
+    return albedo * irradiance_at(y, n_y, first) * (1.0 - hit.t * hit.t);
 }
 
 @compute @workgroup_size(8, 8)

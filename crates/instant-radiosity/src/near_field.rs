@@ -8,8 +8,9 @@
 //! contact in docs/ground-truth.md, which a smaller clamp does not bring back (a 1024-VPL set
 //! almost never has a VPL within h). One cosine-distributed ray of length c per pixel and
 //! frame estimates it: at its first hit y, `L(y) · (1 − d²/c²)`, with `L(y) = ρ_y/π · E(y)`
-//! and E(y) the lights' irradiance by shadow rays plus one random VPL subset's clamped
-//! irradiance (× the subset count) by rays — the estimator's own light one bounce further, so
+//! and E(y) the lights' irradiance by shadow rays plus the clamped irradiance of
+//! [`Y_VPLS`] VPLs drawn at random (× the set's size over that) by rays — the estimator's own
+//! light one bounce further, so
 //! the compensation of y's near field is not recursed. Lambert at both ends; y's albedo is its
 //! triangle's ([`triangle_albedos`]: the base-colour texture at the triangle's centroid).
 //! Every frame brings another sample ([`BoundNearField::set_vpls`] advances the seed): the
@@ -40,16 +41,22 @@ use crate::cpu::vpl_intensity;
 use crate::rays::ray_lift;
 use crate::vpl::{GpuVpl, VplSet};
 
+/// VPLs that light a near-field hit (fewer when the set has fewer): the second bounce of a
+/// short ray's light needs no more, and all 1024 of a progressive frame made the pass as
+/// costly as the VPL shading itself.
+pub const Y_VPLS: u32 = 64;
+
 /// Uniform block `NearFieldParams` of `near_field.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct NearFieldParams {
     /// Square of the VPL clamp distance c (0: nothing is clamped, nothing to compensate).
     pub clamp_squared: f32,
-    /// VPLs per subset.
-    pub per_subset: u32,
-    /// Subsets of the VPL set (one, chosen per pixel, lights y).
-    pub subsets: u32,
+    /// VPLs that light y: a run of this many from a random start (wrapping round), which
+    /// takes every VPL with the same probability.
+    pub samples: u32,
+    /// VPLs in the set.
+    pub vpls: u32,
     /// Seed of the frame's samples.
     pub seed: u32,
     /// Length of a directional light's shadow ray (twice the scene's diagonal).
@@ -68,9 +75,9 @@ pub struct NearFieldInputs<'a> {
     pub albedos: &'a [u32],
     /// The direct lights.
     pub lights: &'a [GpuLight],
-    /// The VPLs, subset-major.
+    /// The VPLs.
     pub vpls: &'a [GpuVpl],
-    /// Clamp, subsets, seed, reach.
+    /// Clamp, VPL samples, seed, reach.
     pub params: NearFieldParams,
 }
 
@@ -135,9 +142,9 @@ fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
     t * (r * phi.cos()) + bt * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()
 }
 
-/// Irradiance / π at `y` (unit normal `n`): the lights by shadow rays, the VPLs of `subset`
-/// by rays, × the subset count (`irradiance_at`).
-fn irradiance_at(inputs: &NearFieldInputs<'_>, y: Vec3, n: Vec3, subset: u32) -> Vec3 {
+/// Irradiance / π at `y` (unit normal `n`): the lights by shadow rays, `samples` VPLs from
+/// `first` by rays, × `vpls / samples` (`irradiance_at`).
+fn irradiance_at(inputs: &NearFieldInputs<'_>, y: Vec3, n: Vec3, first: u32) -> Vec3 {
     let params = &inputs.params;
     let origin = y + n * ray_lift(y);
     let mut e = Vec3::ZERO;
@@ -156,9 +163,9 @@ fn irradiance_at(inputs: &NearFieldInputs<'_>, y: Vec3, n: Vec3, subset: u32) ->
             e += Vec3::from(light.color) * (attenuation * cos_y);
         }
     }
-    let first = (subset * params.per_subset) as usize;
     let mut indirect = Vec3::ZERO;
-    for vpl in &inputs.vpls[first..first + params.per_subset as usize] {
+    for i in 0..params.samples {
+        let vpl = &inputs.vpls[((first + i) % params.vpls) as usize];
         let (intensity, l) = vpl_intensity(vpl, y, params.clamp_squared);
         let cos_y = n.dot(l);
         if cos_y <= 0.0 || intensity == Vec3::ZERO {
@@ -170,7 +177,7 @@ fn irradiance_at(inputs: &NearFieldInputs<'_>, y: Vec3, n: Vec3, subset: u32) ->
             indirect += intensity * cos_y;
         }
     }
-    (e + indirect * params.subsets as f32) * FRAC_1_PI
+    (e + indirect * (params.vpls as f32 / params.samples as f32)) * FRAC_1_PI
 }
 
 /// `E_lost/π` at `p` (unit normal `n`): pixel `(x, y)`'s sample of the frame's seed
@@ -185,7 +192,7 @@ pub fn near_field(inputs: &NearFieldInputs<'_>, p: Vec3, n: Vec3, (x, y): (u32, 
     h = pcg(h);
     let u2 = unit(h);
     h = pcg(h);
-    let subset = h % params.subsets;
+    let first = h % params.vpls;
     let dir = cosine_direction(n, u1, u2);
     let lift = ray_lift(p);
     let origin = p + n * lift;
@@ -206,7 +213,7 @@ pub fn near_field(inputs: &NearFieldInputs<'_>, p: Vec3, n: Vec3, (x, y): (u32, 
         n_y = -n_y;
     }
     let albedo = unpack_rgb(inputs.albedos[tri.index as usize]);
-    albedo * irradiance_at(inputs, origin + to * t, n_y, subset) * (1.0 - t * t)
+    albedo * irradiance_at(inputs, origin + to * t, n_y, first) * (1.0 - t * t)
 }
 
 /// The near field of every pixel of a G-buffer (`near_field_main`), rounded to f16 as the
@@ -344,8 +351,8 @@ impl NearField {
         )?;
         let params = NearFieldParams {
             clamp_squared: clamp_distance * clamp_distance,
-            per_subset: set.per_subset,
-            subsets: set.subsets,
+            samples: (set.vpls.len() as u32).min(Y_VPLS),
+            vpls: set.vpls.len() as u32,
             seed: 0,
             reach: self.reach,
             lights: lights.len() as u32,
@@ -406,16 +413,14 @@ impl BoundNearField {
         true
     }
 
-    /// Replaces the VPLs by another set of as many in as many subsets, and takes the next
+    /// Replaces the VPLs by another set of as many, and takes the next
     /// seed: each set brings another sample of the near field.
     pub fn set_vpls(&mut self, queue: &wgpu::Queue, set: &VplSet) -> Result<(), IndirectError> {
-        if set.vpls.len() != self.vpl_count || set.per_subset != self.params.per_subset {
+        if set.vpls.len() != self.vpl_count {
             return Err(IndirectError::NearField(format!(
-                "the near field was bound to {} VPLs in subsets of {}, not {} in subsets of {}",
+                "it was bound to {} VPLs, not {}",
                 self.vpl_count,
-                self.params.per_subset,
-                set.vpls.len(),
-                set.per_subset
+                set.vpls.len()
             )));
         }
         queue.write_buffer(&self.vpls, 0, bytemuck::cast_slice(&set.gpu()));

@@ -16,7 +16,7 @@ fn luminance(p: &[f32; 4]) -> f64 {
     f64::from(0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
 }
 
-/// The Cornell box at 64×48 with 64 VPLs in 4 subsets and a clamp of 10 % of its diagonal
+/// The Cornell box at 64×48 with 256 VPLs (64 light each hit) and a clamp of 10 % of its diagonal
 /// (many receivers have a surface within it): GPU and CPU agree pixel for pixel, frame after
 /// frame (each `set_vpls` draws another sample), and the near field lights the receivers
 /// near another surface — the box's corners — not the open floor.
@@ -33,7 +33,7 @@ fn gpu_near_field_matches_its_cpu_twin() {
         .expect("G-buffer")
         .gbuffer;
     let frame = Frame::new(&camera, w, h);
-    let set = vpl::generate_from_primary(&scene, &Bvh::build(&scene), 64, 4, 3).expect("vpls");
+    let set = vpl::generate_from_primary(&scene, &Bvh::build(&scene), 256, 4, 3).expect("vpls");
     let lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::from).collect();
     assert!(!lights.is_empty(), "the Cornell box has a light");
     let clamp = 0.1 * scene.bounds().diagonal();
@@ -148,8 +148,8 @@ fn near_field_integrates_the_clamped_away_light() {
     let (c, h) = (1.0f32, 0.1f32);
     let params = |seed, clamp: f32| NearFieldParams {
         clamp_squared: clamp * clamp,
-        per_subset: 1,
-        subsets: 1,
+        samples: 1,
+        vpls: 1,
         seed,
         reach: 100.0,
         lights: 1,
@@ -277,8 +277,8 @@ fn clamped_vpls_plus_near_field_light_a_corner_as_the_analytic_truth() {
             vpls: &gpu_vpls,
             params: NearFieldParams {
                 clamp_squared: c * c,
-                per_subset: 1024,
-                subsets: 1,
+                samples: 64,
+                vpls: 1024,
                 seed: seed as u32,
                 reach: 200.0,
                 lights: 1,

@@ -43,14 +43,19 @@ struct Args {
     /// Scenes: cornell, sponza, large (comma-separated).
     #[arg(long, default_value = "cornell,sponza,large", value_delimiter = ',')]
     scenes: Vec<String>,
-    /// Interleaving patterns n (n×n + blur; 1 = none), comma-separated; default: 1, 2, 4 on
-    /// the Cornell box, 1, 2 elsewhere.
+    /// Interleaving patterns n (n×n; 1 = none), comma-separated; default: 1, 2, 4 on the
+    /// Cornell box, 1, 2 elsewhere.
     #[arg(long, value_delimiter = ',')]
     patterns: Vec<u32>,
+    /// The edge-aware 5×5 blur after interleaved shading (`--blur false`: the interleaved
+    /// frame as it is, each pixel lit by its subset × the subset count, unbiased).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    blur: bool,
     /// Side of the VPLs' paraboloid tiles (hemicube faces are twice as wide).
     #[arg(long, default_value_t = ProgressiveConfig::new(&Scene::default()).vpl_maps.tile)]
     vpl_tile: u32,
-    /// Factor on the progressive mode's VPL clamp distance (0.5 % of the scene diagonal).
+    /// Factor on the progressive mode's VPL clamp distance (2 % of the scene diagonal; 0.25
+    /// gives the 0.5 % of the runs before the near field).
     #[arg(long, default_value_t = 1.0)]
     clamp_scale: f32,
     /// The VPLs' visibility: the paper's rasterised maps, or rays through the scene's BVH.
@@ -60,8 +65,9 @@ struct Args {
     /// and light.
     #[arg(long, value_enum, default_value_t = Direct::Maps)]
     direct: Direct,
-    /// Add the VPLs' near field (the clamp's bias compensation, `ProgressiveConfig::near_field`).
-    #[arg(long)]
+    /// The VPLs' near field (the clamp's bias compensation, `ProgressiveConfig::near_field`):
+    /// `--near-field false` leaves it out.
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     near_field: bool,
     /// Folder that keeps the truths between runs ([`bench::path_traced_cached`]): trace them
     /// once on a machine with CPU time to spare, carry the folder to the GPU.
@@ -241,10 +247,10 @@ fn main() -> Result<()> {
             (chosen, _) => chosen,
         };
         for &n in patterns {
-            let interleaving = if n <= 1 {
-                "none".to_owned()
-            } else {
-                format!("{n}×{n} + blur")
+            let interleaving = match (n, args.blur) {
+                (0..=1, _) => "none".to_owned(),
+                (_, true) => format!("{n}×{n} + blur"),
+                (_, false) => format!("{n}×{n}"),
             };
             let mut config = ProgressiveConfig::new(&scene);
             config.vpls = vpls;
@@ -253,6 +259,9 @@ fn main() -> Result<()> {
                 config.indirect.blur = None;
             } else {
                 config.indirect.pattern = Pattern { n, m: n };
+                if !args.blur {
+                    config.indirect.blur = None;
+                }
             }
             config.vpl_maps.tile = args.vpl_tile;
             if args.visibility == Visibility::Rays {
@@ -434,7 +443,7 @@ fn markdown(r: &Report) -> String {
                                  traversed in the shading kernel, `VplShadows::Rays`)"
                 .into(),
         },
-        c = 0.5 * r.clamp_scale,
+        c = 2.0 * r.clamp_scale,
         direct = match r.direct {
             Direct::Maps => "direct shadow maps 1024²",
             Direct::Rays => "direct shadows by a ray per pixel and light",
