@@ -135,6 +135,11 @@ struct Args {
     /// through a BVH of the scene's triangles, as the path tracer's shadow rays (GPU only).
     #[arg(long, conflicts_with_all = ["shadows", "manylod_shadows"])]
     ray_shadows: bool,
+    /// Give back the light the VPL clamp takes (Kollig & Keller 2004's bias compensation,
+    /// `instant_radiosity::near_field`): a ray of the clamp's length per pixel, the lights and
+    /// 64 VPLs at its hit (GPU only; needs --vpls).
+    #[arg(long, requires = "vpls")]
+    near_field: bool,
     /// Stand in for each emissive mesh with N hemispherical lights spread over its area
     /// (with --shadows they draw its penumbrae); default 1, at its centroid.
     #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
@@ -873,6 +878,9 @@ fn run() -> Result<()> {
     if args.ray_shadows && args.cpu {
         bail!("--ray-shadows runs on the GPU only (no --cpu)");
     }
+    if args.near_field && args.cpu {
+        bail!("--near-field runs on the GPU only (no --cpu)");
+    }
     let shadow_config = args
         .shadows
         .map(|resolution| tiled_shading::shadows::ShadowMapConfig {
@@ -923,6 +931,9 @@ fn run() -> Result<()> {
                         )?,
                         None => renderer.set_indirect(d, config, set)?,
                     }
+                    if args.near_field {
+                        renderer.set_near_field(d, Some(&scene))?;
+                    }
                 }
                 renderer.render(d, q, &camera, ambient)?; // warm-up: first use of pipelines and caches
                 let rendered = renderer.render(d, q, &camera, ambient)?;
@@ -956,6 +967,9 @@ fn run() -> Result<()> {
                 }
                 if args.ray_shadows {
                     bail!("--ray-shadows needs a GPU (the CPU frame has no ray shadows)");
+                }
+                if args.near_field {
+                    bail!("--near-field needs a GPU (the CPU frame has no near field)");
                 }
                 if u64::from(width) * u64::from(height) > MAX_CPU_PIXELS {
                     bail!(

@@ -134,3 +134,37 @@ fn exact_shadows_by_rays_render_on_the_gpu_and_are_refused_on_the_cpu() {
     );
     assert!(out.join("render.png").is_file() && !out.join("vpl-shadow-atlas.png").exists());
 }
+
+/// The VPLs' near field (`--near-field`) needs VPLs, is refused on the CPU with a clear line,
+/// and renders on the GPU.
+#[test]
+fn near_field_needs_vpls_and_a_gpu() {
+    let out = out_folder("near-field-cpu");
+    for args in [
+        &["--near-field"][..],
+        &["--near-field", "--vpls", "64", "--cpu"],
+    ] {
+        let run = deferred(&out, args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{args:?} succeeded");
+        assert!(
+            stderr.contains("--near-field") || stderr.contains("--vpls"),
+            "{args:?}: {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    if gpu::test_device(&pipeline::device_needs()).is_none() {
+        return;
+    }
+    let out = out_folder("near-field");
+    let run = deferred_on_gpu(
+        &out,
+        &["--vpls", "256", "--vpl-shadows", "rays", "--near-field"],
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(out.join("render.png").is_file());
+}
