@@ -65,33 +65,6 @@ fn ray_t(tri: RayTriangle, origin: vec3<f32>, to: vec3<f32>) -> f32 {
     return select(RAY_MISS, t, u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 0.0 && t < 1.0);
 }
 
-// Whether a triangle meets the open segment from `origin` to `origin + to`.
-fn occluded(origin: vec3<f32>, to: vec3<f32>) -> bool {
-    let inv = 1.0 / select(to, vec3<f32>(1e-30), to == vec3<f32>(0.0));
-    var stack: array<u32, RAY_STACK>;
-    stack[0] = 0u;
-    var top = 1u;
-    while top > 0u {
-        top -= 1u;
-        let node = ray_nodes[stack[top]];
-        if !ray_slab(node, origin, inv, 1.0) {
-            continue;
-        }
-        if node.count == 0u {
-            stack[top] = node.first;
-            stack[top + 1u] = node.first + 1u;
-            top += 2u;
-            continue;
-        }
-        for (var i = node.first; i < node.first + node.count; i++) {
-            if ray_t(ray_triangles[i], origin, to) < 1.0 {
-                return true;
-            }
-        }
-    }
-    return false;
-}
-
 // The first triangle on a segment: its parameter t in (0, 1) and its slot in `ray_triangles`,
 // or slot RAY_NONE.
 struct RayHit {
@@ -101,8 +74,9 @@ struct RayHit {
 
 const RAY_NONE: u32 = 0xffffffffu;
 
-// The first triangle the segment from `origin` to `origin + to` meets.
-fn nearest(origin: vec3<f32>, to: vec3<f32>) -> RayHit {
+// The first triangle the segment from `origin` to `origin + to` meets, or with `any` the first
+// one found.
+fn ray_traverse(origin: vec3<f32>, to: vec3<f32>, any: bool) -> RayHit {
     let inv = 1.0 / select(to, vec3<f32>(1e-30), to == vec3<f32>(0.0));
     var hit = RayHit(1.0, RAY_NONE);
     var stack: array<u32, RAY_STACK>;
@@ -124,8 +98,21 @@ fn nearest(origin: vec3<f32>, to: vec3<f32>) -> RayHit {
             let t = ray_t(ray_triangles[i], origin, to);
             if t < hit.t {
                 hit = RayHit(t, i);
+                if any {
+                    return hit;
+                }
             }
         }
     }
     return hit;
+}
+
+// Whether a triangle meets the open segment from `origin` to `origin + to`.
+fn occluded(origin: vec3<f32>, to: vec3<f32>) -> bool {
+    return ray_traverse(origin, to, true).slot != RAY_NONE;
+}
+
+// The first triangle the segment from `origin` to `origin + to` meets.
+fn nearest(origin: vec3<f32>, to: vec3<f32>) -> RayHit {
+    return ray_traverse(origin, to, false);
 }

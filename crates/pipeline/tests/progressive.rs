@@ -29,6 +29,24 @@ fn small(scene: &scene::Scene, vpls: usize, bounces: u32) -> ProgressiveConfig {
     }
 }
 
+/// The test GPU, the original Cornell box and its view, the 8-bounce truth of it at 64² (1024
+/// spp through pixel centres) and [`small`]'s configuration with 256 VPLs of 8 bounces and no
+/// interleaving; `None` (skipped, a failure in CI) without a GPU or the fixtures.
+fn cornell_reference() -> Option<(
+    &'static gpu::Gpu,
+    scene::Scene,
+    scene::Camera,
+    gbuffer::Image<[f32; 4]>,
+    ProgressiveConfig,
+)> {
+    let (gpu, scene, camera) = common::cornell()?;
+    let truth = common::truth(&scene, camera, (64, 64), (8, false), 1024);
+    let mut config = small(&scene, 256, 8);
+    config.indirect.interleaving = Interleaving::Reference;
+    config.indirect.blur = None;
+    Some((gpu, scene, camera, truth, config))
+}
+
 #[test]
 fn gpu_mean_matches_its_cpu_twin() {
     let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
@@ -62,20 +80,18 @@ fn gpu_mean_matches_its_cpu_twin() {
 }
 
 /// The original Cornell box at 64² (no interleaving, 256 VPLs of 8 bounces per frame, 32×32
-/// exact maps) against 8-bounce path tracing at 1024 spp: 16 frames' mean has a clearly lower
-/// RMS error than one frame, and its bias stays small. Measured 2026-12-02 on llvmpipe: RMS
-/// 0.144 → 0.080, bias −4.7 % → −2.1 % (the truth's own noise at 1024 spp is part of the RMS).
+/// exact maps, the default 2 % clamp and its near field) against 8-bounce path tracing at 1024
+/// spp: 16 frames' mean has a clearly lower RMS error than one frame, and its bias stays
+/// small. Measured 2026-12-02 on llvmpipe: RMS 0.128 → 0.055, bias −2.9 % → −0.8 % (before the
+/// near field, with a 0.5 % clamp: 0.144 → 0.080, −4.7 % → −2.1 %; the truth's own noise at
+/// 1024 spp is part of the RMS).
 #[test]
 fn progressive_mean_converges_to_the_path_tracer() {
-    let Some((gpu, scene, camera)) = common::cornell() else {
+    let Some((gpu, scene, camera, truth, mut config)) = cornell_reference() else {
         return;
     };
     let (d, q) = (&gpu.device, &gpu.queue);
-    let size = (64, 64);
-    let truth = common::truth(&scene, camera, size, (8, false), 1024);
-    let mut config = small(&scene, 256, 8);
-    config.indirect.interleaving = Interleaving::Reference;
-    config.indirect.blur = None;
+    let size = (truth.width(), truth.height());
     config.vpl_maps.tile = 32;
     let mut p = Progressive::new(d, q, &scene, camera, size, &config).expect("progressive");
     p.frame(d, q).expect("frame");
@@ -91,24 +107,19 @@ fn progressive_mean_converges_to_the_path_tracer() {
 
 /// The VPLs' near field (Kollig & Keller 2004's compensation of the clamp) against the path
 /// tracer: the original Cornell box at 64², rays for the VPLs' and the lights' visibility, 256
-/// VPLs of 8 bounces per frame with the single-frame clamp (2 % of the diagonal, 4× the
-/// progressive default), 32 frames with and without the near field. Both runs draw the same
+/// VPLs of 8 bounces per frame with the default clamp (2 % of the diagonal), 32 frames with and
+/// without the near field. Both runs draw the same
 /// VPLs and light samples, so their difference is the near field's light; where it adds more
 /// than 5 % of the truth (the boxes' feet, the room's corners) the mean without it is too dark
 /// and with it much closer, and the whole image's RMS falls. Measured 2026-12-02 on llvmpipe:
-/// 157 pixels, bias −16.7 % → −3.9 %, RMS 0.047 → 0.041.
+/// 154 pixels, bias −16.6 % → −4.1 %, RMS 0.047 → 0.041.
 #[test]
 fn near_field_brings_back_the_light_the_clamp_takes() {
-    let Some((gpu, scene, camera)) = common::cornell() else {
+    let Some((gpu, scene, camera, truth, mut config)) = cornell_reference() else {
         return;
     };
     let (d, q) = (&gpu.device, &gpu.queue);
-    let size = (64, 64);
-    let truth = common::truth(&scene, camera, size, (8, false), 1024);
-    let mut config = small(&scene, 256, 8);
-    config.indirect.interleaving = Interleaving::Reference;
-    config.indirect.blur = None;
-    config.indirect.clamp_distance = instant_radiosity::default_clamp(scene.bounds());
+    let size = (truth.width(), truth.height());
     config.visibility = Some(instant_radiosity::shadows::VplShadows::Rays);
     config.direct_rays = true;
     let mean = |near_field| {

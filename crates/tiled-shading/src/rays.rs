@@ -111,43 +111,26 @@ impl RayBvh {
     /// Whether a triangle meets the open segment from `origin` to `origin + to` (`occluded`
     /// of `rays.wgsl`).
     pub fn occluded(&self, origin: Vec3, to: Vec3) -> bool {
-        let inv = to.map(|c| 1.0 / if c == 0.0 { 1e-30 } else { c });
-        let mut stack = [0u32; STACK];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let node = self.nodes[stack[top] as usize];
-            if !slab(&node, origin, inv, 1.0) {
-                continue;
-            }
-            if node.count == 0 {
-                stack[top] = node.first;
-                stack[top + 1] = node.first + 1;
-                top += 2;
-                continue;
-            }
-            let leaf = node.first as usize..(node.first + node.count) as usize;
-            if self.triangles[leaf]
-                .iter()
-                .any(|t| hit_t(t, origin, to) < 1.0)
-            {
-                return true;
-            }
-        }
-        false
+        self.traverse(origin, to, true).is_some()
     }
 
     /// The first triangle the segment from `origin` to `origin + to` meets: its parameter
     /// `t` in (0, 1) and its slot in [`RayBvh::triangles`] (`nearest` of `rays.wgsl`).
     pub fn nearest(&self, origin: Vec3, to: Vec3) -> Option<(f32, usize)> {
+        self.traverse(origin, to, false)
+    }
+
+    /// The first triangle on the segment, or with `any` the first one found
+    /// (`ray_traverse`).
+    fn traverse(&self, origin: Vec3, to: Vec3, any: bool) -> Option<(f32, usize)> {
         let inv = to.map(|c| 1.0 / if c == 0.0 { 1e-30 } else { c });
         let mut stack = [0u32; STACK];
         let mut top = 1;
-        let (mut best, mut index) = (1.0, None);
+        let mut hit: Option<(f32, usize)> = None;
         while top > 0 {
             top -= 1;
             let node = self.nodes[stack[top] as usize];
-            if !slab(&node, origin, inv, best) {
+            if !slab(&node, origin, inv, hit.map_or(1.0, |h| h.0)) {
                 continue;
             }
             if node.count == 0 {
@@ -158,12 +141,15 @@ impl RayBvh {
             }
             for slot in node.first as usize..(node.first + node.count) as usize {
                 let t = hit_t(&self.triangles[slot], origin, to);
-                if t < best {
-                    (best, index) = (t, Some(slot));
+                if t < hit.map_or(1.0, |h| h.0) {
+                    hit = Some((t, slot));
+                    if any {
+                        return hit;
+                    }
                 }
             }
         }
-        index.map(|i| (best, i))
+        hit
     }
 }
 
