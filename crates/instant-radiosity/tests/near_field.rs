@@ -12,6 +12,8 @@ use instant_radiosity::vpl;
 use scene::Bvh;
 use tiled_shading::{GpuLight, rays::RayBvh, rays::scene_mesh};
 
+mod common;
+
 fn luminance(p: &[f32; 4]) -> f64 {
     f64::from(0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2])
 }
@@ -84,13 +86,7 @@ fn gpu_near_field_matches_its_cpu_twin() {
         let want = near_field_image(&gb, &frame, &inputs);
         // A ray through an edge, or a shadow ray grazing one, may go either way.
         let (g, c) = (got.pixels(), want.pixels());
-        let close = g
-            .iter()
-            .zip(c)
-            .filter(|(a, b)| {
-                (0..3).all(|k| (a[k] - b[k]).abs() <= 2f32.powi(-8) * b[k].abs().max(1e-3))
-            })
-            .count();
+        let close = common::agreeing_pixels(g, c);
         let lit = c.iter().filter(|p| luminance(p) > 0.0).count();
         println!(
             "sample {sample}: {close} of {} pixels agree, {lit} lit",

@@ -12,6 +12,8 @@ use instant_radiosity::{
 };
 use scene::{Bvh, Scene};
 
+mod common;
+
 /// Maps of 64×64, 2^18 surfels, ε 1 px, 16 k ISM points; `mode`'s lookup defaults.
 fn shadows(mode: VplShadows) -> ShadowConfig {
     ShadowConfig {
@@ -110,13 +112,7 @@ fn gpu_shading_with_visibility_matches_its_cpu_twin() {
         // A VPL whose receiver lies exactly at the stored depth may flip between the two
         // (positions from depth differ in the last bits): pixels, not all, must agree.
         let (g, c) = (got.diffuse.pixels(), want.diffuse.pixels());
-        let close = g
-            .iter()
-            .zip(c)
-            .filter(|(a, b)| {
-                (0..3).all(|k| (a[k] - b[k]).abs() <= 2f32.powi(-8) * b[k].abs().max(1e-3))
-            })
-            .count();
+        let close = common::agreeing_pixels(g, c);
         assert!(
             close as f64 >= 0.99 * g.len() as f64,
             "{mode:?}: {close} of {} pixels agree",
