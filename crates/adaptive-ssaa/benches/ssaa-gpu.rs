@@ -76,7 +76,8 @@ fn scenes(quick: bool) -> Result<Vec<(String, Scene, scene::Camera)>> {
     let checker = sponza.textures.len() as u32;
     sponza.textures.push(scene::checker_texture());
     for m in &mut sponza.materials {
-        m.base_color_texture.get_or_insert(checker);
+        m.base_color_texture
+            .get_or_insert(scene::TextureRef::new(checker));
     }
     let camera =
         scene::preset_view(&sponza_path, &sponza).unwrap_or_else(|| sponza.camera_or_framed());

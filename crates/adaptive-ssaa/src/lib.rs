@@ -327,7 +327,7 @@ impl SsaaMaterial {
             .map(|m| Self {
                 base_color: m.base_color.truncate().extend(m.specular).to_array(),
                 emissive: m.emissive.to_array(),
-                layer: TextureArray::layer_of(m.base_color_texture),
+                layer: TextureArray::layer_of(m.base_color_texture.map(|t| t.texture)),
             })
             .collect()
     }

@@ -370,6 +370,7 @@ fn subdivide_scene(
                     normals: part.normals,
                     indices: part.indices,
                     material: scene.materials.len() as u32 - 1,
+                    ..Default::default()
                 });
             }
         }

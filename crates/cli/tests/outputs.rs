@@ -142,7 +142,7 @@ fn near_field_needs_vpls_and_a_gpu() {
     let out = out_folder("near-field-cpu");
     for args in [
         &["--near-field"][..],
-        &["--near-field", "--vpls", "64", "--cpu"],
+        &["--near-field", "--vpls", "64"], // `deferred` adds --cpu
     ] {
         let run = deferred(&out, args);
         let stderr = String::from_utf8_lossy(&run.stderr);

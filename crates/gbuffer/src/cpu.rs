@@ -425,7 +425,7 @@ pub fn rasterize(
             roughness: m.roughness,
             metallic: m.metallic,
             specular: m.specular,
-            texture: m.base_color_texture.map(|t| &textures[t as usize]),
+            texture: m.base_color_texture.map(|t| &textures[t.texture as usize]),
         })
         .collect();
 

@@ -478,11 +478,11 @@ pub(crate) fn albedo_at(
     };
     let base = material.base_color.truncate();
     let texel = match (material.base_color_texture, mesh.uvs.is_empty()) {
-        (Some(t), false) if (t as usize) < textures.len() => {
+        (Some(t), false) if (t.texture as usize) < textures.len() => {
             let i = triangle as usize * 3;
             let [a, b, c] = [0, 1, 2].map(|k| mesh.uvs[mesh.indices[i + k] as usize]);
             let uv: Vec2 = a * (1.0 - u - v) + b * u + c * v;
-            textures[t as usize].sample(uv).truncate()
+            textures[t.texture as usize].sample(uv).truncate()
         }
         _ => Vec3::ONE,
     };

@@ -21,6 +21,7 @@ fn material(name: &str, albedo: f32, roughness: f32) -> Material {
         metallic: 0.0,
         emissive: Vec3::ZERO,
         specular: 1.0,
+        ..Default::default()
     }
 }
 

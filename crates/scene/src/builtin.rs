@@ -438,6 +438,7 @@ pub fn checker_texture() -> Texture {
         width: size,
         height: size,
         rgba8,
+        sampler: Default::default(),
     }
 }
 
@@ -448,7 +449,7 @@ pub fn checkerboard() -> Scene {
     let mut b = Builder::new();
     b.scene.textures.push(checker_texture());
     let ground = b.material("checker", Vec3::ONE, 0.6, 0.0);
-    b.scene.materials[ground as usize].base_color_texture = Some(0);
+    b.scene.materials[ground as usize].base_color_texture = Some(crate::TextureRef::new(0));
     let boxes = b.material("boxes", Vec3::new(0.8, 0.35, 0.1), 0.4, 0.0);
     let balls = b.material("balls", Vec3::new(0.9, 0.9, 0.95), 0.2, 1.0);
     let s = 20.0;

@@ -17,6 +17,7 @@ mod bvh;
 mod camera;
 mod light;
 mod load;
+mod material;
 pub mod reference;
 
 use std::path::{Path, PathBuf};
@@ -29,6 +30,7 @@ pub use bvh::{Bvh, Hit};
 pub use camera::Camera;
 pub use glam;
 pub use light::{Light, scatter_point_lights};
+pub use material::{AlphaMode, Sampler, TextureRef, UvTransform, Wrap};
 
 use glam::{Vec2, Vec3, Vec4};
 
@@ -80,6 +82,14 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Texture coordinates, one per position (zero when the file has none).
     pub uvs: Vec<Vec2>,
+    /// The second texture-coordinate set (glTF `TEXCOORD_1`), one per position, or empty.
+    pub uvs1: Vec<Vec2>,
+    /// Tangents (xyz unit, w = ±1 the bitangent's sign; glTF `TANGENT`), one per position, or
+    /// empty.
+    pub tangents: Vec<Vec4>,
+    /// Linear vertex colours (glTF `COLOR_0`, RGB with alpha 1 or RGBA), one per position, or
+    /// empty.
+    pub colors: Vec<Vec4>,
     /// Three indices per triangle.
     pub indices: Vec<u32>,
     /// Index into [`Scene::materials`].
@@ -93,10 +103,10 @@ impl Mesh {
         let mut mesh = Self {
             name: name.into(),
             positions: corners.to_vec(),
-            normals: Vec::new(),
             uvs: vec![Vec2::ZERO; 4],
             indices: vec![0, 1, 2, 0, 2, 3],
             material,
+            ..Default::default()
         };
         mesh.compute_normals();
         mesh
@@ -163,11 +173,28 @@ impl Mesh {
         if self.normals.iter().any(|v| !v.is_finite()) || self.uvs.iter().any(|u| !u.is_finite()) {
             return bad("non-finite normal or texture coordinate".into());
         }
+        for (what, len) in [
+            ("second texture coordinates", self.uvs1.len()),
+            ("tangents", self.tangents.len()),
+            ("colours", self.colors.len()),
+        ] {
+            if len != 0 && len != n {
+                return bad(format!("{n} positions but {len} {what}"));
+            }
+        }
+        if self.uvs1.iter().any(|u| !u.is_finite())
+            || self.tangents.iter().any(|t| !t.is_finite())
+            || self.colors.iter().any(|c| !c.is_finite())
+        {
+            return bad("non-finite second texture coordinate, tangent or colour".into());
+        }
         Ok(())
     }
 }
 
-/// An RGBA8 texture whose colour channels are sRGB-encoded (as glTF base colour textures are).
+/// An RGBA8 texture as its file stores it. Whether its colour channels are sRGB depends on the
+/// role that reads it (glTF 2.0 §3.9): base colour and emissive are sRGB; metallic-roughness,
+/// normal and occlusion linear.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     /// Name or file it came from.
@@ -178,17 +205,37 @@ pub struct Texture {
     pub height: u32,
     /// `width × height` texels, row-major from the top-left, 4 bytes each.
     pub rgba8: Vec<u8>,
+    /// How it is sampled.
+    pub sampler: Sampler,
 }
 
-/// A metallic-roughness material (glTF 2.0 core model, without the secondary textures).
+/// A metallic-roughness material: the glTF 2.0 core model with `KHR_materials_emissive_strength`
+/// (folded into `emissive`) and `KHR_materials_specular`'s factor.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Name from the file.
     pub name: String,
     /// Linear base colour and alpha factor.
     pub base_color: Vec4,
-    /// Index into [`Scene::textures`] of the base colour texture.
-    pub base_color_texture: Option<u32>,
+    /// The base colour texture (sRGB; RGB × `base_color.rgb`, A × `base_color.a`).
+    pub base_color_texture: Option<TextureRef>,
+    /// The metallic-roughness texture (linear; B × `metallic`, G × `roughness`).
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// The tangent-space normal map (linear, `2·rgb − 1`).
+    pub normal_texture: Option<TextureRef>,
+    /// Scale of the normal map's x and y.
+    pub normal_scale: f32,
+    /// The ambient occlusion texture (linear, R).
+    pub occlusion_texture: Option<TextureRef>,
+    /// `1 + strength · (R − 1)` multiplies the ambient and indirect light.
+    pub occlusion_strength: f32,
+    /// The emissive texture (sRGB; RGB × `emissive`).
+    pub emissive_texture: Option<TextureRef>,
+    /// How alpha is used.
+    pub alpha_mode: AlphaMode,
+    /// Whether back faces are lit with the flipped normal (glTF `doubleSided`); a one-sided
+    /// material's back faces are culled.
+    pub double_sided: bool,
     /// Perceptual roughness in \[0, 1\].
     pub roughness: f32,
     /// Metalness in \[0, 1\].
@@ -201,12 +248,35 @@ pub struct Material {
     pub specular: f32,
 }
 
+impl Material {
+    /// The textures it reads, each with its role's name.
+    pub fn textures(&self) -> impl Iterator<Item = (&'static str, TextureRef)> + '_ {
+        [
+            ("base colour", self.base_color_texture),
+            ("metallic-roughness", self.metallic_roughness_texture),
+            ("normal", self.normal_texture),
+            ("occlusion", self.occlusion_texture),
+            ("emissive", self.emissive_texture),
+        ]
+        .into_iter()
+        .filter_map(|(role, t)| t.map(|t| (role, t)))
+    }
+}
+
 impl Default for Material {
     fn default() -> Self {
         Self {
             name: "default".into(),
             base_color: Vec4::new(0.8, 0.8, 0.8, 1.0),
             base_color_texture: None,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
+            emissive_texture: None,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
             roughness: 0.8,
             metallic: 0.0,
             emissive: Vec3::ZERO,
@@ -342,12 +412,34 @@ impl Scene {
             )));
         }
         for (i, mat) in self.materials.iter().enumerate() {
-            if let Some(t) = mat.base_color_texture
-                && t as usize >= self.textures.len()
+            for (role, t) in mat.textures() {
+                if t.texture as usize >= self.textures.len() {
+                    return Err(SceneErrorKind::Texture {
+                        index: i,
+                        problem: format!(
+                            "material {:?}'s {role} texture is {}, of {}",
+                            mat.name,
+                            t.texture,
+                            self.textures.len()
+                        ),
+                    });
+                }
+            }
+        }
+        for mesh in &self.meshes {
+            let Some(mat) = self.materials.get(mesh.material as usize) else {
+                continue;
+            };
+            if let Some((role, _)) = mat.textures().find(|(_, t)| t.uv_set == 1)
+                && mesh.uvs1.is_empty()
             {
-                return Err(SceneErrorKind::Texture {
-                    index: i,
-                    problem: format!("material {:?} names missing texture {t}", mat.name),
+                return Err(SceneErrorKind::InvalidMesh {
+                    mesh: mesh.name.clone(),
+                    problem: format!(
+                        "its material {:?} reads the {role} texture through TEXCOORD_1, which \
+                         the mesh does not have",
+                        mat.name
+                    ),
                 });
             }
         }

@@ -384,7 +384,7 @@ impl<'s> PathTracer<'s> {
         let mut albedo = mat.base_color.truncate();
         if let Some(tex) = mat
             .base_color_texture
-            .and_then(|t| self.scene.textures.get(t as usize))
+            .and_then(|t| self.scene.textures.get(t.texture as usize))
         {
             albedo *= texel(tex, uv);
         }

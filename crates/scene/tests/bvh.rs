@@ -30,6 +30,7 @@ fn hit_barycentrics_give_the_point_aimed_at() {
             uvs: vec![Vec2::ZERO; 3],
             indices: vec![0, 1, 2],
             material: 0,
+            ..Default::default()
         };
         let scene = Scene {
             meshes: vec![mesh],

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use scene::{Scene, SceneError, SceneErrorKind};
+use scene::{AlphaMode, Sampler, Scene, SceneError, SceneErrorKind, UvTransform, Wrap};
 
 fn fixtures() -> Option<PathBuf> {
     let dir = scene::shared_fixtures();
@@ -91,7 +91,7 @@ fn damaged_helmet_has_its_base_colour_texture() {
     let s = Scene::load(dir.join("gltf/DamagedHelmet/DamagedHelmet.glb")).expect("helmet");
     assert_eq!(s.triangle_count(), 46_356 / 3); // 46,356 indices in the glTF
     let m = &s.materials[s.meshes[0].material as usize];
-    let t = &s.textures[m.base_color_texture.expect("base colour texture") as usize];
+    let t = &s.textures[m.base_color_texture.expect("base colour texture").texture as usize];
     assert_eq!((t.width, t.height), (2048, 2048));
 }
 
@@ -309,4 +309,166 @@ fn every_scene_file_under_fixtures_loads() {
         let s = Scene::load(&f).unwrap_or_else(|e| panic!("{e}"));
         assert!(s.triangle_count() > 0, "{}", f.display());
     }
+}
+
+/// The five texture roles of DamagedHelmet's one material, as its JSON names them
+/// (baseColorTexture 0, metallicRoughnessTexture 1, emissiveTexture 2, occlusionTexture 3,
+/// normalTexture 4), each through TEXCOORD_0 untransformed, with the default sampler.
+#[test]
+fn damaged_helmet_has_all_five_texture_roles() {
+    let Some(dir) = fixtures() else { return };
+    let s = Scene::load(dir.join("gltf/DamagedHelmet/DamagedHelmet.glb")).expect("helmet");
+    let m = &s.materials[s.meshes[0].material as usize];
+    let roles: Vec<(&str, u32)> = m.textures().map(|(r, t)| (r, t.texture)).collect();
+    assert_eq!(
+        roles,
+        [
+            ("base colour", 0),
+            ("metallic-roughness", 1),
+            ("normal", 4),
+            ("occlusion", 3),
+            ("emissive", 2)
+        ]
+    );
+    assert!(
+        m.textures()
+            .all(|(_, t)| t.uv_set == 0 && t.transform == UvTransform::IDENTITY)
+    );
+    assert_eq!((m.normal_scale, m.occlusion_strength), (1.0, 1.0));
+    assert_eq!(m.emissive, glam::Vec3::ONE);
+    assert_eq!(m.alpha_mode, AlphaMode::Opaque);
+    assert!(!m.double_sided);
+    assert!(s.textures.iter().all(|t| t.sampler == Sampler::default()));
+}
+
+/// A one-triangle glTF written here with every material feature the model holds: a second
+/// texture-coordinate set, tangents, vertex colours, `KHR_texture_transform`, a sampler, a
+/// normal scale, an occlusion strength, MASK with its cutoff and `doubleSided`;
+/// `base_color_info` is the base colour's `textureInfo`.
+fn featured_gltf(name: &str, base_color_info: &str) -> PathBuf {
+    let dir = tmp(name);
+    std::fs::create_dir_all(&dir).expect("dir");
+    let mut bin: Vec<u8> = Vec::new();
+    let mut floats = |v: &[f32]| {
+        for x in v {
+            bin.extend_from_slice(&x.to_le_bytes());
+        }
+    };
+    floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]); // POSITION, 36 B
+    floats(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0]); // TEXCOORD_0, 24 B
+    floats(&[0.5, 0.5, 1.0, 0.5, 0.5, 1.0]); // TEXCOORD_1, 24 B
+    floats(&[1.0, 0.0, 0.0, -1.0].repeat(3)); // TANGENT, 48 B
+    floats(&[1.0, 0.5, 0.25, 1.0].repeat(3)); // COLOR_0, 48 B
+    std::fs::write(dir.join("t.bin"), &bin).expect("bin");
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 100, 50, 255]))
+        .save(dir.join("t.png"))
+        .expect("png");
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_texture_transform"],
+        "buffers":[{{"uri":"t.bin","byteLength":180}}],
+        "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}},
+          {{"buffer":0,"byteOffset":60,"byteLength":24}},{{"buffer":0,"byteOffset":84,"byteLength":48}},
+          {{"buffer":0,"byteOffset":132,"byteLength":48}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+          {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}},
+          {{"bufferView":2,"componentType":5126,"count":3,"type":"VEC2"}},
+          {{"bufferView":3,"componentType":5126,"count":3,"type":"VEC4"}},
+          {{"bufferView":4,"componentType":5126,"count":3,"type":"VEC4"}}],
+        "images":[{{"uri":"t.png"}}],
+        "samplers":[{{"wrapS":33071,"wrapT":33648,"magFilter":9728,"minFilter":9728}}],
+        "textures":[{{"source":0,"sampler":0}}],
+        "materials":[{{"name":"featured","pbrMetallicRoughness":{{"baseColorTexture":{base_color_info},
+            "metallicRoughnessTexture":{{"index":0}}}},
+          "normalTexture":{{"index":0,"scale":0.5}},"occlusionTexture":{{"index":0,"strength":0.25}},
+          "emissiveTexture":{{"index":0,"texCoord":1}},"emissiveFactor":[1,1,1],
+          "alphaMode":"MASK","alphaCutoff":0.3,"doubleSided":true}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1,"TEXCOORD_1":2,"TANGENT":3,"COLOR_0":4}},"material":0}}]}}],
+        "nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],"scene":0}}"#
+    );
+    let path = dir.join("featured.gltf");
+    std::fs::write(&path, json).expect("gltf");
+    path
+}
+
+#[test]
+fn gltf_material_features_load_as_the_file_states() {
+    let path = featured_gltf(
+        "featured",
+        r#"{"index":0,"texCoord":0,"extensions":{"KHR_texture_transform":
+            {"offset":[0.5,0],"rotation":0.25,"scale":[2,3],"texCoord":1}}}"#,
+    );
+    let s = Scene::load(&path).expect("featured");
+    let m = &s.materials[s.meshes[0].material as usize];
+    let base = m.base_color_texture.expect("base colour");
+    // The extension's texCoord overrides the info's.
+    assert_eq!(base.uv_set, 1);
+    assert_eq!(
+        base.transform,
+        UvTransform {
+            offset: glam::Vec2::new(0.5, 0.0),
+            rotation: 0.25,
+            scale: glam::Vec2::new(2.0, 3.0)
+        }
+    );
+    assert_eq!(m.emissive_texture.expect("emissive").uv_set, 1);
+    assert_eq!((m.normal_scale, m.occlusion_strength), (0.5, 0.25));
+    assert_eq!(m.alpha_mode, AlphaMode::Mask { cutoff: 0.3 });
+    assert!(m.double_sided);
+    assert_eq!(m.textures().count(), 5);
+    assert_eq!(
+        s.textures[0].sampler,
+        Sampler {
+            wrap_u: Wrap::ClampToEdge,
+            wrap_v: Wrap::MirroredRepeat,
+            mag_linear: false,
+            min_linear: false,
+            mipmaps: None,
+        }
+    );
+    let mesh = &s.meshes[0];
+    assert_eq!(mesh.uvs1[1], glam::Vec2::new(1.0, 0.5));
+    assert_eq!(mesh.tangents, vec![glam::Vec4::new(1.0, 0.0, 0.0, -1.0); 3]);
+    assert_eq!(mesh.colors, vec![glam::Vec4::new(1.0, 0.5, 0.25, 1.0); 3]);
+}
+
+/// A texture read through TEXCOORD_2 is refused with the material and role named.
+#[test]
+fn a_third_texture_coordinate_set_is_refused() {
+    let path = featured_gltf("texcoord2", r#"{"index":0,"texCoord":2}"#);
+    let e = Scene::load(&path).expect_err("TEXCOORD_2");
+    let text = e.to_string();
+    assert!(
+        text.contains("TEXCOORD_2") && text.contains("featured") && text.contains("base colour"),
+        "{text}"
+    );
+}
+
+/// An OBJ material's `norm` normal map (with `-bm`), `map_Ke` and `d` load into the same
+/// model; a texture file used twice is decoded once.
+#[test]
+fn mtl_normal_emissive_and_dissolve_load() {
+    let dir = tmp("mtlroles");
+    std::fs::create_dir_all(&dir).expect("dir");
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([128, 128, 255, 255]))
+        .save(dir.join("n.png"))
+        .expect("png");
+    std::fs::write(
+        dir.join("m.mtl"),
+        "newmtl m\nKd 1 1 1\nd 0.5\nmap_Kd n.png\nnorm -bm 0.75 n.png\nmap_Ke n.png\n",
+    )
+    .expect("mtl");
+    std::fs::write(
+        dir.join("t.obj"),
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl m\nf 1 2 3\n",
+    )
+    .expect("obj");
+    let s = Scene::load(dir.join("t.obj")).expect("obj");
+    let m = &s.materials[s.meshes[0].material as usize];
+    assert_eq!(s.textures.len(), 1, "one file, one texture");
+    assert_eq!(m.normal_texture.map(|t| t.texture), Some(0));
+    assert_eq!(m.normal_scale, 0.75);
+    assert_eq!(m.emissive_texture.map(|t| t.texture), Some(0));
+    assert_eq!(m.emissive, glam::Vec3::ONE);
+    assert_eq!(m.alpha_mode, AlphaMode::Blend);
+    assert_eq!(m.base_color.w, 0.5);
 }

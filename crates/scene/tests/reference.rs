@@ -15,6 +15,7 @@ fn material(albedo: f32, emissive: f32) -> Material {
         metallic: 0.0,
         emissive: Vec3::splat(emissive),
         specular: 1.0,
+        ..Default::default()
     }
 }
 

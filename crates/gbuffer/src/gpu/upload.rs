@@ -91,6 +91,7 @@ impl GpuScene {
             width: 1,
             height: 1,
             rgba8: vec![255; 4],
+            sampler: Default::default(),
         };
         let textures = scene
             .textures
@@ -117,7 +118,7 @@ impl GpuScene {
                 )?;
                 let texture = m
                     .base_color_texture
-                    .map_or(&white, |t| &textures[t as usize]);
+                    .map_or(&white, |t| &textures[t.texture as usize]);
                 let view = texture.create_view(&Default::default());
                 Ok(pass.material_layout.bind(
                     device,

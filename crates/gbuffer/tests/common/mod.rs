@@ -48,16 +48,18 @@ pub fn random_scene(seed: u64, triangles: usize) -> Scene {
         width: 16,
         height: 16,
         rgba8: checker,
+        sampler: Default::default(),
     });
     for k in 0..3 {
         scene.materials.push(Material {
             name: format!("m{k}"),
             base_color: Vec4::new(next(), next(), next(), 1.0),
-            base_color_texture: (k == 2).then_some(0),
+            base_color_texture: (k == 2).then_some(scene::TextureRef::new(0)),
             roughness: next(),
             metallic: next(),
             emissive: Vec3::ZERO,
             specular: next(),
+            ..Default::default()
         });
     }
     for k in 0..3u32 {

@@ -32,6 +32,26 @@ pub const VEC3_F32: Allowed = Allowed {
     normalized: false,
 };
 
+/// TANGENT: VEC4 of FLOAT.
+pub const VEC4_F32: Allowed = Allowed {
+    dimensions: Dimensions::Vec4,
+    types: &[DataType::F32],
+    normalized: false,
+};
+
+/// COLOR_0 as RGB: VEC3 of FLOAT, normalized UNSIGNED_BYTE or normalized UNSIGNED_SHORT.
+pub const COLOR_RGB: Allowed = Allowed {
+    dimensions: Dimensions::Vec3,
+    types: &[DataType::F32, DataType::U8, DataType::U16],
+    normalized: true,
+};
+
+/// COLOR_0 as RGBA: VEC4 of the same types.
+pub const COLOR_RGBA: Allowed = Allowed {
+    dimensions: Dimensions::Vec4,
+    ..COLOR_RGB
+};
+
 /// TEXCOORD_n: VEC2 of FLOAT, normalized UNSIGNED_BYTE or normalized UNSIGNED_SHORT.
 pub const TEXCOORD: Allowed = Allowed {
     dimensions: Dimensions::Vec2,

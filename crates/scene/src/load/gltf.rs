@@ -7,7 +7,10 @@ use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 
 use super::accessor;
 use super::folder::{SceneFolder, UNDECLARED_LIMIT};
-use crate::{Camera, Light, Material, Mesh, Scene, SceneErrorKind, light::default_radius};
+use crate::{
+    AlphaMode, Camera, Light, Material, Mesh, Sampler, Scene, SceneErrorKind, TextureRef,
+    UvTransform, Wrap, light::default_radius,
+};
 
 /// The most node instances a scene may place (a node reached through several parents counts
 /// once per path): 2^20.
@@ -54,28 +57,18 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
                     problem: other.to_string(),
                 },
             })?;
-            super::decode_texture(name, index, &bytes)
+            let mut texture = super::decode_texture(name, index, &bytes)?;
+            texture.sampler = sampler(&t.sampler());
+            Ok::<_, SceneErrorKind>(texture)
         })
         .collect::<Result<Vec<_>, _>>()?;
 
-    let mut materials: Vec<Material> = doc
+    let materials = doc
         .materials()
-        .map(|m| {
-            let pbr = m.pbr_metallic_roughness();
-            let emissive = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
-            Material {
-                name: m.name().unwrap_or("material").to_owned(),
-                base_color: Vec4::from(pbr.base_color_factor()),
-                base_color_texture: pbr.base_color_texture().map(|t| t.texture().index() as u32),
-                roughness: pbr.roughness_factor().clamp(0.0, 1.0),
-                metallic: pbr.metallic_factor().clamp(0.0, 1.0),
-                emissive,
-                specular: m
-                    .specular()
-                    .map_or(1.0, |s| s.specular_factor().clamp(0.0, 1.0)),
-            }
-        })
-        .collect();
+        .enumerate()
+        .map(|(i, m)| material(i, &m))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut materials: Vec<Material> = materials;
     let default_material = materials.len() as u32;
     materials.push(Material::default());
 
@@ -245,17 +238,170 @@ fn primitive(
             t.swap(1, 2);
         }
     }
+    let uvs1: Vec<Vec2> = attribute(Semantic::TexCoords(1), &accessor::TEXCOORD)?
+        .map(|v| {
+            v.chunks_exact(2)
+                .map(|c| Vec2::new(c[0] as f32, c[1] as f32))
+                .collect()
+        })
+        .unwrap_or_default();
+    if !uvs1.is_empty() {
+        same_count("second texture coordinates", uvs1.len())?;
+    }
+    // Tangents turn with the normals' frame: the xyz by the world matrix's linear part (a
+    // direction in the surface), w flipped where the matrix mirrors.
+    let linear = Mat3::from_mat4(world);
+    let mirror = if world.determinant() < 0.0 { -1.0 } else { 1.0 };
+    let tangents: Vec<Vec4> = attribute(Semantic::Tangents, &accessor::VEC4_F32)?
+        .map(|v| {
+            v.chunks_exact(4)
+                .map(|c| {
+                    let t = (linear * Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32))
+                        .normalize_or(Vec3::X);
+                    t.extend(if c[3] < 0.0 { -mirror } else { mirror })
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    if !tangents.is_empty() {
+        same_count("tangents", tangents.len())?;
+    }
+    let colors: Vec<Vec4> = match prim.get(&Semantic::Colors(0)) {
+        Some(a) => {
+            let (width, allowed) = if a.dimensions() == gltf::accessor::Dimensions::Vec3 {
+                (3, &accessor::COLOR_RGB)
+            } else {
+                (4, &accessor::COLOR_RGBA)
+            };
+            let values =
+                accessor::read(&a, buffers, &format!("COLOR_0 of mesh {name:?}"), allowed)?;
+            values
+                .chunks_exact(width)
+                .map(|c| {
+                    Vec4::new(
+                        c[0] as f32,
+                        c[1] as f32,
+                        c[2] as f32,
+                        if width == 4 { c[3] as f32 } else { 1.0 },
+                    )
+                })
+                .collect()
+        }
+        None => Vec::new(),
+    };
+    if !colors.is_empty() {
+        same_count("colours", colors.len())?;
+    }
     Ok(Mesh {
         name: name.to_owned(),
         positions,
         normals,
         uvs,
+        uvs1,
+        tangents,
+        colors,
         indices,
         material: prim
             .material()
             .index()
             .map_or(default_material, |i| i as u32),
     })
+}
+
+/// Material `index` of the file: factors, the five texture roles, alpha and sidedness.
+fn material(index: usize, m: &gltf::Material) -> Result<Material, SceneErrorKind> {
+    let pbr = m.pbr_metallic_roughness();
+    let name = m.name().unwrap_or("material").to_owned();
+    let slot = |role: &str, texture: usize, tex_coord: u32, transform: Option<UvTransform>| {
+        if tex_coord > 1 {
+            return Err(SceneErrorKind::Gltf(format!(
+                "material {index} ({name:?}): its {role} texture reads TEXCOORD_{tex_coord}; \
+                 sets 0 and 1 are supported"
+            )));
+        }
+        Ok(TextureRef {
+            texture: texture as u32,
+            uv_set: tex_coord,
+            transform: transform.unwrap_or(UvTransform::IDENTITY),
+        })
+    };
+    // `textureInfo` with its KHR_texture_transform (whose texCoord overrides the info's).
+    let info = |role: &str, t: Option<gltf::texture::Info>| {
+        t.map(|t| {
+            let transform = t.texture_transform();
+            let tex_coord = transform
+                .as_ref()
+                .and_then(|x| x.tex_coord())
+                .unwrap_or(t.tex_coord());
+            let transform = transform.map(|x| UvTransform {
+                offset: Vec2::from(x.offset()),
+                rotation: x.rotation(),
+                scale: Vec2::from(x.scale()),
+            });
+            slot(role, t.texture().index(), tex_coord, transform)
+        })
+        .transpose()
+    };
+    let normal = m.normal_texture();
+    let occlusion = m.occlusion_texture();
+    Ok(Material {
+        base_color: Vec4::from(pbr.base_color_factor()),
+        base_color_texture: info("base colour", pbr.base_color_texture())?,
+        metallic_roughness_texture: info("metallic-roughness", pbr.metallic_roughness_texture())?,
+        normal_texture: normal
+            .as_ref()
+            .map(|t| slot("normal", t.texture().index(), t.tex_coord(), None))
+            .transpose()?,
+        normal_scale: normal.as_ref().map_or(1.0, |t| t.scale()),
+        occlusion_texture: occlusion
+            .as_ref()
+            .map(|t| slot("occlusion", t.texture().index(), t.tex_coord(), None))
+            .transpose()?,
+        occlusion_strength: occlusion
+            .as_ref()
+            .map_or(1.0, |t| t.strength().clamp(0.0, 1.0)),
+        emissive_texture: info("emissive", m.emissive_texture())?,
+        alpha_mode: match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => AlphaMode::Mask {
+                cutoff: m.alpha_cutoff().unwrap_or(0.5),
+            },
+            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        },
+        double_sided: m.double_sided(),
+        roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+        metallic: pbr.metallic_factor().clamp(0.0, 1.0),
+        emissive: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
+        specular: m
+            .specular()
+            .map_or(1.0, |s| s.specular_factor().clamp(0.0, 1.0)),
+        name,
+    })
+}
+
+/// A texture's glTF sampler (defaults: repeat, linear, linear between mip levels).
+fn sampler(s: &gltf::texture::Sampler) -> Sampler {
+    use gltf::texture::{MagFilter, MinFilter, WrappingMode};
+    let wrap = |w| match w {
+        WrappingMode::Repeat => Wrap::Repeat,
+        WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+    };
+    let (min_linear, mipmaps) = match s.min_filter() {
+        None | Some(MinFilter::LinearMipmapLinear) => (true, Some(true)),
+        Some(MinFilter::Nearest) => (false, None),
+        Some(MinFilter::Linear) => (true, None),
+        Some(MinFilter::NearestMipmapNearest) => (false, Some(false)),
+        Some(MinFilter::LinearMipmapNearest) => (true, Some(false)),
+        Some(MinFilter::NearestMipmapLinear) => (false, Some(true)),
+    };
+    Sampler {
+        wrap_u: wrap(s.wrap_s()),
+        wrap_v: wrap(s.wrap_t()),
+        mag_linear: s.mag_filter() != Some(MagFilter::Nearest),
+        min_linear,
+        mipmaps,
+    }
 }
 
 fn convert_light(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> Light {

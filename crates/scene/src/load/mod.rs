@@ -66,5 +66,6 @@ pub(crate) fn decode_texture(
         width: img.width(),
         height: img.height(),
         rgba8: img.into_raw(),
+        sampler: Default::default(),
     })
 }

@@ -5,7 +5,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3, Vec4};
 
 use super::folder::{SceneFolder, UNDECLARED_LIMIT};
-use crate::{Material, Mesh, Scene, SceneErrorKind};
+use crate::{AlphaMode, Material, Mesh, Scene, SceneErrorKind, TextureRef};
 
 pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene, SceneErrorKind> {
     let options = tobj::LoadOptions {
@@ -52,34 +52,72 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
     });
 
     let mut scene = Scene::default();
+    // A texture file is decoded once however many materials and roles use it.
+    let mut loaded: std::collections::HashMap<String, u32> = Default::default();
+    let mut texture = |scene: &mut Scene, file: &str| -> Result<TextureRef, SceneErrorKind> {
+        if let Some(&i) = loaded.get(file) {
+            return Ok(TextureRef::new(i));
+        }
+        let bytes = folder.read_path(file, UNDECLARED_LIMIT)?;
+        let i = scene.textures.len() as u32;
+        scene
+            .textures
+            .push(super::decode_texture(file.to_owned(), i as usize, &bytes)?);
+        loaded.insert(file.to_owned(), i);
+        Ok(TextureRef::new(i))
+    };
     for m in &mtl {
-        let base_color_texture = match &m.diffuse_texture {
-            Some(file) => {
-                let bytes = folder.read_path(file, UNDECLARED_LIMIT)?;
-                scene.textures.push(super::decode_texture(
-                    file.clone(),
-                    scene.textures.len(),
-                    &bytes,
-                )?);
-                Some(scene.textures.len() as u32 - 1)
-            }
-            None => None,
-        };
+        let base_color_texture = m
+            .diffuse_texture
+            .as_deref()
+            .map(|f| texture(&mut scene, f))
+            .transpose()?;
+        // `norm` (a tangent-space normal map) or `map_Bump`/`bump` taken as one, with its
+        // `-bm` scale.
+        let normal = m
+            .unknown_param
+            .get("norm")
+            .or(m.normal_texture.as_ref())
+            .map(|line| map_options(line));
+        let normal_texture = normal
+            .as_ref()
+            .map(|(f, _)| texture(&mut scene, f))
+            .transpose()?;
+        let emissive_texture = m
+            .unknown_param
+            .get("map_Ke")
+            .map(|line| texture(&mut scene, &map_options(line).0))
+            .transpose()?;
+        let alpha = m.dissolve.unwrap_or(1.0).clamp(0.0, 1.0);
         let shininess = m.shininess.unwrap_or(10.0).max(0.0);
         scene.materials.push(Material {
             name: m.name.clone(),
-            base_color: Vec3::from(m.diffuse.unwrap_or([0.8; 3])).extend(m.dissolve.unwrap_or(1.0)),
+            base_color: Vec3::from(m.diffuse.unwrap_or([0.8; 3])).extend(alpha),
             base_color_texture,
+            normal_texture,
+            normal_scale: normal.map_or(1.0, |(_, scale)| scale),
+            emissive_texture,
+            alpha_mode: if alpha < 1.0 {
+                AlphaMode::Blend
+            } else {
+                AlphaMode::Opaque
+            },
             // Blinn-Phong exponent to GGX roughness: alpha = sqrt(2 / (Ns + 2)), roughness = sqrt(alpha).
             roughness: (2.0 / (shininess + 2.0)).sqrt().sqrt().clamp(0.0, 1.0),
             metallic: 0.0,
-            emissive: Vec3::from(m.emissive.unwrap_or([0.0; 3])),
+            // `map_Ke` scales `Ke`; without `Ke` a texture alone emits as it is.
+            emissive: Vec3::from(m.emissive.unwrap_or(if emissive_texture.is_some() {
+                [1.0; 3]
+            } else {
+                [0.0; 3]
+            })),
             // An explicit black `Ks` says the material has no specular reflection.
             specular: if m.specular == Some([0.0; 3]) {
                 0.0
             } else {
                 1.0
             },
+            ..Default::default()
         });
     }
     let default_material = scene.materials.len() as u32;
@@ -110,11 +148,26 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
                 .collect(),
             indices: m.indices,
             material: m.material_id.map_or(default_material, |i| i as u32),
+            ..Default::default()
         };
         scene.meshes.push(super::complete(mesh));
         progress(i + 1, total);
     }
     Ok(scene)
+}
+
+/// A texture line of an MTL statement (`[-option value…] file`): the file and the `-bm` scale
+/// (1 without it). Options other than `-bm` are skipped with their one value.
+fn map_options(line: &str) -> (String, f32) {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let (mut i, mut scale) = (0, 1.0);
+    while i + 1 < words.len() && words[i].starts_with('-') {
+        if words[i] == "-bm" {
+            scale = words[i + 1].parse().unwrap_or(1.0);
+        }
+        i += 2;
+    }
+    (words[i..].join(" "), scale)
 }
 
 /// Checks what tobj would misread or reject without a line number: `v`/`vn` need three finite
