@@ -472,3 +472,17 @@ fn mtl_normal_emissive_and_dissolve_load() {
     assert_eq!(m.alpha_mode, AlphaMode::Blend);
     assert_eq!(m.base_color.w, 0.5);
 }
+
+/// A material that reads TEXCOORD_1 on a mesh without that set is refused, the mesh and the
+/// role named.
+#[test]
+fn a_missing_second_texture_coordinate_set_is_refused() {
+    let path = featured_gltf("no-texcoord1", r#"{"index":0}"#);
+    let json = std::fs::read_to_string(&path).expect("read");
+    std::fs::write(&path, json.replace(r#""TEXCOORD_1":2,"#, "")).expect("write");
+    let text = Scene::load(&path).expect_err("no TEXCOORD_1").to_string();
+    assert!(
+        text.contains("TEXCOORD_1") && text.contains("emissive"),
+        "{text}"
+    );
+}
