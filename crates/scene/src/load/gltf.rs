@@ -205,16 +205,22 @@ fn primitive(
     if !normals.is_empty() {
         same_count("normals", normals.len())?;
     }
-    let uvs: Vec<Vec2> = attribute(Semantic::TexCoords(0), &accessor::TEXCOORD)?
-        .map(|v| {
-            v.chunks_exact(2)
-                .map(|c| Vec2::new(c[0] as f32, c[1] as f32))
-                .collect()
-        })
-        .unwrap_or_default();
-    if !uvs.is_empty() {
-        same_count("texture coordinates", uvs.len())?;
-    }
+    // TEXCOORD_n, checked against the positions when present.
+    let texcoords = |set: u32, what: &str| -> Result<Vec<Vec2>, SceneErrorKind> {
+        let uvs: Vec<Vec2> = attribute(Semantic::TexCoords(set), &accessor::TEXCOORD)?
+            .map(|v| {
+                v.chunks_exact(2)
+                    .map(|c| Vec2::new(c[0] as f32, c[1] as f32))
+                    .collect()
+            })
+            .unwrap_or_default();
+        if !uvs.is_empty() {
+            same_count(what, uvs.len())?;
+        }
+        Ok(uvs)
+    };
+    let uvs = texcoords(0, "texture coordinates")?;
+    let uvs1 = texcoords(1, "second texture coordinates")?;
     let mut indices: Vec<u32> = match prim.indices() {
         Some(a) => accessor::read(
             &a,
@@ -237,16 +243,6 @@ fn primitive(
         for t in indices.chunks_exact_mut(3) {
             t.swap(1, 2);
         }
-    }
-    let uvs1: Vec<Vec2> = attribute(Semantic::TexCoords(1), &accessor::TEXCOORD)?
-        .map(|v| {
-            v.chunks_exact(2)
-                .map(|c| Vec2::new(c[0] as f32, c[1] as f32))
-                .collect()
-        })
-        .unwrap_or_default();
-    if !uvs1.is_empty() {
-        same_count("second texture coordinates", uvs1.len())?;
     }
     // Tangents turn with the normals' frame: the xyz by the world matrix's linear part (a
     // direction in the surface), w flipped where the matrix mirrors.
