@@ -1,10 +1,10 @@
 //! The scene's textures as one array with mip maps (§4.3.3: "we store all textures of the
 //! scene in a 3D-array"), and the CPU twin of `textureSampleGrad` with anisotropic filtering.
 
-use gbuffer::cpu::LinearTexture;
 use gbuffer::{linear_to_srgb, srgb_to_linear};
 use glam::{Vec2, Vec4};
 use rayon::prelude::*;
+use scene::LinearTexture;
 use scene::Scene;
 
 /// Largest anisotropy ratio a sampler may use (the GPU sampler's `anisotropy_clamp`).

@@ -15,11 +15,10 @@
 
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
-use scene::{Camera, Scene};
+use scene::{Camera, LinearTexture, Scene};
 
 use crate::{
     Frame, GBuffer, GBufferError, Image, NO_MATERIAL, normal::pack_octahedral, pack_material,
-    srgb_to_linear,
 };
 
 /// Side of a screen tile in pixels.
@@ -173,58 +172,6 @@ struct FragmentMaterial<'a> {
     metallic: f32,
     specular: f32,
     texture: Option<&'a LinearTexture>,
-}
-
-/// A texture decoded from sRGB to linear floats, as an `Rgba8UnormSrgb` view reads it.
-pub struct LinearTexture {
-    width: u32,
-    height: u32,
-    texels: Vec<Vec4>,
-}
-
-impl LinearTexture {
-    /// Decodes a scene texture.
-    pub fn new(t: &scene::Texture) -> Self {
-        let lut: Vec<f32> = (0..256).map(|v| srgb_to_linear(v as f32 / 255.0)).collect();
-        let texels = t
-            .rgba8
-            .chunks_exact(4)
-            .map(|c| {
-                Vec4::new(
-                    lut[c[0] as usize],
-                    lut[c[1] as usize],
-                    lut[c[2] as usize],
-                    f32::from(c[3]) / 255.0,
-                )
-            })
-            .collect();
-        Self {
-            width: t.width,
-            height: t.height,
-            texels,
-        }
-    }
-
-    /// Bilinear sample of mip 0 with repeat addressing (`textureSampleLevel(t, s, uv, 0.0)`
-    /// with a linear, repeating sampler).
-    pub fn sample(&self, uv: Vec2) -> Vec4 {
-        let (w, h) = (self.width as i64, self.height as i64);
-        let x = uv.x * self.width as f32 - 0.5;
-        let y = uv.y * self.height as f32 - 0.5;
-        let (fx, fy) = (x.floor(), y.floor());
-        let (tx, ty) = (x - fx, y - fy);
-        if !(fx.is_finite() && fy.is_finite()) {
-            return Vec4::ZERO;
-        }
-        let (ix, iy) = (fx as i64, fy as i64);
-        let texel = |dx: i64, dy: i64| {
-            let (u, v) = ((ix + dx).rem_euclid(w), (iy + dy).rem_euclid(h));
-            self.texels[(v * w + u) as usize]
-        };
-        let top = texel(0, 0).lerp(texel(1, 0), tx);
-        let bottom = texel(0, 1).lerp(texel(1, 1), tx);
-        top.lerp(bottom, ty)
-    }
 }
 
 /// Fragment stage (`fs_main`): albedo RGBA8, normal word, material word.

@@ -113,14 +113,7 @@ pub fn linear_to_srgb(v: f32) -> f32 {
     }
 }
 
-/// sRGB → linear transfer function (IEC 61966-2-1).
-pub fn srgb_to_linear(v: f32) -> f32 {
-    if v <= 0.040_45 {
-        v / 12.92
-    } else {
-        ((v + 0.055) / 1.055).powf(2.4)
-    }
-}
+pub use scene::srgb_to_linear;
 
 impl Image<[f32; 4]> {
     /// Writes linear RGB as an 8-bit sRGB PNG (clamped to \[0, 1\]; alpha dropped).

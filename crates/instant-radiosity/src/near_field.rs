@@ -87,7 +87,7 @@ pub fn triangle_albedos(scene: &Scene) -> Vec<u32> {
     let textures: Vec<_> = scene
         .textures
         .iter()
-        .map(gbuffer::cpu::LinearTexture::new)
+        .map(scene::LinearTexture::new)
         .collect();
     let mut albedos = Vec::with_capacity(scene.triangle_count());
     for (m, mesh) in scene.meshes.iter().enumerate() {

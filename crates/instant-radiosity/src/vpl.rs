@@ -25,9 +25,9 @@
 
 use std::f32::consts::PI;
 
-use gbuffer::cpu::LinearTexture;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use scene::LinearTexture;
 use scene::{Aabb, Bvh, Light, Scene};
 
 /// Fewest and most VPLs a set may hold.

@@ -19,6 +19,7 @@ mod light;
 mod load;
 mod material;
 pub mod reference;
+mod texture;
 
 use std::path::{Path, PathBuf};
 
@@ -31,6 +32,7 @@ pub use camera::Camera;
 pub use glam;
 pub use light::{Light, scatter_point_lights};
 pub use material::{AlphaMode, Sampler, TextureRef, UvTransform, Wrap};
+pub use texture::{ColorSpace, LinearTexture, srgb_to_linear};
 
 use glam::{Vec2, Vec3, Vec4};
 

@@ -28,7 +28,7 @@ use std::f32::consts::{FRAC_1_PI, PI};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::{Bvh, Camera, Light, Scene};
+use crate::{Bvh, Camera, Light, LinearTexture, Scene};
 
 /// How far a ray leaves a surface at `p`: 10⁻⁴ of (1 + its largest coordinate), so the
 /// surface does not hit itself in f32 at any distance from the origin. The renderer's shadow
@@ -89,6 +89,8 @@ pub struct PathTracer<'s> {
     emitter_cdf: Vec<f32>,
     /// Emitter index of each (mesh, triangle), for MIS on BRDF-sampled hits.
     emitter_of: Vec<Vec<Option<u32>>>,
+    /// The scene's textures decoded for sampling (as the CPU G-buffer samples them).
+    textures: Vec<LinearTexture>,
     sums: Vec<[f64; 3]>,
     samples: u32,
 }
@@ -296,6 +298,7 @@ impl<'s> PathTracer<'s> {
             emitters,
             emitter_cdf,
             emitter_of,
+            textures: scene.textures.iter().map(LinearTexture::new).collect(),
             sums: vec![[0.0; 3]; width as usize * height as usize],
             samples: 0,
         }
@@ -384,9 +387,9 @@ impl<'s> PathTracer<'s> {
         let mut albedo = mat.base_color.truncate();
         if let Some(tex) = mat
             .base_color_texture
-            .and_then(|t| self.scene.textures.get(t.texture as usize))
+            .and_then(|t| self.textures.get(t.texture as usize))
         {
-            albedo *= texel(tex, uv);
+            albedo *= tex.sample(uv).truncate();
         }
         (
             Surface {
@@ -590,30 +593,6 @@ fn attenuation(position: Vec3, radius: f32, p: Vec3) -> (Vec3, f32) {
 }
 
 /// Bilinear sample of an sRGB texture at `uv` (repeat), linear RGB.
-fn texel(t: &crate::Texture, uv: Vec2) -> Vec3 {
-    let (w, h) = (t.width as f32, t.height as f32);
-    let x = uv.x.rem_euclid(1.0) * w - 0.5;
-    let y = uv.y.rem_euclid(1.0) * h - 0.5;
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let at = |xi: f32, yi: f32| {
-        let xi = (xi as i64).rem_euclid(t.width as i64) as usize;
-        let yi = (yi as i64).rem_euclid(t.height as i64) as usize;
-        let o = (yi * t.width as usize + xi) * 4;
-        let lin = |c: u8| {
-            let c = f32::from(c) / 255.0;
-            if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            }
-        };
-        Vec3::new(lin(t.rgba8[o]), lin(t.rgba8[o + 1]), lin(t.rgba8[o + 2]))
-    };
-    (at(x0, y0) * (1.0 - fx) + at(x0 + 1.0, y0) * fx) * (1.0 - fy)
-        + (at(x0, y0 + 1.0) * (1.0 - fx) + at(x0 + 1.0, y0 + 1.0) * fx) * fy
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
