@@ -48,9 +48,10 @@ fn unit(x: u32) -> f32 {
     return f32(x >> 8u) * (1.0 / 16777216.0);
 }
 
-// A cosine-distributed direction around n (an orthonormal basis after Duff et al. 2017).
+// A cosine-distributed direction around n, in `scene::orthonormal_basis`'s frame (Duff et al.
+// 2017; the sign is n.z's sign bit, as Rust's copysign takes it).
 fn cosine_direction(n: vec3<f32>, u1: f32, u2: f32) -> vec3<f32> {
-    let s = select(-1.0, 1.0, n.z >= 0.0);
+    let s = select(1.0, -1.0, (bitcast<u32>(n.z) & 0x80000000u) != 0u);
     let a = -1.0 / (s + n.z);
     let b = n.x * n.y * a;
     let t = vec3<f32>(1.0 + s * n.x * n.x * a, s * b, -s * n.x);

@@ -129,14 +129,10 @@ fn unit(x: u32) -> f32 {
     (x >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
-/// A cosine-distributed direction around the unit `n` (`cosine_direction`: an orthonormal
-/// basis after Duff et al. 2017).
+/// A cosine-distributed direction around the unit `n` (`cosine_direction`), in
+/// [`scene::orthonormal_basis`]'s frame.
 fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
-    let s = if n.z >= 0.0 { 1.0 } else { -1.0 };
-    let a = -1.0 / (s + n.z);
-    let b = n.x * n.y * a;
-    let t = Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
-    let bt = Vec3::new(b, s + n.y * n.y * a, -n.y);
+    let (t, bt) = scene::orthonormal_basis(n);
     let r = u1.sqrt();
     let phi = TAU * u2;
     t * (r * phi.cos()) + bt * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt()

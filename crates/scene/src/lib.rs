@@ -19,6 +19,7 @@ mod light;
 mod load;
 mod material;
 pub mod reference;
+mod tangents;
 mod texture;
 
 use std::path::{Path, PathBuf};
@@ -380,8 +381,25 @@ impl Scene {
             _ => Err(SceneErrorKind::UnsupportedFormat(ext)),
         }
         .map_err(err)?;
+        let mut scene = scene;
+        scene.complete_tangents();
         scene.validate().map_err(err)?;
         Ok(scene)
+    }
+
+    /// Generates MikkTSpace tangents ([`Mesh::generate_tangents`]) for every mesh whose
+    /// material has a normal map and whose file gave none.
+    pub fn complete_tangents(&mut self) {
+        for mesh in &mut self.meshes {
+            if let Some(normal) = self
+                .materials
+                .get(mesh.material as usize)
+                .and_then(|m| m.normal_texture)
+                && mesh.tangents.is_empty()
+            {
+                mesh.generate_tangents(normal.uv_set);
+            }
+        }
     }
 
     /// Checks every mesh and reference; loaders and built-ins call it, so a `Scene` from

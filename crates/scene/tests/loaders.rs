@@ -339,6 +339,15 @@ fn damaged_helmet_has_all_five_texture_roles() {
     assert_eq!(m.alpha_mode, AlphaMode::Opaque);
     assert!(!m.double_sided);
     assert!(s.textures.iter().all(|t| t.sampler == Sampler::default()));
+    // The file has no TANGENT: MikkTSpace's, unit, perpendicular to the normals, w = ±1.
+    let mesh = &s.meshes[0];
+    assert_eq!(mesh.tangents.len(), mesh.positions.len());
+    for (t, n) in mesh.tangents.iter().zip(&mesh.normals) {
+        let xyz = t.truncate();
+        assert!((xyz.length() - 1.0).abs() < 1e-3, "{t}");
+        assert!(xyz.dot(*n).abs() < 1e-3, "{t} against {n}");
+        assert!(t.w.abs() == 1.0, "{t}");
+    }
 }
 
 /// A one-triangle glTF written here with every material feature the model holds: a second
