@@ -167,11 +167,8 @@ fn irradiance_at(inputs: &NearFieldInputs<'_>, y: Vec3, n: Vec3, first: u32) -> 
         if cos_y <= 0.0 || intensity == Vec3::ZERO {
             continue;
         }
-        let q = Vec3::from(vpl.position);
-        let end = q + Vec3::from(vpl.normal) * ray_lift(q);
-        if !inputs.bvh.occluded(origin, end - origin) {
-            indirect += intensity * cos_y;
-        }
+        let q = (Vec3::from(vpl.position), Vec3::from(vpl.normal));
+        indirect += intensity * (cos_y * crate::rays::visibility(inputs.bvh, (y, n), q, 1.0));
     }
     (e + indirect * (params.vpls as f32 / params.samples as f32)) * FRAC_1_PI
 }
@@ -278,7 +275,6 @@ pub struct BoundNearField {
     vpls: wgpu::Buffer,
     lights: wgpu::Buffer,
     light_capacity: usize,
-    vpl_count: usize,
 }
 
 impl NearField {
@@ -390,7 +386,6 @@ impl NearField {
             vpls,
             lights: lights_buffer,
             light_capacity,
-            vpl_count: set.vpls.len(),
         })
     }
 }
@@ -412,10 +407,10 @@ impl BoundNearField {
     /// Replaces the VPLs by another set of as many, and takes the next
     /// seed: each set brings another sample of the near field.
     pub fn set_vpls(&mut self, queue: &wgpu::Queue, set: &VplSet) -> Result<(), IndirectError> {
-        if set.vpls.len() != self.vpl_count {
+        if set.vpls.len() != self.params.vpls as usize {
             return Err(IndirectError::NearField(format!(
                 "it was bound to {} VPLs, not {}",
-                self.vpl_count,
+                self.params.vpls,
                 set.vpls.len()
             )));
         }

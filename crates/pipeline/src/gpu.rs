@@ -166,6 +166,13 @@ struct NearFieldStage {
     bound: Option<(BoundNearField, wgpu::Texture)>,
 }
 
+impl NearFieldStage {
+    /// Its binding, once bound.
+    fn bound_mut(&mut self) -> Option<&mut BoundNearField> {
+        self.bound.as_mut().map(|(bound, _)| bound)
+    }
+}
+
 /// Textures of one frame size: G-buffer targets, radiance, direct light, no indirect light.
 struct SizedTargets {
     targets: GBufferTargets,
@@ -314,13 +321,11 @@ impl GpuRenderer {
     /// Rebinds the composition to the current targets and indirect stage.
     fn bind_composition(&mut self, device: &wgpu::Device) {
         let [no_diffuse, no_specular] = &self.sized.no_indirect;
-        let near_field = match &self.near_field {
-            Some(NearFieldStage {
-                bound: Some((_, output)),
-                ..
-            }) => output,
-            _ => no_diffuse,
-        };
+        let near_field = self
+            .near_field
+            .as_ref()
+            .and_then(|n| n.bound.as_ref())
+            .map_or(no_diffuse, |(_, output)| output);
         let indirect = match &self.indirect {
             Some(i) => [&i.outputs[0], &i.outputs[1], near_field],
             None => [no_diffuse, no_specular, no_diffuse],
@@ -363,10 +368,7 @@ impl GpuRenderer {
         if rebind {
             self.rebind(device, queue)?;
         }
-        if let Some(NearFieldStage {
-            bound: Some((bound, _)),
-            ..
-        }) = &mut self.near_field
+        if let Some(bound) = self.near_field.as_mut().and_then(NearFieldStage::bound_mut)
             && !bound.set_lights(queue, &self.lights)
         {
             self.bind_near_field(device)?;
@@ -760,11 +762,7 @@ impl GpuRenderer {
         if let Some(shadows) = &self.vpl_shadows {
             shadows.set_vpls(queue, set)?;
         }
-        if let Some(NearFieldStage {
-            bound: Some((bound, _)),
-            ..
-        }) = &mut self.near_field
-        {
+        if let Some(bound) = self.near_field.as_mut().and_then(NearFieldStage::bound_mut) {
             bound.set_vpls(queue, set)?;
         }
         indirect.set = set.clone();
@@ -844,11 +842,7 @@ impl GpuRenderer {
         if let Some(i) = &self.indirect {
             i.stage.encode(&i.bound, encoder, Some(&self.timer));
         }
-        if let Some(NearFieldStage {
-            bound: Some((bound, _)),
-            ..
-        }) = &self.near_field
-        {
+        if let Some((bound, _)) = self.near_field.as_ref().and_then(|n| n.bound.as_ref()) {
             bound.encode(encoder, Some(&self.timer));
         }
         let (w, h) = self.size();

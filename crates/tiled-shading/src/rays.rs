@@ -126,11 +126,11 @@ impl RayBvh {
         let inv = to.map(|c| 1.0 / if c == 0.0 { 1e-30 } else { c });
         let mut stack = [0u32; STACK];
         let mut top = 1;
-        let mut hit: Option<(f32, usize)> = None;
+        let (mut best, mut hit) = (1.0, None);
         while top > 0 {
             top -= 1;
             let node = self.nodes[stack[top] as usize];
-            if !slab(&node, origin, inv, hit.map_or(1.0, |h| h.0)) {
+            if !slab(&node, origin, inv, best) {
                 continue;
             }
             if node.count == 0 {
@@ -141,8 +141,8 @@ impl RayBvh {
             }
             for slot in node.first as usize..(node.first + node.count) as usize {
                 let t = hit_t(&self.triangles[slot], origin, to);
-                if t < hit.map_or(1.0, |h| h.0) {
-                    hit = Some((t, slot));
+                if t < best {
+                    (best, hit) = (t, Some((t, slot)));
                     if any {
                         return hit;
                     }
