@@ -5,28 +5,37 @@
 // at once (MRT). Mirrors `gbuffer::cpu::rasterize`; layout documented in `gbuffer::layout`.
 
 @group(0) @binding(0) var<uniform> frame: Frame;
-@group(1) @binding(0) var<uniform> material: Material;
-@group(1) @binding(1) var base_color_texture: texture_2d<f32>;
-@group(1) @binding(2) var base_color_sampler: sampler;
 
 struct VertexOut {
     // Invariant: the z-prepass (`vs_depth`) must produce bit-identical depth.
     @builtin(position) @invariant clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
-    @location(1) uv: vec2<f32>,
+    // Texture-coordinate sets 0 (xy) and 1 (zw).
+    @location(1) uv: vec4<f32>,
     @location(2) view_depth: f32,
     // The eye relative to the vertex (small near the camera, for precise derivatives).
     @location(3) to_eye: vec3<f32>,
+    @location(4) tangent: vec4<f32>,
+    @location(5) color: vec4<f32>,
 };
 
 @vertex
-fn vs_main(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>, @location(2) uv: vec2<f32>) -> VertexOut {
+fn vs_main(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv0: vec2<f32>,
+    @location(3) uv1: vec2<f32>,
+    @location(4) tangent: vec4<f32>,
+    @location(5) color: vec4<f32>,
+) -> VertexOut {
     var out: VertexOut;
     out.clip = frame.view_proj * vec4<f32>(position, 1.0);
     out.normal = normal;
-    out.uv = uv;
+    out.uv = vec4<f32>(uv0, uv1);
     out.view_depth = out.clip.w;
     out.to_eye = frame.eye.xyz - position;
+    out.tangent = tangent;
+    out.color = color;
     return out;
 }
 
@@ -47,6 +56,7 @@ struct GBufferOut {
     @location(1) normal: u32,
     @location(2) albedo: vec4<f32>,
     @location(3) material: u32,
+    @location(4) emission: vec4<f32>,
 };
 
 // roughness (unorm8) | metallic (unorm8) << 8 | material id << 16.
@@ -56,40 +66,68 @@ fn pack_material(roughness: f32, metallic: f32, id: u32) -> u32 {
     return r | (m << 8u) | (id << 16u);
 }
 
-// The interpolated normal, unit, on the camera's side of the triangle's plane: every surface
-// is two-sided (nothing is culled) and lit from the side it is seen from, and a vertex normal
+// The interpolated normal, unit, on the camera's side of the triangle's plane: a surface is
+// lit from the side it is seen from (one-sided materials' back faces are culled by the
+// pipeline), and a vertex normal
 // bent behind its triangle is turned as the path tracer turns it (`scene::reference`: the
 // shading normal goes to the side of the geometric normal that faces the ray). The geometric
 // normal comes from the screen derivatives of the position, which lie in the triangle's plane:
 // with x right and y down, cross(∂p/∂y, ∂p/∂x) points towards the camera on every triangle.
 // A normal within `BENT_NORMAL_COS` of the plane is replaced by the plane's normal
-// (`scene::facing_shading_normal`, the path tracer's rule too).
+// (`scene::facing_shading_normal`, the path tracer's rule too). `back_face` says whether the
+// vertex normal points away from the camera (the tangent frame turns with it).
 const BENT_NORMAL_COS: f32 = 0.01;
 
-fn facing_normal(normal: vec3<f32>, to_eye: vec3<f32>) -> vec3<f32> {
+struct Facing {
+    normal: vec3<f32>,
+    back_face: bool,
+};
+
+fn facing_normal(normal: vec3<f32>, to_eye: vec3<f32>) -> Facing {
     let l2 = dot(normal, normal);
     let n = select(vec3<f32>(0.0, 0.0, 1.0), normal * inverseSqrt(l2), l2 > 1e-30);
     let geometric = cross(dpdyFine(to_eye), dpdxFine(to_eye));
     let g2 = dot(geometric, geometric);
     if g2 <= 1e-30 {
-        return n;
+        return Facing(n, false);
     }
     let facing = geometric * inverseSqrt(g2);
     let c = dot(n, facing);
     if abs(c) < BENT_NORMAL_COS {
-        return facing;
+        return Facing(facing, c < 0.0);
     }
-    return select(n, -n, c < 0.0);
+    return Facing(select(n, -n, c < 0.0), c < 0.0);
 }
+
+// The largest finite half float: emission beyond it is clamped, not turned to infinity.
+const HALF_MAX: f32 = 65504.0;
 
 @fragment
 fn fs_main(in: VertexOut) -> GBufferOut {
+    // Derivatives first, in uniform control flow.
+    let uv_dx = dpdxFine(in.uv);
+    let uv_dy = dpdyFine(in.uv);
+    let facing = facing_normal(in.normal, in.to_eye);
+    let at = SurfaceAttributes(in.uv, uv_dx, uv_dy, facing.normal, facing.back_face, in.tangent, in.color);
+    let m = evaluate_material(at);
+    if !alpha_keeps(m.alpha, dither_threshold(vec2<u32>(in.clip.xy))) {
+        discard;
+    }
     var out: GBufferOut;
     out.linear_depth = in.view_depth;
-    let n = facing_normal(in.normal, in.to_eye);
-    out.normal = pack2x16snorm(encode_octahedral_snorm(n));
-    let texel = textureSampleLevel(base_color_texture, base_color_sampler, in.uv, 0.0);
-    out.albedo = vec4<f32>(clamp(material.base_color.rgb * texel.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), clamp(material.specular, 0.0, 1.0));
-    out.material = pack_material(material.roughness, material.metallic, material.id);
+    out.normal = pack2x16snorm(encode_octahedral_snorm(m.normal));
+    out.albedo = vec4<f32>(m.albedo, clamp(material.specular, 0.0, 1.0));
+    out.material = pack_material(m.roughness, m.metallic, material.id);
+    out.emission = vec4<f32>(min(m.emission, vec3<f32>(HALF_MAX)), m.occlusion);
     return out;
+}
+
+// The depth-only pass of alpha-tested (masked or blended) materials: the same coverage as
+// `fs_main`, without the G-buffer writes.
+@fragment
+fn fs_alpha_depth(in: VertexOut) {
+    let at = SurfaceAttributes(in.uv, dpdxFine(in.uv), dpdyFine(in.uv), in.normal, false, in.tangent, in.color);
+    if !alpha_keeps(material_alpha(at), dither_threshold(vec2<u32>(in.clip.xy))) {
+        discard;
+    }
 }

@@ -8,17 +8,22 @@
 //! 3. setup: viewport transform, snapping to 1/256 pixel (8 sub-pixel bits, as GPUs do),
 //!    integer edge functions; zero-area triangles are dropped; no face culling;
 //! 4. binning into 32 × 32 pixel tiles, in submission order;
-//! 5. per tile: coverage at pixel centres with the top-left fill rule, perspective-correct
-//!    attribute interpolation, screen-linear depth, depth test `Less`, then the fragment
-//!    stage (`fs_main`): octahedral normal, albedo × bilinear texture sample (mip 0, repeat,
-//!    sRGB decoded before filtering), packed material.
+//! 5. per tile: coverage at pixel centres with the top-left fill rule, back faces of one-
+//!    sided materials culled, perspective-correct attribute interpolation, screen-linear
+//!    depth, depth test `Less`, then the fragment stage (`fs_main`): the material evaluated
+//!    by [`scene::Material::evaluate`] with the texture coordinates' derivatives taken as
+//!    `dpdxFine`/`dpdyFine` take them (differences across the 2 × 2 quad, from the
+//!    triangle's interpolation extrapolated to the neighbour pixel), textures filtered through
+//!    their mip chains with anisotropy; alpha-tested fragments discarded; octahedral normal,
+//!    albedo, packed material, emission and occlusion (half floats).
 
 use glam::{Vec2, Vec3, Vec4};
 use rayon::prelude::*;
-use scene::{Camera, LinearTexture, Scene};
+use scene::{Camera, Material, Scene, SceneTextures, SurfaceAttributes};
 
 use crate::{
-    Frame, GBuffer, GBufferError, Image, NO_MATERIAL, normal::pack_octahedral, pack_material,
+    Frame, GBuffer, GBufferError, Image, NO_MATERIAL, TextureOptions, normal::pack_octahedral,
+    pack_material, to_half,
 };
 
 /// Side of a screen tile in pixels.
@@ -38,19 +43,42 @@ pub struct Rasterized {
     pub triangle_id: Image<u32>,
 }
 
+/// The attributes `vs_main` passes on: normal (3), texture-coordinate sets 0 and 1 (2 + 2),
+/// tangent (4), colour (4).
+const ATTRIBUTES: usize = 15;
+
 #[derive(Clone, Copy)]
 struct ClipVertex {
     clip: Vec4,
-    normal: Vec3,
-    uv: Vec2,
+    attributes: [f32; ATTRIBUTES],
 }
 
 impl ClipVertex {
     fn lerp(self, other: Self, t: f32) -> Self {
         Self {
             clip: self.clip.lerp(other.clip, t),
-            normal: self.normal.lerp(other.normal, t),
-            uv: self.uv.lerp(other.uv, t),
+            attributes: std::array::from_fn(|k| {
+                self.attributes[k] + (other.attributes[k] - self.attributes[k]) * t
+            }),
+        }
+    }
+}
+
+/// Interpolated attributes at a point of a triangle.
+struct Varyings {
+    normal: Vec3,
+    uv: [Vec2; 2],
+    tangent: Vec4,
+    color: Vec4,
+}
+
+impl Varyings {
+    fn new(a: &[f32; ATTRIBUTES]) -> Self {
+        Self {
+            normal: Vec3::new(a[0], a[1], a[2]),
+            uv: [Vec2::new(a[3], a[4]), Vec2::new(a[5], a[6])],
+            tangent: Vec4::new(a[7], a[8], a[9], a[10]),
+            color: Vec4::new(a[11], a[12], a[13], a[14]),
         }
     }
 }
@@ -67,8 +95,7 @@ struct SetupTriangle {
     top_left: [i64; 3],
     z: [f32; 3],
     inv_w: [f32; 3],
-    normal_over_w: [Vec3; 3],
-    uv_over_w: [Vec2; 3],
+    attributes_over_w: [[f32; ATTRIBUTES]; 3],
     /// The triangle's geometric normal (not unit) on the side the camera sees.
     towards_camera: Vec3,
     /// Inclusive pixel bounds, clamped to the image.
@@ -103,10 +130,11 @@ fn is_top_left(a: [i64; 2], b: [i64; 2]) -> bool {
     dy < 0 || (dy == 0 && dx > 0)
 }
 
-/// `geometric` is the world-space normal of the counter-clockwise winding (not unit).
+/// `geometric` is the world-space normal of the counter-clockwise winding (not unit); a
+/// triangle whose back the camera sees is dropped where `cull_back`.
 fn setup(
     verts: [ClipVertex; 3],
-    geometric: Vec3,
+    (geometric, cull_back): (Vec3, bool),
     id: u32,
     material: u32,
     width: u32,
@@ -125,7 +153,8 @@ fn setup(
     }
     let mut order = [0usize, 1, 2];
     let area = edge(fixed[0], fixed[1], fixed[2]);
-    if area == 0 {
+    // Counter-clockwise on screen (y down: a negative area) is the winding's front.
+    if area == 0 || (cull_back && area > 0) {
         return None;
     }
     if area < 0 {
@@ -157,40 +186,56 @@ fn setup(
         top_left,
         z: vs.map(|v| v.clip.z / v.clip.w),
         inv_w,
-        normal_over_w: [0, 1, 2].map(|i| vs[i].normal * inv_w[i]),
-        uv_over_w: [0, 1, 2].map(|i| vs[i].uv * inv_w[i]),
+        attributes_over_w: [0, 1, 2].map(|i| vs[i].attributes.map(|a| a * inv_w[i])),
         // Counter-clockwise on screen (y down): the camera sees the winding's front.
         towards_camera: if area < 0 { geometric } else { -geometric },
         bounds: [x0 as u32, y0 as u32, x1 as u32, y1 as u32],
     })
 }
 
-/// Material constants the fragment stage needs, with the texture decoded to linear floats.
-struct FragmentMaterial<'a> {
-    base_color: Vec4,
-    roughness: f32,
-    metallic: f32,
-    specular: f32,
-    texture: Option<&'a LinearTexture>,
+/// What the fragment stage reads besides the varyings.
+struct Shading<'a> {
+    materials: &'a [Material],
+    textures: &'a SceneTextures,
+    max_anisotropy: u32,
 }
 
-/// Fragment stage (`fs_main`): albedo RGBA8, normal word, material word.
-fn fragment(material: &FragmentMaterial, id: u32, normal: Vec3, uv: Vec2) -> ([u8; 4], u32, u32) {
-    let texel = material.texture.map_or(Vec4::ONE, |t| t.sample(uv));
-    let rgb = (material.base_color.truncate() * texel.truncate()).clamp(Vec3::ZERO, Vec3::ONE);
+/// What a fragment writes: albedo, normal word, material word, emission and occlusion.
+type Fragment = ([u8; 4], u32, u32, [f32; 4]);
+
+/// Fragment stage (`fs_main`), or `None` where alpha discards the fragment at `pixel`.
+fn fragment(
+    shading: &Shading,
+    material: u32,
+    at: &SurfaceAttributes,
+    pixel: (u32, u32),
+) -> Option<Fragment> {
+    let m = &shading.materials[material as usize];
+    let s = m.evaluate(shading.textures, at, shading.max_anisotropy);
+    if !m
+        .alpha_mode
+        .keeps(s.alpha, scene::dither_threshold(pixel.0, pixel.1))
+    {
+        return None;
+    }
     let unorm = |c: f32| (c * 255.0).round() as u8;
     let albedo = [
-        unorm(rgb.x),
-        unorm(rgb.y),
-        unorm(rgb.z),
-        unorm(material.specular.clamp(0.0, 1.0)),
+        unorm(s.albedo.x),
+        unorm(s.albedo.y),
+        unorm(s.albedo.z),
+        unorm(m.specular.clamp(0.0, 1.0)),
     ];
-    (
+    let e = s.emission.min(Vec3::splat(HALF_MAX));
+    Some((
         albedo,
-        pack_octahedral(normal),
-        pack_material(material.roughness, material.metallic, id),
-    )
+        pack_octahedral(s.normal),
+        pack_material(s.roughness, s.metallic, material),
+        [e.x, e.y, e.z, s.occlusion].map(to_half),
+    ))
 }
+
+/// The largest finite half float (emission is clamped to it).
+const HALF_MAX: f32 = 65504.0;
 
 struct Tile {
     x: u32,
@@ -202,15 +247,11 @@ struct Tile {
     normal: Vec<u32>,
     albedo: Vec<[u8; 4]>,
     material: Vec<u32>,
+    emission: Vec<[f32; 4]>,
     triangle: Vec<u32>,
 }
 
-fn raster_tile(
-    tile: &mut Tile,
-    triangles: &[SetupTriangle],
-    bin: &[u32],
-    materials: &[FragmentMaterial],
-) {
+fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], shading: &Shading) {
     for &t in bin {
         let tri = &triangles[t as usize];
         let [bx0, by0, bx1, by1] = tri.bounds;
@@ -221,6 +262,15 @@ fn raster_tile(
         let edge_f =
             |a: Vec2, b: Vec2, p: Vec2| (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
         let area = edge_f(s[0], s[1], s[2]);
+        // Barycentrics of a point (of the unsnapped positions).
+        let bary = |c: Vec2| {
+            [
+                edge_f(s[1], s[2], c),
+                edge_f(s[2], s[0], c),
+                edge_f(s[0], s[1], c),
+            ]
+            .map(|e| e / area)
+        };
         for py in y0..=y1 {
             for px in x0..=x1 {
                 let p = [
@@ -238,51 +288,80 @@ fn raster_tile(
                 // Coverage is decided on snapped positions; attributes are interpolated with
                 // barycentrics of the unsnapped positions, as the GPU's plane equations are.
                 let c = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
-                let l = [
-                    edge_f(s[1], s[2], c),
-                    edge_f(s[2], s[0], c),
-                    edge_f(s[0], s[1], c),
-                ]
-                .map(|e| e / area);
+                let l = bary(c);
                 let z = l[0] * tri.z[0] + l[1] * tri.z[1] + l[2] * tri.z[2];
                 let i = ((py - tile.y) * tile.w + (px - tile.x)) as usize;
                 if !(0.0..=1.0).contains(&z) || z >= tile.depth[i] {
                     continue;
                 }
-                let one_over_w = l[0] * tri.inv_w[0] + l[1] * tri.inv_w[1] + l[2] * tri.inv_w[2];
-                let w = 1.0 / one_over_w;
-                let normal = (tri.normal_over_w[0] * l[0]
-                    + tri.normal_over_w[1] * l[1]
-                    + tri.normal_over_w[2] * l[2])
-                    * w;
-                // Shaded from the side of the plane the camera sees (`facing_normal`).
-                let normal = scene::facing_shading_normal(
-                    normal.normalize_or(Vec3::Z),
-                    tri.towards_camera.normalize_or(Vec3::Z),
+                // Perspective-correct attributes at a pixel centre (the plane equations
+                // extrapolate beyond the triangle, as for the quad's helper pixels).
+                let varyings = |c: Vec2| -> (Varyings, f32) {
+                    let l = bary(c);
+                    let w = 1.0 / (l[0] * tri.inv_w[0] + l[1] * tri.inv_w[1] + l[2] * tri.inv_w[2]);
+                    let a = std::array::from_fn(|k| {
+                        (0..3).map(|v| tri.attributes_over_w[v][k] * l[v]).sum::<f32>() * w
+                    });
+                    (Varyings::new(&a), w)
+                };
+                let (here, w) = varyings(c);
+                // `dpdxFine`/`dpdyFine`: the difference to the other pixel of the quad's row
+                // or column, taken left to right and top to bottom.
+                let (step_x, step_y) = (
+                    if px % 2 == 0 { 1.0 } else { -1.0 },
+                    if py % 2 == 0 { 1.0 } else { -1.0 },
                 );
-                let uv =
-                    (tri.uv_over_w[0] * l[0] + tri.uv_over_w[1] * l[1] + tri.uv_over_w[2] * l[2])
-                        * w;
-                let (albedo, n, m) =
-                    fragment(&materials[tri.material as usize], tri.material, normal, uv);
+                let across = |step: Vec2, sign: f32| -> [Vec2; 2] {
+                    let there = varyings(c + step).0;
+                    [0, 1].map(|k| (there.uv[k] - here.uv[k]) * sign)
+                };
+                // Shaded from the side of the plane the camera sees (`facing_normal`).
+                let vertex_normal = here.normal.normalize_or(Vec3::Z);
+                let facing = tri.towards_camera.normalize_or(Vec3::Z);
+                let at = SurfaceAttributes {
+                    uv: here.uv,
+                    uv_dx: across(Vec2::new(step_x, 0.0), step_x),
+                    uv_dy: across(Vec2::new(0.0, step_y), step_y),
+                    normal: scene::facing_shading_normal(vertex_normal, facing),
+                    back_face: vertex_normal.dot(facing) < 0.0,
+                    tangent: here.tangent,
+                    color: here.color,
+                };
+                let Some((albedo, n, m, emission)) = fragment(shading, tri.material, &at, (px, py))
+                else {
+                    continue;
+                };
                 tile.depth[i] = z;
                 tile.linear_depth[i] = w;
                 tile.normal[i] = n;
                 tile.albedo[i] = albedo;
                 tile.material[i] = m;
+                tile.emission[i] = emission;
                 tile.triangle[i] = tri.id;
             }
         }
     }
 }
 
-/// Rasterizes `scene` seen by `camera` into a `width × height` G-buffer.
+/// Rasterizes `scene` seen by `camera` into a `width × height` G-buffer (textures filtered
+/// with the default [`TextureOptions`]).
 pub fn rasterize(
     scene: &Scene,
     camera: &Camera,
     width: u32,
     height: u32,
 ) -> Result<Rasterized, GBufferError> {
+    rasterize_with(scene, camera, (width, height), &TextureOptions::default())
+}
+
+/// [`rasterize`] at `(width, height)` with textures filtered as `options` say.
+pub fn rasterize_with(
+    scene: &Scene,
+    camera: &Camera,
+    (width, height): (u32, u32),
+    options: &TextureOptions,
+) -> Result<Rasterized, GBufferError> {
+    options.validate()?;
     crate::validate_size(width, height)?;
     crate::validate_camera(camera)?;
     crate::validate_scene(scene)?;
@@ -317,10 +396,20 @@ pub fn rasterize(
                 .chunks_exact(3)
                 .enumerate()
                 .flat_map(move |(t, idx)| {
-                    let vert = |i: u32| ClipVertex {
-                        clip: clip[i as usize],
-                        normal: mesh.normals[i as usize],
-                        uv: mesh.uvs[i as usize],
+                    let vert = |i: u32| {
+                        let i = i as usize;
+                        let n = mesh.normals[i];
+                        let uv0 = mesh.uvs[i];
+                        let uv1 = mesh.uvs1.get(i).copied().unwrap_or(Vec2::ZERO);
+                        let t = mesh.tangents.get(i).copied().unwrap_or(Vec4::ZERO);
+                        let c = mesh.colors.get(i).copied().unwrap_or(Vec4::ONE);
+                        ClipVertex {
+                            clip: clip[i],
+                            attributes: [
+                                n.x, n.y, n.z, uv0.x, uv0.y, uv1.x, uv1.y, t.x, t.y, t.z, t.w,
+                                c.x, c.y, c.z, c.w,
+                            ],
+                        }
                     };
                     let mut poly = vec![vert(idx[0]), vert(idx[1]), vert(idx[2])];
                     let inside = |v: &ClipVertex| planes.iter().all(|p| p.dot(v.clip) >= 0.0);
@@ -335,11 +424,12 @@ pub fn rasterize(
                     let id = first + t as u32;
                     let [p0, p1, p2] = [0, 1, 2].map(|k| mesh.positions[idx[k] as usize]);
                     let geometric = (p1 - p0).cross(p2 - p0);
+                    let cull_back = !scene.materials[mesh.material as usize].double_sided;
                     (1..poly.len().saturating_sub(1))
                         .filter_map(|k| {
                             setup(
                                 [poly[0], poly[k], poly[k + 1]],
-                                geometric,
+                                (geometric, cull_back),
                                 id,
                                 mesh.material,
                                 width,
@@ -363,18 +453,12 @@ pub fn rasterize(
         }
     }
 
-    let textures: Vec<LinearTexture> = scene.textures.par_iter().map(LinearTexture::new).collect();
-    let materials: Vec<FragmentMaterial> = scene
-        .materials
-        .iter()
-        .map(|m| FragmentMaterial {
-            base_color: m.base_color,
-            roughness: m.roughness,
-            metallic: m.metallic,
-            specular: m.specular,
-            texture: m.base_color_texture.map(|t| &textures[t.texture as usize]),
-        })
-        .collect();
+    let textures = SceneTextures::new(scene, true);
+    let shading = Shading {
+        materials: &scene.materials,
+        textures: &textures,
+        max_anisotropy: options.max_anisotropy,
+    };
 
     let tiles: Vec<Tile> = bins
         .par_iter()
@@ -393,9 +477,10 @@ pub fn rasterize(
                 normal: vec![0; n],
                 albedo: vec![[0; 4]; n],
                 material: vec![NO_MATERIAL; n],
+                emission: vec![[0.0; 4]; n],
                 triangle: vec![u32::MAX; n],
             };
-            raster_tile(&mut tile, &triangles, bin, &materials);
+            raster_tile(&mut tile, &triangles, bin, &shading);
             tile
         })
         .collect();
@@ -411,6 +496,7 @@ pub fn rasterize(
                 gbuffer.normal.set(x, y, t.normal[i]);
                 gbuffer.albedo.set(x, y, t.albedo[i]);
                 gbuffer.material.set(x, y, t.material[i]);
+                gbuffer.emission.set(x, y, t.emission[i]);
                 triangle_id.set(x, y, t.triangle[i]);
             }
         }

@@ -103,17 +103,7 @@ impl<T: Copy> Image<T> {
     }
 }
 
-/// Linear → sRGB transfer function (IEC 61966-2-1).
-pub fn linear_to_srgb(v: f32) -> f32 {
-    let v = v.clamp(0.0, 1.0);
-    if v <= 0.003_130_8 {
-        v * 12.92
-    } else {
-        1.055 * v.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-pub use scene::srgb_to_linear;
+pub use scene::{linear_to_srgb, srgb_to_linear};
 
 impl Image<[f32; 4]> {
     /// Writes linear RGB as an 8-bit sRGB PNG (clamped to \[0, 1\]; alpha dropped).

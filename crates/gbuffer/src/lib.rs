@@ -11,13 +11,15 @@
 //! |---|---|---|---|
 //! | `depth` | `Depth32Float` | 32 | hardware depth z/w in \[0, 1\] (cleared to 1) |
 //! | `linear_depth` | `R32Float` | 32 | view-space depth (distance along the view axis); 0 = no surface |
-//! | `normal` | `R32Uint` | 32 | world-space normal, octahedral, two snorm16 (`pack2x16snorm`) |
-//! | `albedo` | `Rgba8Unorm` | 32 | linear base colour × texture; alpha 1 where covered, 0 elsewhere |
+//! | `normal` | `R32Uint` | 32 | world-space shading normal (normal-mapped), octahedral, two snorm16 (`pack2x16snorm`) |
+//! | `albedo` | `Rgba8Unorm` | 32 | linear base colour (factor × texture × vertex colour); alpha: the specular factor |
 //! | `material` | `R32Uint` | 32 | roughness unorm8 \| metallic unorm8 ≪ 8 \| material id ≪ 16; `u32::MAX` = none |
+//! | `emission` | `Rgba16Float` | 64 | emitted radiance (factor × texture, clamped to 65504); alpha: ambient occlusion |
 //!
-//! 160 bits per pixel, like S.T.A.L.K.E.R. (2005), but with hardware depth instead of a stored
-//! position and 32-bit octahedral normals (0.004° worst error, see [`normal`]). Emissive
-//! radiance is looked up from the material id during composition.
+//! 224 bits per pixel: S.T.A.L.K.E.R.'s (2005) 160 with hardware depth instead of a stored
+//! position and 32-bit octahedral normals (0.004° worst error, see [`normal`]), plus the glTF
+//! material's emission and occlusion (issue 22: textured, so per pixel, not per material).
+//! Materials are evaluated as [`scene::Material::evaluate`] describes (`material.wgsl`).
 //!
 //! ```no_run
 //! let scene = scene::cornell_box();
@@ -49,6 +51,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "frame.wgsl",
         "gbuffer.wgsl",
         "material.wgsl",
+        "mips.wgsl",
         "normal_encoding.wgsl",
     ],
 );
@@ -68,6 +71,8 @@ pub const NORMAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 pub const ALBEDO_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// Packed material target format.
 pub const MATERIAL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// Emission and occlusion target format.
+pub const EMISSION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// Material word of pixels no surface covers.
 pub const NO_MATERIAL: u32 = u32::MAX;
 /// Largest image side accepted by the CPU rasterizer (the GPU path checks the device limit).
@@ -86,6 +91,8 @@ pub struct GBuffer {
     pub albedo: Image<[u8; 4]>,
     /// Packed roughness, metallic, material id ([`pack_material`]).
     pub material: Image<u32>,
+    /// Emitted radiance (rgb) and ambient occlusion (a), each a half float ([`to_half`]).
+    pub emission: Image<[f32; 4]>,
 }
 
 impl GBuffer {
@@ -97,6 +104,7 @@ impl GBuffer {
             normal: Image::filled(width, height, 0),
             albedo: Image::filled(width, height, [0; 4]),
             material: Image::filled(width, height, NO_MATERIAL),
+            emission: Image::filled(width, height, [0.0; 4]),
         }
     }
 
@@ -116,6 +124,11 @@ impl GBuffer {
 pub fn pack_material(roughness: f32, metallic: f32, id: u32) -> u32 {
     let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round_ties_even() as u32;
     q(roughness) | (q(metallic) << 8) | (id << 16)
+}
+
+/// `v` rounded to the nearest half float, as the `emission` target stores it.
+pub fn to_half(v: f32) -> f32 {
+    half::f16::from_f32(v).to_f32()
 }
 
 /// Unpacks [`pack_material`]: (roughness, metallic, material id).
@@ -178,6 +191,36 @@ impl Frame {
     }
 }
 
+/// How the G-buffer filters textures (both the GPU pass and its CPU twin).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TextureOptions {
+    /// Largest anisotropy (1..=[`scene::MAX_ANISOTROPY`]; 16 by default), used by samplers
+    /// that filter linearly between mip levels (wgpu allows anisotropy only there).
+    pub max_anisotropy: u32,
+}
+
+impl Default for TextureOptions {
+    fn default() -> Self {
+        Self {
+            max_anisotropy: scene::MAX_ANISOTROPY,
+        }
+    }
+}
+
+impl TextureOptions {
+    /// Rejects an anisotropy outside 1..=16.
+    pub fn validate(&self) -> Result<(), GBufferError> {
+        if !(1..=scene::MAX_ANISOTROPY).contains(&self.max_anisotropy) {
+            return Err(GBufferError::InvalidOptions(format!(
+                "the anisotropy must be 1..={}, got {}",
+                scene::MAX_ANISOTROPY,
+                self.max_anisotropy
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// Errors of G-buffer creation.
 #[derive(Debug, thiserror::Error)]
 pub enum GBufferError {
@@ -200,6 +243,9 @@ pub enum GBufferError {
     /// Too many materials for the 16-bit material id.
     #[error("{0} materials exceed the 65535 the G-buffer's 16-bit material id can address")]
     TooManyMaterials(usize),
+    /// An option is out of its range.
+    #[error("invalid G-buffer option: {0}")]
+    InvalidOptions(String),
     /// A GPU resource could not be created or read.
     #[error(transparent)]
     Gpu(#[from] ::gpu::GpuError),

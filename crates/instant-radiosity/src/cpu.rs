@@ -152,6 +152,7 @@ fn split_gbuffer(
         normal: split(&gb.normal, layout, variant)?,
         albedo: split(&gb.albedo, layout, variant)?,
         material: split(&gb.material, layout, variant)?,
+        emission: split(&gb.emission, layout, variant)?,
     })
 }
 

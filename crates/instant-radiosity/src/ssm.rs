@@ -91,14 +91,7 @@ impl RasterisedMaps {
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         )?;
         let views_group = pass.bind_views(device, &views_buffer);
-        let vertices: Vec<gbuffer::gpu::GpuVertex> = positions
-            .iter()
-            .map(|p| gbuffer::gpu::GpuVertex {
-                position: p.to_array(),
-                normal: [0.0; 3],
-                uv: [0.0; 2],
-            })
-            .collect();
+        let vertices: Vec<[f32; 3]> = positions.iter().map(|p| p.to_array()).collect();
         let vertex_buffer = transfer::buffer_init(
             device,
             "ssm vertices",

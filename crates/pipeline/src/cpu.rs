@@ -23,13 +23,13 @@ fn albedo_of(p: [u8; 4]) -> Vec3 {
 /// Diffuse and specular indirect light images (see [`IndirectStages::result`]).
 pub type IndirectLight<'a> = (&'a Image<[f32; 4]>, &'a Image<[f32; 4]>);
 
-/// Composition: `albedo · (1 − metallic) · (ambient + diffuse + indirect diffuse) + specular
-/// + indirect specular + emissive`.
+/// Composition: `albedo · (1 − metallic) · (diffuse + ao · (ambient + indirect diffuse)) +
+/// specular + ao · indirect specular + emission`, with the emission and the ambient
+/// occlusion `ao` from the G-buffer's emission image.
 pub fn composition(
     gb: &GBuffer,
     (diffuse, specular): (&Image<Vec3>, &Image<Vec3>),
     indirect: Option<IndirectLight<'_>>,
-    emissive: &[Vec3],
     ambient: Vec3,
 ) -> Image<[f32; 4]> {
     let rgb = |p: [f32; 4]| Vec3::new(p[0], p[1], p[2]);
@@ -41,14 +41,17 @@ pub fn composition(
             if word == NO_MATERIAL {
                 return [0.0; 4];
             }
-            let (_, metallic, id) = unpack_material(word);
+            let (_, metallic, _) = unpack_material(word);
             let albedo = albedo_of(gb.albedo.pixels()[i]);
+            let emission = gb.emission.pixels()[i];
+            let occlusion = emission[3];
             let (ind_d, ind_s) = indirect.map_or((Vec3::ZERO, Vec3::ZERO), |(d, s)| {
                 (rgb(d.pixels()[i]), rgb(s.pixels()[i]))
             });
-            let c = albedo * (1.0 - metallic) * (ambient + (diffuse.pixels()[i] + ind_d))
-                + (specular.pixels()[i] + ind_s)
-                + emissive.get(id as usize).copied().unwrap_or(Vec3::ZERO);
+            let c = albedo * (1.0 - metallic) * (diffuse.pixels()[i] + occlusion * (ambient + ind_d))
+                + specular.pixels()[i]
+                + occlusion * ind_s
+                + rgb(emission);
             [c.x, c.y, c.z, 1.0]
         })
         .collect();
@@ -159,13 +162,11 @@ pub fn render_indirect(
     if let Some(stages) = &stages {
         timings.extend(stages.timings.iter().cloned());
     }
-    let emissive: Vec<Vec3> = scene.materials.iter().map(|m| m.emissive).collect();
     let t = Instant::now();
     let image = composition(
         &gb,
         (&direct.diffuse, &direct.specular),
         stages.as_ref().map(IndirectStages::result),
-        &emissive,
         inputs.ambient,
     );
     timed(&mut timings, "composition", t);

@@ -31,11 +31,11 @@ fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
 }
 
-/// `composition.wgsl`: ambient, materials; albedo, material, direct diffuse and specular;
-/// radiance output; indirect diffuse and specular; the VPLs' near field.
+/// `composition.wgsl`: ambient, emission and occlusion; albedo, material, direct diffuse and
+/// specular; radiance output; indirect diffuse and specular; the VPLs' near field.
 const COMPOSITION_BINDINGS: [Binding; 10] = [
     Binding::Uniform,
-    Binding::StorageRead,
+    Binding::TextureUnfilterable,
     Binding::TextureUnfilterable,
     Binding::TextureUint,
     Binding::TextureUnfilterable,
@@ -66,13 +66,13 @@ fn composition_group(
     device: &wgpu::Device,
     composition: &Kernel,
     ambient: &wgpu::Buffer,
-    materials: &wgpu::Buffer,
     targets: &GBufferTargets,
     direct: [&wgpu::Texture; 2],
     radiance: &wgpu::Texture,
     indirect: [&wgpu::Texture; 3],
 ) -> wgpu::BindGroup {
     let views = [
+        view(&targets.emission),
         view(&targets.albedo),
         view(&targets.material),
         view(direct[0]),
@@ -82,7 +82,7 @@ fn composition_group(
         view(indirect[1]),
         view(indirect[2]),
     ];
-    let mut resources = vec![ambient.as_entire_binding(), materials.as_entire_binding()];
+    let mut resources = vec![ambient.as_entire_binding()];
     resources.extend(views.iter().map(wgpu::BindingResource::TextureView));
     composition.bind(device, &resources)
 }
@@ -246,7 +246,6 @@ impl GpuRenderer {
             device,
             &composition,
             &ambient,
-            &gpu_scene.materials,
             &sized.targets,
             [&sized.direct[0], &sized.direct[1]],
             &sized.radiance,
@@ -334,7 +333,6 @@ impl GpuRenderer {
             device,
             &self.composition,
             &self.ambient,
-            &self.scene.materials,
             &self.sized.targets,
             [&self.sized.direct[0], &self.sized.direct[1]],
             &self.sized.radiance,

@@ -32,8 +32,13 @@ pub use bvh::{Bvh, Hit};
 pub use camera::Camera;
 pub use glam;
 pub use light::{Light, scatter_point_lights};
-pub use material::{AlphaMode, Sampler, TextureRef, UvTransform, Wrap};
-pub use texture::{ColorSpace, LinearTexture, srgb_to_linear};
+pub use material::{
+    AlphaMode, MaterialSample, Sampler, SceneTextures, SurfaceAttributes, TextureRef, UvTransform,
+    Wrap, dither_threshold, role_space,
+};
+pub use texture::{
+    ColorSpace, LinearTexture, MAX_ANISOTROPY, anisotropic_footprint, linear_to_srgb, srgb_to_linear,
+};
 
 use glam::{Vec2, Vec3, Vec4};
 
@@ -237,7 +242,8 @@ pub struct Material {
     /// How alpha is used.
     pub alpha_mode: AlphaMode,
     /// Whether back faces are lit with the flipped normal (glTF `doubleSided`); a one-sided
-    /// material's back faces are culled.
+    /// material's back faces are culled where the camera sees them (the G-buffer, the path
+    /// tracer's camera rays). True by default: OBJ and built-in materials are two-sided.
     pub double_sided: bool,
     /// Perceptual roughness in \[0, 1\].
     pub roughness: f32,
@@ -252,8 +258,9 @@ pub struct Material {
 }
 
 impl Material {
-    /// The textures it reads, each with its role's name.
-    pub fn textures(&self) -> impl Iterator<Item = (&'static str, TextureRef)> + '_ {
+    /// Its five texture roles in the order the G-buffer binds them (base colour,
+    /// metallic-roughness, normal, occlusion, emissive), each with its name and texture.
+    pub fn roles(&self) -> [(&'static str, Option<TextureRef>); 5] {
         [
             ("base colour", self.base_color_texture),
             ("metallic-roughness", self.metallic_roughness_texture),
@@ -261,8 +268,13 @@ impl Material {
             ("occlusion", self.occlusion_texture),
             ("emissive", self.emissive_texture),
         ]
-        .into_iter()
-        .filter_map(|(role, t)| t.map(|t| (role, t)))
+    }
+
+    /// The textures it reads, each with its role's name.
+    pub fn textures(&self) -> impl Iterator<Item = (&'static str, TextureRef)> + '_ {
+        self.roles()
+            .into_iter()
+            .filter_map(|(role, t)| t.map(|t| (role, t)))
     }
 }
 
@@ -279,7 +291,7 @@ impl Default for Material {
             occlusion_strength: 1.0,
             emissive_texture: None,
             alpha_mode: AlphaMode::Opaque,
-            double_sided: false,
+            double_sided: true,
             roughness: 0.8,
             metallic: 0.0,
             emissive: Vec3::ZERO,

@@ -113,7 +113,7 @@ impl SsGBufferPass {
         ];
         let stages = ("vs_main", Some(("fs_texcoord", &targets[..])));
         let depth = (wgpu::CompareFunction::Less, true);
-        let pipeline = scene_pipeline(device, "ss gbuffer", &layout, &module, stages, depth);
+        let pipeline = scene_pipeline(device, "ss gbuffer", &layout, &module, stages, depth, false);
         Ok(Self { pipeline })
     }
 

@@ -4,26 +4,41 @@
 use ::gpu::GpuError;
 use ::gpu::kernel::{self, Binding, Layout};
 
-use super::{GBufferTargets, GpuScene, GpuVertex};
+use super::upload::DrawState;
+use super::{GBufferTargets, GpuAttributes, GpuScene};
 use crate::{
-    ALBEDO_FORMAT, DEPTH_FORMAT, Frame, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, NO_MATERIAL,
-    NORMAL_FORMAT,
+    ALBEDO_FORMAT, DEPTH_FORMAT, EMISSION_FORMAT, Frame, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT,
+    NO_MATERIAL, NORMAL_FORMAT,
 };
 
-/// The G-buffer pass: pipeline and frame uniforms, built once.
+/// A pipeline per face culling: two-sided materials draw every face, one-sided ones cull
+/// back faces (glTF `doubleSided`).
+struct BySides {
+    two_sided: wgpu::RenderPipeline,
+    one_sided: wgpu::RenderPipeline,
+}
+
+impl BySides {
+    fn get(&self, cull: bool) -> &wgpu::RenderPipeline {
+        if cull { &self.one_sided } else { &self.two_sided }
+    }
+}
+
+/// The G-buffer pass: pipelines and frame uniforms, built once.
 pub struct GBufferPass {
-    pipeline: wgpu::RenderPipeline,
-    prepass: wgpu::RenderPipeline,
-    after_prepass: wgpu::RenderPipeline,
+    single: BySides,
+    prepass: BySides,
+    /// The z-prepass of alpha-tested materials (`fs_alpha_depth`).
+    alpha_prepass: BySides,
+    after_prepass: BySides,
     frame_layout: Layout,
     pub(super) material_layout: Layout,
-    pub(super) sampler: wgpu::Sampler,
     frame: wgpu::Buffer,
     frame_group: wgpu::BindGroup,
 }
 
 impl GBufferPass {
-    /// Builds the pipeline.
+    /// Builds the pipelines.
     pub fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
         let module = crate::SHADERS.module(device, "gbuffer.wgsl")?;
         let frame_layout = Layout::new(
@@ -32,52 +47,60 @@ impl GBufferPass {
             wgpu::ShaderStages::VERTEX_FRAGMENT,
             &[Binding::Uniform],
         );
+        let mut material = vec![Binding::Uniform];
+        for _ in 0..5 {
+            material.extend([Binding::Texture, Binding::Sampler]);
+        }
         let material_layout = Layout::new(
             device,
             "gbuffer material",
             wgpu::ShaderStages::FRAGMENT,
-            &[Binding::Uniform, Binding::Texture, Binding::Sampler],
+            &material,
         );
         let layout = kernel::pipeline_layout(device, "gbuffer", &[&frame_layout, &material_layout]);
-        let depth_layout = kernel::pipeline_layout(device, "gbuffer z-prepass", &[&frame_layout]);
         let targets = [
             LINEAR_DEPTH_FORMAT,
             NORMAL_FORMAT,
             ALBEDO_FORMAT,
             MATERIAL_FORMAT,
+            EMISSION_FORMAT,
         ];
-        // One pipeline shape, three uses: single-pass G-buffer (depth Less, write), z-prepass
-        // (depth only), and the G-buffer after a prepass (depth Equal, no write).
-        let make = |label, compare, write, fragment: bool| {
-            let stages = if fragment {
-                ("vs_main", Some(("fs_main", &targets[..])))
-            } else {
-                ("vs_depth", None)
+        // One pipeline shape, four uses: single-pass G-buffer (depth Less, write), z-prepass
+        // (depth only, or alpha-tested), and the G-buffer after a prepass (depth Equal, no
+        // write); each for two-sided and one-sided materials.
+        let make = |label: &str, compare, write, fragment: Option<(&str, &[wgpu::TextureFormat])>| {
+            let vertex = if fragment.is_some() { "vs_main" } else { "vs_depth" };
+            let pipeline = |cull| {
+                scene_pipeline(
+                    device,
+                    label,
+                    &layout,
+                    &module,
+                    (vertex, fragment),
+                    (compare, write),
+                    cull,
+                )
             };
-            let layout = if fragment { &layout } else { &depth_layout };
-            scene_pipeline(device, label, layout, &module, stages, (compare, write))
+            BySides {
+                two_sided: pipeline(false),
+                one_sided: pipeline(true),
+            }
         };
-        let pipeline = make("gbuffer", wgpu::CompareFunction::Less, true, true);
-        let prepass = make(
-            "gbuffer z-prepass",
-            wgpu::CompareFunction::Less,
+        use wgpu::CompareFunction::{Equal, Less};
+        let single = make("gbuffer", Less, true, Some(("fs_main", &targets[..])));
+        let prepass = make("gbuffer z-prepass", Less, true, None);
+        let alpha_prepass = make(
+            "gbuffer z-prepass (alpha)",
+            Less,
             true,
-            false,
+            Some(("fs_alpha_depth", &[][..])),
         );
         let after_prepass = make(
             "gbuffer after z-prepass",
-            wgpu::CompareFunction::Equal,
+            Equal,
             false,
-            true,
+            Some(("fs_main", &targets[..])),
         );
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("base colour"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
         let frame = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("frame"),
             size: size_of::<Frame>() as u64,
@@ -86,12 +109,12 @@ impl GBufferPass {
         });
         let frame_group = frame_layout.bind_buffers(device, &[&frame]);
         Ok(Self {
-            pipeline,
+            single,
             prepass,
+            alpha_prepass,
             after_prepass,
             frame_layout,
             material_layout,
-            sampler,
             frame,
             frame_group,
         })
@@ -113,7 +136,7 @@ impl GBufferPass {
         pipeline: &wgpu::RenderPipeline,
         scene: &GpuScene,
     ) {
-        self.draw(pass, pipeline, scene, true);
+        self.draw(pass, scene, |_| pipeline);
     }
 
     /// The uniform buffer holding the [`Frame`]; later screen-space passes bind it too.
@@ -135,7 +158,7 @@ impl GBufferPass {
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let mut pass = Self::begin(encoder, targets, "gbuffer", true, true, timestamp_writes);
-        self.draw(&mut pass, &self.pipeline, scene, true);
+        self.draw(&mut pass, scene, |s| self.single.get(s.cull));
     }
 
     /// Records a z-prepass (depth only, Holländer 2013 §4.2) and then the G-buffer pass with
@@ -158,7 +181,13 @@ impl GBufferPass {
             true,
             prepass_timestamps,
         );
-        self.draw(&mut pass, &self.prepass, scene, false);
+        self.draw(&mut pass, scene, |s| {
+            if s.alpha_tested {
+                self.alpha_prepass.get(s.cull)
+            } else {
+                self.prepass.get(s.cull)
+            }
+        });
         drop(pass);
         let mut pass = Self::begin(
             encoder,
@@ -168,24 +197,29 @@ impl GBufferPass {
             false,
             gbuffer_timestamps,
         );
-        self.draw(&mut pass, &self.after_prepass, scene, true);
+        self.draw(&mut pass, scene, |s| self.after_prepass.get(s.cull));
     }
 
-    fn draw(
+    /// Draws every draw of `scene` with the pipeline `pick` chooses for its state, binding
+    /// the frame and each draw's material.
+    fn draw<'p>(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
-        pipeline: &wgpu::RenderPipeline,
         scene: &GpuScene,
-        materials: bool,
+        pick: impl Fn(DrawState) -> &'p wgpu::RenderPipeline,
     ) {
-        pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &self.frame_group, &[]);
-        pass.set_vertex_buffer(0, scene.vertices.slice(..));
+        pass.set_vertex_buffer(0, scene.positions.slice(..));
+        pass.set_vertex_buffer(1, scene.attributes.slice(..));
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+        let mut bound: Option<&wgpu::RenderPipeline> = None;
         for d in &scene.draws {
-            if materials {
-                pass.set_bind_group(1, &scene.material_groups[d.material], &[]);
+            let pipeline = pick(d.state);
+            if !bound.is_some_and(|b| std::ptr::eq(b, pipeline)) {
+                pass.set_pipeline(pipeline);
+                bound = Some(pipeline);
             }
+            pass.set_bind_group(1, &scene.material_groups[d.material], &[]);
             pass.draw_indexed(
                 d.first_index..d.first_index + d.index_count,
                 d.base_vertex,
@@ -226,6 +260,7 @@ impl GBufferPass {
             (&targets.normal, 0.0),
             (&targets.albedo, 0.0),
             (&targets.material, f64::from(NO_MATERIAL)),
+            (&targets.emission, 0.0),
         ];
         let colour = if color { &colour[..] } else { &[] };
         let depth = (&targets.depth, clear_depth);
@@ -288,8 +323,9 @@ pub fn begin_scene_pass<'e>(
 
 /// A render pipeline drawing an uploaded [`GpuScene`] into the G-buffer's depth target:
 /// `stages` = (vertex entry, optional (fragment entry, colour target formats)) of `module`,
-/// `depth` = (compare, write). With a fragment stage the vertex stage reads every
-/// [`GpuVertex`] attribute (`vs_main`), without one only the position (a depth-only pass).
+/// `depth` = (compare, write), back faces culled where `cull_back`. With a fragment stage the
+/// vertex stage reads the positions (slot 0) and every [`GpuAttributes`] (slot 1, `vs_main`),
+/// without one only the positions (a depth-only pass).
 pub fn scene_pipeline(
     device: &wgpu::Device,
     label: &str,
@@ -297,13 +333,24 @@ pub fn scene_pipeline(
     module: &wgpu::ShaderModule,
     (vertex, fragment): (&str, Option<(&str, &[wgpu::TextureFormat])>),
     (compare, write): (wgpu::CompareFunction, bool),
+    cull_back: bool,
 ) -> wgpu::RenderPipeline {
-    let attributes = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
-    let used = if fragment.is_some() {
-        &attributes[..]
-    } else {
-        &attributes[..1]
-    };
+    let position = wgpu::vertex_attr_array![0 => Float32x3];
+    let attributes = wgpu::vertex_attr_array![
+        1 => Float32x3, 2 => Float32x2, 3 => Float32x2, 4 => Float32x4, 5 => Float32x4
+    ];
+    let mut buffers = vec![Some(wgpu::VertexBufferLayout {
+        array_stride: 12,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &position,
+    })];
+    if fragment.is_some() {
+        buffers.push(Some(wgpu::VertexBufferLayout {
+            array_stride: size_of::<GpuAttributes>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &attributes,
+        }));
+    }
     let targets: Vec<Option<wgpu::ColorTargetState>> = fragment
         .map_or(&[][..], |(_, formats)| formats)
         .iter()
@@ -316,14 +363,12 @@ pub fn scene_pipeline(
             module,
             entry_point: Some(vertex),
             compilation_options: Default::default(),
-            buffers: &[Some(wgpu::VertexBufferLayout {
-                array_stride: size_of::<GpuVertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: used,
-            })],
+            buffers: &buffers,
         },
         primitive: wgpu::PrimitiveState {
-            cull_mode: None,
+            // glTF's front faces wind counter-clockwise.
+            front_face: wgpu::FrontFace::Ccw,
+            cull_mode: cull_back.then_some(wgpu::Face::Back),
             ..Default::default()
         },
         depth_stencil: Some(wgpu::DepthStencilState {

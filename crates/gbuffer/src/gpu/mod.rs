@@ -5,51 +5,100 @@
 pub mod gbuffer;
 pub mod run;
 pub mod targets;
+pub mod textures;
 pub mod upload;
 
 pub use gbuffer::{GBufferPass, begin_scene_pass, scene_pipeline};
+pub use textures::MaterialTextures;
 pub use run::{run, run_with};
 pub use targets::{GBufferTargets, GBufferTextures, UploadedGBuffer};
 pub use upload::GpuScene;
 
 use ::gpu::kernel::Binding;
+use bytemuck::Zeroable;
 use glam::Vec4;
 
-/// Vertex layout of the uploaded scene (WGSL `vs_main` inputs).
+/// The per-vertex attributes besides the position (vertex buffer slot 1; WGSL `vs_main`
+/// locations 1–5). Positions have their own buffer (slot 0), so depth-only passes read 12
+/// bytes per vertex.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct GpuVertex {
-    /// World position.
-    pub position: [f32; 3],
+pub struct GpuAttributes {
     /// Normal.
     pub normal: [f32; 3],
-    /// Texture coordinate.
-    pub uv: [f32; 2],
+    /// Texture-coordinate set 0.
+    pub uv0: [f32; 2],
+    /// Texture-coordinate set 1 (zero where the mesh has none).
+    pub uv1: [f32; 2],
+    /// Tangent and bitangent sign (zero where the mesh has none).
+    pub tangent: [f32; 4],
+    /// Linear vertex colour (white where the mesh has none).
+    pub color: [f32; 4],
 }
 
-/// A material as the shaders see it (WGSL `Material`).
+/// One texture slot of a [`GpuMaterial`] (WGSL `TextureSlot`): the 2 × 2 part of the
+/// `KHR_texture_transform` (column-major), the offset, the coordinate set and whether the
+/// material has the texture.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuTextureSlot {
+    /// Columns (m00, m10) and (m01, m11).
+    pub linear: [f32; 4],
+    /// Offset (xy), coordinate set (z), present (w: 1 or 0).
+    pub offset: [f32; 4],
+}
+
+impl GpuTextureSlot {
+    fn new(t: Option<::scene::TextureRef>) -> Self {
+        let Some(t) = t else {
+            return Self::zeroed();
+        };
+        let m = t.transform.matrix();
+        Self {
+            linear: [m.x_axis.x, m.x_axis.y, m.y_axis.x, m.y_axis.y],
+            offset: [m.z_axis.x, m.z_axis.y, t.uv_set.min(1) as f32, 1.0],
+        }
+    }
+}
+
+/// A material as the shaders see it (WGSL `Material` in `gbuffer/material.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuMaterial {
-    /// Linear base colour factor.
+    /// Linear base colour and alpha factor.
     pub base_color: Vec4,
-    /// Emitted radiance.
+    /// Emitted radiance factor.
     pub emissive: [f32; 3],
-    /// Perceptual roughness.
+    /// Perceptual roughness factor.
     pub roughness: f32,
-    /// Metalness.
+    /// Metalness factor.
     pub metallic: f32,
     /// Index in the scene's material list (the G-buffer's material id).
     pub id: u32,
     /// Specular factor (written to the G-buffer albedo's alpha).
     pub specular: f32,
+    /// Scale of the normal map's x and y.
+    pub normal_scale: f32,
+    /// Strength of the occlusion texture.
+    pub occlusion_strength: f32,
+    /// 0 opaque, 1 mask, 2 blend (dithered).
+    pub alpha_mode: u32,
+    /// The mask's cutoff.
+    pub alpha_cutoff: f32,
     /// Padding to 16-byte alignment.
     pub _pad: u32,
+    /// Base colour, metallic-roughness, normal, occlusion, emissive.
+    pub slots: [GpuTextureSlot; 5],
 }
 
 impl GpuMaterial {
     /// The GPU form of material `id` of a scene.
     pub fn new(m: &::scene::Material, id: u32) -> Self {
+        let (alpha_mode, alpha_cutoff) = match m.alpha_mode {
+            ::scene::AlphaMode::Opaque => (0, 0.0),
+            ::scene::AlphaMode::Mask { cutoff } => (1, cutoff),
+            ::scene::AlphaMode::Blend => (2, 0.0),
+        };
         Self {
             base_color: m.base_color,
             emissive: m.emissive.to_array(),
@@ -57,7 +106,12 @@ impl GpuMaterial {
             metallic: m.metallic,
             id,
             specular: m.specular,
+            normal_scale: m.normal_scale,
+            occlusion_strength: m.occlusion_strength,
+            alpha_mode,
+            alpha_cutoff,
             _pad: 0,
+            slots: m.roles().map(|(_, t)| GpuTextureSlot::new(t)),
         }
     }
 }

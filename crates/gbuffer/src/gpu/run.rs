@@ -4,7 +4,7 @@ use ::gpu::Gpu;
 use ::scene::{Camera, Scene};
 
 use super::{GBufferPass, GBufferTargets, GpuScene};
-use crate::{Frame, GBuffer, GBufferError};
+use crate::{Frame, GBuffer, GBufferError, TextureOptions};
 
 /// Convenience for tests and examples: uploads `scene`, renders its G-buffer on `gpu` and
 /// reads it back.
@@ -15,22 +15,23 @@ pub fn run(
     width: u32,
     height: u32,
 ) -> Result<GBuffer, GBufferError> {
-    run_with(gpu, scene, camera, width, height, false)
+    run_with(gpu, scene, camera, (width, height), false, &TextureOptions::default())
 }
 
-/// Like [`run`]; with `prepass`, through [`GBufferPass::encode_with_prepass`].
+/// Like [`run`] at `(width, height)` with textures filtered as `options` say; with
+/// `prepass`, through [`GBufferPass::encode_with_prepass`].
 pub fn run_with(
     gpu: &Gpu,
     scene: &Scene,
     camera: &Camera,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
     prepass: bool,
+    options: &TextureOptions,
 ) -> Result<GBuffer, GBufferError> {
     crate::validate_size(width, height)?;
     crate::validate_camera(camera)?;
     let pass = GBufferPass::new(&gpu.device)?;
-    let gpu_scene = GpuScene::upload(&gpu.device, &gpu.queue, scene, &pass)?;
+    let gpu_scene = GpuScene::upload_with(&gpu.device, &gpu.queue, scene, &pass, options)?;
     let targets = GBufferTargets::new(&gpu.device, width, height)?;
     pass.write_frame(&gpu.queue, &Frame::new(camera, width, height));
     let mut encoder = gpu.device.create_command_encoder(&Default::default());

@@ -3,11 +3,11 @@
 use ::gpu::{GpuError, transfer};
 
 use crate::{
-    ALBEDO_FORMAT, DEPTH_FORMAT, Frame, GBuffer, GBufferError, Image, LINEAR_DEPTH_FORMAT,
-    MATERIAL_FORMAT, NORMAL_FORMAT,
+    ALBEDO_FORMAT, DEPTH_FORMAT, EMISSION_FORMAT, Frame, GBuffer, GBufferError, Image,
+    LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT,
 };
 
-/// The five G-buffer textures of one resolution (see the layout table in the crate docs).
+/// The six G-buffer textures of one resolution (see the layout table in the crate docs).
 #[derive(Clone)]
 pub struct GBufferTargets {
     /// Width in pixels.
@@ -24,6 +24,8 @@ pub struct GBufferTargets {
     pub albedo: wgpu::Texture,
     /// Material word.
     pub material: wgpu::Texture,
+    /// Emission and occlusion.
+    pub emission: wgpu::Texture,
 }
 
 impl GBufferTargets {
@@ -48,12 +50,13 @@ impl GBufferTargets {
             normal: make("gbuffer normal", NORMAL_FORMAT, true),
             albedo: make("gbuffer albedo", ALBEDO_FORMAT, true),
             material: make("gbuffer material", MATERIAL_FORMAT, true),
+            emission: make("gbuffer emission", EMISSION_FORMAT, false),
         })
     }
 
     /// Total bytes of all targets (for bandwidth figures).
     pub fn bytes(&self) -> u64 {
-        u64::from(self.width) * u64::from(self.height) * 20
+        u64::from(self.width) * u64::from(self.height) * 28
     }
 
     /// Reads every target back into a CPU [`GBuffer`].
@@ -79,6 +82,15 @@ impl GBufferTargets {
             normal: img(read(&self.normal, all)?)?,
             albedo: img(read(&self.albedo, all)?)?.map(u32::to_le_bytes),
             material: img(read(&self.material, all)?)?,
+            emission: {
+                let halves: Vec<half::f16> = bytemuck::pod_collect_to_vec(&read(&self.emission, all)?);
+                let texels = halves
+                    .chunks_exact(4)
+                    .map(|c| [0, 1, 2, 3].map(|k| c[k].to_f32()))
+                    .collect();
+                Image::from_vec(self.width, self.height, texels)
+                    .map_err(|e| GBufferError::Gpu(GpuError::Readback(e.to_string())))?
+            },
         })
     }
 }

@@ -1,27 +1,39 @@
 //! A scene uploaded for the G-buffer pass.
 
 use ::gpu::{GpuError, transfer};
-use ::scene::Scene;
+use ::scene::{AlphaMode, Scene};
 
-use super::{GBufferPass, GpuMaterial, GpuVertex};
-use crate::GBufferError;
+use super::{GBufferPass, GpuAttributes, GpuMaterial, MaterialTextures};
+use crate::{GBufferError, TextureOptions};
+
+/// The fixed-function state a draw needs from its material.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) struct DrawState {
+    /// Back faces culled (a one-sided material, glTF `doubleSided: false`).
+    pub(super) cull: bool,
+    /// Fragments discarded by alpha (`MASK` or `BLEND`): the z-prepass needs a fragment stage.
+    pub(super) alpha_tested: bool,
+}
 
 pub(super) struct Draw {
     pub(super) first_index: u32,
     pub(super) index_count: u32,
     pub(super) base_vertex: i32,
     pub(super) material: usize,
+    pub(super) state: DrawState,
 }
 
-/// A scene uploaded for the G-buffer pass: one vertex and one index buffer, a bind group per
-/// material, and the materials as a storage buffer for later passes.
+/// A scene uploaded for the G-buffer pass: positions (vertex buffer slot 0) and the other
+/// attributes ([`GpuAttributes`], slot 1), one index buffer, the textures with their mip
+/// chains ([`MaterialTextures`]) and a bind group per material.
 pub struct GpuScene {
-    pub(super) vertices: wgpu::Buffer,
+    pub(super) positions: wgpu::Buffer,
+    pub(super) attributes: wgpu::Buffer,
     pub(super) indices: wgpu::Buffer,
     pub(super) draws: Vec<Draw>,
     pub(super) material_groups: Vec<wgpu::BindGroup>,
-    /// All materials ([`GpuMaterial`]), indexed by material id.
-    pub materials: wgpu::Buffer,
+    /// The textures the materials read.
+    pub textures: MaterialTextures,
     /// Number of triangles.
     pub triangle_count: u64,
 }
@@ -29,9 +41,10 @@ pub struct GpuScene {
 impl GpuScene {
     /// Draws every triangle, positions only (vertex buffer slot 0, no bind groups), with
     /// `instances`: for depth-only passes whose pipeline sets its own groups (shadow maps
-    /// draw view `v` as instance `v`).
+    /// draw view `v` as instance `v`). Every surface is drawn, whatever its material's
+    /// sides and alpha.
     pub fn draw_geometry(&self, pass: &mut wgpu::RenderPass<'_>, instances: std::ops::Range<u32>) {
-        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.set_vertex_buffer(0, self.positions.slice(..));
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
         for d in &self.draws {
             pass.draw_indexed(
@@ -42,125 +55,92 @@ impl GpuScene {
         }
     }
 
-    /// Uploads `scene` (textures as `Rgba8UnormSrgb`, mip 0) for `pass`.
+    /// Uploads `scene` for `pass` with the default [`TextureOptions`].
     pub fn upload(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         scene: &Scene,
         pass: &GBufferPass,
     ) -> Result<Self, GBufferError> {
+        Self::upload_with(device, queue, scene, pass, &TextureOptions::default())
+    }
+
+    /// Uploads `scene` for `pass`, its textures filtered as `options` say.
+    pub fn upload_with(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        pass: &GBufferPass,
+        options: &TextureOptions,
+    ) -> Result<Self, GBufferError> {
         crate::validate_scene(scene)?;
-        let mut vertices = Vec::new();
+        options.validate()?;
+        let mut positions = Vec::new();
+        let mut attributes = Vec::new();
         let mut indices = Vec::new();
         let mut draws = Vec::new();
         for m in &scene.meshes {
+            let material = &scene.materials[m.material as usize];
             draws.push(Draw {
                 first_index: indices.len() as u32,
                 index_count: m.indices.len() as u32,
-                base_vertex: vertices.len() as i32,
+                base_vertex: positions.len() as i32,
                 material: m.material as usize,
+                state: DrawState {
+                    cull: !material.double_sided,
+                    alpha_tested: material.alpha_mode != AlphaMode::Opaque,
+                },
             });
             indices.extend_from_slice(&m.indices);
-            vertices.extend(
-                m.positions
-                    .iter()
-                    .zip(&m.normals)
-                    .zip(&m.uvs)
-                    .map(|((p, n), uv)| GpuVertex {
-                        position: p.to_array(),
-                        normal: n.to_array(),
-                        uv: uv.to_array(),
-                    }),
-            );
+            positions.extend(m.positions.iter().map(|p| p.to_array()));
+            attributes.extend((0..m.positions.len()).map(|i| GpuAttributes {
+                normal: m.normals[i].to_array(),
+                uv0: m.uvs[i].to_array(),
+                uv1: m.uvs1.get(i).map_or([0.0; 2], |uv| uv.to_array()),
+                tangent: m.tangents.get(i).map_or([0.0; 4], |t| t.to_array()),
+                color: m.colors.get(i).map_or([1.0; 4], |c| c.to_array()),
+            }));
         }
-        let vertices = transfer::buffer_init(
-            device,
-            "scene vertices",
-            bytemuck::cast_slice(&vertices),
-            wgpu::BufferUsages::VERTEX,
-        )?;
+        let vertex_buffer = |label, bytes: &[u8]| {
+            transfer::buffer_init(device, label, bytes, wgpu::BufferUsages::VERTEX)
+        };
+        let positions = vertex_buffer("scene positions", bytemuck::cast_slice(&positions))?;
+        let attributes = vertex_buffer("scene attributes", bytemuck::cast_slice(&attributes))?;
         let indices = transfer::buffer_init(
             device,
             "scene indices",
             bytemuck::cast_slice(&indices),
             wgpu::BufferUsages::INDEX,
         )?;
-
-        let white = ::scene::Texture {
-            name: "white".into(),
-            width: 1,
-            height: 1,
-            rgba8: vec![255; 4],
-            sampler: Default::default(),
-        };
-        let textures = scene
-            .textures
-            .iter()
-            .map(|t| upload_texture(device, queue, t))
-            .collect::<Result<Vec<_>, _>>()?;
-        let white = upload_texture(device, queue, &white)?;
-        let gpu_materials: Vec<GpuMaterial> = scene
-            .materials
-            .iter()
-            .enumerate()
-            .map(|(i, m)| GpuMaterial::new(m, i as u32))
-            .collect();
+        let textures = MaterialTextures::upload(device, queue, scene, options)?;
         let material_groups = scene
             .materials
             .iter()
-            .zip(&gpu_materials)
-            .map(|(m, g)| {
+            .enumerate()
+            .map(|(i, m)| {
                 let uniform = transfer::buffer_init(
                     device,
                     "material",
-                    bytemuck::bytes_of(g),
+                    bytemuck::bytes_of(&GpuMaterial::new(m, i as u32)),
                     wgpu::BufferUsages::UNIFORM,
                 )?;
-                let texture = m
-                    .base_color_texture
-                    .map_or(&white, |t| &textures[t.texture as usize]);
-                let view = texture.create_view(&Default::default());
-                Ok(pass.material_layout.bind(
-                    device,
-                    &[
-                        uniform.as_entire_binding(),
-                        wgpu::BindingResource::TextureView(&view),
-                        wgpu::BindingResource::Sampler(&pass.sampler),
-                    ],
-                ))
+                let mut resources = vec![uniform.as_entire_binding()];
+                for (role, t) in m.roles() {
+                    let t = textures.for_role(role, t);
+                    resources.push(wgpu::BindingResource::TextureView(&t.view));
+                    resources.push(wgpu::BindingResource::Sampler(&t.sampler));
+                }
+                Ok(pass.material_layout.bind(device, &resources))
             })
             .collect::<Result<Vec<_>, GpuError>>()?;
-        let materials = transfer::buffer_init(
-            device,
-            "materials",
-            bytemuck::cast_slice(&gpu_materials),
-            wgpu::BufferUsages::STORAGE,
-        )?;
         Ok(Self {
-            vertices,
+            positions,
+            attributes,
             indices,
             draws,
             material_groups,
-            materials,
+            textures,
             triangle_count: scene.triangle_count() as u64,
         })
     }
-}
-
-fn upload_texture(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    t: &::scene::Texture,
-) -> Result<wgpu::Texture, GpuError> {
-    transfer::check_texture_size(device, &format!("texture {:?}", t.name), t.width, t.height)?;
-    transfer::texture_init(
-        device,
-        queue,
-        &t.name,
-        t.width,
-        t.height,
-        wgpu::TextureFormat::Rgba8UnormSrgb,
-        wgpu::TextureUsages::TEXTURE_BINDING,
-        &t.rgba8,
-    )
 }

@@ -155,6 +155,7 @@ impl ShadowMapPass {
             &module,
             ("shadow_depth", None),
             (wgpu::CompareFunction::Less, true),
+            false,
         );
         Ok(Self { pipeline, layout })
     }

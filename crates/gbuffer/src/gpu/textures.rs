@@ -1,0 +1,314 @@
+//! The scene's textures on the GPU for the G-buffer: one texture per scene texture and colour
+//! space a material reads it in (`Rgba8UnormSrgb` for base colour and emissive, `Rgba8Unorm`
+//! for the rest), with full mip chains drawn on the GPU at load (`shaders/gbuffer/mips.wgsl`)
+//! and a sampler per texture from its glTF sampler, anisotropic where it filters linearly.
+//! The CPU twin is [`scene::SceneTextures`] built with mip maps.
+
+use ::gpu::kernel::{Binding, Layout};
+use ::gpu::{GpuError, transfer};
+use ::scene::{ColorSpace, Scene, Wrap};
+
+use crate::TextureOptions;
+
+/// One uploaded texture: its view (all mips) and sampler.
+pub struct GpuTexture {
+    /// The texture (all mip levels).
+    pub texture: wgpu::Texture,
+    /// A view of every level.
+    pub view: wgpu::TextureView,
+    /// The texture's sampler.
+    pub sampler: wgpu::Sampler,
+}
+
+/// Every texture some material reads, per colour space, plus a white 1 × 1 for absent ones.
+pub struct MaterialTextures {
+    srgb: Vec<Option<GpuTexture>>,
+    linear: Vec<Option<GpuTexture>>,
+    white: GpuTexture,
+}
+
+/// The texture format of `space`.
+pub fn format_of(space: ColorSpace) -> wgpu::TextureFormat {
+    match space {
+        ColorSpace::Srgb => wgpu::TextureFormat::Rgba8UnormSrgb,
+        ColorSpace::Linear => wgpu::TextureFormat::Rgba8Unorm,
+    }
+}
+
+impl MaterialTextures {
+    /// Uploads the textures `scene`'s materials read and draws their mip chains (one command
+    /// buffer, submitted here). A texture larger than the device's limit is an error naming it.
+    pub fn upload(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        options: &TextureOptions,
+    ) -> Result<Self, GpuError> {
+        let mut used = vec![[false; 2]; scene.textures.len()];
+        for m in &scene.materials {
+            for (role, t) in m.textures() {
+                if let Some(u) = used.get_mut(t.texture as usize) {
+                    u[usize::from(::scene::role_space(role) == ColorSpace::Linear)] = true;
+                }
+            }
+        }
+        let mips = Mips::new(device)?;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let mut upload = |space: ColorSpace, k: usize| -> Result<Vec<Option<GpuTexture>>, GpuError> {
+            scene
+                .textures
+                .iter()
+                .zip(&used)
+                .map(|(t, u)| {
+                    u[k].then(|| upload_texture(device, queue, &mips, &mut encoder, t, space, options))
+                        .transpose()
+                })
+                .collect()
+        };
+        let srgb = upload(ColorSpace::Srgb, 0)?;
+        let linear = upload(ColorSpace::Linear, 1)?;
+        let white = ::scene::Texture {
+            name: "white".into(),
+            width: 1,
+            height: 1,
+            rgba8: vec![255; 4],
+            sampler: Default::default(),
+        };
+        let white = upload_texture(
+            device,
+            queue,
+            &mips,
+            &mut encoder,
+            &white,
+            ColorSpace::Linear,
+            options,
+        )?;
+        queue.submit([encoder.finish()]);
+        Ok(Self {
+            srgb,
+            linear,
+            white,
+        })
+    }
+
+    /// Texture `texture` as uploaded for `space`, if some material reads it so.
+    pub fn get(&self, texture: u32, space: ColorSpace) -> Option<&GpuTexture> {
+        let list = match space {
+            ColorSpace::Srgb => &self.srgb,
+            ColorSpace::Linear => &self.linear,
+        };
+        list.get(texture as usize).and_then(Option::as_ref)
+    }
+
+    /// The texture a material's role binds: its own, or white.
+    pub(super) fn for_role(&self, role: &str, t: Option<::scene::TextureRef>) -> &GpuTexture {
+        t.and_then(|t| self.get(t.texture, ::scene::role_space(role)))
+            .unwrap_or(&self.white)
+    }
+}
+
+fn address(wrap: Wrap) -> wgpu::AddressMode {
+    match wrap {
+        Wrap::Repeat => wgpu::AddressMode::Repeat,
+        Wrap::MirroredRepeat => wgpu::AddressMode::MirrorRepeat,
+        Wrap::ClampToEdge => wgpu::AddressMode::ClampToEdge,
+    }
+}
+
+fn filter(linear: bool) -> wgpu::FilterMode {
+    if linear {
+        wgpu::FilterMode::Linear
+    } else {
+        wgpu::FilterMode::Nearest
+    }
+}
+
+/// Uploads level 0 of `t`, records its mip chain into `encoder` and builds its sampler.
+fn upload_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    mips: &Mips,
+    encoder: &mut wgpu::CommandEncoder,
+    t: &::scene::Texture,
+    space: ColorSpace,
+    options: &TextureOptions,
+) -> Result<GpuTexture, GpuError> {
+    let what = format!("texture {:?}", t.name);
+    transfer::check_texture_size(device, &what, t.width, t.height)?;
+    let levels = t.width.max(t.height).ilog2() + 1;
+    let format = format_of(space);
+    let texture = transfer::allocation(device, &what, || {
+        Ok::<_, GpuError>(device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(&t.name),
+            size: wgpu::Extent3d {
+                width: t.width,
+                height: t.height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: levels,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_DST
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        }))
+    })?;
+    queue.write_texture(
+        wgpu::TexelCopyTextureInfo {
+            texture: &texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        &t.rgba8,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(t.width * 4),
+            rows_per_image: Some(t.height),
+        },
+        wgpu::Extent3d {
+            width: t.width,
+            height: t.height,
+            depth_or_array_layers: 1,
+        },
+    );
+    mips.encode(device, encoder, &texture, space);
+    let s = &t.sampler;
+    let trilinear = s.mag_linear && s.min_linear && s.mipmaps == Some(true);
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some(&t.name),
+        address_mode_u: address(s.wrap_u),
+        address_mode_v: address(s.wrap_v),
+        mag_filter: filter(s.mag_linear),
+        min_filter: filter(s.min_linear),
+        mipmap_filter: if s.mipmaps == Some(true) {
+            wgpu::MipmapFilterMode::Linear
+        } else {
+            wgpu::MipmapFilterMode::Nearest
+        },
+        // Without mip maps level 0 is read, minified with the minification filter: the
+        // Vulkan specification's emulation (a clamp of 0.25 keeps λ > 0 minifying).
+        lod_max_clamp: if s.mipmaps.is_some() { 32.0 } else { 0.25 },
+        anisotropy_clamp: if trilinear {
+            options.max_anisotropy.clamp(1, ::scene::MAX_ANISOTROPY) as u16
+        } else {
+            1
+        },
+        ..Default::default()
+    });
+    Ok(GpuTexture {
+        view: texture.create_view(&Default::default()),
+        texture,
+        sampler,
+    })
+}
+
+/// The mip chain pass (`mips.wgsl`): one pipeline per colour space.
+struct Mips {
+    layout: Layout,
+    srgb: wgpu::RenderPipeline,
+    linear: wgpu::RenderPipeline,
+    edge: wgpu::Sampler,
+}
+
+impl Mips {
+    fn new(device: &wgpu::Device) -> Result<Self, GpuError> {
+        let module = crate::SHADERS.module(device, "mips.wgsl")?;
+        let layout = Layout::new(
+            device,
+            "mips",
+            wgpu::ShaderStages::FRAGMENT,
+            &[Binding::Texture, Binding::Sampler],
+        );
+        let pipeline_layout = ::gpu::kernel::pipeline_layout(device, "mips", &[&layout]);
+        let pipeline = |space| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("mips"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_downsample"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(format_of(space).into())],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let edge = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("mips"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        Ok(Self {
+            srgb: pipeline(ColorSpace::Srgb),
+            linear: pipeline(ColorSpace::Linear),
+            layout,
+            edge,
+        })
+    }
+
+    /// Draws levels 1.. of `texture` from level 0, each from the one before.
+    fn encode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        texture: &wgpu::Texture,
+        space: ColorSpace,
+    ) {
+        let level_view = |level| {
+            texture.create_view(&wgpu::TextureViewDescriptor {
+                base_mip_level: level,
+                mip_level_count: Some(1),
+                ..Default::default()
+            })
+        };
+        let pipeline = match space {
+            ColorSpace::Srgb => &self.srgb,
+            ColorSpace::Linear => &self.linear,
+        };
+        for level in 1..texture.mip_level_count() {
+            let source = level_view(level - 1);
+            let target = level_view(level);
+            let group = self.layout.bind(
+                device,
+                &[
+                    wgpu::BindingResource::TextureView(&source),
+                    wgpu::BindingResource::Sampler(&self.edge),
+                ],
+            );
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("mip level"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &target,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.draw(0..3, 0..1);
+        }
+    }
+}

@@ -1,0 +1,20 @@
+// Mip chain generation at load (the G-buffer's textures): level l + 1 is drawn from level l,
+// each texel the bilinear sample (clamped to the edge) of level l at its centre — the 2 × 2
+// box filter where level l's side is even. The view formats decode sRGB before filtering and
+// encode it on write. Twin of `scene::LinearTexture::mipmapped`.
+
+@group(0) @binding(0) var source: texture_2d<f32>;
+@group(0) @binding(1) var edge: sampler;
+
+// One triangle covering the viewport.
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let corner = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs_downsample(@builtin(position) pixel: vec4<f32>) -> @location(0) vec4<f32> {
+    let target_size = max(textureDimensions(source) / 2u, vec2<u32>(1u));
+    return textureSampleLevel(source, edge, pixel.xy / vec2<f32>(target_size), 0.0);
+}
