@@ -18,10 +18,10 @@ struct TexcoordOut {
 fn fs_texcoord(in: VertexOut) -> TexcoordOut {
     var out: TexcoordOut;
     out.linear_depth = in.view_depth;
-    let n = facing_normal(in.normal, in.to_eye);
+    let n = facing_normal(in.normal, in.to_eye).normal;
     out.normal = pack2x16snorm(encode_octahedral_snorm(n));
-    out.uv = in.uv;
-    out.uv_grad = vec4<f32>(dpdxFine(in.uv), dpdyFine(in.uv));
+    out.uv = in.uv.xy;
+    out.uv_grad = vec4<f32>(dpdxFine(in.uv.xy), dpdyFine(in.uv.xy));
     out.material = pack_material(material.roughness, material.metallic, material.id);
     return out;
 }

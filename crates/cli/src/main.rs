@@ -34,8 +34,9 @@ struct Args {
     /// Scene file (.gltf, .glb, .obj, .ply); default: the built-in scene named by --builtin.
     #[arg(long)]
     scene: Option<PathBuf>,
-    /// Built-in scene when no --scene is given: cornell, spheres, checkerboard, or the
-    /// light-culling scenes of Ishmukhametov 2013 §4.2: walls-test1 .. walls-test4.
+    /// Built-in scene when no --scene is given: cornell, spheres, checkerboard, gallery (the
+    /// glTF material's parts, one sphere each), or the light-culling scenes of Ishmukhametov
+    /// 2013 §4.2: walls-test1 .. walls-test4.
     #[arg(long, default_value = "cornell")]
     builtin: String,
     /// Image size as WIDTHxHEIGHT.
@@ -642,12 +643,13 @@ fn load_scene(args: &Args) -> Result<Scene> {
             "cornell" => scene::cornell_box(),
             "spheres" => scene::spheres_on_plane(8),
             "checkerboard" => scene::checkerboard(),
+            "gallery" => scene::material_gallery(),
             "walls-test1" => scene::thesis_walls(0),
             "walls-test2" => scene::thesis_walls(100),
             "walls-test3" => scene::thesis_walls(500),
             "walls-test4" => scene::thesis_walls(1000),
             other => bail!(
-                "unknown built-in scene {other:?} (cornell, spheres, checkerboard, walls-test1 .. walls-test4)"
+                "unknown built-in scene {other:?} (cornell, spheres, checkerboard, gallery, walls-test1 .. walls-test4)"
             ),
         });
     };

@@ -300,7 +300,10 @@ fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], shadin
                     let l = bary(c);
                     let w = 1.0 / (l[0] * tri.inv_w[0] + l[1] * tri.inv_w[1] + l[2] * tri.inv_w[2]);
                     let a = std::array::from_fn(|k| {
-                        (0..3).map(|v| tri.attributes_over_w[v][k] * l[v]).sum::<f32>() * w
+                        (0..3)
+                            .map(|v| tri.attributes_over_w[v][k] * l[v])
+                            .sum::<f32>()
+                            * w
                     });
                     (Varyings::new(&a), w)
                 };
@@ -406,8 +409,8 @@ pub fn rasterize_with(
                         ClipVertex {
                             clip: clip[i],
                             attributes: [
-                                n.x, n.y, n.z, uv0.x, uv0.y, uv1.x, uv1.y, t.x, t.y, t.z, t.w,
-                                c.x, c.y, c.z, c.w,
+                                n.x, n.y, n.z, uv0.x, uv0.y, uv1.x, uv1.y, t.x, t.y, t.z, t.w, c.x,
+                                c.y, c.z, c.w,
                             ],
                         }
                     };

@@ -82,24 +82,16 @@ pub struct NearFieldInputs<'a> {
 }
 
 /// The diffuse albedo ρ(1 − metallic) of every triangle of `scene` in [`scene_mesh`]'s order,
-/// its base-colour texture read at the triangle's centroid, packed as WGSL's `pack4x8unorm`.
+/// its material evaluated at the triangle's centroid, packed as WGSL's `pack4x8unorm`.
 pub fn triangle_albedos(scene: &Scene) -> Vec<u32> {
-    let textures: Vec<_> = scene
-        .textures
-        .iter()
-        .map(scene::LinearTexture::new)
-        .collect();
+    let textures = scene::SceneTextures::new(scene, false);
     let mut albedos = Vec::with_capacity(scene.triangle_count());
     for (m, mesh) in scene.meshes.iter().enumerate() {
-        let metallic = scene
-            .materials
-            .get(mesh.material as usize)
-            .map_or(0.0, |material| material.metallic);
         for t in 0..mesh.indices.len() / 3 {
             let third = 1.0 / 3.0;
             let albedo =
-                crate::vpl::albedo_at(scene, &textures, (m as u32, t as u32), (third, third))
-                    * (1.0 - metallic);
+                crate::vpl::material_at(scene, &textures, (m as u32, t as u32), (third, third))
+                    .map_or(Vec3::ZERO, |s| s.albedo * (1.0 - s.metallic));
             albedos.push(pack4x8unorm(albedo.extend(1.0).to_array()));
         }
     }

@@ -25,10 +25,10 @@
 
 use std::f32::consts::PI;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
-use scene::LinearTexture;
 use scene::{Aabb, Bvh, Light, Scene};
+use scene::{SceneTextures, SurfaceAttributes};
 
 /// Fewest and most VPLs a set may hold.
 pub const VPL_RANGE: std::ops::RangeInclusive<usize> = 16..=16384;
@@ -464,29 +464,23 @@ pub fn area_lights_frame(scene: &Scene, samples: u32, frame: u32) -> Vec<Light> 
     lights
 }
 
-/// Linear albedo of the surface at barycentrics `(u, v)` of `triangle` of mesh `mesh`: base
-/// colour × base-colour texture at that UV.
-pub(crate) fn albedo_at(
+/// The material of `triangle` of mesh `mesh` evaluated at barycentrics `(u, v)`
+/// ([`scene::Material::evaluate`], level 0 of each texture): its albedo is what a photon's
+/// VPL reflects.
+pub(crate) fn material_at(
     scene: &Scene,
-    textures: &[LinearTexture],
+    textures: &SceneTextures,
     (mesh, triangle): (u32, u32),
     (u, v): (f32, f32),
-) -> Vec3 {
+) -> Option<scene::MaterialSample> {
     let mesh = &scene.meshes[mesh as usize];
-    let Some(material) = scene.materials.get(mesh.material as usize) else {
-        return Vec3::ZERO;
-    };
-    let base = material.base_color.truncate();
-    let texel = match (material.base_color_texture, mesh.uvs.is_empty()) {
-        (Some(t), false) if (t.texture as usize) < textures.len() => {
-            let i = triangle as usize * 3;
-            let [a, b, c] = [0, 1, 2].map(|k| mesh.uvs[mesh.indices[i + k] as usize]);
-            let uv: Vec2 = a * (1.0 - u - v) + b * u + c * v;
-            textures[t.texture as usize].sample(uv).truncate()
-        }
-        _ => Vec3::ONE,
-    };
-    (base * texel).clamp(Vec3::ZERO, Vec3::ONE)
+    let material = scene.materials.get(mesh.material as usize)?;
+    let i = triangle as usize * 3;
+    let idx = [0, 1, 2].map(|k| mesh.indices[i + k] as usize);
+    let [a, b, c] = idx.map(|k| mesh.positions[k]);
+    let normal = (b - a).cross(c - a).normalize_or(Vec3::Z);
+    let at = SurfaceAttributes::blend(mesh, idx, [1.0 - u - v, u, v], normal, false);
+    Some(material.evaluate(textures, &at, 1))
 }
 
 /// The VPLs a photon places: one where it first hits the scene with non-zero flux, and with
@@ -495,7 +489,7 @@ pub(crate) fn albedo_at(
 fn place(
     scene: &Scene,
     bvh: &Bvh,
-    textures: &[LinearTexture],
+    textures: &SceneTextures,
     photon: &Photon,
     (bounces, reach): (u32, f32),
     random: impl Fn(u32) -> [f32; 5],
@@ -522,12 +516,13 @@ fn place(
         } else {
             normal
         };
-        let albedo = albedo_at(
+        let albedo = material_at(
             scene,
             textures,
             (hit.mesh, hit.triangle),
             (hit.barycentrics.x, hit.barycentrics.y),
-        );
+        )
+        .map_or(Vec3::ZERO, |m| m.albedo);
         let flux = photon.flux * w * albedo;
         if !(flux.max_element() > 0.0 && flux.is_finite()) {
             break;
@@ -596,7 +591,7 @@ pub fn generate(
             Some(*acc)
         })
         .collect();
-    let textures: Vec<LinearTexture> = scene.textures.iter().map(LinearTexture::new).collect();
+    let textures = SceneTextures::new(scene, false);
     let k = config.count / subsets as usize;
     let bounces = config.bounces.max(1);
     let reach = 2.0 * bounds.diagonal();

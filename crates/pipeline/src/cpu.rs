@@ -3,7 +3,7 @@
 
 use std::time::Instant;
 
-use gbuffer::{Frame, GBuffer, Image, NO_MATERIAL, unpack_material};
+use gbuffer::{Frame, GBuffer, Image, NO_MATERIAL, TextureOptions, unpack_material};
 use glam::Vec3;
 use rayon::prelude::*;
 use scene::{Camera, Light, Scene};
@@ -48,10 +48,11 @@ pub fn composition(
             let (ind_d, ind_s) = indirect.map_or((Vec3::ZERO, Vec3::ZERO), |(d, s)| {
                 (rgb(d.pixels()[i]), rgb(s.pixels()[i]))
             });
-            let c = albedo * (1.0 - metallic) * (diffuse.pixels()[i] + occlusion * (ambient + ind_d))
-                + specular.pixels()[i]
-                + occlusion * ind_s
-                + rgb(emission);
+            let c =
+                albedo * (1.0 - metallic) * (diffuse.pixels()[i] + occlusion * (ambient + ind_d))
+                    + specular.pixels()[i]
+                    + occlusion * ind_s
+                    + rgb(emission);
             [c.x, c.y, c.z, 1.0]
         })
         .collect();
@@ -69,9 +70,18 @@ pub struct FrameInputs<'a> {
     height: u32,
     ambient: Vec3,
     shadows: Option<ShadowMapConfig>,
+    textures: TextureOptions,
 }
 
 impl<'a> FrameInputs<'a> {
+    /// Filters textures as `options` say (`GpuRenderer::new_with`'s twin).
+    pub fn with_textures(self, options: TextureOptions) -> Self {
+        Self {
+            textures: options,
+            ..self
+        }
+    }
+
     /// Shadows every light with maps of `config` (`GpuRenderer::set_shadows`' twin), whose
     /// depth the CPU ray-casts through every texel centre
     /// ([`tiled_shading::shadows::ray_cast_maps`]).
@@ -98,6 +108,7 @@ impl<'a> FrameInputs<'a> {
             height,
             ambient,
             shadows: None,
+            textures: TextureOptions::default(),
         }
     }
 }
@@ -126,7 +137,8 @@ pub fn render_indirect(
         })
     };
     let t = Instant::now();
-    let gb = gbuffer::cpu::rasterize(scene, camera, width, height)?.gbuffer;
+    let gb =
+        gbuffer::cpu::rasterize_with(scene, camera, (width, height), &inputs.textures)?.gbuffer;
     timed(&mut timings, "gbuffer", t);
     let frame = Frame::new(camera, width, height);
     let maps = match &inputs.shadows {

@@ -5,7 +5,7 @@
 use ::gpu::kernel::{Binding, Kernel, Passes, Workgroups};
 use ::gpu::{PassTimer, transfer};
 use gbuffer::{
-    Frame, Image,
+    Frame, Image, TextureOptions,
     gpu::{GBufferPass, GBufferTargets, GpuScene},
 };
 use glam::{Vec3, Vec4};
@@ -222,10 +222,30 @@ impl GpuRenderer {
         width: u32,
         height: u32,
     ) -> Result<Self, RenderError> {
+        Self::new_with(
+            device,
+            queue,
+            scene,
+            lights,
+            (width, height),
+            &TextureOptions::default(),
+        )
+    }
+
+    /// [`GpuRenderer::new`] at `(width, height)` with the scene's textures filtered as
+    /// `textures` says.
+    pub fn new_with(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        lights: &[Light],
+        (width, height): (u32, u32),
+        textures: &TextureOptions,
+    ) -> Result<Self, RenderError> {
         let gpu_lights = crate::validate_lights(lights)?;
         let sized = SizedTargets::new(device, width, height)?;
         let gbuffer_pass = GBufferPass::new(device)?;
-        let gpu_scene = GpuScene::upload(device, queue, scene, &gbuffer_pass)?;
+        let gpu_scene = GpuScene::upload_with(device, queue, scene, &gbuffer_pass, textures)?;
         let ambient = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("ambient"),
             contents: bytemuck::bytes_of(&crate::DEFAULT_AMBIENT.extend(0.0)),

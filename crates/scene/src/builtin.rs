@@ -418,7 +418,6 @@ pub fn wall(front: u32, behind: u32) -> Scene {
     b.scene
 }
 
-/// A 256² texture of 8 × 8 black-and-white checks (sRGB 0.1 and 0.9).
 /// A 256 × 256 two-tone checker (32-texel squares, sRGB 230 and 26), the built-in texture.
 pub fn checker_texture() -> Texture {
     let size = 256u32;
@@ -496,13 +495,258 @@ pub fn checkerboard() -> Scene {
     b.scene
 }
 
+/// A `size`² texture whose texel (x, y) is `texel(x / size, y / size)` (coordinates of the
+/// texel's centre in \[0, 1\]), RGBA8.
+fn procedural(name: &str, size: u32, texel: impl Fn(f32, f32) -> [u8; 4]) -> Texture {
+    let rgba8 = (0..size * size)
+        .flat_map(|i| {
+            let (x, y) = (i % size, i / size);
+            texel(
+                (x as f32 + 0.5) / size as f32,
+                (y as f32 + 0.5) / size as f32,
+            )
+        })
+        .collect();
+    Texture {
+        name: name.into(),
+        width: size,
+        height: size,
+        rgba8,
+        sampler: Default::default(),
+    }
+}
+
+/// The distance of (u, v) to the nearest mortar line of a running-bond brick wall of 4 courses
+/// and 2 bricks per course per tile, in units of the tile (0 on the mortar's centre line),
+/// and the direction from the line into the brick.
+fn brick(u: f32, v: f32) -> (f32, Vec2) {
+    let course = (v * 4.0).floor();
+    let shift = if course as i32 % 2 == 0 { 0.0 } else { 0.25 };
+    let bu = (u + shift).rem_euclid(0.5) / 0.5;
+    let bv = (v * 4.0).fract();
+    // Distances to the four edges of the brick, in tile units.
+    let edges = [
+        (bu * 0.5, Vec2::X),
+        ((1.0 - bu) * 0.5, -Vec2::X),
+        (bv * 0.25, Vec2::Y),
+        ((1.0 - bv) * 0.25, -Vec2::Y),
+    ];
+    edges
+        .into_iter()
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .expect("four edges")
+}
+
+/// The material gallery: ten spheres on a checker ground, each showing one part of the glTF
+/// metallic-roughness material (issue 22), with procedural textures made here. Front row, left
+/// to right: base colour texture (tiles), metallic-roughness texture (metal left, roughness
+/// rising upwards), normal map (bricks), occlusion texture (the bricks' mortar), emissive
+/// texture (rings). Back row: vertex colours, texture-coordinate set 1 with a texture
+/// transform, alpha `MASK` (holes), alpha `BLEND` (half transparent, dithered), and an open
+/// one-sided hemisphere (its inside is culled). The ground's checker is rotated by a texture
+/// transform. One directional and one point light.
+pub fn material_gallery() -> Scene {
+    use crate::{AlphaMode, TextureRef, UvTransform};
+    let mut b = Builder::new();
+    let textures = [
+        procedural("tiles", 128, |u, v| {
+            let (i, j) = ((u * 4.0) as u32, (v * 4.0) as u32);
+            let hues = [[200, 60, 40], [40, 140, 200], [230, 190, 60], [60, 170, 80]];
+            let c = hues[((i + 2 * j) % 4) as usize];
+            let grout = (u * 4.0).fract() < 0.08 || (v * 4.0).fract() < 0.08;
+            if grout {
+                [230, 230, 220, 255]
+            } else {
+                [c[0], c[1], c[2], 255]
+            }
+        }),
+        procedural("metal-rough", 64, |u, v| {
+            [
+                0,
+                ((1.0 - v) * 255.0) as u8,
+                if u < 0.5 { 255 } else { 0 },
+                255,
+            ]
+        }),
+        procedural("bricks-normal", 128, |u, v| {
+            let (d, inward) = brick(u, v);
+            // A bevel 0.04 wide tilts the normal 45° away from the mortar line.
+            let slope = if d < 0.04 { 1.0 } else { 0.0 };
+            let n = Vec3::new(-inward.x * slope, -inward.y * slope, 1.0).normalize();
+            let e = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
+            [e(n.x), e(n.y), e(n.z), 255]
+        }),
+        procedural("bricks-occlusion", 128, |u, v| {
+            let o = (brick(u, v).0 / 0.04).clamp(0.2, 1.0);
+            let o = (o * 255.0) as u8;
+            [o, o, o, 255]
+        }),
+        procedural("rings", 128, |u, v| {
+            let r = Vec2::new(u - 0.5, v - 0.5).length() * 8.0;
+            if r.fract() < 0.5 {
+                [255, 150, 40, 255]
+            } else {
+                [0, 0, 0, 255]
+            }
+        }),
+        procedural("holes", 64, |u, v| {
+            let hole = Vec2::new((u * 4.0).fract() - 0.5, (v * 4.0).fract() - 0.5).length() < 0.3;
+            [200, 200, 210, if hole { 0 } else { 255 }]
+        }),
+    ];
+    b.scene.textures.push(checker_texture());
+    b.scene.textures.extend(textures);
+    let texture = |t: u32| Some(TextureRef::new(t));
+    let ground = b.material("checker", Vec3::ONE, 0.7, 0.0);
+    b.scene.materials[ground as usize].base_color_texture = Some(TextureRef {
+        transform: UvTransform {
+            rotation: 30f32.to_radians(),
+            ..UvTransform::IDENTITY
+        },
+        ..TextureRef::new(0)
+    });
+    b.ground(ground, 12.0, 12.0);
+    let spheres: [(&str, Box<dyn Fn(&mut Material)>); 10] = [
+        (
+            "base colour texture",
+            Box::new(|m| m.base_color_texture = texture(1)),
+        ),
+        (
+            "metallic-roughness texture",
+            Box::new(|m| {
+                m.metallic_roughness_texture = texture(2);
+                m.metallic = 1.0;
+                m.roughness = 1.0;
+                m.base_color = Vec3::new(0.95, 0.64, 0.54).extend(1.0);
+            }),
+        ),
+        (
+            "normal map",
+            Box::new(|m| {
+                m.normal_texture = texture(3);
+                m.base_color = Vec3::new(0.6, 0.25, 0.15).extend(1.0);
+            }),
+        ),
+        (
+            "occlusion texture",
+            Box::new(|m| {
+                m.occlusion_texture = texture(4);
+                m.occlusion_strength = 1.0;
+            }),
+        ),
+        (
+            "emissive texture",
+            Box::new(|m| {
+                m.emissive_texture = texture(5);
+                m.emissive = Vec3::splat(2.0);
+                m.base_color = Vec3::splat(0.2).extend(1.0);
+            }),
+        ),
+        ("vertex colours", Box::new(|_| ())),
+        (
+            "texture-coordinate set 1",
+            Box::new(|m| {
+                m.base_color_texture = Some(TextureRef {
+                    texture: 0,
+                    uv_set: 1,
+                    transform: UvTransform {
+                        offset: Vec2::new(0.25, 0.0),
+                        rotation: 45f32.to_radians(),
+                        scale: Vec2::splat(2.0),
+                    },
+                });
+            }),
+        ),
+        (
+            "alpha mask",
+            Box::new(|m| {
+                m.base_color_texture = texture(6);
+                m.alpha_mode = AlphaMode::Mask { cutoff: 0.5 };
+            }),
+        ),
+        (
+            "alpha blend",
+            Box::new(|m| {
+                m.base_color = Vec3::new(0.2, 0.5, 0.9).extend(0.5);
+                m.alpha_mode = AlphaMode::Blend;
+            }),
+        ),
+        ("one-sided", Box::new(|m| m.double_sided = false)),
+    ];
+    for (k, (name, style)) in spheres.iter().enumerate() {
+        let material = b.material(name, Vec3::splat(0.8), 0.5, 0.0);
+        style(&mut b.scene.materials[material as usize]);
+        let (column, row) = ((k % 5) as f32, (k / 5) as f32);
+        let center = Vec3::new((column - 2.0) * 1.25, 0.5, -row * 1.4);
+        let mesh = b.mesh(name, material);
+        Builder::sphere(mesh, center, 0.5, 48, 24);
+        if *name == "one-sided" {
+            // Open at the top, so the camera looks at its inside.
+            let positions = &mesh.positions;
+            let tris: Vec<u32> = mesh
+                .indices
+                .chunks_exact(3)
+                .filter(|t| {
+                    t.iter().map(|&i| positions[i as usize].y).sum::<f32>() < 3.0 * (center.y + 0.2)
+                })
+                .flatten()
+                .copied()
+                .collect();
+            mesh.indices = tris;
+        }
+        if *name == "vertex colours" {
+            mesh.colors = mesh
+                .positions
+                .iter()
+                .map(|p| {
+                    let h = (p.y - center.y) / 0.5 * 0.5 + 0.5;
+                    Vec3::new(h, 1.0 - h, 0.5 + 0.5 * (p.x - center.x) / 0.5).extend(1.0)
+                })
+                .collect();
+        }
+        if *name == "texture-coordinate set 1" {
+            mesh.uvs1 = mesh
+                .positions
+                .iter()
+                .map(|p| Vec2::new(p.x, p.y) * 0.5)
+                .collect();
+        }
+    }
+    b.scene.complete_tangents();
+    b.scene.lights.push(Light::Directional {
+        direction: Vec3::new(-0.5, -1.0, -0.6).normalize(),
+        color: Vec3::ONE,
+        intensity: 2.0,
+    });
+    b.scene.lights.push(Light::Point {
+        position: Vec3::new(2.5, 2.0, 1.5),
+        color: Vec3::new(1.0, 0.8, 0.6),
+        intensity: 3.0,
+        radius: 10.0,
+    });
+    b.scene.camera = Some(Camera {
+        eye: Vec3::new(0.0, 3.2, 6.5),
+        target: Vec3::new(0.0, 0.2, -0.7),
+        up: Vec3::Y,
+        fov_y: 45f32.to_radians(),
+        near: 0.1,
+        far: 40.0,
+    });
+    b.scene
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn builtins_validate() {
-        for scene in [cornell_box(), spheres_on_plane(4), checkerboard()] {
+        for scene in [
+            cornell_box(),
+            spheres_on_plane(4),
+            checkerboard(),
+            material_gallery(),
+        ] {
             scene.validate().expect("built-in scene is valid");
         }
     }

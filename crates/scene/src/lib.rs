@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 
 pub use builtin::{
     THESIS_HIDDEN_LIGHTS, THESIS_LIGHT_RADIUS, THESIS_VISIBLE_LIGHTS, checker_texture,
-    checkerboard, cornell_box, spheres_on_plane, thesis_walls, wall,
+    checkerboard, cornell_box, material_gallery, spheres_on_plane, thesis_walls, wall,
 };
 pub use bvh::{Bvh, Hit};
 pub use camera::Camera;
@@ -37,7 +37,8 @@ pub use material::{
     Wrap, dither_threshold, role_space,
 };
 pub use texture::{
-    ColorSpace, LinearTexture, MAX_ANISOTROPY, anisotropic_footprint, linear_to_srgb, srgb_to_linear,
+    ColorSpace, LinearTexture, MAX_ANISOTROPY, anisotropic_footprint, linear_to_srgb,
+    srgb_to_linear,
 };
 
 use glam::{Vec2, Vec3, Vec4};

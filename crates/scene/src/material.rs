@@ -120,7 +120,6 @@ impl Default for Sampler {
     }
 }
 
-
 impl AlphaMode {
     /// Whether a fragment of `alpha` is kept: always when opaque, at or above the cutoff when
     /// masked, and — the deferred renderer's policy for `BLEND`, dithered (stochastic)

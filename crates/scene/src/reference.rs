@@ -25,10 +25,10 @@
 
 use std::f32::consts::{FRAC_1_PI, PI};
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::{Bvh, Camera, Light, LinearTexture, Scene};
+use crate::{Bvh, Camera, Light, MaterialSample, Scene, SceneTextures, SurfaceAttributes};
 
 /// How far a ray leaves a surface at `p`: 10⁻⁴ of (1 + its largest coordinate), so the
 /// surface does not hit itself in f32 at any distance from the origin. The renderer's shadow
@@ -66,9 +66,12 @@ impl Default for ReferenceConfig {
     }
 }
 
-/// An emissive triangle: corners, emitted radiance, area.
+/// An emissive triangle: its mesh and index, corners, emitted radiance factor (times the
+/// emissive texture where its material has one), area.
 #[derive(Clone, Copy, Debug)]
 struct Emitter {
+    mesh: u32,
+    triangle: u32,
     v: [Vec3; 3],
     normal: Vec3,
     radiance: Vec3,
@@ -89,8 +92,9 @@ pub struct PathTracer<'s> {
     emitter_cdf: Vec<f32>,
     /// Emitter index of each (mesh, triangle), for MIS on BRDF-sampled hits.
     emitter_of: Vec<Vec<Option<u32>>>,
-    /// The scene's textures decoded for sampling (as the CPU G-buffer samples them).
-    textures: Vec<LinearTexture>,
+    /// The scene's textures decoded for sampling (level 0, as the CPU G-buffer's sampler
+    /// reads it when magnifying).
+    textures: SceneTextures,
     sums: Vec<[f64; 3]>,
     samples: u32,
 }
@@ -278,6 +282,8 @@ impl<'s> PathTracer<'s> {
                     total += area * luminance(radiance);
                     emitter_cdf.push(total);
                     emitters.push(Emitter {
+                        mesh: emitter_of.len() as u32,
+                        triangle: t as u32,
                         v,
                         normal,
                         radiance,
@@ -298,7 +304,7 @@ impl<'s> PathTracer<'s> {
             emitters,
             emitter_cdf,
             emitter_of,
-            textures: scene.textures.iter().map(LinearTexture::new).collect(),
+            textures: SceneTextures::new(scene, false),
             sums: vec![[0.0; 3]; width as usize * height as usize],
             samples: 0,
         }
@@ -367,42 +373,53 @@ impl<'s> PathTracer<'s> {
         (c.eye, (forward + right * sx + up * sy).normalize())
     }
 
-    /// The surface at `hit` seen along `dir`.
-    fn surface(&self, hit: &crate::Hit, dir: Vec3) -> (Surface, Vec3) {
+    /// The surface at `hit` seen along `dir`, its material evaluated there
+    /// ([`crate::Material::evaluate`], level 0 of each texture), and whether `dir` sees the
+    /// back of the triangle's counter-clockwise winding.
+    fn surface(&self, hit: &crate::Hit, dir: Vec3) -> (Surface, MaterialSample, bool) {
         let m = &self.scene.meshes[hit.mesh as usize];
         let t = hit.triangle as usize * 3;
         let idx = [m.indices[t], m.indices[t + 1], m.indices[t + 2]].map(|i| i as usize);
         let (u, v) = (hit.barycentrics.x, hit.barycentrics.y);
         let w = [1.0 - u - v, u, v];
-        let mut n: Vec3 = (0..3).map(|k| m.normals[idx[k]] * w[k]).sum();
-        n = n.normalize_or(Vec3::Y);
+        let vertex_normal = (0..3)
+            .map(|k| m.normals[idx[k]] * w[k])
+            .sum::<Vec3>()
+            .normalize_or(Vec3::Y);
         let [p0, p1, p2] = idx.map(|i| m.positions[i]);
-        let mut ng = (p1 - p0).cross(p2 - p0).normalize_or(n);
-        if ng.dot(dir) > 0.0 {
-            ng = -ng;
-        }
-        n = crate::facing_shading_normal(n, ng);
-        let uv: Vec2 = (0..3).map(|k| m.uvs[idx[k]] * w[k]).sum();
+        let winding = (p1 - p0).cross(p2 - p0).normalize_or(vertex_normal);
+        let back = winding.dot(dir) > 0.0;
+        let ng = if back { -winding } else { winding };
+        let n = crate::facing_shading_normal(vertex_normal, ng);
+        let at = SurfaceAttributes::blend(m, idx, w, n, vertex_normal.dot(ng) < 0.0);
         let mat = &self.scene.materials[m.material as usize];
-        let mut albedo = mat.base_color.truncate();
-        if let Some(tex) = mat
-            .base_color_texture
-            .and_then(|t| self.textures.get(t.texture as usize))
-        {
-            albedo *= tex.sample(uv).truncate();
-        }
+        let sample = mat.evaluate(&self.textures, &at, 1);
         (
             Surface {
                 p: hit.position,
-                n,
+                n: sample.normal,
                 ng,
-                albedo: albedo.clamp(Vec3::ZERO, Vec3::ONE),
-                roughness: mat.roughness,
-                metallic: mat.metallic,
-                specular: mat.specular,
+                albedo: sample.albedo,
+                roughness: sample.roughness,
+                metallic: sample.metallic,
+                specular: sample.specular,
             },
-            mat.emissive,
+            sample,
+            back,
         )
+    }
+
+    /// The radiance emitter `e` sends at barycentrics (a, b) of its corners.
+    fn emission_at(&self, e: &Emitter, a: f32, b: f32) -> Vec3 {
+        let m = &self.scene.meshes[e.mesh as usize];
+        let mat = &self.scene.materials[m.material as usize];
+        if mat.emissive_texture.is_none() {
+            return e.radiance;
+        }
+        let t = e.triangle as usize * 3;
+        let idx = [m.indices[t], m.indices[t + 1], m.indices[t + 2]].map(|i| i as usize);
+        let at = SurfaceAttributes::blend(m, idx, [1.0 - a - b, a, b], e.normal, false);
+        mat.evaluate(&self.textures, &at, 1).emission
     }
 
     /// A point just off the surface on the side of `dir` ([`ray_lift`]).
@@ -528,21 +545,54 @@ impl<'s> PathTracer<'s> {
         }
         let bsdf_pdf = s.pdf(l, v, self.config.specular);
         let weight = pdf * pdf / (pdf * pdf + bsdf_pdf * bsdf_pdf);
-        self.brdf(s, l, v) * e.radiance * cos * weight / pdf
+        self.brdf(s, l, v) * self.emission_at(e, a, b) * cos * weight / pdf
     }
 
-    /// The radiance arriving through pixel `pixel` along one path.
+    /// The first surface along the ray that is there for it: surfaces whose alpha discards
+    /// them ([`crate::AlphaMode::keeps`], a random threshold for blended ones) and, for camera
+    /// rays, the backs of one-sided materials are passed through, as the G-buffer culls and
+    /// discards them (at most [`PASS_THROUGH`] of them).
+    fn next_surface(
+        &self,
+        mut origin: Vec3,
+        dir: Vec3,
+        camera: bool,
+        rng: &mut Rng,
+    ) -> Option<(crate::Hit, Surface, MaterialSample)> {
+        for _ in 0..PASS_THROUGH {
+            let hit = self.bvh.closest_hit(origin, dir, 1e30)?;
+            let (s, sample, back) = self.surface(&hit, dir);
+            let m = &self.scene.materials[self.scene.meshes[hit.mesh as usize].material as usize];
+            let threshold = if m.alpha_mode == crate::AlphaMode::Blend {
+                rng.f()
+            } else {
+                0.0
+            };
+            let culled = camera && back && !m.double_sided;
+            if !culled && m.alpha_mode.keeps(sample.alpha, threshold) {
+                return Some((hit, s, sample));
+            }
+            origin = Self::offset(&s, dir);
+        }
+        None
+    }
+
+    /// The radiance arriving through pixel `pixel` along one path. A surface's ambient
+    /// occlusion ([`MaterialSample::occlusion`]) scales what its continuation ray brings,
+    /// except the emitters that ray hits (direct light, as next-event estimation's).
     fn radiance(&self, pixel: (u32, u32), rng: &mut Rng) -> Vec3 {
         let (mut origin, mut dir) = self.camera_ray(pixel, rng);
         let mut throughput = Vec3::ONE;
+        // `throughput` without the last surface's occlusion: for the emitters a ray hits.
+        let mut direct_throughput = Vec3::ONE;
         let mut sum = Vec3::ZERO;
         // The solid-angle pdf of the BRDF sample that produced `dir` (None: camera ray).
         let mut last_pdf: Option<(f32, Vec3)> = None;
         for depth in 0..=self.config.max_bounces + 1 {
-            let Some(hit) = self.bvh.closest_hit(origin, dir, 1e30) else {
+            let Some((hit, s, sample)) = self.next_surface(origin, dir, last_pdf.is_none(), rng)
+            else {
                 break;
             };
-            let (s, emitted) = self.surface(&hit, dir);
             if let Some(e) = self.emitter_of[hit.mesh as usize][hit.triangle as usize] {
                 let e = &self.emitters[e as usize];
                 if e.normal.dot(-dir) > 0.0 {
@@ -553,7 +603,7 @@ impl<'s> PathTracer<'s> {
                             bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + light_pdf * light_pdf)
                         }
                     };
-                    sum += throughput * emitted * weight;
+                    sum += direct_throughput * sample.emission * weight;
                 }
             }
             if depth > self.config.max_bounces {
@@ -567,13 +617,15 @@ impl<'s> PathTracer<'s> {
             if pdf <= 0.0 || cos <= 0.0 || l.dot(s.ng) <= 0.0 {
                 break;
             }
-            throughput *= self.brdf(&s, l, v) * cos / pdf;
+            direct_throughput = throughput * self.brdf(&s, l, v) * cos / pdf;
+            throughput = direct_throughput * sample.occlusion;
             if depth >= 3 {
                 let survive = throughput.max_element().clamp(0.05, 1.0);
                 if rng.f() >= survive {
                     break;
                 }
                 throughput /= survive;
+                direct_throughput /= survive;
             }
             origin = Self::offset(&s, l);
             dir = l;
@@ -582,6 +634,9 @@ impl<'s> PathTracer<'s> {
         sum
     }
 }
+
+/// The most surfaces a ray passes through (alpha-discarded or culled) before it gives up.
+const PASS_THROUGH: usize = 64;
 
 /// Direction to a light at `position` and its finite-radius attenuation at `p`.
 fn attenuation(position: Vec3, radius: f32, p: Vec3) -> (Vec3, f32) {
@@ -592,7 +647,6 @@ fn attenuation(position: Vec3, radius: f32, p: Vec3) -> (Vec3, f32) {
     (to / d.max(1e-6), w * w / (d * d).max(1e-4))
 }
 
-/// Bilinear sample of an sRGB texture at `uv` (repeat), linear RGB.
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -20,7 +20,11 @@ struct BySides {
 
 impl BySides {
     fn get(&self, cull: bool) -> &wgpu::RenderPipeline {
-        if cull { &self.one_sided } else { &self.two_sided }
+        if cull {
+            &self.one_sided
+        } else {
+            &self.two_sided
+        }
     }
 }
 
@@ -68,24 +72,29 @@ impl GBufferPass {
         // One pipeline shape, four uses: single-pass G-buffer (depth Less, write), z-prepass
         // (depth only, or alpha-tested), and the G-buffer after a prepass (depth Equal, no
         // write); each for two-sided and one-sided materials.
-        let make = |label: &str, compare, write, fragment: Option<(&str, &[wgpu::TextureFormat])>| {
-            let vertex = if fragment.is_some() { "vs_main" } else { "vs_depth" };
-            let pipeline = |cull| {
-                scene_pipeline(
-                    device,
-                    label,
-                    &layout,
-                    &module,
-                    (vertex, fragment),
-                    (compare, write),
-                    cull,
-                )
+        let make =
+            |label: &str, compare, write, fragment: Option<(&str, &[wgpu::TextureFormat])>| {
+                let vertex = if fragment.is_some() {
+                    "vs_main"
+                } else {
+                    "vs_depth"
+                };
+                let pipeline = |cull| {
+                    scene_pipeline(
+                        device,
+                        label,
+                        &layout,
+                        &module,
+                        (vertex, fragment),
+                        (compare, write),
+                        cull,
+                    )
+                };
+                BySides {
+                    two_sided: pipeline(false),
+                    one_sided: pipeline(true),
+                }
             };
-            BySides {
-                two_sided: pipeline(false),
-                one_sided: pipeline(true),
-            }
-        };
         use wgpu::CompareFunction::{Equal, Less};
         let single = make("gbuffer", Less, true, Some(("fs_main", &targets[..])));
         let prepass = make("gbuffer z-prepass", Less, true, None);

@@ -9,9 +9,9 @@ pub mod textures;
 pub mod upload;
 
 pub use gbuffer::{GBufferPass, begin_scene_pass, scene_pipeline};
-pub use textures::MaterialTextures;
 pub use run::{run, run_with};
 pub use targets::{GBufferTargets, GBufferTextures, UploadedGBuffer};
+pub use textures::MaterialTextures;
 pub use upload::GpuScene;
 
 use ::gpu::kernel::Binding;

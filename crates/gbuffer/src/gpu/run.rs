@@ -15,7 +15,14 @@ pub fn run(
     width: u32,
     height: u32,
 ) -> Result<GBuffer, GBufferError> {
-    run_with(gpu, scene, camera, (width, height), false, &TextureOptions::default())
+    run_with(
+        gpu,
+        scene,
+        camera,
+        (width, height),
+        false,
+        &TextureOptions::default(),
+    )
 }
 
 /// Like [`run`] at `(width, height)` with textures filtered as `options` say; with

@@ -83,7 +83,8 @@ impl GBufferTargets {
             albedo: img(read(&self.albedo, all)?)?.map(u32::to_le_bytes),
             material: img(read(&self.material, all)?)?,
             emission: {
-                let halves: Vec<half::f16> = bytemuck::pod_collect_to_vec(&read(&self.emission, all)?);
+                let halves: Vec<half::f16> =
+                    bytemuck::pod_collect_to_vec(&read(&self.emission, all)?);
                 let texels = halves
                     .chunks_exact(4)
                     .map(|c| [0, 1, 2, 3].map(|k| c[k].to_f32()))

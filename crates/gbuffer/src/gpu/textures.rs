@@ -54,17 +54,20 @@ impl MaterialTextures {
         }
         let mips = Mips::new(device)?;
         let mut encoder = device.create_command_encoder(&Default::default());
-        let mut upload = |space: ColorSpace, k: usize| -> Result<Vec<Option<GpuTexture>>, GpuError> {
-            scene
-                .textures
-                .iter()
-                .zip(&used)
-                .map(|(t, u)| {
-                    u[k].then(|| upload_texture(device, queue, &mips, &mut encoder, t, space, options))
+        let mut upload =
+            |space: ColorSpace, k: usize| -> Result<Vec<Option<GpuTexture>>, GpuError> {
+                scene
+                    .textures
+                    .iter()
+                    .zip(&used)
+                    .map(|(t, u)| {
+                        u[k].then(|| {
+                            upload_texture(device, queue, &mips, &mut encoder, t, space, options)
+                        })
                         .transpose()
-                })
-                .collect()
-        };
+                    })
+                    .collect()
+            };
         let srgb = upload(ColorSpace::Srgb, 0)?;
         let linear = upload(ColorSpace::Linear, 1)?;
         let white = ::scene::Texture {
