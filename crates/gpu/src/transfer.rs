@@ -269,6 +269,17 @@ pub fn read_texture(
     texture: &wgpu::Texture,
     aspect: wgpu::TextureAspect,
 ) -> Result<Vec<u8>, GpuError> {
+    read_texture_level(device, queue, texture, aspect, 0)
+}
+
+/// [`read_texture`] of mip level `level`.
+pub fn read_texture_level(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    aspect: wgpu::TextureAspect,
+    level: u32,
+) -> Result<Vec<u8>, GpuError> {
     let texel = u64::from(
         texture
             .format()
@@ -280,7 +291,8 @@ pub fn read_texture(
                 ))
             })?,
     );
-    let (w, h) = (u64::from(texture.width()), u64::from(texture.height()));
+    let size = texture.size().mip_level_size(level, texture.dimension());
+    let (w, h) = (u64::from(size.width), u64::from(size.height));
     // Rows of every layer: layers are images of `h` rows, one after the other.
     let rows = h * u64::from(texture.depth_or_array_layers());
     let row = w * texel;
@@ -302,7 +314,7 @@ pub fn read_texture(
     encoder.copy_texture_to_buffer(
         wgpu::TexelCopyTextureInfo {
             texture,
-            mip_level: 0,
+            mip_level: level,
             origin: wgpu::Origin3d::ZERO,
             aspect,
         },
@@ -314,7 +326,10 @@ pub fn read_texture(
                 rows_per_image: Some(h as u32),
             },
         },
-        texture.size(),
+        wgpu::Extent3d {
+            depth_or_array_layers: texture.depth_or_array_layers(),
+            ..size
+        },
     );
     queue.submit([encoder.finish()]);
     let padded = map_and_copy(device, &staging)?;
