@@ -118,6 +118,19 @@ struct Args {
     /// Seed of the VPL sampling (with --vpls) or of the path tracer (with --reference).
     #[arg(long, default_value_t = 1, requires = "seeded")]
     seed: u64,
+    /// Exposure compensation of render.png in stops (render.exr stays linear radiance).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    exposure: f32,
+    /// Also expose render.png automatically: the frame's log-average luminance maps to 0.18
+    /// (Reinhard et al. 2002), on the GPU where the frame is rendered there.
+    #[arg(long)]
+    auto_exposure: bool,
+    /// Tone curve of render.png: aces (Hill's fitted ACES RRT + sRGB ODT) or clamp.
+    #[arg(long, default_value = "aces")]
+    tone_map: pipeline::output::ToneMapper,
+    /// Largest anisotropy of the texture filter (1 = trilinear .. 16).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=16))]
+    anisotropy: u32,
     /// Distance under which a VPL's 1/d² is clamped (default: 2 % of the scene diagonal).
     #[arg(long, requires = "vpls")]
     vpl_clamp: Option<f32>,
@@ -446,7 +459,7 @@ fn render_reference(
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let (png, exr) = (args.out.join("render.png"), args.out.join("render.exr"));
-    save_png(&image, &png)?;
+    save_png(&output_transform(args)?.apply(&image), &png)?;
     save_exr(&image, &exr)?;
     println!("device:  CPU path tracer (the ground truth, rayon)");
     println!(
@@ -484,6 +497,7 @@ fn render_ssaa(
         metric: Some(args.ssaa_metric),
         resolve: args.ssaa_resolve,
         ambient,
+        anisotropy: args.anisotropy,
         ..Default::default()
     };
     let lights = pipeline::validate_lights(lights)?;
@@ -508,7 +522,10 @@ fn render_ssaa(
     let image = renderer.ssaa.read_output(&gpu.device, &gpu.queue)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    save_png(&image, &args.out.join("render.png"))?;
+    save_png(
+        &output_transform(args)?.apply(&image),
+        &args.out.join("render.png"),
+    )?;
     save_exr(&image, &args.out.join("render.exr"))?;
     println!("device:  GPU {}", gpu.describe());
     if args.adaptive {
@@ -679,6 +696,24 @@ fn record(path: &std::path::Path) {
 }
 
 /// Writes `image` as a PNG at `path` (atomically) and records it as this run's output.
+/// The output transform of render.png (--exposure, --auto-exposure, --tone-map).
+fn output_transform(args: &Args) -> Result<pipeline::output::OutputTransform> {
+    let t = pipeline::output::OutputTransform {
+        exposure_ev: args.exposure,
+        auto_exposure: args.auto_exposure,
+        tone_mapper: args.tone_map,
+    };
+    t.validate()?;
+    Ok(t)
+}
+
+/// The texture filtering of --anisotropy.
+fn texture_options(args: &Args) -> gbuffer::TextureOptions {
+    gbuffer::TextureOptions {
+        max_anisotropy: args.anisotropy,
+    }
+}
+
 fn save_png(image: &gbuffer::Image<[f32; 4]>, path: &std::path::Path) -> Result<()> {
     image.write_png(path)?;
     record(path);
@@ -901,123 +936,149 @@ fn run() -> Result<()> {
             }
         }
     };
-    let (device, rendered, stages, gbuffer): (String, Rendered, Option<IndirectStages>, _) =
-        match &gpu {
-            Some(gpu) => {
-                let (d, q) = (&gpu.device, &gpu.queue);
-                let mut renderer =
-                    pipeline::gpu::GpuRenderer::new(d, q, &scene, &direct_lights, width, height)?;
-                renderer.set_shading(d, q, &shading)?;
-                renderer.set_shadows(d, q, shadow_config.as_ref())?;
-                if let Some(tile) = args.manylod_shadows {
-                    let config = ShadowConfig {
-                        tile,
-                        ..ShadowConfig::default()
-                    };
-                    renderer.set_manylod_shadows(d, q, &scene, Some(&config))?;
-                }
-                if args.ray_shadows {
-                    renderer.set_ray_shadows(d, q, Some(&scene))?;
-                }
-                if let Some((config, set)) = indirect_ref {
-                    match vpl_shadows {
-                        Some(mode) => renderer.set_vpl_shadows(
-                            d,
-                            &scene,
-                            mode,
-                            &ShadowConfig {
-                                epsilon: args.vpl_shadow_epsilon,
-                                ..ShadowConfig::for_mode(mode)
-                            },
-                            config,
-                            set,
-                        )?,
-                        None => renderer.set_indirect(d, config, set)?,
-                    }
-                    if args.near_field {
-                        renderer.set_near_field(d, Some(&scene))?;
-                    }
-                }
-                renderer.render(d, q, &camera, ambient)?; // warm-up: first use of pipelines and caches
-                let rendered = renderer.render(d, q, &camera, ambient)?;
-                if let Some(shadows) = renderer
-                    .vpl_shadows()
-                    .filter(|s| s.mode() != VplShadows::Rays)
-                {
-                    write_shadow_atlas(&args, gpu, shadows)?;
-                }
-                if args.heatmap {
-                    match renderer.light_counts(d, q)? {
-                        Some(counts) => {
-                            write_heatmap(&args, &shading, width, height, &counts)?;
-                        }
-                        None => eprintln!("no heatmap: brute force keeps no per-tile lists"),
-                    }
-                }
-                let (stages, gbuffer) = if args.dump_stages {
-                    (
-                        renderer.indirect().map(|s| s.read(d, q)).transpose()?,
-                        Some(renderer.targets().read(&gpu.device, &gpu.queue)?),
-                    )
-                } else {
-                    (None, None)
+    let output = output_transform(&args)?;
+    let (device, rendered, display, stages, gbuffer): (
+        String,
+        Rendered,
+        gbuffer::Image<[f32; 4]>,
+        Option<IndirectStages>,
+        _,
+    ) = match &gpu {
+        Some(gpu) => {
+            let (d, q) = (&gpu.device, &gpu.queue);
+            let mut renderer = pipeline::gpu::GpuRenderer::new_with(
+                d,
+                q,
+                &scene,
+                &direct_lights,
+                (width, height),
+                &texture_options(&args),
+            )?;
+            renderer.set_output(d, Some(output))?;
+            renderer.set_shading(d, q, &shading)?;
+            renderer.set_shadows(d, q, shadow_config.as_ref())?;
+            if let Some(tile) = args.manylod_shadows {
+                let config = ShadowConfig {
+                    tile,
+                    ..ShadowConfig::default()
                 };
-                (format!("GPU {}", gpu.describe()), rendered, stages, gbuffer)
+                renderer.set_manylod_shadows(d, q, &scene, Some(&config))?;
             }
-            None => {
-                if args.manylod_shadows.is_some() {
-                    bail!("--manylod-shadows needs a GPU (the CPU frame has no ManyLoD cut)");
-                }
-                if args.ray_shadows {
-                    bail!("--ray-shadows needs a GPU (the CPU frame has no ray shadows)");
+            if args.ray_shadows {
+                renderer.set_ray_shadows(d, q, Some(&scene))?;
+            }
+            if let Some((config, set)) = indirect_ref {
+                match vpl_shadows {
+                    Some(mode) => renderer.set_vpl_shadows(
+                        d,
+                        &scene,
+                        mode,
+                        &ShadowConfig {
+                            epsilon: args.vpl_shadow_epsilon,
+                            ..ShadowConfig::for_mode(mode)
+                        },
+                        config,
+                        set,
+                    )?,
+                    None => renderer.set_indirect(d, config, set)?,
                 }
                 if args.near_field {
-                    bail!("--near-field needs a GPU (the CPU frame has no near field)");
+                    renderer.set_near_field(d, Some(&scene))?;
                 }
-                if u64::from(width) * u64::from(height) > MAX_CPU_PIXELS {
-                    bail!(
-                        "--size {width}x{height}: the CPU reference renders at most {MAX_CPU_PIXELS} pixels"
-                    );
-                }
-                let mut inputs = pipeline::cpu::FrameInputs::new(
-                    &scene,
-                    &camera,
-                    &direct_lights,
-                    (width, height),
-                    ambient,
-                );
-                if let Some(config) = shadow_config {
-                    inputs = inputs.with_shadows(config);
-                }
-                let (rendered, stages) =
-                    pipeline::cpu::render_indirect(&inputs, &shading, indirect_ref)?;
-                if args.heatmap {
-                    let gb = gbuffer::cpu::rasterize(&scene, &camera, width, height)?.gbuffer;
-                    let frame = gbuffer::Frame::new(&camera, width, height);
-                    let lights = pipeline::validate_lights(&direct_lights)?;
-                    let shaded =
-                        tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &shading, None)?;
-                    write_heatmap(&args, &shading, width, height, &shaded.counts)?;
-                }
-                let gbuffer = args
-                    .dump_stages
-                    .then(|| gbuffer::cpu::rasterize(&scene, &camera, width, height))
-                    .transpose()?
-                    .map(|r| r.gbuffer);
-                (
-                    "CPU (reference path, rayon)".into(),
-                    rendered,
-                    stages,
-                    gbuffer,
-                )
             }
-        };
+            renderer.render(d, q, &camera, ambient)?; // warm-up: first use of pipelines and caches
+            let rendered = renderer.render(d, q, &camera, ambient)?;
+            let display = match renderer.display() {
+                Some(texture) => pipeline::gpu::read_display(d, q, texture)?,
+                None => output.apply(&rendered.image),
+            };
+            if let Some(shadows) = renderer
+                .vpl_shadows()
+                .filter(|s| s.mode() != VplShadows::Rays)
+            {
+                write_shadow_atlas(&args, gpu, shadows)?;
+            }
+            if args.heatmap {
+                match renderer.light_counts(d, q)? {
+                    Some(counts) => {
+                        write_heatmap(&args, &shading, width, height, &counts)?;
+                    }
+                    None => eprintln!("no heatmap: brute force keeps no per-tile lists"),
+                }
+            }
+            let (stages, gbuffer) = if args.dump_stages {
+                (
+                    renderer.indirect().map(|s| s.read(d, q)).transpose()?,
+                    Some(renderer.targets().read(&gpu.device, &gpu.queue)?),
+                )
+            } else {
+                (None, None)
+            };
+            (
+                format!("GPU {}", gpu.describe()),
+                rendered,
+                display,
+                stages,
+                gbuffer,
+            )
+        }
+        None => {
+            if args.manylod_shadows.is_some() {
+                bail!("--manylod-shadows needs a GPU (the CPU frame has no ManyLoD cut)");
+            }
+            if args.ray_shadows {
+                bail!("--ray-shadows needs a GPU (the CPU frame has no ray shadows)");
+            }
+            if args.near_field {
+                bail!("--near-field needs a GPU (the CPU frame has no near field)");
+            }
+            if u64::from(width) * u64::from(height) > MAX_CPU_PIXELS {
+                bail!(
+                    "--size {width}x{height}: the CPU reference renders at most {MAX_CPU_PIXELS} pixels"
+                );
+            }
+            let mut inputs = pipeline::cpu::FrameInputs::new(
+                &scene,
+                &camera,
+                &direct_lights,
+                (width, height),
+                ambient,
+            )
+            .with_textures(texture_options(&args));
+            if let Some(config) = shadow_config {
+                inputs = inputs.with_shadows(config);
+            }
+            let (rendered, stages) =
+                pipeline::cpu::render_indirect(&inputs, &shading, indirect_ref)?;
+            if args.heatmap {
+                let gb = gbuffer::cpu::rasterize(&scene, &camera, width, height)?.gbuffer;
+                let frame = gbuffer::Frame::new(&camera, width, height);
+                let lights = pipeline::validate_lights(&direct_lights)?;
+                let shaded =
+                    tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &shading, None)?;
+                write_heatmap(&args, &shading, width, height, &shaded.counts)?;
+            }
+            let gbuffer = args
+                .dump_stages
+                .then(|| gbuffer::cpu::rasterize(&scene, &camera, width, height))
+                .transpose()?
+                .map(|r| r.gbuffer);
+            let display = output.apply(&rendered.image);
+            (
+                "CPU (reference path, rayon)".into(),
+                rendered,
+                display,
+                stages,
+                gbuffer,
+            )
+        }
+    };
 
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let png = args.out.join("render.png");
     let exr = args.out.join("render.exr");
-    save_png(&rendered.image, &png)?;
+    save_png(&display, &png)?;
     save_exr(&rendered.image, &exr)?;
     if let Some(gb) = &gbuffer {
         dump_stages(&args.out, gb, stages.as_ref())?;

@@ -10,6 +10,8 @@ use gbuffer::{
 };
 use glam::{Vec3, Vec4};
 use scene::{Camera, Light, Scene};
+
+use crate::output::{self, BoundOutput, OutputPass, OutputTransform};
 use wgpu::util::DeviceExt;
 
 use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
@@ -124,8 +126,18 @@ pub struct GpuRenderer {
     light_atlas: Option<LightAtlas>,
     ray_shadows: Option<GpuRays>,
     near_field: Option<NearFieldStage>,
+    output: Option<OutputStage>,
     bounds: scene::Aabb,
     timer: PassTimer,
+}
+
+/// The output transform as the renderer holds it ([`GpuRenderer::set_output`]): its kernels,
+/// its binding to the radiance and the display texture it writes.
+struct OutputStage {
+    transform: OutputTransform,
+    pass: OutputPass,
+    bound: BoundOutput,
+    display: wgpu::Texture,
 }
 
 /// ManyLoD shadows of the point, spot and hemispherical lights (Holländer 2013 §3.6's
@@ -292,6 +304,7 @@ impl GpuRenderer {
             light_atlas: None,
             ray_shadows: None,
             near_field: None,
+            output: None,
             bounds: scene.bounds(),
             timer: PassTimer::new(device, 32),
         })
@@ -334,7 +347,50 @@ impl GpuRenderer {
         self.shading_bound = bound;
         self.bind_shadow_lookup(device)?;
         self.bind_composition(device);
+        if let Some(output) = self.output.take() {
+            self.set_output(device, Some(output.transform))?;
+        }
         Ok(())
+    }
+
+    /// Sets the output transform (exposure, tone mapper) run after the composition into the
+    /// display texture ([`GpuRenderer::display`]), or with `None` removes it.
+    pub fn set_output(
+        &mut self,
+        device: &wgpu::Device,
+        transform: Option<OutputTransform>,
+    ) -> Result<(), RenderError> {
+        let Some(transform) = transform else {
+            self.output = None;
+            return Ok(());
+        };
+        let pass = match self.output.take() {
+            Some(stage) => stage.pass,
+            None => OutputPass::new(device)?,
+        };
+        let (w, h) = self.size();
+        let display = transfer::texture_2d(
+            device,
+            "display",
+            w,
+            h,
+            output::DISPLAY_FORMAT,
+            transfer::STORAGE_OUTPUT,
+        );
+        let bound = pass.bind(device, &self.sized.radiance, &display, &transform)?;
+        self.output = Some(OutputStage {
+            transform,
+            pass,
+            bound,
+            display,
+        });
+        Ok(())
+    }
+
+    /// The display-linear image the output transform writes ([`output::DISPLAY_FORMAT`],
+    /// `TEXTURE_BINDING | COPY_SRC`), if one is set; encode it as sRGB to show or store it.
+    pub fn display(&self) -> Option<&wgpu::Texture> {
+        self.output.as_ref().map(|o| &o.display)
     }
 
     /// Rebinds the composition to the current targets and indirect stage.
@@ -871,6 +927,9 @@ impl GpuRenderer {
             Workgroups::covering(w, h, 8),
         )
         .encode(encoder, Some(&self.timer));
+        if let Some(output) = &self.output {
+            output.bound.encode(encoder, Some(&self.timer));
+        }
         self.timer.resolve(encoder);
     }
 
@@ -924,6 +983,22 @@ impl GpuRenderer {
             timings,
         })
     }
+}
+
+/// Reads a [`output::DISPLAY_FORMAT`] texture (half floats) back as RGBA.
+pub fn read_display(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<Image<[f32; 4]>, RenderError> {
+    let bytes = transfer::read_texture(device, queue, texture, wgpu::TextureAspect::All)?;
+    let halves: Vec<half::f16> = bytemuck::pod_collect_to_vec(&bytes);
+    let pixels = halves
+        .chunks_exact(4)
+        .map(|c| [0, 1, 2, 3].map(|k| c[k].to_f32()))
+        .collect();
+    Ok(Image::from_vec(texture.width(), texture.height(), pixels)
+        .map_err(|e| ::gpu::GpuError::Readback(e.to_string()))?)
 }
 
 /// Reads a [`RADIANCE_FORMAT`] texture back as linear RGBA.

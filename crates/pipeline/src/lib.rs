@@ -21,6 +21,7 @@
 
 pub mod cpu;
 pub mod gpu;
+pub mod output;
 pub mod progressive;
 
 use gbuffer::Image;
@@ -39,6 +40,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     files: [
         "composition.wgsl",
         "accumulate.wgsl",
+        "output.wgsl",
     ],
 );
 
@@ -82,6 +84,9 @@ pub enum RenderError {
     /// VPLs were given to a renderer without an indirect stage.
     #[error("the renderer has no indirect light: set one (set_indirect) before its VPLs")]
     NoIndirect,
+    /// The output transform's options are out of range.
+    #[error("invalid output transform: {0}")]
+    InvalidOutput(String),
     /// A light has non-finite or negative parameters.
     #[error("light {index}: {problem}")]
     InvalidLight {

@@ -725,8 +725,8 @@ pub fn material_gallery() -> Scene {
         radius: 10.0,
     });
     b.scene.camera = Some(Camera {
-        eye: Vec3::new(0.0, 3.2, 6.5),
-        target: Vec3::new(0.0, 0.2, -0.7),
+        eye: Vec3::new(0.0, 2.3, 4.4),
+        target: Vec3::new(0.0, 0.25, -0.7),
         up: Vec3::Y,
         fov_y: 45f32.to_radians(),
         near: 0.1,
