@@ -353,12 +353,11 @@ impl Emitter {
     }
 }
 
-/// The meshes whose material emits (finite, non-zero emissive radiance).
+/// The meshes whose material is a light ([`scene::Material::is_light`]: uniform emission).
 fn emissive_meshes(scene: &Scene) -> impl Iterator<Item = (&scene::Mesh, &scene::Material)> {
     scene.meshes.iter().filter_map(|mesh| {
         let material = scene.materials.get(mesh.material as usize)?;
-        (material.emissive.max_element() > 0.0 && material.emissive.is_finite())
-            .then_some((mesh, material))
+        material.is_light().then_some((mesh, material))
     })
 }
 

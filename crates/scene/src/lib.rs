@@ -271,6 +271,17 @@ impl Material {
         ]
     }
 
+    /// Whether the renderers treat its surfaces as area lights: a uniform emitter (finite,
+    /// non-zero emissive factor, no emissive texture — a lamp). Textured emission (glowing
+    /// panels, decals) is seen where a ray or the camera meets it, but not sampled as a light:
+    /// the deferred renderer's stand-in lights and VPL photons leave it out, the path tracer
+    /// reaches it by its BRDF samples only.
+    pub fn is_light(&self) -> bool {
+        self.emissive.max_element() > 0.0
+            && self.emissive.is_finite()
+            && self.emissive_texture.is_none()
+    }
+
     /// The textures it reads, each with its role's name.
     pub fn textures(&self) -> impl Iterator<Item = (&'static str, TextureRef)> + '_ {
         self.roles()

@@ -66,12 +66,10 @@ impl Default for ReferenceConfig {
     }
 }
 
-/// An emissive triangle: its mesh and index, corners, emitted radiance factor (times the
-/// emissive texture where its material has one), area.
+/// An emissive triangle of a light ([`crate::Material::is_light`]): corners, emitted
+/// radiance, area.
 #[derive(Clone, Copy, Debug)]
 struct Emitter {
-    mesh: u32,
-    triangle: u32,
     v: [Vec3; 3],
     normal: Vec3,
     radiance: Vec3,
@@ -256,12 +254,10 @@ impl<'s> PathTracer<'s> {
         let mut emitter_of = Vec::new();
         let mut total = 0.0;
         for m in &scene.meshes {
-            let radiance = scene
-                .materials
-                .get(m.material as usize)
-                .map_or(Vec3::ZERO, |mat| mat.emissive);
+            let material = scene.materials.get(m.material as usize);
+            let radiance = material.map_or(Vec3::ZERO, |mat| mat.emissive);
             let mut own = vec![None; m.triangle_count()];
-            if luminance(radiance) > 0.0 {
+            if material.is_some_and(|mat| mat.is_light()) && luminance(radiance) > 0.0 {
                 for (t, tri) in m.indices.chunks_exact(3).enumerate() {
                     let v = [tri[0], tri[1], tri[2]].map(|i| m.positions[i as usize]);
                     let cross = (v[1] - v[0]).cross(v[2] - v[0]);
@@ -282,8 +278,6 @@ impl<'s> PathTracer<'s> {
                     total += area * luminance(radiance);
                     emitter_cdf.push(total);
                     emitters.push(Emitter {
-                        mesh: emitter_of.len() as u32,
-                        triangle: t as u32,
                         v,
                         normal,
                         radiance,
@@ -409,19 +403,6 @@ impl<'s> PathTracer<'s> {
         )
     }
 
-    /// The radiance emitter `e` sends at barycentrics (a, b) of its corners.
-    fn emission_at(&self, e: &Emitter, a: f32, b: f32) -> Vec3 {
-        let m = &self.scene.meshes[e.mesh as usize];
-        let mat = &self.scene.materials[m.material as usize];
-        if mat.emissive_texture.is_none() {
-            return e.radiance;
-        }
-        let t = e.triangle as usize * 3;
-        let idx = [m.indices[t], m.indices[t + 1], m.indices[t + 2]].map(|i| i as usize);
-        let at = SurfaceAttributes::blend(m, idx, [1.0 - a - b, a, b], e.normal, false);
-        mat.evaluate(&self.textures, &at, 1).emission
-    }
-
     /// A point just off the surface on the side of `dir` ([`ray_lift`]).
     fn offset(s: &Surface, dir: Vec3) -> Vec3 {
         s.p + s.ng * ray_lift(s.p) * dir.dot(s.ng).signum()
@@ -545,7 +526,7 @@ impl<'s> PathTracer<'s> {
         }
         let bsdf_pdf = s.pdf(l, v, self.config.specular);
         let weight = pdf * pdf / (pdf * pdf + bsdf_pdf * bsdf_pdf);
-        self.brdf(s, l, v) * self.emission_at(e, a, b) * cos * weight / pdf
+        self.brdf(s, l, v) * e.radiance * cos * weight / pdf
     }
 
     /// The first surface along the ray that is there for it: surfaces whose alpha discards
@@ -593,18 +574,24 @@ impl<'s> PathTracer<'s> {
             else {
                 break;
             };
-            if let Some(e) = self.emitter_of[hit.mesh as usize][hit.triangle as usize] {
-                let e = &self.emitters[e as usize];
-                if e.normal.dot(-dir) > 0.0 {
-                    let weight = match last_pdf {
-                        None => 1.0,
-                        Some((bsdf_pdf, from)) => {
-                            let light_pdf = self.emitter_pdf(e, from, s.p);
-                            bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + light_pdf * light_pdf)
-                        }
-                    };
-                    sum += direct_throughput * sample.emission * weight;
+            match self.emitter_of[hit.mesh as usize][hit.triangle as usize] {
+                Some(e) => {
+                    let e = &self.emitters[e as usize];
+                    if e.normal.dot(-dir) > 0.0 {
+                        let weight = match last_pdf {
+                            None => 1.0,
+                            Some((bsdf_pdf, from)) => {
+                                let light_pdf = self.emitter_pdf(e, from, s.p);
+                                bsdf_pdf * bsdf_pdf
+                                    / (bsdf_pdf * bsdf_pdf + light_pdf * light_pdf)
+                            }
+                        };
+                        sum += direct_throughput * sample.emission * weight;
+                    }
                 }
+                // Textured emission (not a sampled light): reached by BRDF samples only, on
+                // the side the camera or the ray sees.
+                None => sum += direct_throughput * sample.emission,
             }
             if depth > self.config.max_bounces {
                 break;
