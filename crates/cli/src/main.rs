@@ -128,6 +128,10 @@ struct Args {
     /// Tone curve of render.png: aces (Hill's fitted ACES RRT + sRGB ODT) or clamp.
     #[arg(long, default_value = "aces")]
     tone_map: pipeline::output::ToneMapper,
+    /// Replace the scene's materials with procedural normal-mapped ones (brick walls, floor
+    /// tiles; `scene::dress_procedurally`), e.g. for the untextured Sponza.
+    #[arg(long)]
+    procedural_materials: bool,
     /// Largest anisotropy of the texture filter (1 = trilinear .. 16).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=16))]
     anisotropy: u32,
@@ -762,6 +766,9 @@ fn run() -> Result<()> {
         return subdivide_command(input, *level, *limit, *cpu, output);
     }
     let mut scene = load_scene(&args)?;
+    if args.procedural_materials {
+        scene::dress_procedurally(&mut scene);
+    }
     let (width, height) = args.size;
 
     let mut camera = match (&scene.camera, &args.scene) {

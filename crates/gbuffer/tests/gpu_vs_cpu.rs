@@ -145,7 +145,7 @@ fn compare(
         return Ok(());
     };
     // Trilinear filtering: anisotropic filters are implementation-defined (see
-    // `anisotropic_filtering_agrees_on_average`).
+    // `materials.rs`'s `anisotropic_filtering_is_closest_to_supersampling`).
     let options = gbuffer::TextureOptions { max_anisotropy: 1 };
     let expected =
         cpu::rasterize_with(scene, camera, (w, h), &options).map_err(|e| e.to_string())?;

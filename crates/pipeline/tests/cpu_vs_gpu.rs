@@ -27,7 +27,7 @@ fn check(name: &str, scene: &scene::Scene, lights: &[Light], w: u32, h: u32) {
     };
     let camera = scene.camera_or_framed();
     // Trilinear filtering: anisotropic filters are implementation-defined (the G-buffer's
-    // tests compare them on average).
+    // tests compare them with supersampling).
     let textures = gbuffer::TextureOptions { max_anisotropy: 1 };
     let expected = cpu::render(
         &FrameInputs::new(scene, &camera, lights, (w, h), DEFAULT_AMBIENT).with_textures(textures),

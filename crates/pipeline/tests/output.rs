@@ -3,7 +3,7 @@
 
 use pipeline::output::{DISPLAY_FORMAT, OutputPass, OutputTransform, ToneMapper, aces_fitted};
 
-fn upload(gpu: &gpu::Gpu, image: &gbuffer::Image<[f32; 4]>) -> gpu::wgpu::Texture {
+fn upload(gpu: &gpu::Gpu, image: &gbuffer::Image<[f32; 4]>) -> wgpu::Texture {
     gpu::transfer::texture_init(
         &gpu.device,
         &gpu.queue,
@@ -11,7 +11,7 @@ fn upload(gpu: &gpu::Gpu, image: &gbuffer::Image<[f32; 4]>) -> gpu::wgpu::Textur
         image.width(),
         image.height(),
         pipeline::gpu::RADIANCE_FORMAT,
-        gpu::wgpu::TextureUsages::TEXTURE_BINDING,
+        wgpu::TextureUsages::TEXTURE_BINDING,
         bytemuck::cast_slice(image.pixels()),
     )
     .expect("upload")

@@ -537,6 +537,111 @@ fn brick(u: f32, v: f32) -> (f32, Vec2) {
         .expect("four edges")
 }
 
+/// The brick wall's tangent-space normal map: a bevel 0.04 tile units wide along the mortar
+/// lines tilts the normal 45° away from them (128², linear).
+fn bricks_normal_map() -> Texture {
+    procedural("bricks-normal", 128, |u, v| {
+        let (d, inward) = brick(u, v);
+        let slope = if d < 0.04 { 1.0 } else { 0.0 };
+        let n = Vec3::new(-inward.x * slope, -inward.y * slope, 1.0).normalize();
+        let e = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
+        [e(n.x), e(n.y), e(n.z), 255]
+    })
+}
+
+/// The brick wall's ambient occlusion: 0.2 in the mortar, rising to 1 across the bevel.
+fn bricks_occlusion() -> Texture {
+    procedural("bricks-occlusion", 128, |u, v| {
+        let o = ((brick(u, v).0 / 0.04).clamp(0.2, 1.0) * 255.0) as u8;
+        [o, o, o, 255]
+    })
+}
+
+/// Brick and mortar colours (sRGB), the bricks varying in tone.
+fn bricks_colour() -> Texture {
+    procedural("bricks", 128, |u, v| {
+        if brick(u, v).0 < 0.02 {
+            return [170, 165, 150, 255];
+        }
+        let course = (v * 4.0).floor();
+        let n = ((u * 2.0 + course * 0.5).floor() * 7.0 + course * 3.0).rem_euclid(5.0) as u8;
+        [150 + 12 * n, 70 + 6 * n, 50 + 3 * n, 255]
+    })
+}
+
+/// Replaces `scene`'s materials with procedural normal-mapped ones, for scenes that come
+/// without textures (the shared Sponza): meshes facing mostly up or down get floor tiles
+/// (base colour and a grout normal map), the rest brick walls (base colour, normal map and
+/// ambient occlusion). Texture coordinates are the scene's own; tangents are generated
+/// (MikkTSpace). The issue-22 test scene for interleaved indirect light on normal-mapped
+/// surfaces (Segovia et al. 2006, Fig. 7).
+pub fn dress_procedurally(scene: &mut Scene) {
+    use crate::TextureRef;
+    let first = scene.textures.len() as u32;
+    scene.textures.extend([
+        bricks_colour(),
+        bricks_normal_map(),
+        bricks_occlusion(),
+        procedural("floor-tiles", 128, |u, v| {
+            let grout = (u * 4.0).fract() < 0.05 || (v * 4.0).fract() < 0.05;
+            let tone = if ((u * 4.0) as u32 + (v * 4.0) as u32) % 2 == 0 {
+                200
+            } else {
+                160
+            };
+            if grout {
+                [90, 85, 80, 255]
+            } else {
+                [tone, tone - 15, tone - 40, 255]
+            }
+        }),
+        procedural("floor-tiles-normal", 128, |u, v| {
+            let (fu, fv) = ((u * 4.0).fract(), (v * 4.0).fract());
+            let d = [fu, 1.0 - fu, fv, 1.0 - fv];
+            let k = (0..4).min_by(|&a, &b| d[a].total_cmp(&d[b])).unwrap_or(0);
+            let slope = if d[k] < 0.05 { 0.7 } else { 0.0 };
+            let inward = [Vec2::X, -Vec2::X, Vec2::Y, -Vec2::Y][k];
+            let n = Vec3::new(-inward.x * slope, -inward.y * slope, 1.0).normalize();
+            let e = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
+            [e(n.x), e(n.y), e(n.z), 255]
+        }),
+    ]);
+    let texture = |k: u32| Some(TextureRef::new(first + k));
+    let walls = scene.materials.len() as u32;
+    scene.materials.push(Material {
+        name: "procedural bricks".into(),
+        base_color: Vec3::ONE.extend(1.0),
+        base_color_texture: texture(0),
+        normal_texture: texture(1),
+        occlusion_texture: texture(2),
+        roughness: 0.85,
+        specular: 0.5,
+        ..Default::default()
+    });
+    scene.materials.push(Material {
+        name: "procedural floor tiles".into(),
+        base_color: Vec3::ONE.extend(1.0),
+        base_color_texture: texture(3),
+        normal_texture: texture(4),
+        roughness: 0.45,
+        ..Default::default()
+    });
+    for mesh in &mut scene.meshes {
+        let mut up = 0.0;
+        let mut total = 0.0;
+        for t in mesh.indices.chunks_exact(3) {
+            let [a, b, c] = [0, 1, 2].map(|k| mesh.positions[t[k] as usize]);
+            let n = (b - a).cross(c - a);
+            up += n.y.abs();
+            total += n.length();
+        }
+        let floor = total > 0.0 && up / total > 0.7;
+        mesh.material = walls + u32::from(floor);
+        mesh.tangents.clear();
+    }
+    scene.complete_tangents();
+}
+
 /// The material gallery: ten spheres on a checker ground, each showing one part of the glTF
 /// metallic-roughness material (issue 22), with procedural textures made here. Front row, left
 /// to right: base colour texture (tiles), metallic-roughness texture (metal left, roughness
@@ -568,19 +673,8 @@ pub fn material_gallery() -> Scene {
                 255,
             ]
         }),
-        procedural("bricks-normal", 128, |u, v| {
-            let (d, inward) = brick(u, v);
-            // A bevel 0.04 wide tilts the normal 45° away from the mortar line.
-            let slope = if d < 0.04 { 1.0 } else { 0.0 };
-            let n = Vec3::new(-inward.x * slope, -inward.y * slope, 1.0).normalize();
-            let e = |c: f32| ((c * 0.5 + 0.5) * 255.0).round() as u8;
-            [e(n.x), e(n.y), e(n.z), 255]
-        }),
-        procedural("bricks-occlusion", 128, |u, v| {
-            let o = (brick(u, v).0 / 0.04).clamp(0.2, 1.0);
-            let o = (o * 255.0) as u8;
-            [o, o, o, 255]
-        }),
+        bricks_normal_map(),
+        bricks_occlusion(),
         procedural("rings", 128, |u, v| {
             let r = Vec2::new(u - 0.5, v - 0.5).length() * 8.0;
             if r.fract() < 0.5 {

@@ -582,8 +582,7 @@ impl<'s> PathTracer<'s> {
                             None => 1.0,
                             Some((bsdf_pdf, from)) => {
                                 let light_pdf = self.emitter_pdf(e, from, s.p);
-                                bsdf_pdf * bsdf_pdf
-                                    / (bsdf_pdf * bsdf_pdf + light_pdf * light_pdf)
+                                bsdf_pdf * bsdf_pdf / (bsdf_pdf * bsdf_pdf + light_pdf * light_pdf)
                             }
                         };
                         sum += direct_throughput * sample.emission * weight;
