@@ -30,6 +30,18 @@ fn luminance(c: vec3<f32>) -> f32 {
 
 var<workgroup> shared_sums: array<vec2<f32>, 256>;
 
+// The workgroup's 256 values of `shared_sums`, after this invocation stored its own at `local`,
+// summed into `shared_sums[0]` (a tree, halving the stride).
+fn reduce_shared(local: u32) {
+    workgroupBarrier();
+    for (var stride = 128u; stride > 0u; stride = stride / 2u) {
+        if local < stride {
+            shared_sums[local] = shared_sums[local] + shared_sums[local + stride];
+        }
+        workgroupBarrier();
+    }
+}
+
 // Σ log(δ + L) and the count of pixels with L > 0, per 16 × 16 tile.
 @compute @workgroup_size(16, 16)
 fn log_luminance_main(
@@ -47,13 +59,7 @@ fn log_luminance_main(
         }
     }
     shared_sums[local] = s;
-    workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride = stride / 2u) {
-        if local < stride {
-            shared_sums[local] = shared_sums[local] + shared_sums[local + stride];
-        }
-        workgroupBarrier();
-    }
+    reduce_shared(local);
     if local == 0u {
         sums[group.y * groups.x + group.x] = shared_sums[0];
     }
@@ -67,13 +73,7 @@ fn exposure_main(@builtin(local_invocation_index) local: u32) {
         s = s + sums[i];
     }
     shared_sums[local] = s;
-    workgroupBarrier();
-    for (var stride = 128u; stride > 0u; stride = stride / 2u) {
-        if local < stride {
-            shared_sums[local] = shared_sums[local] + shared_sums[local + stride];
-        }
-        workgroupBarrier();
-    }
+    reduce_shared(local);
     if local == 0u {
         let total = shared_sums[0];
         var exposure = params.exposure;

@@ -41,7 +41,8 @@ use std::str::FromStr;
 use glam::Vec3;
 
 pub use dither::{bayer_matrix, dither_matrix, dither_order, prefix_spread};
-pub use texture::{MAX_ANISOTROPY, TextureArray, anisotropic_footprint};
+pub use scene::{MAX_ANISOTROPY, anisotropic_footprint};
+pub use texture::TextureArray;
 
 /// This crate's WGSL (`shaders/adaptive-ssaa/`, carried into the package by the `shaders` link).
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(

@@ -4,11 +4,8 @@
 use gbuffer::{linear_to_srgb, srgb_to_linear};
 use glam::{Vec2, Vec4};
 use rayon::prelude::*;
-use scene::LinearTexture;
 use scene::Scene;
-
-/// Largest anisotropy ratio a sampler may use (the GPU sampler's `anisotropy_clamp`).
-pub const MAX_ANISOTROPY: u32 = 16;
+use scene::{LinearTexture, anisotropic_footprint};
 
 /// Every scene texture resampled to one power-of-two size, with a full mip chain, as sRGB8
 /// texels: the CPU copy of the GPU's `Rgba8UnormSrgb` 2D array. Layer 0 is white (materials
@@ -184,37 +181,9 @@ impl TextureArray {
     }
 }
 
-/// The anisotropic footprint of a sample whose texel-space derivatives are `dx` and `dy`:
-/// `(level of detail, probe count N, major axis)` with `P_max`, `P_min` the longer and shorter
-/// derivative, `N = min(⌈P_max / P_min⌉, max_anisotropy)` and `λ = log₂(P_max / N)`.
-pub fn anisotropic_footprint(dx: Vec2, dy: Vec2, max_anisotropy: u32) -> (f32, u32, Vec2) {
-    let (px, py) = (dx.length(), dy.length());
-    let (major, p_max, p_min) = if px >= py { (dx, px, py) } else { (dy, py, px) };
-    if !(p_max > 0.0 && p_max.is_finite()) {
-        return (0.0, 1, Vec2::ZERO);
-    }
-    let ratio = if p_min > 0.0 {
-        (p_max / p_min).ceil()
-    } else {
-        max_anisotropy as f32
-    };
-    let n = (ratio as u32).clamp(1, max_anisotropy);
-    ((p_max / n as f32).log2(), n, major)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn footprint_of_isotropic_and_stretched_derivatives() {
-        let (lod, n, _) = anisotropic_footprint(Vec2::new(4.0, 0.0), Vec2::new(0.0, 4.0), 16);
-        assert_eq!((lod, n), (2.0, 1));
-        let (lod, n, axis) = anisotropic_footprint(Vec2::new(1.0, 0.0), Vec2::new(0.0, 8.0), 16);
-        assert_eq!((lod, n, axis), (0.0, 8, Vec2::new(0.0, 8.0)));
-        let (_, n, _) = anisotropic_footprint(Vec2::new(1.0, 0.0), Vec2::ZERO, 16);
-        assert_eq!(n, 16);
-    }
 
     #[test]
     fn white_layer_and_mip_averages() {

@@ -133,9 +133,21 @@ pub fn texture_init(
         format,
         usage | wgpu::TextureUsages::COPY_DST,
     );
+    write_level0(queue, &texture, texels);
+    Ok(texture)
+}
+
+/// Writes tightly packed `texels` into mip level 0 of a 2D `texture` (with `COPY_DST`) whose
+/// level 0 they fill exactly (the caller checks the size).
+pub fn write_level0(queue: &wgpu::Queue, texture: &wgpu::Texture, texels: &[u8]) {
+    let texel = texture.format().block_copy_size(None).unwrap_or(4);
+    let size = wgpu::Extent3d {
+        depth_or_array_layers: 1,
+        ..texture.size()
+    };
     queue.write_texture(
         wgpu::TexelCopyTextureInfo {
-            texture: &texture,
+            texture,
             mip_level: 0,
             origin: wgpu::Origin3d::ZERO,
             aspect: wgpu::TextureAspect::All,
@@ -143,12 +155,11 @@ pub fn texture_init(
         texels,
         wgpu::TexelCopyBufferLayout {
             offset: 0,
-            bytes_per_row: Some(width * texel),
-            rows_per_image: Some(height),
+            bytes_per_row: Some(size.width * texel),
+            rows_per_image: Some(size.height),
         },
-        texture.size(),
+        size,
     );
-    Ok(texture)
 }
 
 /// Three-component vectors padded to four with `w`, the 16-byte stride WGSL storage arrays of

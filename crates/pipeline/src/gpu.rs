@@ -997,6 +997,14 @@ pub fn read_display(
         .chunks_exact(4)
         .map(|c| [0, 1, 2, 3].map(|k| c[k].to_f32()))
         .collect();
+    image_of(texture, pixels)
+}
+
+/// The read-back `pixels` of `texture` as an image of its size.
+fn image_of(
+    texture: &wgpu::Texture,
+    pixels: Vec<[f32; 4]>,
+) -> Result<Image<[f32; 4]>, RenderError> {
     Ok(Image::from_vec(texture.width(), texture.height(), pixels)
         .map_err(|e| ::gpu::GpuError::Readback(e.to_string()))?)
 }
@@ -1012,8 +1020,7 @@ pub fn read_radiance(
         .iter()
         .map(|v| v.to_array())
         .collect();
-    Ok(Image::from_vec(texture.width(), texture.height(), pixels)
-        .map_err(|e| ::gpu::GpuError::Readback(e.to_string()))?)
+    image_of(texture, pixels)
 }
 
 #[cfg(test)]

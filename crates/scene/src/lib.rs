@@ -35,7 +35,7 @@ pub use glam;
 pub use light::{Light, scatter_point_lights};
 pub use material::{
     AlphaMode, MaterialSample, Sampler, SceneTextures, SurfaceAttributes, TextureRef, UvTransform,
-    Wrap, dither_threshold, role_space,
+    Wrap, dither_threshold, role_space, texture_spaces,
 };
 pub use texture::{
     ColorSpace, LinearTexture, MAX_ANISOTROPY, anisotropic_footprint, linear_to_srgb,

@@ -153,14 +153,7 @@ impl SceneTextures {
     /// Decodes every texture some material reads; `mipmaps` builds their mip chains
     /// ([`LinearTexture::mipmapped`]) for [`Material::evaluate`] with derivatives.
     pub fn new(scene: &Scene, mipmaps: bool) -> Self {
-        let mut used = vec![[false; 2]; scene.textures.len()];
-        for m in &scene.materials {
-            for (role, t) in m.textures() {
-                if let Some(u) = used.get_mut(t.texture as usize) {
-                    u[usize::from(role_space(role) == ColorSpace::Linear)] = true;
-                }
-            }
-        }
+        let used = texture_spaces(scene);
         let decode = |space: ColorSpace, k: usize| -> Vec<Option<LinearTexture>> {
             scene
                 .textures
@@ -188,6 +181,20 @@ impl SceneTextures {
         };
         list.get(texture as usize).and_then(Option::as_ref)
     }
+}
+
+/// For each texture of `scene`, whether some material reads it as colour (sRGB, index 0) and
+/// as data (linear, index 1).
+pub fn texture_spaces(scene: &Scene) -> Vec<[bool; 2]> {
+    let mut used = vec![[false; 2]; scene.textures.len()];
+    for m in &scene.materials {
+        for (role, t) in m.textures() {
+            if let Some(u) = used.get_mut(t.texture as usize) {
+                u[usize::from(role_space(role) == ColorSpace::Linear)] = true;
+            }
+        }
+    }
+    used
 }
 
 /// The colour space a role's texture is stored in (glTF §3.9): base colour and emissive

@@ -2,11 +2,7 @@
 # Issue 22: the G-buffer's cost of the glTF material on the H200 (materials-gpu), after a
 # warm-up run that brings the SM clock up.
 set -u
-for f in .gl/*.deb; do dpkg -x $f /; done; ldconfig
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json WGPU_BACKEND=vulkan
-export DEFERRED_FIXTURES=$PWD/.gpu-data/fixtures
-clock() { nvidia-smi --query-gpu=clocks.sm --format=csv,noheader; }
-nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv,noheader | tee $OUT/gpu.txt
+source docs/bench/device-env.sh
 .gpu-bin/materials-gpu --bench --frames 50 --out /tmp/warm > /dev/null 2>&1
 echo "clock after warm-up $(clock)" | tee -a $OUT/gpu.txt
 .gpu-bin/materials-gpu --bench --out $OUT 2>&1 | grep -v "^\s*[0-9]*:\|^\s*at " | tee $OUT/materials.log

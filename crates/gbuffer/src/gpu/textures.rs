@@ -44,14 +44,7 @@ impl MaterialTextures {
         scene: &Scene,
         options: &TextureOptions,
     ) -> Result<Self, GpuError> {
-        let mut used = vec![[false; 2]; scene.textures.len()];
-        for m in &scene.materials {
-            for (role, t) in m.textures() {
-                if let Some(u) = used.get_mut(t.texture as usize) {
-                    u[usize::from(::scene::role_space(role) == ColorSpace::Linear)] = true;
-                }
-            }
-        }
+        let used = ::scene::texture_spaces(scene);
         let mips = Mips::new(device)?;
         let mut encoder = device.create_command_encoder(&Default::default());
         let mut upload =
@@ -159,25 +152,16 @@ fn upload_texture(
             view_formats: &[],
         }))
     })?;
-    queue.write_texture(
-        wgpu::TexelCopyTextureInfo {
-            texture: &texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
-        },
-        &t.rgba8,
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(t.width * 4),
-            rows_per_image: Some(t.height),
-        },
-        wgpu::Extent3d {
-            width: t.width,
-            height: t.height,
-            depth_or_array_layers: 1,
-        },
-    );
+    if t.rgba8.len() as u64 != u64::from(t.width) * u64::from(t.height) * 4 {
+        return Err(GpuError::DataSize(format!(
+            "{what}: {} bytes of texels, {}×{} RGBA8 needs {}",
+            t.rgba8.len(),
+            t.width,
+            t.height,
+            u64::from(t.width) * u64::from(t.height) * 4
+        )));
+    }
+    transfer::write_level0(queue, &texture, &t.rgba8);
     mips.encode(device, encoder, &texture, space);
     let s = &t.sampler;
     let trilinear = s.mag_linear && s.min_linear && s.mipmaps == Some(true);
