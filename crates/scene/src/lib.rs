@@ -283,6 +283,51 @@ impl Material {
             && self.emissive_texture.is_none()
     }
 
+    /// Rejects factors and texture transforms that are not finite, and negative emission.
+    pub fn validate(&self) -> Result<(), SceneErrorKind> {
+        let cutoff = match self.alpha_mode {
+            AlphaMode::Mask { cutoff } => cutoff,
+            _ => 0.0,
+        };
+        let scalars = [
+            ("roughness", self.roughness),
+            ("metallic", self.metallic),
+            ("specular", self.specular),
+            ("normal scale", self.normal_scale),
+            ("occlusion strength", self.occlusion_strength),
+            ("alpha cutoff", cutoff),
+        ];
+        let problem = if !self.base_color.is_finite() {
+            Some(format!("base colour {} is not finite", self.base_color))
+        } else if !self.emissive.is_finite() || self.emissive.min_element() < 0.0 {
+            Some(format!(
+                "emission {} is not finite and non-negative",
+                self.emissive
+            ))
+        } else if let Some((what, v)) = scalars.iter().find(|(_, v)| !v.is_finite()) {
+            Some(format!("{what} {v} is not finite"))
+        } else {
+            self.textures()
+                .find(|(_, t)| {
+                    let u = t.transform;
+                    !(u.offset.is_finite() && u.scale.is_finite() && u.rotation.is_finite())
+                })
+                .map(|(role, t)| {
+                    format!(
+                        "the {role} texture's transform {:?} is not finite",
+                        t.transform
+                    )
+                })
+        };
+        match problem {
+            Some(problem) => Err(SceneErrorKind::Material {
+                name: self.name.clone(),
+                problem,
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// The textures it reads, each with its role's name.
     pub fn textures(&self) -> impl Iterator<Item = (&'static str, TextureRef)> + '_ {
         self.roles()
@@ -457,6 +502,7 @@ impl Scene {
             )));
         }
         for (i, mat) in self.materials.iter().enumerate() {
+            mat.validate()?;
             for (role, t) in mat.textures() {
                 if t.texture as usize >= self.textures.len() {
                     return Err(SceneErrorKind::Texture {
@@ -576,6 +622,15 @@ pub enum SceneErrorKind {
     /// The scene's coordinates are too large for `f32` rendering, or it has no extent.
     #[error("{0}")]
     Extent(String),
+    /// A material's factor or texture transform is not a finite number, or its emission is
+    /// negative.
+    #[error("material {name:?}: {problem}")]
+    Material {
+        /// The material's name.
+        name: String,
+        /// Which value, and what it is.
+        problem: String,
+    },
     /// A texture could not be decoded or is inconsistent.
     #[error("texture {index}: {problem}")]
     Texture {

@@ -495,3 +495,43 @@ fn a_missing_second_texture_coordinate_set_is_refused() {
         "{text}"
     );
 }
+
+/// A glTF whose emission overflows f32 (1e39 parses as infinity) or is negative is refused
+/// with the material named (factors with a range, such as roughness, the loader clamps); the
+/// same checks run on a scene built in code.
+#[test]
+fn non_finite_material_factors_are_refused() {
+    let gltf = |material: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}}],
+            "bufferViews":[{{"buffer":0,"byteLength":36}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}],
+            "materials":[{material}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"material":0}}]}}],
+            "nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],"scene":0}}"#
+        )
+    };
+    for (name, material, says) in [
+        (
+            "huge.gltf",
+            r#"{"name":"huge","emissiveFactor":[1e39,0,0]}"#,
+            "emission",
+        ),
+        (
+            "negative.gltf",
+            r#"{"name":"negative","emissiveFactor":[-1,0,0]}"#,
+            "emission",
+        ),
+    ] {
+        let e = load_error(name, &gltf(material)).to_string();
+        let material_name = name.trim_end_matches(".gltf");
+        assert!(e.contains(says) && e.contains(material_name), "{name}: {e}");
+    }
+    let mut s = scene::cornell_box();
+    s.materials[0].normal_scale = f32::NAN;
+    let e = s.validate().expect_err("NaN normal scale").to_string();
+    assert!(
+        e.contains("normal scale") && e.contains(&s.materials[0].name),
+        "{e}"
+    );
+}
