@@ -3,7 +3,7 @@
 //!
 //! Benchmark 1, G-buffer creation (Ishmukhametov 2013 §1.3 step 2): the MRT pass on a scene
 //! (default: Dabrovic Sponza from ../shared/fixtures) at 1920×1080 and 3840×2160. Baselines
-//! measured in the same run: a pass that only clears and stores the same five targets (the
+//! measured in the same run: a pass that only clears and stores the same six targets (the
 //! pass's unavoidable write traffic), and a buffer-to-buffer copy of as many bytes.
 
 use anyhow::{Context, Result, bail};
@@ -198,7 +198,7 @@ fn write_report(dir: &std::path::Path, r: &Report) -> Result<()> {
     )?;
     let mut md = r.header.markdown("Benchmarks", r.frames);
     md.push_str(&format!(
-        "## G-buffer creation (MRT render pass)\n\nScene: `{}`, {} triangles; camera {}.\nTargets: depth32f + r32f linear depth + r32u normal + rgba8 albedo + r32u material = 20 bytes/pixel.\nBaselines in the same run: a pass that only clears and stores the five targets, and a buffer copy of the same number of bytes.\n\n",
+        "## G-buffer creation (MRT render pass)\n\nScene: `{}`, {} triangles; camera {}.\nTargets: depth32f + r32f linear depth + r32u normal + rgba8 albedo + r32u material + rgba16f emission = 28 bytes/pixel.\nBaselines in the same run: a pass that only clears and stores the six targets, and a buffer copy of the same number of bytes.\n\n",
         r.scene, r.triangles, r.camera
     ));
     md.push_str("| size | G-buffer ms (min) | clear-only ms | copy ms | × clear | × copy | Mtri/s | Gpix/s | z-prepass + G-buffer ms (min) | speed-up |\n|---|---|---|---|---|---|---|---|---|---|\n");

@@ -207,7 +207,7 @@ impl ShadowMapPass {
 
 impl ShadowMapPass {
     /// The depth-only pipeline: vertex stage `shadow_depth` draws the scene's positions
-    /// (`gbuffer::gpu::GpuVertex`) into the view its instance index names.
+    /// (`GpuScene::draw_geometry`: vertex buffer slot 0) into the view its instance index names.
     pub fn pipeline(&self) -> &wgpu::RenderPipeline {
         &self.pipeline
     }
