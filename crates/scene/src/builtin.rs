@@ -833,6 +833,31 @@ pub fn material_gallery() -> Scene {
 mod tests {
     use super::*;
 
+    /// Every mesh of a dressed scene gets a normal-mapped material and unit tangents, floors
+    /// (the Cornell box's floor and ceiling) the tiles, walls the bricks.
+    #[test]
+    fn dressing_gives_every_mesh_a_normal_mapped_material() {
+        let mut s = cornell_box();
+        dress_procedurally(&mut s);
+        s.validate().expect("valid");
+        for m in &s.meshes {
+            let material = &s.materials[m.material as usize];
+            assert!(material.normal_texture.is_some(), "{}", m.name);
+            assert_eq!(m.tangents.len(), m.positions.len(), "{}", m.name);
+            assert!(
+                m.tangents
+                    .iter()
+                    .all(|t| (t.truncate().length() - 1.0).abs() < 1e-3)
+            );
+            let all = |f: fn(f32) -> bool| m.normals.iter().all(|n| f(n.y.abs()));
+            if all(|y| y > 0.9) {
+                assert_eq!(material.name, "procedural floor tiles", "{}", m.name);
+            } else if all(|y| y < 0.1) {
+                assert_eq!(material.name, "procedural bricks", "{}", m.name);
+            }
+        }
+    }
+
     #[test]
     fn builtins_validate() {
         for scene in [
