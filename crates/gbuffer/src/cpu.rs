@@ -271,6 +271,21 @@ fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], shadin
             ]
             .map(|e| e / area)
         };
+        // Perspective-correct weights at a point — barycentrics and the view depth w —
+        // and attribute k there (the plane equations extrapolate beyond the triangle,
+        // as for the quad's helper pixels).
+        let view_depth =
+            |l: [f32; 3]| 1.0 / (l[0] * tri.inv_w[0] + l[1] * tri.inv_w[1] + l[2] * tri.inv_w[2]);
+        let weights = |c: Vec2| {
+            let l = bary(c);
+            (l, view_depth(l))
+        };
+        let attribute = |(l, w): ([f32; 3], f32), k: usize| {
+            (0..3)
+                .map(|v| tri.attributes_over_w[v][k] * l[v])
+                .sum::<f32>()
+                * w
+        };
         for py in y0..=y1 {
             for px in x0..=x1 {
                 let p = [
@@ -294,29 +309,20 @@ fn raster_tile(tile: &mut Tile, triangles: &[SetupTriangle], bin: &[u32], shadin
                 if !(0.0..=1.0).contains(&z) || z >= tile.depth[i] {
                     continue;
                 }
-                // Perspective-correct attributes at a pixel centre (the plane equations
-                // extrapolate beyond the triangle, as for the quad's helper pixels).
-                let varyings = |c: Vec2| -> (Varyings, f32) {
-                    let l = bary(c);
-                    let w = 1.0 / (l[0] * tri.inv_w[0] + l[1] * tri.inv_w[1] + l[2] * tri.inv_w[2]);
-                    let a = std::array::from_fn(|k| {
-                        (0..3)
-                            .map(|v| tri.attributes_over_w[v][k] * l[v])
-                            .sum::<f32>()
-                            * w
-                    });
-                    (Varyings::new(&a), w)
-                };
-                let (here, w) = varyings(c);
+                let w = view_depth(l);
+                let here = Varyings::new(&std::array::from_fn(|k| attribute((l, w), k)));
                 // `dpdxFine`/`dpdyFine`: the difference to the other pixel of the quad's row
-                // or column, taken left to right and top to bottom.
+                // or column, taken left to right and top to bottom; only the texture
+                // coordinates (attributes 3..7) are needed there.
                 let (step_x, step_y) = (
                     if px % 2 == 0 { 1.0 } else { -1.0 },
                     if py % 2 == 0 { 1.0 } else { -1.0 },
                 );
                 let across = |step: Vec2, sign: f32| -> [Vec2; 2] {
-                    let there = varyings(c + step).0;
-                    [0, 1].map(|k| (there.uv[k] - here.uv[k]) * sign)
+                    let at = weights(c + step);
+                    let uv = |k| Vec2::new(attribute(at, k), attribute(at, k + 1));
+                    let there = [uv(3), uv(5)];
+                    [0, 1].map(|k| (there[k] - here.uv[k]) * sign)
                 };
                 // Shaded from the side of the plane the camera sees (`facing_normal`).
                 let vertex_normal = here.normal.normalize_or(Vec3::Z);
