@@ -138,53 +138,53 @@ fn main() -> Result<()> {
         far: 20.0,
     };
     let trilinear = TextureOptions { max_anisotropy: 1 };
-    let variants: [(&str, &str, &Scene, &Camera, TextureOptions); 5] = [
+    let variants: [(&str, &str, Scene, &Camera, TextureOptions); 5] = [
         (
             "Sponza",
             "factors only",
-            &sponza,
+            untextured(&sponza),
             &sponza_camera,
             Default::default(),
         ),
         (
             "Sponza",
             "procedural textures, anisotropy 16",
-            &dressed,
+            dressed.clone(),
             &sponza_camera,
             Default::default(),
         ),
         (
             "Sponza",
             "procedural textures, trilinear",
-            &dressed,
+            dressed.clone(),
             &sponza_camera,
             trilinear,
         ),
         (
             "DamagedHelmet",
             "factors only",
-            &helmet,
+            untextured(&helmet),
             &helmet_camera,
             Default::default(),
         ),
         (
             "DamagedHelmet",
             "five textures, anisotropy 16",
-            &helmet,
+            helmet.clone(),
             &helmet_camera,
             Default::default(),
         ),
     ];
+    let uploaded = variants
+        .iter()
+        .map(|(_, _, scene, _, options)| {
+            GpuScene::upload_with(&gpu.device, &gpu.queue, scene, &pass, options)
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let mut rows: Vec<Row> = Vec::new();
     for size in [(1920, 1080), (3840, 2160)].map(bench::size) {
-        for (name, variant, scene, camera, options) in &variants {
-            let scene = if variant.starts_with("factors") {
-                untextured(scene)
-            } else {
-                (*scene).clone()
-            };
-            let uploaded = GpuScene::upload_with(&gpu.device, &gpu.queue, &scene, &pass, options)?;
-            let t = time_gbuffer(&gpu, &pass, &uploaded, camera, size, frames)?;
+        for ((name, variant, _, camera, _), uploaded) in variants.iter().zip(&uploaded) {
+            let t = time_gbuffer(&gpu, &pass, uploaded, camera, size, frames)?;
             let base = rows
                 .iter()
                 .find(|r| r.scene == *name && r.width == size.0 && r.variant == "factors only")
