@@ -995,10 +995,13 @@ fn run() -> Result<()> {
             }
             renderer.render(d, q, &camera, ambient)?; // warm-up: first use of pipelines and caches
             let rendered = renderer.render(d, q, &camera, ambient)?;
-            let display = match renderer.display() {
-                Some(texture) => pipeline::gpu::read_display(d, q, texture)?,
-                None => output.apply(&rendered.image),
-            };
+            let display = pipeline::gpu::read_display(
+                d,
+                q,
+                renderer
+                    .display()
+                    .context("the renderer has an output stage")?,
+            )?;
             if let Some(shadows) = renderer
                 .vpl_shadows()
                 .filter(|s| s.mode() != VplShadows::Rays)
