@@ -35,10 +35,21 @@ struct Params {
     order: array<vec4<u32>, 16>,
 };
 
-struct SsaaMaterial {
-    base_color: vec4<f32>,
-    emissive: vec3<f32>,
+// How a shaded sample reads one texture of its material from the array: the slot's
+// KHR_texture_transform (2 × 2 columns xy and zw, offset) and the layer (0: white).
+struct ArraySlot {
+    linear: vec4<f32>,
+    offset: vec2<f32>,
     layer: u32,
+    _pad: u32,
+};
+
+struct SsaaMaterial {
+    // Linear base colour factor; alpha: the specular factor.
+    base_color: vec4<f32>,
+    emissive: vec4<f32>,
+    base: ArraySlot,
+    emission: ArraySlot,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -59,6 +70,7 @@ struct SsaaMaterial {
 // Counting sort by sample count: [0, 65) histogram, [65, 130) cursors, [130] total.
 @group(0) @binding(14) var<storage, read_write> sort: array<atomic<u32>>;
 @group(0) @binding(15) var<storage, read_write> list: array<u32>;
+@group(0) @binding(16) var tint_tex: texture_2d<u32>;
 
 const NO_MATERIAL: u32 = 0xffffffffu;
 const HISTOGRAM: u32 = 0u;
@@ -76,8 +88,20 @@ fn footprint_scale(k: u32) -> f32 {
     return f32(params.m) / sqrt(f32(k));
 }
 
-// Shades G-buffer sample q (§4.3.4): texture lookup with the stored derivatives × scale,
-// every light (params.stall times), ambient and emission.
+// One array texture of a material at the sample's coordinates, filtered over the
+// derivatives `grad` (du/dx, dv/dx, du/dy, dv/dy), both through the slot's transform; white
+// without a texture (layer 0, not sampled).
+fn read_array(slot: ArraySlot, uv: vec2<f32>, grad: vec4<f32>) -> vec4<f32> {
+    if slot.layer == 0u {
+        return vec4<f32>(1.0);
+    }
+    let m = mat2x2<f32>(slot.linear.xy, slot.linear.zw);
+    return textureSampleGrad(textures, texture_sampler, m * uv + slot.offset, slot.layer, m * grad.xy, m * grad.zw);
+}
+
+// Shades G-buffer sample q (§4.3.4): base colour and emission looked up in the array with the
+// stored derivatives × scale, every light (params.stall times), ambient × occlusion and
+// emission.
 fn shade_sample(q: vec2<u32>, scale: f32) -> vec3<f32> {
     let depth = textureLoad(linear_depth_tex, q, 0).r;
     let word = textureLoad(material_tex, q, 0).r;
@@ -94,8 +118,12 @@ fn shade_sample(q: vec2<u32>, scale: f32) -> vec3<f32> {
     let material = materials[id];
     let grad = textureLoad(uv_grad_tex, q, 0) * scale;
     let uv = textureLoad(uv_tex, q, 0).xy;
-    let texel = textureSampleGrad(textures, texture_sampler, uv, material.layer, grad.xy, grad.zw);
-    let albedo = clamp(material.base_color.rgb * texel.rgb, vec3<f32>(0.0), vec3<f32>(1.0));
+    let tint = unpack4x8unorm(textureLoad(tint_tex, q, 0).r);
+    // The vertex colour, stored as its square root (`unpack_tint`).
+    let color = tint.rgb * tint.rgb;
+    let texel = read_array(material.base, uv, grad);
+    let albedo = clamp(material.base_color.rgb * color * texel.rgb, vec3<f32>(0.0), vec3<f32>(1.0));
+    let emission = material.emissive.rgb * read_array(material.emission, uv, grad).rgb;
     let p = position_from_view_ray(frame, q, depth);
     let v = normalize(frame.eye.xyz - p);
     var diffuse = vec3<f32>(0.0);
@@ -112,7 +140,7 @@ fn shade_sample(q: vec2<u32>, scale: f32) -> vec3<f32> {
             specular += a.specular;
         }
     }
-    return albedo * (1.0 - metallic) * (params.ambient + diffuse) + specular + material.emissive;
+    return albedo * (1.0 - metallic) * (params.ambient * tint.a + diffuse) + specular + emission;
 }
 
 fn pixel_index(p: vec2<u32>) -> u32 {

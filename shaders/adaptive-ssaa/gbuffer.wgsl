@@ -1,27 +1,44 @@
 // #import gbuffer/gbuffer.wgsl
 // The supersampled G-buffer of adaptive supersampling (Holländer 2013 §4.3.3): the vertex
-// stage of `gbuffer.wgsl`, but instead of albedo the fragment stage stores the texture
-// coordinates and their derivatives per sample step, so the texture is looked up when a sample
-// is shaded (`shade.wgsl`, §4.3.4). The material word carries the material id, whose texture
-// layer the shading reads from the material table.
+// stage of `gbuffer.wgsl` and its material (`evaluate_material` over the scene's one texture
+// store: normal map, metallic-roughness, occlusion, alpha test at the sample rate), but
+// instead of albedo and emission the fragment stage stores texture coordinates and their
+// derivatives per sample step, so those textures are looked up when a sample is shaded, in
+// the texture array (`shade.wgsl`, §4.3.4). The material word carries the material id, whose
+// array layers and texture transforms the shading reads from the material table.
 
 struct TexcoordOut {
     @location(0) linear_depth: f32,
     @location(1) normal: u32,
+    // The coordinate set the base colour (else the emissive texture) reads, untransformed.
     @location(2) uv: vec2<f32>,
     @location(3) material: u32,
     // du/dx, dv/dx, du/dy, dv/dy (one sample step).
     @location(4) uv_grad: vec4<f32>,
+    // √(vertex colour) rgb (unorm8 each) and occlusion (unorm8): `unpack_tint`.
+    @location(5) tint: u32,
 };
 
 @fragment
 fn fs_texcoord(in: VertexOut) -> TexcoordOut {
+    // Derivatives first, in uniform control flow.
+    let uv_dx = dpdxFine(in.uv);
+    let uv_dy = dpdyFine(in.uv);
+    let facing = facing_normal(in.normal, in.to_eye);
+    let at = SurfaceAttributes(in.uv, uv_dx, uv_dy, facing.normal, facing.back_face, in.tangent, in.color);
+    let m = evaluate_material(at);
+    if !alpha_keeps(m.alpha, dither_threshold(vec2<u32>(in.clip.xy))) {
+        discard;
+    }
+    let base = material.slots[SLOT_BASE_COLOR];
+    let uv_set = select(material.slots[SLOT_EMISSIVE].offset.z, base.offset.z, base.offset.w != 0.0);
+    let set1 = uv_set != 0.0;
     var out: TexcoordOut;
     out.linear_depth = in.view_depth;
-    let n = facing_normal(in.normal, in.to_eye).normal;
-    out.normal = pack2x16snorm(encode_octahedral_snorm(n));
-    out.uv = in.uv.xy;
-    out.uv_grad = vec4<f32>(dpdxFine(in.uv.xy), dpdyFine(in.uv.xy));
-    out.material = pack_material(material.roughness, material.metallic, material.id);
+    out.normal = pack2x16snorm(encode_octahedral_snorm(m.normal));
+    out.uv = select(in.uv.xy, in.uv.zw, set1);
+    out.uv_grad = select(vec4<f32>(uv_dx.xy, uv_dy.xy), vec4<f32>(uv_dx.zw, uv_dy.zw), set1);
+    out.material = pack_material(m.roughness, m.metallic, material.id);
+    out.tint = pack4x8unorm(vec4<f32>(sqrt(clamp(in.color.rgb, vec3<f32>(0.0), vec3<f32>(1.0))), m.occlusion));
     return out;
 }

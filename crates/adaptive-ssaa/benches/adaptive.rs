@@ -4,7 +4,7 @@
 #![allow(missing_docs)] // criterion_group! generates an undocumented function
 
 use adaptive_ssaa::cpu::{self, ShadingInputs, SsGBuffer};
-use adaptive_ssaa::{SsaaConfig, SsaaMaterial, TextureArray};
+use adaptive_ssaa::{ArrayLayers, SsaaConfig, SsaaMaterial, TextureArray};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 /// A supersampled G-buffer of the checkerboard scene from the GPU when one is present.
@@ -42,8 +42,8 @@ fn inputs() -> Option<(
         gb,
         frame,
         camera.far,
-        TextureArray::new(&scene, 1024),
-        SsaaMaterial::of_scene(&scene),
+        r.textures.read(&gpu.device, &gpu.queue).ok()?,
+        SsaaMaterial::of_scene(&scene, &ArrayLayers::new(&scene)),
         lights,
     ))
 }

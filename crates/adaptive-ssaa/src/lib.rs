@@ -42,7 +42,7 @@ use glam::Vec3;
 
 pub use dither::{bayer_matrix, dither_matrix, dither_order, prefix_spread};
 pub use scene::{MAX_ANISOTROPY, anisotropic_footprint};
-pub use texture::TextureArray;
+pub use texture::{ArrayLayers, TextureArray};
 
 /// This crate's WGSL (`shaders/adaptive-ssaa/`, carried into the package by the `shaders` link).
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
@@ -69,6 +69,18 @@ pub const MAX_M: u32 = 8;
 pub const UV_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 /// Format of the texture-coordinate derivative target (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y per sample).
 pub const UV_GRAD_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+/// Format of the tint target: √(vertex colour) and occlusion as four unorm8 ([`unpack_tint`]).
+/// One word keeps the supersampled G-buffer at 32 bytes a sample, wgpu's default
+/// `max_color_attachment_bytes_per_sample`.
+pub const TINT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+
+/// The vertex colour (linear rgb) and occlusion of a tint word (WGSL
+/// `unpack4x8unorm`, the colour squared: it is stored as its square root, so dark colours keep
+/// more than 8 linear bits).
+pub fn unpack_tint(word: u32) -> (Vec3, f32) {
+    let [r, g, b, a] = word.to_le_bytes().map(|v| f32::from(v) / 255.0);
+    (Vec3::new(r * r, g * g, b * b), a)
+}
 
 /// The geometric metrics of §4.3.1 on a sampling window of depths `d` (view depth over the far
 /// plane distance) and unit normals `n`.
@@ -304,31 +316,78 @@ impl SsaaConfig {
     }
 }
 
-/// A material as `common.wgsl` sees it (`SsaaMaterial`): the base colour factor with the
-/// specular factor in its alpha, the emission and the texture-array layer of the base colour
-/// texture (roughness and metallic come from the G-buffer's material word).
+/// How a shaded sample reads one texture of its material from the [`TextureArray`]
+/// (`common.wgsl` `ArraySlot`): the slot's `KHR_texture_transform` and the layer.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ArraySlot {
+    /// Columns (m00, m10) and (m01, m11) of the transform's 2 × 2 part.
+    pub linear: [f32; 4],
+    /// The transform's offset.
+    pub offset: [f32; 2],
+    /// Layer in the [`TextureArray`] (0: white).
+    pub layer: u32,
+    /// Padding to 16-byte alignment.
+    pub _pad: u32,
+}
+
+impl ArraySlot {
+    fn new(t: Option<scene::TextureRef>, layers: &ArrayLayers) -> Self {
+        let m = t.map_or(glam::Mat3::IDENTITY, |t| t.transform.matrix());
+        Self {
+            linear: [m.x_axis.x, m.x_axis.y, m.y_axis.x, m.y_axis.y],
+            offset: [m.z_axis.x, m.z_axis.y],
+            layer: layers.layer_of(t),
+            _pad: 0,
+        }
+    }
+
+    /// The texture coordinates and derivatives (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y) of the stored
+    /// coordinate set through the transform.
+    pub fn transform(
+        &self,
+        uv: glam::Vec2,
+        grad: glam::Vec4,
+    ) -> (glam::Vec2, glam::Vec2, glam::Vec2) {
+        let l = self.linear;
+        let m = glam::Mat2::from_cols_array(&l);
+        (
+            m * uv + glam::Vec2::from(self.offset),
+            m * glam::Vec2::new(grad.x, grad.y),
+            m * glam::Vec2::new(grad.z, grad.w),
+        )
+    }
+}
+
+/// A material as `common.wgsl` sees it (`SsaaMaterial`): the factors and the array slots of
+/// the two textures looked up when a sample is shaded (§4.3.3): base colour and emissive.
+/// Roughness, metallic, the normal map and occlusion were evaluated into the supersampled
+/// G-buffer from the scene's texture store.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SsaaMaterial {
     /// Linear base colour factor; alpha: the material's specular factor
     /// ([`scene::Material::specular`]).
     pub base_color: [f32; 4],
-    /// Emitted radiance.
-    pub emissive: [f32; 3],
-    /// Layer in the [`TextureArray`] (0: white).
-    pub layer: u32,
+    /// Emitted radiance factor (w unused).
+    pub emissive: [f32; 4],
+    /// The base colour texture.
+    pub base: ArraySlot,
+    /// The emissive texture.
+    pub emission: ArraySlot,
 }
 
 impl SsaaMaterial {
-    /// The materials of `scene`, indexed by material id.
-    pub fn of_scene(scene: &scene::Scene) -> Vec<Self> {
+    /// The materials of `scene`, indexed by material id, reading the array of `layers`.
+    pub fn of_scene(scene: &scene::Scene, layers: &ArrayLayers) -> Vec<Self> {
         scene
             .materials
             .iter()
             .map(|m| Self {
                 base_color: m.base_color.truncate().extend(m.specular).to_array(),
-                emissive: m.emissive.to_array(),
-                layer: TextureArray::layer_of(m.base_color_texture.map(|t| t.texture)),
+                emissive: m.emissive.extend(0.0).to_array(),
+                base: ArraySlot::new(m.base_color_texture, layers),
+                emission: ArraySlot::new(m.emissive_texture, layers),
             })
             .collect()
     }

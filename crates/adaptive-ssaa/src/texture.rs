@@ -1,15 +1,76 @@
 //! The scene's textures as one array with mip maps (§4.3.3: "we store all textures of the
 //! scene in a 3D-array"), and the CPU twin of `textureSampleGrad` with anisotropic filtering.
+//! The GPU array is drawn from the scene's one texture store
+//! ([`gbuffer::gpu::MaterialTextures::array`]); this is its CPU twin.
 
 use gbuffer::{linear_to_srgb, srgb_to_linear};
 use glam::{Vec2, Vec4};
 use rayon::prelude::*;
-use scene::Scene;
-use scene::{LinearTexture, anisotropic_footprint};
+use scene::{ColorSpace, LinearTexture, Scene, TextureRef, anisotropic_footprint};
 
-/// Every scene texture resampled to one power-of-two size, with a full mip chain, as sRGB8
-/// texels: the CPU copy of the GPU's `Rgba8UnormSrgb` 2D array. Layer 0 is white (materials
-/// without a texture); scene texture `t` is layer `t + 1`.
+/// Which scene textures the array holds: layer 0 is white (a material without the texture),
+/// then every texture a material reads in sRGB (base colour or emissive, the textures looked up
+/// when a sample is shaded), in scene order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ArrayLayers {
+    /// The scene texture of each layer (`None`: white).
+    pub sources: Vec<Option<u32>>,
+    /// The layer of each scene texture (0 where the array does not hold it).
+    of_texture: Vec<u32>,
+}
+
+impl ArrayLayers {
+    /// The layers of `scene`'s array.
+    pub fn new(scene: &Scene) -> Self {
+        let used = scene::texture_spaces(scene);
+        let mut sources = vec![None];
+        let of_texture = used
+            .iter()
+            .enumerate()
+            .map(|(t, u)| {
+                if u[0] {
+                    sources.push(Some(t as u32));
+                    sources.len() as u32 - 1
+                } else {
+                    0
+                }
+            })
+            .collect();
+        Self {
+            sources,
+            of_texture,
+        }
+    }
+
+    /// The layer a material's texture is read from (0, white, without one).
+    pub fn layer_of(&self, texture: Option<TextureRef>) -> u32 {
+        texture.map_or(0, |t| {
+            self.of_texture
+                .get(t.texture as usize)
+                .copied()
+                .unwrap_or(0)
+        })
+    }
+
+    /// The side of every layer: the largest held texture's side rounded up to a power of two,
+    /// but at most `max_size` (rounded up to a power of two); 1 when the array holds none.
+    pub fn side(&self, scene: &Scene, max_size: u32) -> u32 {
+        let largest = self
+            .sources
+            .iter()
+            .flatten()
+            .filter_map(|&t| scene.textures.get(t as usize))
+            .map(|t| t.width.max(t.height))
+            .max()
+            .unwrap_or(1);
+        largest
+            .next_power_of_two()
+            .min(max_size.max(1).next_power_of_two())
+    }
+}
+
+/// The scene's sRGB textures ([`ArrayLayers`]) resampled to one power-of-two size, with a full
+/// mip chain, as sRGB8 texels: the CPU copy of the GPU's `Rgba8UnormSrgb` 2D array.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TextureArray {
     /// Side of every layer at mip 0.
@@ -22,87 +83,77 @@ pub struct TextureArray {
 }
 
 impl TextureArray {
-    /// Builds the array for `scene`; layers are as large as the largest texture (rounded up to
-    /// a power of two) but at most `max_size`. Each texture is resampled bilinearly in linear
-    /// space (repeat addressing); mips are 2 × 2 box filters in linear space.
-    pub fn new(scene: &Scene, max_size: u32) -> Self {
-        let largest = scene
-            .textures
-            .iter()
-            .map(|t| t.width.max(t.height))
-            .max()
-            .unwrap_or(1);
-        let size = largest
-            .next_power_of_two()
-            .min(max_size.max(1).next_power_of_two());
+    /// Builds `scene`'s array of `layers`, `size` texels on a side: each texture resampled at
+    /// level 0 with its own sampler at the texel centres ([`LinearTexture::sample`], as the
+    /// GPU's `fs_resample`); each level above is the 2 × 2 box filter, in linear space, of the
+    /// stored sRGB8 level below (as `fs_downsample` reads it).
+    pub fn new(scene: &Scene, layers: &ArrayLayers, size: u32) -> Self {
+        let size = size.max(1).next_power_of_two();
         let levels = size.ilog2() + 1;
-        let white = vec![Vec4::ONE; (size * size) as usize];
-        let resampled: Vec<Vec<Vec4>> = scene
-            .textures
+        let lut: Vec<f32> = (0..256).map(|v| srgb_to_linear(v as f32 / 255.0)).collect();
+        let encode = |t: Vec4| {
+            let c = |c: f32| (linear_to_srgb(c.clamp(0.0, 1.0)) * 255.0).round() as u8;
+            [
+                c(t.x),
+                c(t.y),
+                c(t.z),
+                (t.w.clamp(0.0, 1.0) * 255.0).round() as u8,
+            ]
+        };
+        let decode = |t: &[u8]| {
+            Vec4::new(
+                lut[t[0] as usize],
+                lut[t[1] as usize],
+                lut[t[2] as usize],
+                f32::from(t[3]) / 255.0,
+            )
+        };
+        let base: Vec<Vec<u8>> = layers
+            .sources
             .par_iter()
             .map(|t| {
-                let linear = LinearTexture::new(t);
+                let Some(t) = t.and_then(|t| scene.textures.get(t as usize)) else {
+                    return vec![255; (size * size * 4) as usize];
+                };
+                let linear = LinearTexture::with_space(t, ColorSpace::Srgb);
                 (0..size * size)
-                    .map(|i| {
+                    .flat_map(|i| {
                         let texel = Vec2::new((i % size) as f32 + 0.5, (i / size) as f32 + 0.5);
-                        linear.sample(texel / size as f32)
+                        encode(linear.sample(texel / size as f32))
                     })
                     .collect()
             })
             .collect();
-        let base: Vec<Vec<Vec4>> = std::iter::once(white).chain(resampled).collect();
-        let mut linear_mips = vec![base];
+        let mut mips = vec![base];
         for level in 1..levels {
             let side = size >> level;
-            let prev = &linear_mips[level as usize - 1];
-            let next = prev
-                .iter()
+            let next = mips[level as usize - 1]
+                .par_iter()
                 .map(|texels| {
+                    let at = |x: u32, y: u32| decode(&texels[((y * 2 * side + x) * 4) as usize..]);
                     (0..side * side)
-                        .map(|i| {
+                        .flat_map(|i| {
                             let (x, y) = (2 * (i % side), 2 * (i / side));
-                            let at =
-                                |dx: u32, dy: u32| texels[((y + dy) * 2 * side + x + dx) as usize];
-                            (at(0, 0) + at(1, 0) + at(0, 1) + at(1, 1)) * 0.25
+                            let sum = at(x, y) + at(x + 1, y) + at(x, y + 1) + at(x + 1, y + 1);
+                            encode(sum * 0.25)
                         })
                         .collect()
                 })
                 .collect();
-            linear_mips.push(next);
+            mips.push(next);
         }
-        let encode = |c: f32| (linear_to_srgb(c.clamp(0.0, 1.0)) * 255.0).round() as u8;
-        let mips = linear_mips
-            .iter()
-            .map(|layers| {
-                layers
-                    .iter()
-                    .map(|texels| {
-                        texels
-                            .iter()
-                            .flat_map(|t| {
-                                [
-                                    encode(t.x),
-                                    encode(t.y),
-                                    encode(t.z),
-                                    (t.w.clamp(0.0, 1.0) * 255.0).round() as u8,
-                                ]
-                            })
-                            .collect()
-                    })
-                    .collect()
-            })
-            .collect();
+        Self::from_texels(size, mips)
+    }
+
+    /// An array of `size`-sided layers from its sRGB8 texels, `mips[level][layer]` (e.g. read
+    /// back from the GPU).
+    pub(crate) fn from_texels(size: u32, mips: Vec<Vec<Vec<u8>>>) -> Self {
         Self {
             size,
-            layers: scene.textures.len() as u32 + 1,
+            layers: mips.first().map_or(0, |l| l.len() as u32),
             mips,
             lut: (0..256).map(|v| srgb_to_linear(v as f32 / 255.0)).collect(),
         }
-    }
-
-    /// The layer of a material's base colour texture.
-    pub fn layer_of(texture: Option<u32>) -> u32 {
-        texture.map_or(0, |t| t + 1)
     }
 
     /// Number of mip levels.
@@ -188,7 +239,8 @@ mod tests {
     #[test]
     fn white_layer_and_mip_averages() {
         let scene = scene::checkerboard();
-        let t = TextureArray::new(&scene, 1024);
+        let layers = ArrayLayers::new(&scene);
+        let t = TextureArray::new(&scene, &layers, layers.side(&scene, 1024));
         assert_eq!((t.size, t.layers, t.levels()), (256, 2, 9));
         assert!(t.mips[0][0].iter().all(|&b| b == 255));
         // The checker's last mip is the linear average of its two tones.

@@ -6,8 +6,8 @@
 use adaptive_ssaa::cpu::{self, ShadingInputs, SsGBuffer};
 use adaptive_ssaa::gpu::{SsaaRenderer, TEXTURE_SIZE};
 use adaptive_ssaa::{
-    Constants, GeometricMetric, Resolve, ShadingMetric, SsaaConfig, SsaaError, SsaaMaterial,
-    TextureArray, bayer_matrix, dither_matrix, dither_order, prefix_spread,
+    ArrayLayers, Constants, GeometricMetric, Resolve, ShadingMetric, SsaaConfig, SsaaError,
+    SsaaMaterial, TextureArray, bayer_matrix, dither_matrix, dither_order, prefix_spread,
 };
 use gbuffer::Image;
 use tiled_shading::GpuLight;
@@ -155,14 +155,18 @@ impl Fixture {
             .targets
             .read(&gpu.device, &gpu.queue)
             .expect("read");
+        let textures = renderer
+            .textures
+            .read(&gpu.device, &gpu.queue)
+            .expect("read");
         Some(Self {
             gpu,
             renderer,
             gbuffer,
             frame: gbuffer::Frame::new(&camera, W * m, H * m),
             far: camera.far,
-            textures: TextureArray::new(&scene, TEXTURE_SIZE),
-            materials: SsaaMaterial::of_scene(&scene),
+            textures,
+            materials: SsaaMaterial::of_scene(&scene, &ArrayLayers::new(&scene)),
             lights,
         })
     }
@@ -473,14 +477,17 @@ fn caller_owned_output_is_checked() {
     let scene = scene::checkerboard();
     let config = SsaaConfig::default();
     let (w, h, m) = (W, H, config.m);
-    let array = TextureArray::new(&scene, TEXTURE_SIZE);
-    let textures = GpuTextures::new(d, &gpu.queue, &array, config.anisotropy).expect("textures");
-    let targets = SsGBufferTargets::new(d, w * m, h * m).expect("targets");
     let pass = gbuffer::gpu::GBufferPass::new(d).expect("pass");
+    let store = gbuffer::gpu::GpuScene::upload(d, &gpu.queue, &scene, &pass).expect("scene");
+    let layers = ArrayLayers::new(&scene);
+    let size = layers.side(&scene, TEXTURE_SIZE);
+    let textures =
+        GpuTextures::new(d, &gpu.queue, &store.textures, &layers, size, 16).expect("textures");
+    let targets = SsGBufferTargets::new(d, w * m, h * m).expect("targets");
     let materials = gpu::transfer::buffer_init(
         d,
         "materials",
-        bytemuck::cast_slice(&SsaaMaterial::of_scene(&scene)),
+        bytemuck::cast_slice(&SsaaMaterial::of_scene(&scene, &layers)),
         wgpu::BufferUsages::STORAGE,
     )
     .expect("materials");

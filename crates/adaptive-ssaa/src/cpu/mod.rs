@@ -25,7 +25,7 @@ pub use evaluate::{
 pub use fxaa::fxaa;
 pub use shade::{shade_adaptive, shade_first, shade_full};
 
-use crate::{SsaaConfig, SsaaError, SsaaMaterial, TextureArray};
+use crate::{ArraySlot, SsaaConfig, SsaaError, SsaaMaterial, TextureArray, unpack_tint};
 
 /// Rec. 709 luminance weights of the shading metric and FXAA.
 pub const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
@@ -43,6 +43,8 @@ pub struct SsGBuffer {
     pub uv_grad: Image<[f32; 4]>,
     /// Material words (`gbuffer::pack_material`), `gbuffer::NO_MATERIAL` where no surface.
     pub material: Image<u32>,
+    /// Vertex colour and occlusion ([`crate::unpack_tint`]).
+    pub tint: Image<u32>,
 }
 
 /// Everything shading a sample needs besides the configuration.
@@ -78,7 +80,8 @@ impl ShadingInputs<'_> {
         if !(same(g.normal.width(), g.normal.height())
             && same(g.uv.width(), g.uv.height())
             && same(g.uv_grad.width(), g.uv_grad.height())
-            && same(g.material.width(), g.material.height()))
+            && same(g.material.width(), g.material.height())
+            && same(g.tint.width(), g.tint.height()))
         {
             return Err(SsaaError::SizeMismatch(
                 "the G-buffer images differ in size".into(),
@@ -107,9 +110,9 @@ fn window_sample(p: [u32; 2], m: u32, order: &[[u32; 2]], i: usize) -> [u32; 2] 
     [p[0] * m + order[i][0], p[1] * m + order[i][1]]
 }
 
-/// Shades G-buffer sample `q` (`shade_sample`): material and texture lookup with the
-/// derivatives scaled by `scale`, every light, ambient and emission; the background colour
-/// where no surface is.
+/// Shades G-buffer sample `q` (`shade_sample`): base colour and emission looked up in the
+/// array with the derivatives scaled by `scale` (`read_array`), every light, ambient ×
+/// occlusion and emission; the background colour where no surface is.
 pub fn shade_sample(inp: &ShadingInputs, config: &SsaaConfig, q: [u32; 2], scale: f32) -> Vec3 {
     let g = inp.gbuffer;
     let depth = g.linear_depth.get(q[0], q[1]);
@@ -123,14 +126,20 @@ pub fn shade_sample(inp: &ShadingInputs, config: &SsaaConfig, q: [u32; 2], scale
         return config.background;
     };
     let grad = Vec4::from(g.uv_grad.get(q[0], q[1])) * scale;
-    let texel = inp.textures.sample_grad(
-        material.layer,
-        Vec2::from(g.uv.get(q[0], q[1])),
-        grad.xy(),
-        grad.zw(),
-        config.anisotropy,
-    );
-    let albedo = (Vec4::from(material.base_color).xyz() * texel.xyz()).clamp(Vec3::ZERO, Vec3::ONE);
+    let uv = Vec2::from(g.uv.get(q[0], q[1]));
+    let (color, occlusion) = unpack_tint(g.tint.get(q[0], q[1]));
+    let read_array = |slot: &ArraySlot| {
+        if slot.layer == 0 {
+            return Vec4::ONE;
+        }
+        let (uv, ddx, ddy) = slot.transform(uv, grad);
+        inp.textures
+            .sample_grad(slot.layer, uv, ddx, ddy, config.anisotropy)
+    };
+    let texel = read_array(&material.base);
+    let albedo =
+        (Vec4::from(material.base_color).xyz() * color * texel.xyz()).clamp(Vec3::ZERO, Vec3::ONE);
+    let emission = Vec4::from(material.emissive).xyz() * read_array(&material.emission).xyz();
     let p = gbuffer::position::from_view_ray(inp.frame, q[0], q[1], depth);
     let v = (inp.frame.eye.xyz() - p).normalize();
     let surface = Surface {
@@ -148,9 +157,7 @@ pub fn shade_sample(inp: &ShadingInputs, config: &SsaaConfig, q: [u32; 2], scale
         diffuse += d;
         specular += s;
     }
-    albedo * (1.0 - metallic) * (config.ambient + diffuse)
-        + specular
-        + Vec3::from(material.emissive)
+    albedo * (1.0 - metallic) * (config.ambient * occlusion + diffuse) + specular + emission
 }
 
 fn per_pixel<T: Copy + Send>(w: u32, h: u32, f: impl Fn(u32, u32) -> T + Sync) -> Image<T> {

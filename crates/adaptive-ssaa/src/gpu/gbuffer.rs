@@ -1,5 +1,6 @@
 //! The supersampled G-buffer (`shaders/adaptive-ssaa/gbuffer.wgsl`): the G-buffer pass's vertex
-//! stage with a fragment stage that also writes texture coordinates and their derivatives.
+//! stage and material with a fragment stage that writes texture coordinates and their
+//! derivatives instead of albedo and emission.
 
 use ::gbuffer::gpu::{GBufferPass, GpuScene, begin_scene_pass, scene_pipeline};
 use ::gbuffer::{DEPTH_FORMAT, Image, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT, NORMAL_FORMAT};
@@ -7,7 +8,7 @@ use ::gpu::kernel;
 use ::gpu::{GpuError, transfer};
 
 use crate::cpu::SsGBuffer;
-use crate::{UV_FORMAT, UV_GRAD_FORMAT};
+use crate::{TINT_FORMAT, UV_FORMAT, UV_GRAD_FORMAT};
 
 /// The supersampled G-buffer's targets, `(m·w) × (m·h)` samples.
 pub struct SsGBufferTargets {
@@ -27,6 +28,8 @@ pub struct SsGBufferTargets {
     pub uv_grad: wgpu::Texture,
     /// Material words.
     pub material: wgpu::Texture,
+    /// Vertex colour and occlusion words.
+    pub tint: wgpu::Texture,
 }
 
 impl SsGBufferTargets {
@@ -54,6 +57,7 @@ impl SsGBufferTargets {
             uv: make("ss uv", UV_FORMAT),
             uv_grad: make("ss uv grad", UV_GRAD_FORMAT),
             material: make("ss material", MATERIAL_FORMAT),
+            tint: make("ss tint", TINT_FORMAT),
         })
     }
 
@@ -88,14 +92,15 @@ impl SsGBufferTargets {
                     .collect(),
             )?,
             material: image(w, h, words(&self.material)?)?,
+            tint: image(w, h, words(&self.tint)?)?,
         })
     }
 }
 
-/// The supersampled G-buffer pass: a render pipeline on the G-buffer pass's layouts with the
-/// `fs_texcoord` fragment stage.
+/// The supersampled G-buffer pass: render pipelines on the G-buffer pass's layouts with the
+/// `fs_texcoord` fragment stage, [two-sided, one-sided] (glTF `doubleSided`).
 pub struct SsGBufferPass {
-    pipeline: wgpu::RenderPipeline,
+    pipelines: [wgpu::RenderPipeline; 2],
 }
 
 impl SsGBufferPass {
@@ -110,11 +115,14 @@ impl SsGBufferPass {
             UV_FORMAT,
             MATERIAL_FORMAT,
             UV_GRAD_FORMAT,
+            TINT_FORMAT,
         ];
         let stages = ("vs_main", Some(("fs_texcoord", &targets[..])));
         let depth = (wgpu::CompareFunction::Less, true);
-        let pipeline = scene_pipeline(device, "ss gbuffer", &layout, &module, stages, depth, false);
-        Ok(Self { pipeline })
+        let pipelines = [false, true].map(|cull| {
+            scene_pipeline(device, "ss gbuffer", &layout, &module, stages, depth, cull)
+        });
+        Ok(Self { pipelines })
     }
 
     /// Records the pass: clears every target and draws `scene` with the frame
@@ -133,9 +141,11 @@ impl SsGBufferPass {
             (&targets.uv, 0.0),
             (&targets.material, f64::from(::gbuffer::NO_MATERIAL)),
             (&targets.uv_grad, 0.0),
+            (&targets.tint, 0.0),
         ];
         let depth = (&targets.depth, true);
         let mut pass = begin_scene_pass(encoder, "ss gbuffer", &colour, depth, timestamp_writes);
-        gbuffer_pass.draw_scene(&mut pass, &self.pipeline, scene);
+        let [two_sided, one_sided] = &self.pipelines;
+        gbuffer_pass.draw_scene(&mut pass, [two_sided, one_sided], scene);
     }
 }

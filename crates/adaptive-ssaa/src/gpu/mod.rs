@@ -275,6 +275,8 @@ impl Ssaa {
             ]
             .map(|b| b.as_entire_binding()),
         );
+        let tint = t.tint.create_view(&Default::default());
+        resources.push(view(&tint));
         let group = group_layout.bind(device, &resources);
         let args_group = args_layout.bind_buffers(device, &[&args]);
         Ok(Self {
@@ -416,8 +418,8 @@ impl Ssaa {
 
 /// Group 0 of `common.wgsl`: frame, params; linear depth, normal, uv, uv gradient, material
 /// targets; texture array and sampler; materials, lights; first sample, counts, output, sort
-/// histogram, pixel list.
-const SSAA_BINDINGS: [Binding; 16] = {
+/// histogram, pixel list; tint target.
+const SSAA_BINDINGS: [Binding; 17] = {
     use Binding::{
         Sampler, Storage, StorageRead, TextureArray, TextureUint, TextureUnfilterable, Uniform,
     };
@@ -438,5 +440,6 @@ const SSAA_BINDINGS: [Binding; 16] = {
         Storage,
         Storage,
         Storage,
+        TextureUint,
     ]
 };

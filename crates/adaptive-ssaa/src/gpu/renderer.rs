@@ -7,14 +7,17 @@ use scene::{Camera, Scene};
 use tiled_shading::GpuLight;
 
 use super::{GpuTextures, SsGBufferPass, SsGBufferTargets, Ssaa, SsaaInputs, TEXTURE_SIZE};
-use crate::{SsaaConfig, SsaaError, SsaaMaterial, TextureArray};
+use crate::{ArrayLayers, SsaaConfig, SsaaError, SsaaMaterial};
 
-/// A scene set up for adaptive supersampling at one size: G-buffer passes, uploaded scene,
-/// texture array, materials, targets and the [`Ssaa`] passes.
+/// A scene set up for adaptive supersampling at one size: G-buffer passes, the uploaded scene
+/// (with its texture store), the texture array drawn from the store, materials, targets and
+/// the [`Ssaa`] passes.
 pub struct SsaaRenderer {
     gbuffer_pass: GBufferPass,
     ss_pass: SsGBufferPass,
     scene: GpuScene,
+    /// The texture array (the scene's base colour and emissive textures).
+    pub textures: GpuTextures,
     /// The supersampled G-buffer.
     pub targets: SsGBufferTargets,
     /// The adaptive supersampling passes.
@@ -24,8 +27,8 @@ pub struct SsaaRenderer {
 }
 
 impl SsaaRenderer {
-    /// Uploads `scene` (textures resampled to at most [`TEXTURE_SIZE`]) and builds every pass
-    /// for a `width × height` image.
+    /// Uploads `scene` (its texture store filtered with `config.anisotropy`; the array's layers
+    /// at most [`TEXTURE_SIZE`] on a side) and builds every pass for a `width × height` image.
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -53,17 +56,23 @@ impl SsaaRenderer {
         }
         let gbuffer_pass = GBufferPass::new(device)?;
         let ss_pass = SsGBufferPass::new(device, &gbuffer_pass)?;
-        let gpu_scene = GpuScene::upload(device, queue, scene, &gbuffer_pass)?;
+        let options = ::gbuffer::TextureOptions {
+            max_anisotropy: config.anisotropy,
+        };
+        let gpu_scene = GpuScene::upload_with(device, queue, scene, &gbuffer_pass, &options)?;
+        let layers = ArrayLayers::new(scene);
         let textures = GpuTextures::new(
             device,
             queue,
-            &TextureArray::new(scene, TEXTURE_SIZE),
+            &gpu_scene.textures,
+            &layers,
+            layers.side(scene, TEXTURE_SIZE),
             config.anisotropy,
         )?;
         let materials = transfer::buffer_init(
             device,
             "ssaa materials",
-            bytemuck::cast_slice(&SsaaMaterial::of_scene(scene)),
+            bytemuck::cast_slice(&SsaaMaterial::of_scene(scene, &layers)),
             wgpu::BufferUsages::STORAGE,
         )?;
         let targets = SsGBufferTargets::new(device, sw, sh)?;
@@ -80,6 +89,7 @@ impl SsaaRenderer {
             gbuffer_pass,
             ss_pass,
             scene: gpu_scene,
+            textures,
             targets,
             ssaa,
             width,

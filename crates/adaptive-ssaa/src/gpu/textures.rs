@@ -1,66 +1,33 @@
-//! The scene's texture array on the GPU, sampled with the stored derivatives.
+//! The scene's texture array on the GPU, drawn from its texture store and sampled with the
+//! stored derivatives.
 
+use ::gbuffer::gpu::MaterialTextures;
 use ::gpu::{GpuError, transfer};
+use scene::ColorSpace;
 
-use crate::TextureArray;
+use crate::{ArrayLayers, TextureArray};
 
-/// The [`TextureArray`] on the GPU (`Rgba8UnormSrgb`, all mips) and its anisotropic sampler.
+/// The [`TextureArray`] on the GPU (`Rgba8UnormSrgb`, all mips), drawn from the scene's
+/// texture store, and its anisotropic sampler.
 pub struct GpuTextures {
+    texture: wgpu::Texture,
     pub(super) view: wgpu::TextureView,
     pub(super) sampler: wgpu::Sampler,
 }
 
 impl GpuTextures {
-    /// Uploads `array`; the sampler filters with anisotropy up to `anisotropy` (1..=16).
+    /// Draws the array of `layers` from `store`, `size` texels on a side
+    /// ([`MaterialTextures::array`]); the sampler repeats and filters with anisotropy up to
+    /// `anisotropy` (1..=16).
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        array: &TextureArray,
+        store: &MaterialTextures,
+        layers: &ArrayLayers,
+        size: u32,
         anisotropy: u32,
     ) -> Result<Self, GpuError> {
-        transfer::check_texture_size(device, "texture array", array.size, array.size)?;
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("texture array"),
-            size: wgpu::Extent3d {
-                width: array.size,
-                height: array.size,
-                depth_or_array_layers: array.layers,
-            },
-            mip_level_count: array.levels(),
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8UnormSrgb,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
-        for (level, layers) in array.mips.iter().enumerate() {
-            let side = array.size >> level;
-            for (layer, texels) in layers.iter().enumerate() {
-                queue.write_texture(
-                    wgpu::TexelCopyTextureInfo {
-                        texture: &texture,
-                        mip_level: level as u32,
-                        origin: wgpu::Origin3d {
-                            x: 0,
-                            y: 0,
-                            z: layer as u32,
-                        },
-                        aspect: wgpu::TextureAspect::All,
-                    },
-                    texels,
-                    wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(side * 4),
-                        rows_per_image: Some(side),
-                    },
-                    wgpu::Extent3d {
-                        width: side,
-                        height: side,
-                        depth_or_array_layers: 1,
-                    },
-                );
-            }
-        }
+        let texture = store.array(device, queue, &layers.sources, ColorSpace::Srgb, size)?;
         let view = texture.create_view(&wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
@@ -75,6 +42,35 @@ impl GpuTextures {
             anisotropy_clamp: anisotropy.clamp(1, crate::MAX_ANISOTROPY) as u16,
             ..Default::default()
         });
-        Ok(Self { view, sampler })
+        Ok(Self {
+            texture,
+            view,
+            sampler,
+        })
+    }
+
+    /// Reads every level and layer back: the array the GPU samples, for the CPU twin of the
+    /// shading.
+    pub fn read(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<TextureArray, GpuError> {
+        let size = self.texture.width();
+        let layers = self.texture.depth_or_array_layers() as usize;
+        let mips = (0..self.texture.mip_level_count())
+            .map(|level| {
+                let all = transfer::read_texture_level(
+                    device,
+                    queue,
+                    &self.texture,
+                    wgpu::TextureAspect::All,
+                    level,
+                )?;
+                let layer_bytes = all.len() / layers;
+                Ok(all.chunks_exact(layer_bytes).map(<[u8]>::to_vec).collect())
+            })
+            .collect::<Result<_, GpuError>>()?;
+        Ok(TextureArray::from_texels(size, mips))
     }
 }

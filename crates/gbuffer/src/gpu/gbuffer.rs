@@ -136,16 +136,17 @@ impl GBufferPass {
         [&self.frame_layout, &self.material_layout]
     }
 
-    /// Draws `scene` with `pipeline` (built on [`GBufferPass::layouts`] and
-    /// [`GBufferPass::vertex_attributes`]) into an open render pass, binding this pass's frame
-    /// uniform and each draw's material.
+    /// Draws `scene` into an open render pass with `pipelines` = [two-sided, one-sided]
+    /// (built on [`GBufferPass::layouts`], the one-sided with back faces culled, as
+    /// [`scene_pipeline`] builds them), each draw with the one its material's `doubleSided`
+    /// picks, binding this pass's frame uniform and each draw's material.
     pub fn draw_scene(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
-        pipeline: &wgpu::RenderPipeline,
+        pipelines: [&wgpu::RenderPipeline; 2],
         scene: &GpuScene,
     ) {
-        self.draw(pass, scene, |_| pipeline);
+        self.draw(pass, scene, |s| pipelines[usize::from(s.cull)]);
     }
 
     /// The uniform buffer holding the [`Frame`]; later screen-space passes bind it too.

@@ -18,13 +18,19 @@ pub struct GpuTexture {
     pub view: wgpu::TextureView,
     /// The texture's sampler.
     pub sampler: wgpu::Sampler,
+    /// What the sampler was made from (the glTF sampler).
+    pub sampling: ::scene::Sampler,
 }
 
-/// Every texture some material reads, per colour space, plus a white 1 × 1 for absent ones.
+/// Every texture some material reads, per colour space, plus a white 1 × 1 for absent ones:
+/// the one texture store of a scene. Passes that must reach every texture from one binding
+/// (the supersampled G-buffer's shading, Holländer 2013 §4.3.3) take a resampled array of it
+/// ([`MaterialTextures::array`]).
 pub struct MaterialTextures {
     srgb: Vec<Option<GpuTexture>>,
     linear: Vec<Option<GpuTexture>>,
     white: GpuTexture,
+    mips: Mips,
 }
 
 /// The texture format of `space`.
@@ -84,7 +90,77 @@ impl MaterialTextures {
             srgb,
             linear,
             white,
+            mips,
         })
+    }
+
+    /// The store's textures as one `size × size` 2D array in `space`'s format with a full
+    /// mip chain, drawn on the GPU: layer `i` is texture `layers[i]` read in `space`, resampled
+    /// at level 0 with its own sampler (`fs_resample`), or white where `layers[i]` is `None`
+    /// or no material reads that texture in `space`; the levels above are 2 × 2 box filters.
+    /// The CPU twin resamples [`scene::LinearTexture::sample`] the same way.
+    pub fn array(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        layers: &[Option<u32>],
+        space: ColorSpace,
+        size: u32,
+    ) -> Result<wgpu::Texture, GpuError> {
+        transfer::check_texture_size(device, "texture array", size, size)?;
+        let limit = device.limits().max_texture_array_layers;
+        if layers.is_empty() || layers.len() as u64 > u64::from(limit) {
+            return Err(GpuError::DataSize(format!(
+                "a texture array of {} layers (the device allows 1..={limit})",
+                layers.len()
+            )));
+        }
+        let texture = transfer::allocation(device, "texture array", || {
+            Ok::<_, GpuError>(device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("texture array"),
+                size: wgpu::Extent3d {
+                    width: size,
+                    height: size,
+                    depth_or_array_layers: layers.len() as u32,
+                },
+                mip_level_count: size.max(1).ilog2() + 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: format_of(space),
+                usage: wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            }))
+        })?;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        for (layer, t) in layers.iter().enumerate() {
+            let source = t.and_then(|t| self.get(t, space)).unwrap_or(&self.white);
+            // Level 0 through the texture's wrap modes and magnification filter, without the
+            // anisotropy (some drivers let an anisotropic sampler pick another level).
+            let s = &source.sampling;
+            let level0 = device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("resample"),
+                address_mode_u: address(s.wrap_u),
+                address_mode_v: address(s.wrap_v),
+                mag_filter: filter(s.mag_linear),
+                min_filter: filter(s.mag_linear),
+                ..Default::default()
+            });
+            let target = layer_view(&texture, 0, layer as u32);
+            let pipeline = &self.mips.resample[space as usize];
+            self.mips.draw(
+                device,
+                &mut encoder,
+                pipeline,
+                (&source.view, &level0),
+                &target,
+            );
+            self.mips
+                .encode(device, &mut encoder, &texture, space, layer as u32);
+        }
+        queue.submit([encoder.finish()]);
+        Ok(texture)
     }
 
     /// Texture `texture` as uploaded for `space`, if some material reads it so.
@@ -162,7 +238,7 @@ fn upload_texture(
         )));
     }
     transfer::write_level0(queue, &texture, &t.rgba8);
-    mips.encode(device, encoder, &texture, space);
+    mips.encode(device, encoder, &texture, space, 0);
     let s = &t.sampler;
     let trilinear = s.mag_linear && s.min_linear && s.mipmaps == Some(true);
     let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
@@ -190,14 +266,28 @@ fn upload_texture(
         view: texture.create_view(&Default::default()),
         texture,
         sampler,
+        sampling: *s,
     })
 }
 
-/// The mip chain pass (`mips.wgsl`): one pipeline per colour space.
+/// A single-level, single-layer view of `texture`.
+fn layer_view(texture: &wgpu::Texture, level: u32, layer: u32) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2),
+        base_mip_level: level,
+        mip_level_count: Some(1),
+        base_array_layer: layer,
+        array_layer_count: Some(1),
+        ..Default::default()
+    })
+}
+
+/// The passes of `mips.wgsl`: a downsampling and a resampling pipeline per colour space
+/// (indexed by `ColorSpace as usize`).
 struct Mips {
     layout: Layout,
-    srgb: wgpu::RenderPipeline,
-    linear: wgpu::RenderPipeline,
+    downsample: [wgpu::RenderPipeline; 2],
+    resample: [wgpu::RenderPipeline; 2],
     edge: wgpu::Sampler,
 }
 
@@ -211,13 +301,13 @@ impl Mips {
             &[Binding::Texture, Binding::Sampler],
         );
         let pipeline_layout = ::gpu::kernel::pipeline_layout(device, "mips", &[&layout]);
-        let pipeline = |space| {
+        let pipeline = |(vertex, fragment), space| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("mips"),
+                label: Some(fragment),
                 layout: Some(&pipeline_layout),
                 vertex: wgpu::VertexState {
                     module: &module,
-                    entry_point: Some("vs_fullscreen"),
+                    entry_point: Some(vertex),
                     compilation_options: Default::default(),
                     buffers: &[],
                 },
@@ -226,7 +316,7 @@ impl Mips {
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &module,
-                    entry_point: Some("fs_downsample"),
+                    entry_point: Some(fragment),
                     compilation_options: Default::default(),
                     targets: &[Some(format_of(space).into())],
                 }),
@@ -234,6 +324,7 @@ impl Mips {
                 cache: None,
             })
         };
+        let spaces = |stages| [ColorSpace::Srgb, ColorSpace::Linear].map(|s| pipeline(stages, s));
         let edge = device.create_sampler(&wgpu::SamplerDescriptor {
             label: Some("mips"),
             mag_filter: wgpu::FilterMode::Linear,
@@ -241,61 +332,65 @@ impl Mips {
             ..Default::default()
         });
         Ok(Self {
-            srgb: pipeline(ColorSpace::Srgb),
-            linear: pipeline(ColorSpace::Linear),
+            downsample: spaces(("vs_fullscreen", "fs_downsample")),
+            resample: spaces(("vs_resample", "fs_resample")),
             layout,
             edge,
         })
     }
 
-    /// Draws levels 1.. of `texture` from level 0, each from the one before.
+    /// Draws `source` (a view and the sampler it is read with) into `target` with `pipeline`.
+    fn draw(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::RenderPipeline,
+        (source, sampler): (&wgpu::TextureView, &wgpu::Sampler),
+        target: &wgpu::TextureView,
+    ) {
+        let group = self.layout.bind(
+            device,
+            &[
+                wgpu::BindingResource::TextureView(source),
+                wgpu::BindingResource::Sampler(sampler),
+            ],
+        );
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("mips"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+
+    /// Draws levels 1.. of layer `layer` of `texture` from its level 0, each from the one
+    /// before.
     fn encode(
         &self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         texture: &wgpu::Texture,
         space: ColorSpace,
+        layer: u32,
     ) {
-        let level_view = |level| {
-            texture.create_view(&wgpu::TextureViewDescriptor {
-                base_mip_level: level,
-                mip_level_count: Some(1),
-                ..Default::default()
-            })
-        };
-        let pipeline = match space {
-            ColorSpace::Srgb => &self.srgb,
-            ColorSpace::Linear => &self.linear,
-        };
         for level in 1..texture.mip_level_count() {
-            let source = level_view(level - 1);
-            let target = level_view(level);
-            let group = self.layout.bind(
-                device,
-                &[
-                    wgpu::BindingResource::TextureView(&source),
-                    wgpu::BindingResource::Sampler(&self.edge),
-                ],
-            );
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("mip level"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &target,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.draw(0..3, 0..1);
+            let source = layer_view(texture, level - 1, layer);
+            let target = layer_view(texture, level, layer);
+            let pipeline = &self.downsample[space as usize];
+            self.draw(device, encoder, pipeline, (&source, &self.edge), &target);
         }
     }
 }
