@@ -35,21 +35,15 @@ struct Params {
     order: array<vec4<u32>, 16>,
 };
 
-// How a shaded sample reads one texture of its material from the array: the slot's
-// KHR_texture_transform (2 × 2 columns xy and zw, offset) and the layer (0: white).
-struct ArraySlot {
-    linear: vec4<f32>,
-    offset: vec2<f32>,
-    layer: u32,
-    _pad: u32,
-};
-
+// A material as the shading reads it (`adaptive_ssaa::SsaaMaterial`): the factors and the
+// array layers (0: white) of the two textures looked up per sample, both at the stored
+// coordinates.
 struct SsaaMaterial {
     // Linear base colour factor; alpha: the specular factor.
     base_color: vec4<f32>,
-    emissive: vec4<f32>,
-    base: ArraySlot,
-    emission: ArraySlot,
+    emissive: vec3<f32>,
+    base_layer: u32,
+    emissive_layer: u32,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -88,15 +82,15 @@ fn footprint_scale(k: u32) -> f32 {
     return f32(params.m) / sqrt(f32(k));
 }
 
-// One array texture of a material at the sample's coordinates, filtered over the
-// derivatives `grad` (du/dx, dv/dx, du/dy, dv/dy), both through the slot's transform; white
-// without a texture (layer 0, not sampled).
-fn read_array(slot: ArraySlot, uv: vec2<f32>, grad: vec4<f32>) -> vec4<f32> {
-    if slot.layer == 0u {
+// Layer `layer` of the array at the sample's coordinates, filtered over the derivatives
+// `grad` (du/dx, dv/dx, du/dy, dv/dy); layer 0 is white and not sampled (a mesh without
+// texture coordinates has zero derivatives, which llvmpipe's anisotropic filter never
+// finishes).
+fn read_array(layer: u32, uv: vec2<f32>, grad: vec4<f32>) -> vec4<f32> {
+    if layer == 0u {
         return vec4<f32>(1.0);
     }
-    let m = mat2x2<f32>(slot.linear.xy, slot.linear.zw);
-    return textureSampleGrad(textures, texture_sampler, m * uv + slot.offset, slot.layer, m * grad.xy, m * grad.zw);
+    return textureSampleGrad(textures, texture_sampler, uv, layer, grad.xy, grad.zw);
 }
 
 // Shades G-buffer sample q (§4.3.4): base colour and emission looked up in the array with the
@@ -121,9 +115,9 @@ fn shade_sample(q: vec2<u32>, scale: f32) -> vec3<f32> {
     let tint = unpack4x8unorm(textureLoad(tint_tex, q, 0).r);
     // The vertex colour, stored as its square root (`unpack_tint`).
     let color = tint.rgb * tint.rgb;
-    let texel = read_array(material.base, uv, grad);
+    let texel = read_array(material.base_layer, uv, grad);
     let albedo = clamp(material.base_color.rgb * color * texel.rgb, vec3<f32>(0.0), vec3<f32>(1.0));
-    let emission = material.emissive.rgb * read_array(material.emission, uv, grad).rgb;
+    let emission = material.emissive * read_array(material.emissive_layer, uv, grad).rgb;
     let p = position_from_view_ray(frame, q, depth);
     let v = normalize(frame.eye.xyz - p);
     var diffuse = vec3<f32>(0.0);

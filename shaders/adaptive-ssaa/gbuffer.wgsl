@@ -10,7 +10,7 @@
 struct TexcoordOut {
     @location(0) linear_depth: f32,
     @location(1) normal: u32,
-    // The coordinate set the base colour (else the emissive texture) reads, untransformed.
+    // The base colour's (else the emissive texture's) coordinates, through its transform.
     @location(2) uv: vec2<f32>,
     @location(3) material: u32,
     // du/dx, dv/dx, du/dy, dv/dy (one sample step).
@@ -30,14 +30,27 @@ fn fs_texcoord(in: VertexOut) -> TexcoordOut {
     if !alpha_keeps(m.alpha, dither_threshold(vec2<u32>(in.clip.xy))) {
         discard;
     }
+    // The coordinates of the base colour texture, else of the emissive one, through its
+    // transform (`adaptive_ssaa::SsaaMaterial` reads both textures at them).
     let base = material.slots[SLOT_BASE_COLOR];
-    let uv_set = select(material.slots[SLOT_EMISSIVE].offset.z, base.offset.z, base.offset.w != 0.0);
-    let set1 = uv_set != 0.0;
+    let emissive = material.slots[SLOT_EMISSIVE];
+    let has_base = base.offset.w != 0.0;
+    let linear = select(emissive.linear, base.linear, has_base);
+    let offset = select(emissive.offset, base.offset, has_base);
+    let set1 = offset.z != 0.0;
+    // A material without either texture keeps its coordinates (its slots are zero, and zero
+    // derivatives hang llvmpipe's anisotropic filter).
+    let textured = has_base || emissive.offset.w != 0.0;
+    let columns = select(vec4<f32>(1.0, 0.0, 0.0, 1.0), linear, textured);
+    let transform = mat2x2<f32>(columns.xy, columns.zw);
     var out: TexcoordOut;
     out.linear_depth = in.view_depth;
     out.normal = pack2x16snorm(encode_octahedral_snorm(m.normal));
-    out.uv = select(in.uv.xy, in.uv.zw, set1);
-    out.uv_grad = select(vec4<f32>(uv_dx.xy, uv_dy.xy), vec4<f32>(uv_dx.zw, uv_dy.zw), set1);
+    out.uv = transform * select(in.uv.xy, in.uv.zw, set1) + offset.xy;
+    // Finite in half precision (an infinite derivative at a grazing edge would become NaN
+    // through a transform).
+    let grad = select(vec4<f32>(uv_dx.xy, uv_dy.xy), vec4<f32>(uv_dx.zw, uv_dy.zw), set1);
+    out.uv_grad = clamp(vec4<f32>(transform * grad.xy, transform * grad.zw), vec4<f32>(-HALF_MAX), vec4<f32>(HALF_MAX));
     out.material = pack_material(m.roughness, m.metallic, material.id);
     out.tint = pack4x8unorm(vec4<f32>(sqrt(clamp(in.color.rgb, vec3<f32>(0.0), vec3<f32>(1.0))), m.occlusion));
     return out;

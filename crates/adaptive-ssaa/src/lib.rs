@@ -316,65 +316,27 @@ impl SsaaConfig {
     }
 }
 
-/// How a shaded sample reads one texture of its material from the [`TextureArray`]
-/// (`common.wgsl` `ArraySlot`): the slot's `KHR_texture_transform` and the layer.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct ArraySlot {
-    /// Columns (m00, m10) and (m01, m11) of the transform's 2 × 2 part.
-    pub linear: [f32; 4],
-    /// The transform's offset.
-    pub offset: [f32; 2],
-    /// Layer in the [`TextureArray`] (0: white).
-    pub layer: u32,
-    /// Padding to 16-byte alignment.
-    pub _pad: u32,
-}
-
-impl ArraySlot {
-    fn new(t: Option<scene::TextureRef>, layers: &ArrayLayers) -> Self {
-        let m = t.map_or(glam::Mat3::IDENTITY, |t| t.transform.matrix());
-        Self {
-            linear: [m.x_axis.x, m.x_axis.y, m.y_axis.x, m.y_axis.y],
-            offset: [m.z_axis.x, m.z_axis.y],
-            layer: layers.layer_of(t),
-            _pad: 0,
-        }
-    }
-
-    /// The texture coordinates and derivatives (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y) of the stored
-    /// coordinate set through the transform.
-    pub fn transform(
-        &self,
-        uv: glam::Vec2,
-        grad: glam::Vec4,
-    ) -> (glam::Vec2, glam::Vec2, glam::Vec2) {
-        let l = self.linear;
-        let m = glam::Mat2::from_cols_array(&l);
-        (
-            m * uv + glam::Vec2::from(self.offset),
-            m * glam::Vec2::new(grad.x, grad.y),
-            m * glam::Vec2::new(grad.z, grad.w),
-        )
-    }
-}
-
-/// A material as `common.wgsl` sees it (`SsaaMaterial`): the factors and the array slots of
-/// the two textures looked up when a sample is shaded (§4.3.3): base colour and emissive.
-/// Roughness, metallic, the normal map and occlusion were evaluated into the supersampled
-/// G-buffer from the scene's texture store.
+/// A material as `common.wgsl` sees it (`SsaaMaterial`): the factors and the array layers of
+/// the two textures looked up when a sample is shaded (§4.3.3), base colour and emissive, both
+/// read at the coordinates the supersampled G-buffer stores: the base colour texture's (else
+/// the emissive texture's) through its `KHR_texture_transform`. An emissive texture with
+/// another coordinate set or transform than the base colour's is read at the base colour's
+/// coordinates. Roughness, metallic, the normal map and occlusion were evaluated into the
+/// supersampled G-buffer from the scene's texture store.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct SsaaMaterial {
     /// Linear base colour factor; alpha: the material's specular factor
     /// ([`scene::Material::specular`]).
     pub base_color: [f32; 4],
-    /// Emitted radiance factor (w unused).
-    pub emissive: [f32; 4],
-    /// The base colour texture.
-    pub base: ArraySlot,
-    /// The emissive texture.
-    pub emission: ArraySlot,
+    /// Emitted radiance factor.
+    pub emissive: [f32; 3],
+    /// Layer of the base colour texture in the [`TextureArray`] (0: white).
+    pub base_layer: u32,
+    /// Layer of the emissive texture (0: white).
+    pub emissive_layer: u32,
+    /// Padding to 16-byte alignment.
+    pub _pad: [u32; 3],
 }
 
 impl SsaaMaterial {
@@ -385,9 +347,10 @@ impl SsaaMaterial {
             .iter()
             .map(|m| Self {
                 base_color: m.base_color.truncate().extend(m.specular).to_array(),
-                emissive: m.emissive.extend(0.0).to_array(),
-                base: ArraySlot::new(m.base_color_texture, layers),
-                emission: ArraySlot::new(m.emissive_texture, layers),
+                emissive: m.emissive.to_array(),
+                base_layer: layers.layer_of(m.base_color_texture),
+                emissive_layer: layers.layer_of(m.emissive_texture),
+                _pad: [0; 3],
             })
             .collect()
     }

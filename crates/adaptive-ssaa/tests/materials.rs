@@ -199,7 +199,7 @@ fn full_supersampling_equals_the_gbuffer_shaded_and_averaged() {
         anisotropy: 1,
         ..Default::default()
     };
-    let mut r = g.renderer(&config);
+    let r = g.renderer(&config);
     let (d, q) = (&g.gpu.device, &g.gpu.queue);
     let mut encoder = d.create_command_encoder(&Default::default());
     r.ssaa.encode(&mut encoder, None);

@@ -25,7 +25,7 @@ pub use evaluate::{
 pub use fxaa::fxaa;
 pub use shade::{shade_adaptive, shade_first, shade_full};
 
-use crate::{ArraySlot, SsaaConfig, SsaaError, SsaaMaterial, TextureArray, unpack_tint};
+use crate::{SsaaConfig, SsaaError, SsaaMaterial, TextureArray, unpack_tint};
 
 /// Rec. 709 luminance weights of the shading metric and FXAA.
 pub const LUMINANCE: Vec3 = Vec3::new(0.2126, 0.7152, 0.0722);
@@ -128,18 +128,17 @@ pub fn shade_sample(inp: &ShadingInputs, config: &SsaaConfig, q: [u32; 2], scale
     let grad = Vec4::from(g.uv_grad.get(q[0], q[1])) * scale;
     let uv = Vec2::from(g.uv.get(q[0], q[1]));
     let (color, occlusion) = unpack_tint(g.tint.get(q[0], q[1]));
-    let read_array = |slot: &ArraySlot| {
-        if slot.layer == 0 {
+    let read_array = |layer| {
+        if layer == 0 {
             return Vec4::ONE;
         }
-        let (uv, ddx, ddy) = slot.transform(uv, grad);
         inp.textures
-            .sample_grad(slot.layer, uv, ddx, ddy, config.anisotropy)
+            .sample_grad(layer, uv, grad.xy(), grad.zw(), config.anisotropy)
     };
-    let texel = read_array(&material.base);
+    let texel = read_array(material.base_layer);
     let albedo =
         (Vec4::from(material.base_color).xyz() * color * texel.xyz()).clamp(Vec3::ZERO, Vec3::ONE);
-    let emission = Vec4::from(material.emissive).xyz() * read_array(&material.emission).xyz();
+    let emission = Vec3::from(material.emissive) * read_array(material.emissive_layer).xyz();
     let p = gbuffer::position::from_view_ray(inp.frame, q[0], q[1], depth);
     let v = (inp.frame.eye.xyz() - p).normalize();
     let surface = Surface {
