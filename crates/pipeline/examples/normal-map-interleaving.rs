@@ -2,16 +2,22 @@
 //! brought by a normal map are conserved with interleaved sampling and [the] fast Gaussian
 //! blur … They disappear with sub-sampling." On Sponza with procedural normal-mapped materials
 //! (`scene::dress_procedurally`), lit by its default sun's VPLs, the CPU reference path
-//! computes the indirect diffuse irradiance three ways:
+//! computes the indirect light (the VPLs' diffuse and glossy light, composed with the
+//! G-buffer's materials, no direct light) three ways:
 //! - the non-interleaved reference: every VPL at every pixel;
 //! - interleaved 4 × 4 with the discontinuity buffer and the 5 × 5 fast blur (the defaults);
 //! - sub-sampling: every VPL at every 4th pixel along x and y (the reference rendered at a
-//!   quarter of the size), bilinearly upsampled — the same shading work as interleaving.
+//!   quarter of the size), its irradiance bilinearly upsampled — the same shading work as
+//!   interleaving;
 //!
-//! It prints each one's relative RMS error against the reference, overall and on the pixels
-//! whose normal the normal map tilts (more than 10° off the interpolated one), and ꟻLIP on the
-//! images as shown (one exposure for all), and writes the three irradiance images side by side
-//! (`normal-map-interleaving.png`).
+//! and the ground truth: the path tracer's one-bounce light alone (`min_bounces = max_bounces
+//! = 1`, rays through the pixel centres as the rasteriser samples), what the VPLs approximate.
+//!
+//! It prints each one's relative RMS error against the non-interleaved reference and against
+//! the path tracer, overall and on the pixels whose normal the normal map tilts (more than 10°
+//! off the interpolated one), and ꟻLIP on the images as shown (one exposure for all), and
+//! writes the images side by side (`normal-map-interleaving.png`: path tracer | reference |
+//! interleaved | sub-sampled).
 
 use std::path::PathBuf;
 
@@ -20,6 +26,7 @@ use clap::Parser;
 use gbuffer::{Frame, Image};
 use glam::Vec3;
 use instant_radiosity::{IndirectConfig, Interleaving, vpl};
+use scene::reference::ReferenceConfig;
 
 /// Reproduces Segovia 2006 Fig. 7.
 #[derive(Parser, Debug)]
@@ -38,19 +45,31 @@ struct Args {
     /// Keep the scene's own materials (no procedural normal maps), for comparison.
     #[arg(long)]
     plain: bool,
+    /// Path-tracer samples per pixel of the ground truth (0 leaves it out).
+    #[arg(long, default_value_t = 256)]
+    spp: u32,
 }
 
-/// The diffuse indirect irradiance of `scene` at `(w, h)` with `config`.
-fn irradiance(
+/// The indirect light (diffuse and glossy) of `scene` at `(w, h)` with `config`, and the
+/// G-buffer; with `irradiance`, the VPLs' irradiance images are replaced (sub-sampling).
+fn indirect(
     scene: &scene::Scene,
     camera: &scene::Camera,
     (w, h): (u32, u32),
     set: &vpl::VplSet,
     config: &IndirectConfig,
-) -> Result<(Image<[f32; 4]>, gbuffer::GBuffer)> {
+) -> Result<(Image<[f32; 4]>, [Image<[f32; 4]>; 2], gbuffer::GBuffer)> {
     let gb = gbuffer::cpu::rasterize(scene, camera, w, h)?.gbuffer;
     let stages = instant_radiosity::cpu::indirect(&gb, &Frame::new(camera, w, h), set, config)?;
-    Ok((stages.result().0.clone(), gb))
+    let (diffuse, specular) = stages.result();
+    let irradiance = [diffuse.clone(), specular.clone()];
+    Ok((compose(&gb, &irradiance), irradiance, gb))
+}
+
+/// The radiance the composition makes of the indirect irradiance images alone.
+fn compose(gb: &gbuffer::GBuffer, [diffuse, specular]: &[Image<[f32; 4]>; 2]) -> Image<[f32; 4]> {
+    let none = Image::filled(gb.width(), gb.height(), Vec3::ZERO);
+    pipeline::cpu::composition(gb, (&none, &none), Some((diffuse, specular)), Vec3::ZERO)
 }
 
 /// `low` (a quarter of the size) bilinearly upsampled to `(w, h)`, texel centres aligned.
@@ -101,10 +120,23 @@ fn main() -> Result<()> {
     let set = vpl::generate_from_primary(&scene, &bvh, args.vpls, config.subsets(), 1)?;
     let reference_config =
         IndirectConfig { interleaving: Interleaving::Reference, blur: None, ..config.clone() };
-    let (reference, gb) = irradiance(&scene, &camera, (w, h), &set, &reference_config)?;
-    let (interleaved, _) = irradiance(&scene, &camera, (w, h), &set, &config)?;
-    let (low, _) = irradiance(&scene, &camera, (w / 4, h / 4), &set, &reference_config)?;
-    let subsampled = upsample(&low, (w, h));
+    let (reference, _, gb) = indirect(&scene, &camera, (w, h), &set, &reference_config)?;
+    let (interleaved, _, _) = indirect(&scene, &camera, (w, h), &set, &config)?;
+    let (_, [low_d, low_s], _) =
+        indirect(&scene, &camera, (w / 4, h / 4), &set, &reference_config)?;
+    let subsampled = compose(&gb, &[upsample(&low_d, (w, h)), upsample(&low_s, (w, h))]);
+    let truth = (args.spp > 0)
+        .then(|| {
+            let config = ReferenceConfig {
+                min_bounces: 1,
+                max_bounces: 1,
+                jitter: false,
+                ..Default::default()
+            };
+            let (lights, _, _) = vpl::primary_lights(&scene);
+            bench::path_traced(&scene, &lights, camera, (w, h), config, args.spp)
+        })
+        .transpose()?;
 
     // Pixels whose shading normal the normal map tilts by more than 10° from the flat one.
     let mut flat = scene.clone();
@@ -134,19 +166,35 @@ fn main() -> Result<()> {
     let scale = 0.9 / lum[lum.len() * 99 / 100].max(1e-6);
     let shown =
         |img: &Image<[f32; 4]>| img.map(|p| [p[0] * scale, p[1] * scale, p[2] * scale, 1.0]);
-    for (name, image) in
-        [("interleaved 4×4 + blur", &interleaved), ("sub-sampled 4×4 + bilinear", &subsampled)]
-    {
-        println!(
-            "{name:28} relative RMS vs the reference: {:.3} overall, {:.3} on normal-mapped detail; ꟻLIP {:.3}",
-            relative_rms(&reference, image, &covered),
-            relative_rms(&reference, image, &tilted),
-            bench::quality(&shown(&reference), &shown(image)).flip_mean
-        );
+    let mut references = vec![("non-interleaved", &reference)];
+    references.extend(truth.as_ref().map(|t| ("path tracer", t)));
+    let mut shown_images = vec![("non-interleaved", &reference)];
+    for (name, image) in [
+        ("non-interleaved", &reference),
+        ("interleaved 4×4 + blur", &interleaved),
+        ("sub-sampled 4×4 + bilinear", &subsampled),
+    ] {
+        for &(against, truth) in &references {
+            if std::ptr::eq(truth, image) {
+                continue;
+            }
+            println!(
+                "{name:28} vs the {against:15}: relative RMS {:.3} overall, {:.3} on normal-mapped detail; ꟻLIP {:.3}",
+                relative_rms(truth, image, &covered),
+                relative_rms(truth, image, &tilted),
+                bench::quality(&shown(truth), &shown(image)).flip_mean
+            );
+        }
+        if !std::ptr::eq(image, &reference) {
+            shown_images.push((name, image));
+        }
+    }
+    if let Some(t) = &truth {
+        shown_images.insert(0, ("path tracer", t));
     }
     let row: Vec<[f32; 4]> = (0..h)
         .flat_map(|y| {
-            [&reference, &interleaved, &subsampled].into_iter().flat_map(move |img| {
+            shown_images.iter().flat_map(move |(_, img)| {
                 (0..w).map(move |x| {
                     let p = img.get(x, y);
                     [p[0] * scale, p[1] * scale, p[2] * scale, 1.0]
@@ -156,7 +204,8 @@ fn main() -> Result<()> {
         .collect();
     std::fs::create_dir_all(&args.out)?;
     let out = args.out.join("normal-map-interleaving.png");
-    Image::from_vec(3 * w, h, row)?.write_png(&out)?;
-    println!("wrote {} (reference | interleaved | sub-sampled)", out.display());
+    Image::from_vec(shown_images.len() as u32 * w, h, row)?.write_png(&out)?;
+    let names: Vec<_> = shown_images.iter().map(|(n, _)| *n).collect();
+    println!("wrote {} ({})", out.display(), names.join(" | "));
     Ok(())
 }

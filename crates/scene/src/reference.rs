@@ -43,6 +43,11 @@ pub fn ray_lift(p: Vec3) -> f32 {
 pub struct ReferenceConfig {
     /// Bounces after the first surface: 0 = direct light only, 1 = one indirect bounce.
     pub max_bounces: u32,
+    /// Light with fewer bounces is left out: 0 (default) keeps everything; 1 with
+    /// `max_bounces = 1` is the one-bounce indirect light alone, what instant radiosity's VPLs
+    /// add to the direct light. The random sequence does not depend on it, so for the same
+    /// seed the image with `min_bounces = 0` is the sum of those with 0..1 and 1..max bounces.
+    pub min_bounces: u32,
     /// Seed of every random decision.
     pub seed: u64,
     /// Include the GGX specular lobe (default). `false` leaves the Lambert lobe alone: the
@@ -55,10 +60,11 @@ pub struct ReferenceConfig {
 }
 
 impl Default for ReferenceConfig {
-    /// One bounce, seed 1, the full BRDF.
+    /// One bounce (all light up to it), seed 1, the full BRDF.
     fn default() -> Self {
         Self {
             max_bounces: 1,
+            min_bounces: 0,
             seed: 1,
             specular: true,
             jitter: true,
@@ -574,10 +580,15 @@ impl<'s> PathTracer<'s> {
             else {
                 break;
             };
+            // Emission seen at vertex `depth` has bounced at the `depth − 1` surfaces before
+            // it (none for the camera's own view of it); light sampled at vertex `depth`
+            // bounces there and at the `depth` surfaces before.
+            let emitted_kept = depth.saturating_sub(1) >= self.config.min_bounces;
+            let sampled_kept = depth >= self.config.min_bounces;
             match self.emitter_of[hit.mesh as usize][hit.triangle as usize] {
                 Some(e) => {
                     let e = &self.emitters[e as usize];
-                    if e.normal.dot(-dir) > 0.0 {
+                    if emitted_kept && e.normal.dot(-dir) > 0.0 {
                         let weight = match last_pdf {
                             None => 1.0,
                             Some((bsdf_pdf, from)) => {
@@ -590,13 +601,18 @@ impl<'s> PathTracer<'s> {
                 }
                 // Textured emission (not a sampled light): reached by BRDF samples only, on
                 // the side the camera or the ray sees.
-                None => sum += direct_throughput * sample.emission,
+                None if emitted_kept => sum += direct_throughput * sample.emission,
+                None => {}
             }
             if depth > self.config.max_bounces {
                 break;
             }
             let v = -dir;
-            sum += throughput * (self.punctual(&s, v) + self.area(&s, v, rng));
+            // Both estimators draw their random numbers whether or not the light is kept.
+            let light = self.punctual(&s, v) + self.area(&s, v, rng);
+            if sampled_kept {
+                sum += throughput * light;
+            }
             let l = s.sample(v, rng, self.config.specular);
             let pdf = s.pdf(l, v, self.config.specular);
             let cos = s.n.dot(l);

@@ -229,3 +229,44 @@ fn the_same_seed_gives_the_same_image_progressively() {
     other.add_samples(8);
     assert_ne!(once.image(), other.image());
 }
+
+/// `min_bounces` splits the image without changing the random sequence: with one seed, all
+/// light up to one bounce is the direct light plus the one-bounce light alone, pixel for pixel
+/// (up to the order of the f32 sums); the one-bounce part holds none of the lamp's own view.
+#[test]
+fn min_bounces_splits_direct_and_indirect_light() {
+    let scene = scene::cornell_box();
+    let camera = scene.camera_or_framed();
+    let render = |min_bounces, max_bounces| {
+        let config = ReferenceConfig {
+            min_bounces,
+            max_bounces,
+            ..Default::default()
+        };
+        let mut pt = PathTracer::new(&scene, camera, 24, 24, &scene.lights, config);
+        pt.add_samples(4);
+        pt.image()
+    };
+    let (all, direct, indirect) = (render(0, 1), render(0, 0), render(1, 1));
+    let mut brightest_direct = 0.0f32;
+    for (i, ((a, d), n)) in all.iter().zip(&direct).zip(&indirect).enumerate() {
+        let sum = *d + *n;
+        assert!(
+            (*a - sum).abs().max_element() <= 1e-4 * a.max_element().max(1.0),
+            "pixel {i}: {a} vs {d} + {n}"
+        );
+        brightest_direct = brightest_direct.max(d.max_element());
+    }
+    let (mean_all, mean_indirect) = (mean(&all), mean(&indirect));
+    assert!(
+        mean_indirect > 0.05 * mean_all,
+        "{mean_indirect} of {mean_all}"
+    );
+    // The lamp seen directly is the brightest thing in the direct image, absent from the
+    // indirect one.
+    let brightest_indirect = indirect.iter().map(|c| c.max_element()).fold(0.0, f32::max);
+    assert!(
+        brightest_indirect < 0.5 * brightest_direct,
+        "{brightest_indirect} vs {brightest_direct}"
+    );
+}
