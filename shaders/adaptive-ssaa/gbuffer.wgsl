@@ -21,15 +21,10 @@ struct TexcoordOut {
 
 @fragment
 fn fs_texcoord(in: VertexOut) -> TexcoordOut {
-    // Derivatives first, in uniform control flow.
-    let uv_dx = dpdxFine(in.uv);
-    let uv_dy = dpdyFine(in.uv);
-    let facing = facing_normal(in.normal, in.to_eye);
-    let at = SurfaceAttributes(in.uv, uv_dx, uv_dy, facing.normal, facing.back_face, in.tangent, in.color);
-    let m = evaluate_material(at);
-    if !alpha_keeps(m.alpha, dither_threshold(vec2<u32>(in.clip.xy))) {
-        discard;
-    }
+    let fragment = surface_fragment(in);
+    let m = fragment.m;
+    let uv_dx = fragment.at.uv_dx;
+    let uv_dy = fragment.at.uv_dy;
     // The coordinates of the base colour texture, else of the emissive one, through its
     // transform (`adaptive_ssaa::SsaaMaterial` reads both textures at them).
     let base = material.slots[SLOT_BASE_COLOR];

@@ -102,9 +102,15 @@ fn facing_normal(normal: vec3<f32>, to_eye: vec3<f32>) -> Facing {
 // The largest finite half float: emission beyond it is clamped, not turned to infinity.
 const HALF_MAX: f32 = 65504.0;
 
-@fragment
-fn fs_main(in: VertexOut) -> GBufferOut {
-    // Derivatives first, in uniform control flow.
+struct SurfaceFragment {
+    at: SurfaceAttributes,
+    m: MaterialSample,
+};
+
+// A fragment's attributes (coordinates with their fine derivatives, the facing normal) and
+// its evaluated material; a fragment its material's alpha does not keep is discarded. Call
+// in uniform control flow (the derivatives).
+fn surface_fragment(in: VertexOut) -> SurfaceFragment {
     let uv_dx = dpdxFine(in.uv);
     let uv_dy = dpdyFine(in.uv);
     let facing = facing_normal(in.normal, in.to_eye);
@@ -113,6 +119,12 @@ fn fs_main(in: VertexOut) -> GBufferOut {
     if !alpha_keeps(m.alpha, dither_threshold(vec2<u32>(in.clip.xy))) {
         discard;
     }
+    return SurfaceFragment(at, m);
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> GBufferOut {
+    let m = surface_fragment(in).m;
     var out: GBufferOut;
     out.linear_depth = in.view_depth;
     out.normal = pack2x16snorm(encode_octahedral_snorm(m.normal));
