@@ -154,8 +154,9 @@ fn main() -> Result<()> {
         })
         .collect();
     println!(
-        "{} with procedural normal maps, {w}×{h}, {} VPLs; {:.1} % of the covered pixels tilted > 10° by the normal map",
+        "{} with {}, {w}×{h}, {} VPLs; {:.1} % of the covered pixels tilted > 10° by the normal map",
         path.display(),
+        if args.plain { "its own materials" } else { "procedural normal maps" },
         set.vpls.len(),
         100.0 * tilted.iter().filter(|&&t| t).count() as f64
             / covered.iter().filter(|&&c| c).count().max(1) as f64
