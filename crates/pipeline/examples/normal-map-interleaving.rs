@@ -50,8 +50,8 @@ struct Args {
     spp: u32,
 }
 
-/// The indirect light (diffuse and glossy) of `scene` at `(w, h)` with `config`, and the
-/// G-buffer; with `irradiance`, the VPLs' irradiance images are replaced (sub-sampling).
+/// The indirect light (diffuse and glossy) of `scene` at `(w, h)` with `config`, the VPLs'
+/// diffuse and specular irradiance images it was composed from, and the G-buffer.
 fn indirect(
     scene: &scene::Scene,
     camera: &scene::Camera,
@@ -167,14 +167,16 @@ fn main() -> Result<()> {
     let scale = 0.9 / lum[lum.len() * 99 / 100].max(1e-6);
     let shown =
         |img: &Image<[f32; 4]>| img.map(|p| [p[0] * scale, p[1] * scale, p[2] * scale, 1.0]);
-    let mut references = vec![("non-interleaved", &reference)];
-    references.extend(truth.as_ref().map(|t| ("path tracer", t)));
-    let mut shown_images = vec![("non-interleaved", &reference)];
-    for (name, image) in [
+    // Left to right in the picture: the path tracer (when traced), then the three VPL images.
+    let mut shown_images: Vec<(&str, &Image<[f32; 4]>)> =
+        truth.iter().map(|t| ("path tracer", t)).collect();
+    shown_images.extend([
         ("non-interleaved", &reference),
         ("interleaved 4×4 + blur", &interleaved),
         ("sub-sampled 4×4 + bilinear", &subsampled),
-    ] {
+    ]);
+    let references = shown_images[..shown_images.len() - 2].to_vec();
+    for &(name, image) in &shown_images[references.len() - 1..] {
         for &(against, truth) in &references {
             if std::ptr::eq(truth, image) {
                 continue;
@@ -186,22 +188,10 @@ fn main() -> Result<()> {
                 bench::quality(&shown(truth), &shown(image)).flip_mean
             );
         }
-        if !std::ptr::eq(image, &reference) {
-            shown_images.push((name, image));
-        }
     }
-    if let Some(t) = &truth {
-        shown_images.insert(0, ("path tracer", t));
-    }
+    let shown_all: Vec<_> = shown_images.iter().map(|(_, img)| shown(img)).collect();
     let row: Vec<[f32; 4]> = (0..h)
-        .flat_map(|y| {
-            shown_images.iter().flat_map(move |(_, img)| {
-                (0..w).map(move |x| {
-                    let p = img.get(x, y);
-                    [p[0] * scale, p[1] * scale, p[2] * scale, 1.0]
-                })
-            })
-        })
+        .flat_map(|y| shown_all.iter().flat_map(move |img| (0..w).map(move |x| img.get(x, y))))
         .collect();
     std::fs::create_dir_all(&args.out)?;
     let out = args.out.join("normal-map-interleaving.png");
