@@ -39,6 +39,7 @@ fn plane_scene() -> Scene {
         meshes: vec![floor, ceiling],
         materials: vec![material("floor", 0.8, 1.0), material("ceiling", 0.7, 1.0)],
         textures: Vec::new(),
+        rig: None,
         camera: Some(Camera {
             eye: Vec3::new(0.0, 0.9, 0.0),
             target: Vec3::ZERO,

@@ -12,6 +12,7 @@
 //! # Ok::<(), scene::SceneError>(())
 //! ```
 
+pub mod animation;
 mod builtin;
 mod bvh;
 mod camera;
@@ -406,6 +407,9 @@ pub struct Scene {
     pub camera: Option<Camera>,
     /// Lights from the file or the built-in scene.
     pub lights: Vec<Light>,
+    /// What moves: glTF skins, morph targets and animations (`None` for a still scene). Its
+    /// meshes are [`Scene::meshes`] at the rest pose.
+    pub rig: Option<animation::Rig>,
 }
 
 impl Scene {
@@ -486,6 +490,9 @@ impl Scene {
                     problem: format!("material {} does not exist", m.material),
                 });
             }
+        }
+        if let Some(rig) = &self.rig {
+            rig.validate(&self.meshes)?;
         }
         let b = self.bounds();
         let reach = b.min.abs().max(b.max.abs()).max_element();

@@ -66,6 +66,46 @@ pub const INDICES: Allowed = Allowed {
     normalized: false,
 };
 
+/// JOINTS_0: VEC4 of UNSIGNED_BYTE or UNSIGNED_SHORT, not normalized.
+pub const JOINTS: Allowed = Allowed {
+    dimensions: Dimensions::Vec4,
+    types: &[DataType::U8, DataType::U16],
+    normalized: false,
+};
+
+/// WEIGHTS_0: VEC4 of FLOAT, normalized UNSIGNED_BYTE or normalized UNSIGNED_SHORT.
+pub const WEIGHTS: Allowed = Allowed {
+    dimensions: Dimensions::Vec4,
+    ..TEXCOORD
+};
+
+/// Inverse bind matrices: MAT4 of FLOAT.
+pub const MAT4_F32: Allowed = Allowed {
+    dimensions: Dimensions::Mat4,
+    types: &[DataType::F32],
+    normalized: false,
+};
+
+/// Animation key times and morph weights: SCALAR of FLOAT.
+pub const SCALAR_F32: Allowed = Allowed {
+    dimensions: Dimensions::Scalar,
+    types: &[DataType::F32],
+    normalized: false,
+};
+
+/// Animated rotations: VEC4 of FLOAT or of normalized (UNSIGNED_)BYTE/SHORT.
+pub const ROTATION: Allowed = Allowed {
+    dimensions: Dimensions::Vec4,
+    types: &[
+        DataType::F32,
+        DataType::I8,
+        DataType::U8,
+        DataType::I16,
+        DataType::U16,
+    ],
+    normalized: true,
+};
+
 /// Every component of `accessor` (element after element) as `f64` — exact for every integer
 /// type — after checking it against `allowed` and `buffers`. `what` names the attribute in
 /// errors.

@@ -3,10 +3,11 @@
 
 use std::path::Path;
 
-use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 
-use super::accessor;
 use super::folder::{SceneFolder, UNDECLARED_LIMIT};
+use super::{accessor, rig};
+use crate::animation::{Deformer, Joints, NodeInstance, Rig, Trs};
 use crate::{
     AlphaMode, Camera, Light, Material, Mesh, Sampler, Scene, SceneErrorKind, TextureRef,
     UvTransform, Wrap, light::default_radius,
@@ -82,10 +83,22 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
     };
     // Each stack entry carries its ancestors, so a node that is its own ancestor (a cycle,
     // which glTF forbids) is an error instead of an endless walk; instances are counted, so a
-    // node reused on many levels cannot multiply the scene without bound.
-    let mut stack: Vec<(gltf::Node, Mat4, Vec<usize>)> = gscene
+    // node reused on many levels cannot multiply the scene without bound. With a rig, each
+    // entry also carries its parent's node instance and whether a channel moves it or an
+    // ancestor.
+    let rigged = rig::has_rig(&doc);
+    let moved = rig::moved_nodes(&doc);
+    let mut nodes: Vec<NodeInstance> = Vec::new();
+    let mut pending: Vec<Deformer> = Vec::new();
+    let mut stack: Vec<Visit> = gscene
         .nodes()
-        .map(|n| (n, Mat4::IDENTITY, Vec::new()))
+        .map(|node| Visit {
+            node,
+            parent: Mat4::IDENTITY,
+            ancestors: Vec::new(),
+            parent_instance: None,
+            moving: false,
+        })
         .collect();
     let total = doc
         .meshes()
@@ -93,7 +106,14 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
         .sum::<usize>()
         .max(1);
     let mut instances = 0usize;
-    while let Some((node, parent, mut ancestors)) = stack.pop() {
+    while let Some(Visit {
+        node,
+        parent,
+        mut ancestors,
+        parent_instance,
+        moving,
+    }) = stack.pop()
+    {
         if ancestors.contains(&node.index()) {
             return Err(SceneErrorKind::Gltf(format!(
                 "node {} is its own ancestor (the node hierarchy has a cycle)",
@@ -107,22 +127,61 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
             )));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        let moving = rigged && (moving || moved.contains(&node.index()));
+        let instance = rigged.then(|| {
+            nodes.push(node_instance(&node, parent_instance));
+            nodes.len() as u32 - 1
+        });
         ancestors.push(node.index());
-        stack.extend(node.children().map(|c| (c, world, ancestors.clone())));
+        stack.extend(node.children().map(|c| Visit {
+            node: c,
+            parent: world,
+            ancestors: ancestors.clone(),
+            parent_instance: instance,
+            moving,
+        }));
         if let Some(mesh) = node.mesh() {
             for prim in mesh.primitives() {
                 if prim.mode() != gltf::mesh::Mode::Triangles {
                     log::warn!("skipping non-triangle primitive of mesh {:?}", mesh.name());
                     continue;
                 }
-                let m = primitive(
-                    &prim,
-                    &buffers,
-                    world,
-                    mesh.name().unwrap_or("mesh"),
-                    default_material,
-                )?;
-                scene.meshes.push(super::complete(m));
+                let name = mesh.name().unwrap_or("mesh");
+                let skin = node.skin();
+                let morphed = prim.morph_targets().next().is_some();
+                match instance.filter(|_| moving || morphed || skin.is_some()) {
+                    Some(instance) => {
+                        let mut object = super::complete(primitive(
+                            &prim,
+                            &buffers,
+                            Mat4::IDENTITY,
+                            name,
+                            default_material,
+                        )?);
+                        // Tangents of normal maps are made in object space, so they move too.
+                        if let Some(normal) = scene
+                            .materials
+                            .get(object.material as usize)
+                            .and_then(|m| m.normal_texture)
+                            && object.tangents.is_empty()
+                        {
+                            object.generate_tangents(normal.uv_set);
+                        }
+                        pending.push(deformer(
+                            &prim,
+                            &buffers,
+                            &object,
+                            scene.meshes.len() as u32,
+                            instance,
+                            skin.as_ref(),
+                        )?);
+                        scene.meshes.push(object);
+                    }
+                    None => {
+                        let m = primitive(&prim, &buffers, world, name, default_material)?;
+                        scene.meshes.push(super::complete(m));
+                    }
+                }
                 progress(scene.meshes.len(), total);
             }
         }
@@ -146,12 +205,147 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
             scene.lights.push(convert_light(&light, world));
         }
     }
+    if rigged {
+        scene.rig = Some(finish_rig(
+            &doc,
+            &buffers,
+            nodes,
+            pending,
+            &mut scene.meshes,
+        )?);
+    }
     if let Some(cam) = &mut scene.camera
         && cam.far <= cam.near
     {
         cam.far = cam.near * 1e4;
     }
     Ok(scene)
+}
+
+/// A node to visit: its parent's world matrix, its ancestors' glTF indices, its parent's
+/// node instance (with a rig) and whether a channel moves an ancestor.
+struct Visit<'a> {
+    node: gltf::Node<'a>,
+    parent: Mat4,
+    ancestors: Vec<usize>,
+    parent_instance: Option<u32>,
+    moving: bool,
+}
+
+/// `node` placed under `parent`: its rest TRS (and matrix, when the file gave one) and morph
+/// weights (the node's, else its mesh's, else zeros for its targets).
+fn node_instance(node: &gltf::Node, parent: Option<u32>) -> NodeInstance {
+    let (t, r, s) = node.transform().decomposed();
+    let targets = node
+        .mesh()
+        .and_then(|m| m.primitives().next())
+        .map_or(0, |p| p.morph_targets().count());
+    let weights = node
+        .weights()
+        .or_else(|| node.mesh().and_then(|m| m.weights()))
+        .map_or_else(|| vec![0.0; targets], <[f32]>::to_vec);
+    NodeInstance {
+        node: node.index() as u32,
+        parent,
+        rest: Trs {
+            translation: Vec3::from(t),
+            rotation: Quat::from_array(r).normalize(),
+            scale: Vec3::from(s),
+        },
+        matrix: match node.transform() {
+            gltf::scene::Transform::Matrix { matrix } => Some(Mat4::from_cols_array_2d(&matrix)),
+            gltf::scene::Transform::Decomposed { .. } => None,
+        },
+        weights,
+    }
+}
+
+/// What moves `object` (primitive `prim` as mesh `mesh`, placed by node instance `instance`):
+/// `skin`'s joints with the vertices' `JOINTS_0`/`WEIGHTS_0`, else the node itself; and the
+/// primitive's morph targets.
+fn deformer(
+    prim: &gltf::Primitive,
+    buffers: &[Vec<u8>],
+    object: &Mesh,
+    mesh: u32,
+    instance: u32,
+    skin: Option<&gltf::Skin>,
+) -> Result<Deformer, SceneErrorKind> {
+    let n = object.positions.len();
+    let (joints, joint_indices, weights) = match skin {
+        Some(s) => {
+            let count = s.joints().count();
+            let (j, w) = rig::joints_and_weights(prim, buffers, &object.name, n, count)?;
+            (Joints::Skin(s.index() as u32), j, w)
+        }
+        None => (
+            Joints::Node(instance),
+            vec![[0; 4]; n],
+            vec![[1.0, 0.0, 0.0, 0.0]; n],
+        ),
+    };
+    Ok(Deformer {
+        mesh,
+        node: instance,
+        joints,
+        positions: object.positions.clone(),
+        normals: object.normals.clone(),
+        tangents: object.tangents.clone(),
+        joint_indices,
+        weights,
+        targets: rig::morph_targets(prim, buffers, &object.name, n)?,
+    })
+}
+
+/// The rig of the file's node instances and `deformers`, with its skins and clips; each
+/// deformed mesh is set to the rest pose (no clip: the nodes' own transforms and weights).
+fn finish_rig(
+    doc: &gltf::Document,
+    buffers: &[Vec<u8>],
+    nodes: Vec<NodeInstance>,
+    deformers: Vec<Deformer>,
+    meshes: &mut [Mesh],
+) -> Result<Rig, SceneErrorKind> {
+    let first_instance = |node: usize| {
+        nodes
+            .iter()
+            .position(|n| n.node as usize == node)
+            .map(|i| i as u32)
+    };
+    let skins = doc
+        .skins()
+        .map(|s| rig::skin(&s, buffers, &first_instance))
+        .collect::<Result<Vec<_>, _>>()?;
+    let targets = |node: usize| {
+        doc.nodes()
+            .nth(node)
+            .and_then(|n| n.mesh())
+            .and_then(|m| m.primitives().next())
+            .map_or(0, |p| p.morph_targets().count())
+    };
+    let clips = rig::clips(doc, buffers, &targets)?;
+    let rig = Rig {
+        nodes,
+        clips,
+        skins,
+        deformers,
+    };
+    let rest = rig.pose(None, 0.0);
+    for d in &rig.deformers {
+        let posed = rig.deform(d, &rest);
+        let mesh = &mut meshes[d.mesh as usize];
+        mesh.positions = posed.positions;
+        mesh.normals = posed.normals;
+        mesh.tangents = posed.tangents;
+        if let Joints::Node(n) = d.joints
+            && rest.world[n as usize].determinant() < 0.0
+        {
+            for t in mesh.indices.chunks_exact_mut(3) {
+                t.swap(1, 2);
+            }
+        }
+    }
+    Ok(rig)
 }
 
 fn primitive(

@@ -5,6 +5,7 @@ mod folder;
 pub mod gltf;
 pub mod obj;
 pub mod ply;
+mod rig;
 
 use std::path::Path;
 
