@@ -349,6 +349,15 @@ impl Workgroups {
     pub fn covering(width: u32, height: u32, size: u32) -> Self {
         Self::Direct([width.div_ceil(size), height.div_ceil(size), 1])
     }
+
+    /// Enough `size`-wide workgroups for `n` threads, in rows of at most 32 768 (under
+    /// `Limits::default().max_compute_workgroups_per_dimension`): thread
+    /// `gid.x + gid.y · num_workgroups.x · size` (the kernel skips those ≥ `n`).
+    pub fn linear(n: u32, size: u32) -> Self {
+        const ROW: u32 = 32_768;
+        let g = n.div_ceil(size).max(1);
+        Self::Direct([g.min(ROW), g.div_ceil(ROW), 1])
+    }
 }
 
 /// One dispatch: a pipeline, its bind groups (groups 0, 1, …) and its workgroups.

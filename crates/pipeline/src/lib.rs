@@ -23,6 +23,7 @@ pub mod cpu;
 pub mod gpu;
 pub mod output;
 pub mod progressive;
+pub mod skinning;
 
 use gbuffer::Image;
 use glam::Vec3;
@@ -41,6 +42,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "composition.wgsl",
         "accumulate.wgsl",
         "output.wgsl",
+        "skinning.wgsl",
     ],
 );
 
@@ -81,6 +83,9 @@ pub enum RenderError {
     /// The light accumulation failed (tile size, light buffer, GPU).
     #[error(transparent)]
     Shading(tiled_shading::ShadingError),
+    /// The animation cannot be bound (a rig that does not fit the uploaded scene).
+    #[error("animation: {0}")]
+    Animation(String),
     /// VPLs were given to a renderer without an indirect stage.
     #[error("the renderer has no indirect light: set one (set_indirect) before its VPLs")]
     NoIndirect,

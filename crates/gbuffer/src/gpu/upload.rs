@@ -55,6 +55,18 @@ impl GpuScene {
         }
     }
 
+    /// The vertex buffers: positions (`[f32; 3]` a vertex) and [`GpuAttributes`]. A scene
+    /// with a [`scene::animation::Rig`] has them with `STORAGE | COPY_SRC` usage too, for the
+    /// skinning kernel that moves them.
+    pub fn vertex_buffers(&self) -> [&wgpu::Buffer; 2] {
+        [&self.positions, &self.attributes]
+    }
+
+    /// The first vertex of mesh `mesh` (its index in [`Scene::meshes`]) in the vertex buffers.
+    pub fn base_vertex(&self, mesh: usize) -> Option<u32> {
+        self.draws.get(mesh).map(|d| d.base_vertex as u32)
+    }
+
     /// Uploads `scene` for `pass` with the default [`TextureOptions`].
     pub fn upload(
         device: &wgpu::Device,
@@ -101,9 +113,14 @@ impl GpuScene {
                 color: m.colors.get(i).map_or([1.0; 4], |c| c.to_array()),
             }));
         }
-        let vertex_buffer = |label, bytes: &[u8]| {
-            transfer::buffer_init(device, label, bytes, wgpu::BufferUsages::VERTEX)
+        // A scene that moves is written by the skinning kernel (and read back by its tests).
+        let usage = if scene.rig.is_some() {
+            wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC
+        } else {
+            wgpu::BufferUsages::VERTEX
         };
+        let vertex_buffer =
+            |label, bytes: &[u8]| transfer::buffer_init(device, label, bytes, usage);
         let positions = vertex_buffer("scene positions", bytemuck::cast_slice(&positions))?;
         let attributes = vertex_buffer("scene attributes", bytemuck::cast_slice(&attributes))?;
         let indices = transfer::buffer_init(
