@@ -14,6 +14,7 @@ use scene::{Camera, Light, Scene};
 use crate::output::{self, BoundOutput, OutputPass, OutputTransform};
 use wgpu::util::DeviceExt;
 
+use crate::skinning::{BoundSkinning, Skinning};
 use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
 use instant_radiosity::{
     IndirectConfig,
@@ -22,6 +23,7 @@ use instant_radiosity::{
     shadows::{ShadowConfig, VplShadowMaps, VplShadows},
     vpl::VplSet,
 };
+use scene::animation::{Pose, Rig};
 use tiled_shading::gpu::shadows::{
     AtlasBindings, GpuRays, GpuShadowMaps, ShadowInputs, ShadowMapPass,
 };
@@ -127,8 +129,16 @@ pub struct GpuRenderer {
     ray_shadows: Option<GpuRays>,
     near_field: Option<NearFieldStage>,
     output: Option<OutputStage>,
+    animation: Option<Animation>,
     bounds: scene::Aabb,
     timer: PassTimer,
+}
+
+/// The skinning stage as the renderer holds it ([`GpuRenderer::set_animation`]): the rig and
+/// its kernel bound to the uploaded scene.
+struct Animation {
+    rig: Rig,
+    bound: BoundSkinning,
 }
 
 /// The output transform as the renderer holds it ([`GpuRenderer::set_output`]): its kernels,
@@ -305,6 +315,7 @@ impl GpuRenderer {
             ray_shadows: None,
             near_field: None,
             output: None,
+            animation: None,
             bounds: scene.bounds(),
             timer: PassTimer::new(device, 32),
         })
@@ -661,6 +672,51 @@ impl GpuRenderer {
         Ok(self.shading_bound.set_lights(queue, &self.lights)?)
     }
 
+    /// Moves the scene's meshes by `rig` (`Some`: the rig of the scene this renderer was made
+    /// from; the skinning runs first in every frame, at the rest pose until
+    /// [`GpuRenderer::set_pose`]), or stops moving them (`None`: they keep the last pose).
+    /// The shadow maps and the G-buffer see the moved meshes; the structures built on the CPU
+    /// from the scene at set-up (ManyLoD surfels, ray-shadow and near-field BVHs) keep the
+    /// rest pose.
+    pub fn set_animation(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        rig: Option<&Rig>,
+    ) -> Result<(), RenderError> {
+        self.animation = match rig {
+            Some(rig) => {
+                let bound = Skinning::new(device)?.bind(device, rig, &self.scene)?;
+                bound.set_pose(queue, rig, &rig.pose(None, 0.0));
+                Some(Animation {
+                    rig: rig.clone(),
+                    bound,
+                })
+            }
+            None => None,
+        };
+        Ok(())
+    }
+
+    /// Poses the animated meshes for the following frames (a pose of the rig given to
+    /// [`GpuRenderer::set_animation`]; only joint matrices and morph weights are written).
+    pub fn set_pose(&self, queue: &wgpu::Queue, pose: &Pose) -> Result<(), RenderError> {
+        let Some(a) = &self.animation else {
+            return Err(RenderError::Animation(
+                "the renderer has no animation: set one (set_animation) before a pose".into(),
+            ));
+        };
+        if pose.world.len() != a.rig.nodes.len() {
+            return Err(RenderError::Animation(format!(
+                "a pose of {} nodes for a rig of {}",
+                pose.world.len(),
+                a.rig.nodes.len()
+            )));
+        }
+        a.bound.set_pose(queue, &a.rig, pose);
+        Ok(())
+    }
+
     /// Sets the camera of the following frames (validated: finite, positive field of view).
     pub fn set_camera(&mut self, queue: &wgpu::Queue, camera: &Camera) -> Result<(), RenderError> {
         gbuffer::validate_camera(camera)?;
@@ -885,6 +941,9 @@ impl GpuRenderer {
     /// back, so frames can be encoded back to back.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) {
         self.timer.reset();
+        if let Some(a) = &self.animation {
+            a.bound.encode(encoder, Some(&self.timer));
+        }
         // The z-prepass path: 1.3× faster than the single MRT pass on Sponza on an H100
         // (docs/bench), and the same G-buffer.
         self.gbuffer_pass.encode_with_prepass(
@@ -933,6 +992,16 @@ impl GpuRenderer {
         self.timer.resolve(encoder);
     }
 
+    /// The GPU time and start (from the frame's first pass) of each pass of the last encoded
+    /// frame (waits for it; empty without timestamp queries).
+    pub fn pass_times(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<::gpu::PassTime>, RenderError> {
+        Ok(self.timer.read(device, queue)?)
+    }
+
     /// The GPU time of each pass of the last encoded frame (waits for it; empty without
     /// timestamp queries).
     pub fn timings(
@@ -941,8 +1010,7 @@ impl GpuRenderer {
         queue: &wgpu::Queue,
     ) -> Result<Vec<PassTiming>, RenderError> {
         Ok(self
-            .timer
-            .read(device, queue)?
+            .pass_times(device, queue)?
             .into_iter()
             .map(|t| PassTiming {
                 name: t.name,

@@ -23,6 +23,7 @@ pub mod cpu;
 pub mod gpu;
 pub mod output;
 pub mod progressive;
+pub mod sequence;
 pub mod skinning;
 
 use gbuffer::Image;
