@@ -180,12 +180,9 @@ impl Timeline {
         let mut row: Vec<f64> = columns
             .iter()
             .map(|c| {
-                frame
-                    .passes
-                    .iter()
-                    .filter(|p| &p.name == c)
-                    .map(|p| p.ms)
-                    .sum()
+                // A fold from +0: an empty f64 `sum` is −0, which prints as "-0".
+                let named = frame.passes.iter().filter(|p| &p.name == c);
+                named.fold(0.0, |a, p| a + p.ms)
             })
             .collect();
         row.push(frame.passes.iter().fold(0.0, |a, p| a + p.ms));
