@@ -15,7 +15,7 @@ use instant_radiosity::{
     vpl,
 };
 use interleave::{Block, Blur, BlurVariant, Pattern, SplitVariant};
-use pipeline::{DEFAULT_AMBIENT, PassTiming, Rendered};
+use pipeline::{DEFAULT_AMBIENT, PassTiming, Rendered, sequence};
 use scene::{Light, Scene};
 
 /// Deferred shading of point, spot, hemispherical and directional lights, with optional
@@ -213,6 +213,28 @@ struct Args {
     /// With --subdiv-pixels: colour every triangle by its patch's level (1 blue … 6 red).
     #[arg(long, requires = "subdiv_pixels")]
     subdiv_show_levels: bool,
+    /// Render a sequence of N frames on a fixed-step clock (frame k at k / --fps seconds),
+    /// playing the scene's animation (glTF skins, morph targets, node animation): numbered
+    /// PNGs in OUT/frames, timings.csv (a row per frame, a column per pass) and trace.json
+    /// (the GPU passes for chrome://tracing or ui.perfetto.dev).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    frames: Option<u32>,
+    /// With --frames: frames per second of the clock.
+    #[arg(long, default_value_t = 24.0, requires = "frames", value_parser = parse_fps)]
+    fps: f32,
+    /// The animation played: a clip's name or index (default: the file's first).
+    #[arg(long)]
+    clip: Option<String>,
+    /// Seconds into the animation of a single frame (loops over the clip).
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.0, conflicts_with = "frames", value_parser = parse_time)]
+    time: f32,
+    /// With --frames: turn the camera about the vertical axis through its target by DEG a
+    /// second (counter-clockwise seen from above).
+    #[arg(long, value_name = "DEG", requires = "frames", allow_hyphen_values = true, value_parser = parse_orbit)]
+    orbit: Option<f32>,
+    /// With --frames: also write each frame's linear radiance as EXR.
+    #[arg(long, requires = "frames")]
+    frame_exr: bool,
 }
 
 #[derive(clap::Subcommand, Debug)]
@@ -492,8 +514,11 @@ fn render_ssaa(
     ambient: Vec3,
     m: u32,
 ) -> Result<()> {
-    if args.cpu || args.vpls.is_some() {
-        bail!("--ssaa runs on the GPU only and shades direct light only (no --cpu, no --vpls)");
+    if args.cpu || args.vpls.is_some() || args.frames.is_some() {
+        bail!(
+            "--ssaa runs on the GPU only, for one frame of direct light (no --cpu, --vpls or \
+             --frames yet)"
+        );
     }
     let gpu = gpu::Gpu::from_env().context("--ssaa needs a GPU adapter")?;
     let config = adaptive_ssaa::SsaaConfig {
@@ -628,6 +653,30 @@ fn parse_spp(s: &str) -> Result<u32, String> {
     match s.trim().parse::<u32>() {
         Ok(n) if (1..=65536).contains(&n) => Ok(n),
         _ => Err("expected samples per pixel from 1 to 65536".into()),
+    }
+}
+
+fn parse_fps(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(f) if f > 0.0 && f <= sequence::MAX_FPS => Ok(f),
+        _ => Err(format!(
+            "expected frames per second above 0, at most {}",
+            sequence::MAX_FPS
+        )),
+    }
+}
+
+fn parse_time(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(t) if t.is_finite() && t >= 0.0 => Ok(t),
+        _ => Err("expected a time of 0 seconds or more".into()),
+    }
+}
+
+fn parse_orbit(s: &str) -> Result<f32, String> {
+    match s.trim().parse::<f32>() {
+        Ok(d) if d.is_finite() && d.abs() <= 36_000.0 => Ok(d),
+        _ => Err("expected degrees a second from -36000 to 36000".into()),
     }
 }
 
@@ -803,7 +852,17 @@ fn run() -> Result<()> {
     };
     gbuffer::validate_camera(&camera).context(camera_source)?;
     if let Some(level) = args.subdiv {
+        if scene.rig.take().is_some() {
+            eprintln!("note: --subdiv is evaluated once at load: the scene's animation is dropped");
+        }
         subdivide_scene(&mut scene, &args, level, &camera)?;
+    }
+    let clip = animation_clip(&args, &scene)?;
+    // The scene at the single frame's time, or at the sequence's start: what the structures
+    // built on the CPU (VPLs, BVHs, surfels) see.
+    if let Some(rig) = &scene.rig {
+        let t = clip.map_or(0.0, |c| sequence::looped(args.time, rig.clips[c].duration));
+        rig.apply(&rig.pose(clip, t), &mut scene.meshes);
     }
     let scene = scene;
     let (mut lights, emissive_photons, lit_by) = match args.lights {
@@ -826,21 +885,15 @@ fn run() -> Result<()> {
         Some(count) => {
             let config = indirect_config(&args, &scene)?;
             let subsets = config.subsets();
-            let count = vpl::per_subset(count, subsets) as usize * subsets as usize;
-            let bvh = scene::Bvh::build(&scene);
-            let set = vpl::generate(
-                &scene,
-                &bvh,
-                &photon_lights,
-                &vpl::VplConfig {
-                    count,
-                    subsets,
-                    seed: args.seed,
-                    emissive: emissive_photons,
-                    bounces: args.vpl_bounces,
-                },
-            )?;
-            Some((config, set))
+            let vpls = vpl::VplConfig {
+                count: vpl::per_subset(count, subsets) as usize * subsets as usize,
+                subsets,
+                seed: args.seed,
+                emissive: emissive_photons,
+                bounces: args.vpl_bounces,
+            };
+            let set = vpl::generate(&scene, &scene::Bvh::build(&scene), &photon_lights, &vpls)?;
+            Some((config, set, vpls))
         }
         None => None,
     };
@@ -859,7 +912,6 @@ fn run() -> Result<()> {
     } else {
         lights.clone()
     };
-    let indirect_ref = indirect.as_ref().map(|(c, s)| (c, s));
     let all_direct = direct_lights.len();
     let direct_lights: Vec<Light> = if args.frustum_cull {
         let aspect = width as f32 / height as f32;
@@ -943,56 +995,44 @@ fn run() -> Result<()> {
             }
         }
     };
-    let output = output_transform(&args)?;
-    let (device, rendered, display, stages, gbuffer): (
-        String,
-        Rendered,
-        gbuffer::Image<[f32; 4]>,
-        Option<IndirectStages>,
-        _,
-    ) = match &gpu {
+    let setup = Setup {
+        scene: &scene,
+        camera,
+        lights: direct_lights,
+        photon_lights,
+        all_direct,
+        lit_by,
+        shading,
+        indirect,
+        ambient,
+        output: output_transform(&args)?,
+        shadow_config,
+        vpl_shadows,
+        clip,
+    };
+    if setup.scene.rig.is_some()
+        && args.frames.is_some()
+        && (setup
+            .vpl_shadows
+            .is_some_and(|m| m != VplShadows::Rasterised)
+            || args.manylod_shadows.is_some()
+            || args.ray_shadows
+            || args.near_field)
+    {
+        eprintln!(
+            "note: ManyLoD/ISM surfels and the ray BVHs are built once: the moving meshes cast \
+             the VPL shadows, ManyLoD and ray shadows of the first frame's pose"
+        );
+    }
+    let (device, rendered, display, stages, gbuffer) = match &gpu {
         Some(gpu) => {
             let (d, q) = (&gpu.device, &gpu.queue);
-            let mut renderer = pipeline::gpu::GpuRenderer::new_with(
-                d,
-                q,
-                &scene,
-                &direct_lights,
-                (width, height),
-                &texture_options(&args),
-            )?;
-            renderer.set_output(d, Some(output))?;
-            renderer.set_shading(d, q, &shading)?;
-            renderer.set_shadows(d, q, shadow_config.as_ref())?;
-            if let Some(tile) = args.manylod_shadows {
-                let config = ShadowConfig {
-                    tile,
-                    ..ShadowConfig::default()
-                };
-                renderer.set_manylod_shadows(d, q, &scene, Some(&config))?;
+            let mut renderer = gpu_renderer(&args, gpu, &setup)?;
+            if let Some(frames) = args.frames {
+                print_setup(&args, &setup, &format!("GPU {}", gpu.describe()));
+                return gpu_sequence(&args, gpu, &mut renderer, &setup, frames);
             }
-            if args.ray_shadows {
-                renderer.set_ray_shadows(d, q, Some(&scene))?;
-            }
-            if let Some((config, set)) = indirect_ref {
-                match vpl_shadows {
-                    Some(mode) => renderer.set_vpl_shadows(
-                        d,
-                        &scene,
-                        mode,
-                        &ShadowConfig {
-                            epsilon: args.vpl_shadow_epsilon,
-                            ..ShadowConfig::for_mode(mode)
-                        },
-                        config,
-                        set,
-                    )?,
-                    None => renderer.set_indirect(d, config, set)?,
-                }
-                if args.near_field {
-                    renderer.set_near_field(d, Some(&scene))?;
-                }
-            }
+            let (camera, ambient) = (setup.camera, setup.ambient);
             renderer.render(d, q, &camera, ambient)?; // warm-up: first use of pipelines and caches
             let rendered = renderer.render(d, q, &camera, ambient)?;
             let display = pipeline::gpu::read_display(
@@ -1011,7 +1051,7 @@ fn run() -> Result<()> {
             if args.heatmap {
                 match renderer.light_counts(d, q)? {
                     Some(counts) => {
-                        write_heatmap(&args, &shading, width, height, &counts)?;
+                        write_heatmap(&args, &setup.shading, width, height, &counts)?;
                     }
                     None => eprintln!("no heatmap: brute force keeps no per-tile lists"),
                 }
@@ -1047,40 +1087,28 @@ fn run() -> Result<()> {
                     "--size {width}x{height}: the CPU reference renders at most {MAX_CPU_PIXELS} pixels"
                 );
             }
-            let mut inputs = pipeline::cpu::FrameInputs::new(
-                &scene,
-                &camera,
-                &direct_lights,
-                (width, height),
-                ambient,
-            )
-            .with_textures(texture_options(&args));
-            if let Some(config) = shadow_config {
-                inputs = inputs.with_shadows(config);
+            let device = "CPU (reference path, rayon)";
+            if let Some(frames) = args.frames {
+                print_setup(&args, &setup, device);
+                return cpu_sequence(&args, &setup, frames);
             }
-            let (rendered, stages) =
-                pipeline::cpu::render_indirect(&inputs, &shading, indirect_ref)?;
+            let (rendered, stages) = cpu_frame(&args, &setup, &scene, &setup.camera, None)?;
             if args.heatmap {
-                let gb = gbuffer::cpu::rasterize(&scene, &camera, width, height)?.gbuffer;
-                let frame = gbuffer::Frame::new(&camera, width, height);
-                let lights = pipeline::validate_lights(&direct_lights)?;
+                let camera = &setup.camera;
+                let gb = gbuffer::cpu::rasterize(&scene, camera, width, height)?.gbuffer;
+                let frame = gbuffer::Frame::new(camera, width, height);
+                let lights = pipeline::validate_lights(&setup.lights)?;
                 let shaded =
-                    tiled_shading::cpu::shade(&gb, &frame, &camera, &lights, &shading, None)?;
-                write_heatmap(&args, &shading, width, height, &shaded.counts)?;
+                    tiled_shading::cpu::shade(&gb, &frame, camera, &lights, &setup.shading, None)?;
+                write_heatmap(&args, &setup.shading, width, height, &shaded.counts)?;
             }
             let gbuffer = args
                 .dump_stages
-                .then(|| gbuffer::cpu::rasterize(&scene, &camera, width, height))
+                .then(|| gbuffer::cpu::rasterize(&scene, &setup.camera, width, height))
                 .transpose()?
                 .map(|r| r.gbuffer);
-            let display = output.apply(&rendered.image);
-            (
-                "CPU (reference path, rayon)".into(),
-                rendered,
-                display,
-                stages,
-                gbuffer,
-            )
+            let display = setup.output.apply(&rendered.image);
+            (device.to_owned(), rendered, display, stages, gbuffer)
         }
     };
 
@@ -1093,13 +1121,363 @@ fn run() -> Result<()> {
     if let Some(gb) = &gbuffer {
         dump_stages(&args.out, gb, stages.as_ref())?;
     }
+    print_setup(&args, &setup, &device);
+    println!("wrote:   {} and {}", png.display(), exr.display());
+    println!();
+    print_table(&rendered.timings, f64::from(width) * f64::from(height));
+    if rendered.timings.is_empty() {
+        println!("(this GPU has no timestamp queries: no pass times)");
+    }
+    Ok(())
+}
 
+/// What a render is made of, after the arguments were read: the scene (at the first frame's
+/// pose), camera, direct lights, indirect light, output transform and shadows.
+struct Setup<'a> {
+    scene: &'a Scene,
+    camera: scene::Camera,
+    /// The direct lights the frame shades (after --indirect-only and --frustum-cull).
+    lights: Vec<Light>,
+    /// The lights VPLs are traced from.
+    photon_lights: Vec<Light>,
+    /// Direct lights before frustum culling.
+    all_direct: usize,
+    lit_by: &'static str,
+    shading: pipeline::ShadingConfig,
+    indirect: Option<(IndirectConfig, vpl::VplSet, vpl::VplConfig)>,
+    ambient: Vec3,
+    output: pipeline::output::OutputTransform,
+    shadow_config: Option<tiled_shading::shadows::ShadowMapConfig>,
+    vpl_shadows: Option<VplShadows>,
+    /// The animation clip played, if the scene has one.
+    clip: Option<usize>,
+}
+
+/// `--clip`: the clip of the scene's rig by name or index (the first by default), `None` for a
+/// still scene.
+fn animation_clip(args: &Args, scene: &Scene) -> Result<Option<usize>> {
+    let Some(rig) = scene.rig.as_ref().filter(|r| !r.clips.is_empty()) else {
+        if let Some(c) = &args.clip {
+            bail!("--clip {c:?}: the scene has no animation");
+        }
+        return Ok(None);
+    };
+    let Some(wanted) = &args.clip else {
+        return Ok(Some(0));
+    };
+    let names: Vec<&str> = rig.clips.iter().map(|c| c.name.as_str()).collect();
+    names
+        .iter()
+        .position(|n| n == wanted)
+        .or_else(|| wanted.parse::<usize>().ok().filter(|&i| i < names.len()))
+        .map(Some)
+        .with_context(|| {
+            format!(
+                "--clip {wanted:?}: the scene's clips are {names:?} (or 0 .. {})",
+                names.len() - 1
+            )
+        })
+}
+
+/// The GPU renderer with every stage the arguments ask for.
+fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::gpu::GpuRenderer> {
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let scene = setup.scene;
+    let mut renderer = pipeline::gpu::GpuRenderer::new_with(
+        d,
+        q,
+        scene,
+        &setup.lights,
+        args.size,
+        &texture_options(args),
+    )?;
+    renderer.set_output(d, Some(setup.output))?;
+    renderer.set_shading(d, q, &setup.shading)?;
+    renderer.set_shadows(d, q, setup.shadow_config.as_ref())?;
+    if let Some(tile) = args.manylod_shadows {
+        let config = ShadowConfig {
+            tile,
+            ..ShadowConfig::default()
+        };
+        renderer.set_manylod_shadows(d, q, scene, Some(&config))?;
+    }
+    if args.ray_shadows {
+        renderer.set_ray_shadows(d, q, Some(scene))?;
+    }
+    if let Some((config, set, _)) = &setup.indirect {
+        match setup.vpl_shadows {
+            Some(mode) => renderer.set_vpl_shadows(
+                d,
+                scene,
+                mode,
+                &ShadowConfig {
+                    epsilon: args.vpl_shadow_epsilon,
+                    ..ShadowConfig::for_mode(mode)
+                },
+                config,
+                set,
+            )?,
+            None => renderer.set_indirect(d, config, set)?,
+        }
+        if args.near_field {
+            renderer.set_near_field(d, Some(scene))?;
+        }
+    }
+    renderer.set_ambient(q, setup.ambient);
+    Ok(renderer)
+}
+
+/// The frame's VPLs for `scene` posed at some time (the same seed, so the same Halton
+/// indices and random numbers each frame: the subsets stay put where nothing moved).
+fn posed_vpls(setup: &Setup, scene: &Scene) -> Result<Option<vpl::VplSet>> {
+    let Some((_, _, config)) = &setup.indirect else {
+        return Ok(None);
+    };
+    let bvh = scene::Bvh::build(scene);
+    Ok(Some(vpl::generate(
+        scene,
+        &bvh,
+        &setup.photon_lights,
+        config,
+    )?))
+}
+
+/// The CPU frame of `scene` from `camera` (with `vpls` instead of the set-up's, when given).
+fn cpu_frame(
+    args: &Args,
+    setup: &Setup,
+    scene: &Scene,
+    camera: &scene::Camera,
+    vpls: Option<&vpl::VplSet>,
+) -> Result<(Rendered, Option<IndirectStages>)> {
+    let mut inputs =
+        pipeline::cpu::FrameInputs::new(scene, camera, &setup.lights, args.size, setup.ambient)
+            .with_textures(texture_options(args));
+    if let Some(config) = setup.shadow_config {
+        inputs = inputs.with_shadows(config);
+    }
+    let indirect = setup
+        .indirect
+        .as_ref()
+        .map(|(config, set, _)| (config, vpls.unwrap_or(set)));
+    Ok(pipeline::cpu::render_indirect(
+        &inputs,
+        &setup.shading,
+        indirect,
+    )?)
+}
+
+/// A sequence's clock, camera path and output folder, and its per-frame bookkeeping.
+struct Sequence {
+    clock: sequence::Clock,
+    path: sequence::CameraPath,
+    dir: PathBuf,
+    timeline: sequence::Timeline,
+    start: std::time::Instant,
+    bar: indicatif::ProgressBar,
+}
+
+impl Sequence {
+    fn new(args: &Args, frames: u32) -> Result<Self> {
+        let dir = args.out.join("frames");
+        std::fs::create_dir_all(&dir)
+            .with_context(|| format!("cannot create {}", dir.display()))?;
+        let bar = indicatif::ProgressBar::new(u64::from(frames)).with_message("rendering");
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} {msg} [{bar:30}] {pos}/{len} frames, {eta} left",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        Ok(Self {
+            clock: sequence::Clock::new(args.fps)?,
+            path: match args.orbit {
+                Some(degrees_per_second) => sequence::CameraPath::Orbit { degrees_per_second },
+                None => sequence::CameraPath::Still,
+            },
+            dir,
+            timeline: Default::default(),
+            start: std::time::Instant::now(),
+            bar,
+        })
+    }
+
+    /// The scene's pose at frame time `t` (looping its clip), or `None` for a still scene.
+    fn pose(setup: &Setup, t: f32) -> Option<scene::animation::Pose> {
+        let rig = setup.scene.rig.as_ref()?;
+        let time = setup
+            .clip
+            .map_or(0.0, |c| sequence::looped(t, rig.clips[c].duration));
+        Some(rig.pose(setup.clip, time))
+    }
+
+    /// Writes frame `k`'s display image (and radiance with --frame-exr) and records its passes.
+    fn finish_frame(
+        &mut self,
+        args: &Args,
+        k: u32,
+        t: f32,
+        submitted_us: f64,
+        (display, radiance): (&gbuffer::Image<[f32; 4]>, Option<&gbuffer::Image<[f32; 4]>>),
+        passes: Vec<gpu::PassTime>,
+    ) -> Result<()> {
+        save_png(display, &self.dir.join(format!("frame-{k:05}.png")))?;
+        if let Some(radiance) = radiance.filter(|_| args.frame_exr) {
+            save_exr(radiance, &self.dir.join(format!("frame-{k:05}.exr")))?;
+        }
+        self.timeline.push(k, t, submitted_us, passes);
+        self.bar.inc(1);
+        Ok(())
+    }
+
+    /// Writes timings.csv and trace.json and prints the per-pass median and 99th percentile.
+    fn finish(self, args: &Args) -> Result<()> {
+        self.bar.finish_and_clear();
+        let csv = args.out.join("timings.csv");
+        let trace = args.out.join("trace.json");
+        save_text(&self.timeline.csv(), &csv)?;
+        save_text(&self.timeline.chrome_trace(), &trace)?;
+        let n = self.timeline.frames.len();
+        println!(
+            "wrote:   {n} frames in {} ({:.1} s), {} and {}",
+            self.dir.display(),
+            self.start.elapsed().as_secs_f64(),
+            csv.display(),
+            trace.display()
+        );
+        println!();
+        println!(
+            "{:<32} {:>10} {:>10}",
+            "pass (over the frames)", "median ms", "p99 ms"
+        );
+        for s in self.timeline.summary() {
+            println!("{:<32} {:>10.3} {:>10.3}", s.name, s.median_ms, s.p99_ms);
+        }
+        Ok(())
+    }
+}
+
+/// `--frames N` on the GPU: the renderer skins the animated meshes every frame; the VPLs are
+/// traced again on the CPU for the posed scene when it moves.
+fn gpu_sequence(
+    args: &Args,
+    gpu: &gpu::Gpu,
+    renderer: &mut pipeline::gpu::GpuRenderer,
+    setup: &Setup,
+    frames: u32,
+) -> Result<()> {
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let mut seq = Sequence::new(args, frames)?;
+    renderer.set_animation(d, q, setup.scene.rig.as_ref())?;
+    let mut posed = setup.scene.clone();
+    for k in 0..frames {
+        let t = seq.clock.time(k);
+        if let Some(pose) = Sequence::pose(setup, t) {
+            renderer.set_pose(q, &pose)?;
+            if setup.indirect.is_some()
+                && let Some(rig) = &posed.rig
+            {
+                rig.apply(&pose, &mut posed.meshes);
+                if let Some(set) = posed_vpls(setup, &posed)? {
+                    renderer.set_vpls(q, &set)?;
+                }
+            }
+        }
+        renderer.set_camera(q, &seq.path.camera(&setup.camera, t))?;
+        let submitted_us = seq.start.elapsed().as_secs_f64() * 1e6;
+        let mut encoder = d.create_command_encoder(&Default::default());
+        renderer.encode(&mut encoder);
+        q.submit([encoder.finish()]);
+        let passes = renderer.pass_times(d, q)?;
+        let display = pipeline::gpu::read_display(
+            d,
+            q,
+            renderer
+                .display()
+                .context("the renderer has an output stage")?,
+        )?;
+        let radiance = args
+            .frame_exr
+            .then(|| pipeline::gpu::read_radiance(d, q, renderer.output()))
+            .transpose()?;
+        seq.finish_frame(
+            args,
+            k,
+            t,
+            submitted_us,
+            (&display, radiance.as_ref()),
+            passes,
+        )?;
+    }
+    seq.finish(args)
+}
+
+/// `--frames N` on the CPU: every frame poses the scene (`Rig::deform`, the GPU skinning's
+/// twin), traces the VPLs again when it moves, and renders with the CPU frame.
+fn cpu_sequence(args: &Args, setup: &Setup, frames: u32) -> Result<()> {
+    let mut seq = Sequence::new(args, frames)?;
+    let mut posed = setup.scene.clone();
+    for k in 0..frames {
+        let t = seq.clock.time(k);
+        let mut vpls = None;
+        if let (Some(pose), Some(rig)) = (Sequence::pose(setup, t), &setup.scene.rig) {
+            rig.apply(&pose, &mut posed.meshes);
+            vpls = posed_vpls(setup, &posed)?;
+        }
+        let submitted_us = seq.start.elapsed().as_secs_f64() * 1e6;
+        let camera = seq.path.camera(&setup.camera, t);
+        let (rendered, _) = cpu_frame(args, setup, &posed, &camera, vpls.as_ref())?;
+        let mut start_ms = 0.0;
+        let passes = rendered
+            .timings
+            .iter()
+            .map(|p| {
+                let pass = gpu::PassTime {
+                    name: p.name.clone(),
+                    ms: p.ms,
+                    start_ms,
+                };
+                start_ms += p.ms;
+                pass
+            })
+            .collect();
+        let display = setup.output.apply(&rendered.image);
+        seq.finish_frame(
+            args,
+            k,
+            t,
+            submitted_us,
+            (&display, Some(&rendered.image)),
+            passes,
+        )?;
+    }
+    seq.finish(args)
+}
+
+/// Prints the device, scene, light accumulation and indirect light of the render.
+fn print_setup(args: &Args, setup: &Setup, device: &str) {
+    let (width, height) = args.size;
+    let shading = &setup.shading;
     println!("device:  {device}");
     println!(
-        "scene:   {} triangles, {} direct lights ({lit_by}), {width}x{height}",
-        scene.triangle_count(),
-        all_direct,
+        "scene:   {} triangles, {} direct lights ({}), {width}x{height}",
+        setup.scene.triangle_count(),
+        setup.all_direct,
+        setup.lit_by,
     );
+    if let (Some(rig), Some(c)) = (&setup.scene.rig, setup.clip) {
+        let clip = &rig.clips[c];
+        println!(
+            "animation: clip {c} {:?} ({:.2} s), {} moving meshes{}",
+            clip.name,
+            clip.duration,
+            rig.deformers.len(),
+            match args.frames {
+                Some(n) => format!(", {n} frames at {} fps", args.fps),
+                None => format!(", at {} s", args.time),
+            }
+        );
+    }
     println!(
         "shading: {}{}{}",
         shading.method,
@@ -1109,12 +1487,12 @@ fn run() -> Result<()> {
             format!(", {0}x{0} tiles", shading.tile_size)
         },
         if args.frustum_cull {
-            format!(", CPU frustum culling kept {} lights", direct_lights.len())
+            format!(", CPU frustum culling kept {} lights", setup.lights.len())
         } else {
             String::new()
         },
     );
-    if let Some((config, set)) = &indirect {
+    if let Some((config, set, _)) = &setup.indirect {
         println!(
             "indirect: {} VPLs in {} subsets of {} ({}), blur {}",
             set.vpls.len(),
@@ -1136,13 +1514,6 @@ fn run() -> Result<()> {
             )),
         );
     }
-    println!("wrote:   {} and {}", png.display(), exr.display());
-    println!();
-    print_table(&rendered.timings, f64::from(width) * f64::from(height));
-    if rendered.timings.is_empty() {
-        println!("(this GPU has no timestamp queries: no pass times)");
-    }
-    Ok(())
 }
 
 /// Writes the per-tile light counts as `heatmap.png` (the thesis's light-count figures).

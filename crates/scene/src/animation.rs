@@ -334,6 +334,19 @@ impl Rig {
         out
     }
 
+    /// Writes `pose` into the moved meshes of `meshes` (the scene's, which this rig moves):
+    /// positions, normals and tangents in world space ([`Rig::deform`]).
+    pub fn apply(&self, pose: &Pose, meshes: &mut [crate::Mesh]) {
+        for d in &self.deformers {
+            let posed = self.deform(d, pose);
+            if let Some(mesh) = meshes.get_mut(d.mesh as usize) {
+                mesh.positions = posed.positions;
+                mesh.normals = posed.normals;
+                mesh.tangents = posed.tangents;
+            }
+        }
+    }
+
     /// Checks that every reference holds: parents before children, skins and joints inside
     /// the rig, one rest vertex (with joints, weights and displacements) per vertex of its
     /// mesh in `meshes`.

@@ -331,16 +331,12 @@ fn finish_rig(
         deformers,
     };
     let rest = rig.pose(None, 0.0);
+    rig.apply(&rest, meshes);
     for d in &rig.deformers {
-        let posed = rig.deform(d, &rest);
-        let mesh = &mut meshes[d.mesh as usize];
-        mesh.positions = posed.positions;
-        mesh.normals = posed.normals;
-        mesh.tangents = posed.tangents;
         if let Joints::Node(n) = d.joints
             && rest.world[n as usize].determinant() < 0.0
         {
-            for t in mesh.indices.chunks_exact_mut(3) {
+            for t in meshes[d.mesh as usize].indices.chunks_exact_mut(3) {
                 t.swap(1, 2);
             }
         }
