@@ -24,6 +24,9 @@ use glam::{Mat3, Mat4, Quat, Vec3, Vec4};
 
 use crate::SceneErrorKind;
 
+/// The channel target of the root node instances [`Rig::insert`] adds (no channel moves them).
+pub const PLACEMENT_NODE: u32 = u32::MAX;
+
 /// A node's local transform as translation, rotation and scale (glTF `TRS`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Trs {
@@ -332,6 +335,67 @@ impl Rig {
             }
         }
         out
+    }
+
+    /// Adds `model` (the rig of a scene whose meshes were appended after `mesh_offset` of
+    /// this rig's scene) under a new root node instance placed by `placement`. The model's
+    /// channel targets are renumbered past this rig's, so each clip moves only its own file's
+    /// nodes; its clips are appended.
+    pub fn insert(&mut self, model: Rig, placement: Mat4, mesh_offset: u32) {
+        let target_offset = self
+            .nodes
+            .iter()
+            .map(|n| n.node)
+            .chain(
+                self.clips
+                    .iter()
+                    .flat_map(|c| c.channels.iter().map(|ch| ch.node)),
+            )
+            .filter(|&n| n != PLACEMENT_NODE)
+            .max()
+            .map_or(0, |n| n + 1);
+        let root = self.nodes.len() as u32;
+        let (scale, rotation, translation) = placement.to_scale_rotation_translation();
+        self.nodes.push(NodeInstance {
+            node: PLACEMENT_NODE,
+            parent: None,
+            rest: Trs {
+                translation,
+                rotation,
+                scale,
+            },
+            matrix: Some(placement),
+            weights: Vec::new(),
+        });
+        let offset = self.nodes.len() as u32;
+        self.nodes.extend(model.nodes.into_iter().map(|mut n| {
+            n.node += target_offset;
+            n.parent = Some(n.parent.map_or(root, |p| p + offset));
+            n
+        }));
+        let skin_offset = self.skins.len() as u32;
+        self.skins.extend(model.skins.into_iter().map(|mut s| {
+            for j in &mut s.joints {
+                *j += offset;
+            }
+            s
+        }));
+        self.deformers
+            .extend(model.deformers.into_iter().map(|mut d| {
+                d.mesh += mesh_offset;
+                d.node += offset;
+                d.joints = match d.joints {
+                    Joints::Skin(s) => Joints::Skin(s + skin_offset),
+                    Joints::Node(n) => Joints::Node(n + offset),
+                };
+                d
+            }));
+        self.clips.extend(model.clips.into_iter().map(|mut c| {
+            for ch in &mut c.channels {
+                ch.node += target_offset;
+            }
+            c
+        }));
     }
 
     /// Writes `pose` into the moved meshes of `meshes` (the scene's, which this rig moves):

@@ -461,6 +461,76 @@ impl Scene {
         Ok(scene)
     }
 
+    /// Adds `model` (another scene: its meshes, materials, textures, lights and animation)
+    /// placed by `placement`; its camera is dropped. Its rig hangs under a new root node that
+    /// holds `placement`, its clips follow this scene's, and its channels keep moving only its
+    /// own nodes.
+    pub fn insert(&mut self, model: Scene, placement: glam::Mat4) -> Result<(), SceneErrorKind> {
+        if !placement.is_finite() || placement.determinant().abs() < 1e-12 {
+            return Err(SceneErrorKind::Extent(format!(
+                "a model's placement must be finite and invertible, not {placement}"
+            )));
+        }
+        let Scene {
+            meshes,
+            materials,
+            textures,
+            lights,
+            rig,
+            ..
+        } = model;
+        let (mesh_offset, material_offset) =
+            (self.meshes.len() as u32, self.materials.len() as u32);
+        let texture_offset = self.textures.len() as u32;
+        self.textures.extend(textures);
+        self.materials.extend(materials.into_iter().map(|mut m| {
+            for t in [
+                &mut m.base_color_texture,
+                &mut m.metallic_roughness_texture,
+                &mut m.normal_texture,
+                &mut m.occlusion_texture,
+                &mut m.emissive_texture,
+            ]
+            .into_iter()
+            .flatten()
+            {
+                t.texture += texture_offset;
+            }
+            m
+        }));
+        let normals = glam::Mat3::from_mat4(placement).inverse().transpose();
+        let linear = glam::Mat3::from_mat4(placement);
+        let mirror = placement.determinant() < 0.0;
+        for mut m in meshes {
+            m.material += material_offset;
+            for p in &mut m.positions {
+                *p = placement.transform_point3(*p);
+            }
+            for n in &mut m.normals {
+                *n = (normals * *n).normalize_or(Vec3::Y);
+            }
+            for t in &mut m.tangents {
+                let w = if mirror { -t.w } else { t.w };
+                *t = (linear * t.truncate()).normalize_or(Vec3::X).extend(w);
+            }
+            if mirror {
+                for t in m.indices.chunks_exact_mut(3) {
+                    t.swap(1, 2);
+                }
+            }
+            self.meshes.push(m);
+        }
+        self.lights
+            .extend(lights.iter().map(|l| l.transformed(placement)));
+        if let Some(model_rig) = rig {
+            let own = self.rig.get_or_insert_with(Default::default);
+            own.insert(model_rig, placement, mesh_offset);
+            let rest = own.pose(None, 0.0);
+            own.apply(&rest, &mut self.meshes);
+        }
+        self.validate()
+    }
+
     /// Generates MikkTSpace tangents ([`Mesh::generate_tangents`]) for every mesh whose
     /// material has a normal map and whose file gave none.
     pub fn complete_tangents(&mut self) {

@@ -64,6 +64,47 @@ pub enum Light {
     },
 }
 
+impl Light {
+    /// The light moved by `m`: positions as points, directions as vectors (renormalised),
+    /// radii scaled by `m`'s largest axis scale.
+    pub fn transformed(&self, m: glam::Mat4) -> Light {
+        let point = |p: Vec3| m.transform_point3(p);
+        let dir = |d: Vec3| m.transform_vector3(d).normalize_or(d);
+        let scale = glam::Mat3::from_mat4(m)
+            .to_cols_array_2d()
+            .iter()
+            .map(|c| Vec3::from(*c).length())
+            .fold(0.0f32, f32::max);
+        let mut light = *self;
+        match &mut light {
+            Light::Point {
+                position, radius, ..
+            } => {
+                *position = point(*position);
+                *radius *= scale;
+            }
+            Light::Spot {
+                position,
+                direction,
+                radius,
+                ..
+            }
+            | Light::Hemispherical {
+                position,
+                direction,
+                radius,
+                ..
+            } => {
+                *position = point(*position);
+                *direction = dir(*direction);
+                *radius *= scale;
+            }
+            Light::Directional { direction, .. } => *direction = dir(*direction),
+        }
+        light
+    }
+}
+
 /// Radius at which a light of `intensity` falls to 1/256 of unit illuminance, used when a
 /// glTF light has no `range`.
 pub(crate) fn default_radius(intensity: f32) -> f32 {

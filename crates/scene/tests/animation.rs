@@ -178,3 +178,46 @@ fn a_still_file_has_no_rig() {
     );
     assert!(scene::cornell_box().rig.is_none());
 }
+
+/// A model inserted into another scene moves as it did alone, carried by its placement; a
+/// second copy's channels move only its own nodes.
+#[test]
+fn an_inserted_model_keeps_its_animation_under_its_placement() {
+    use glam::Mat4;
+    let man = Scene::load(fixture("CesiumMan/CesiumMan.glb")).expect("CesiumMan");
+    let alone = man.rig.clone().expect("a rig");
+    let placement = Mat4::from_scale_rotation_translation(
+        Vec3::splat(0.5),
+        Quat::from_rotation_y(0.7),
+        Vec3::new(0.1, 0.2, -0.3),
+    );
+    let mut room = scene::cornell_box();
+    let first_mesh = room.meshes.len();
+    room.insert(man.clone(), placement).expect("inserts");
+    room.insert(man, Mat4::from_translation(Vec3::X))
+        .expect("inserts twice");
+    let rig = room.rig.as_ref().expect("the room moves now");
+    assert_eq!(rig.clips.len(), 2);
+    let t = 0.6;
+    let (pose, pose_alone) = (rig.pose(Some(0), t), alone.pose(Some(0), t));
+    let (placed, original) = (
+        rig.deform(&rig.deformers[0], &pose),
+        alone.deform(&alone.deformers[0], &pose_alone),
+    );
+    assert_eq!(rig.deformers[0].mesh as usize, first_mesh);
+    for (a, b) in placed.positions.iter().zip(&original.positions) {
+        let expected = placement.transform_point3(*b);
+        assert!(a.distance(expected) < 1e-5, "{a} vs {expected}");
+    }
+    // Clip 0 moves the first copy only: the second stays at its rest pose.
+    let rest = rig.pose(None, 0.0);
+    assert_eq!(
+        rig.deform(&rig.deformers[1], &pose).positions,
+        rig.deform(&rig.deformers[1], &rest).positions
+    );
+    // The scene's meshes are the rest pose.
+    assert_eq!(
+        rig.deform(&rig.deformers[0], &rest).positions,
+        room.meshes[first_mesh].positions
+    );
+}
