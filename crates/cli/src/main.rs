@@ -26,6 +26,7 @@ use scene::{Light, Scene};
 /// or else by a default sun.
 #[derive(Parser, Debug)]
 #[command(version, about, long_about = None, args_conflicts_with_subcommands = true)]
+#[command(args_override_self = true)]
 #[command(group(clap::ArgGroup::new("seeded").args(["vpls", "reference"]).multiple(true)))]
 struct Args {
     /// A command other than rendering.
@@ -235,6 +236,25 @@ struct Args {
     /// With --frames: also write each frame's linear radiance as EXR.
     #[arg(long, requires = "frames")]
     frame_exr: bool,
+    /// With --frames: the camera through keyframes T:EX,EY,EZ:TX,TY,TZ (seconds, eye,
+    /// target; repeat the flag, in time order), interpolated linearly.
+    #[arg(long = "camera-key", value_name = "KEY", conflicts_with = "orbit", value_parser = parse_camera_key)]
+    camera_keys: Vec<(f32, Vec3, Vec3)>,
+    /// With --frames: the direct lights turn about the vertical axis through the scene's
+    /// centre by DEG a second (the VPLs are traced again each frame).
+    #[arg(long, value_name = "DEG", requires = "frames", allow_hyphen_values = true, value_parser = parse_orbit)]
+    light_orbit: Option<f32>,
+    /// Add a model to the scene: PATH[@X,Y,Z[,SCALE[,YAW°]]] (its meshes, materials, lights
+    /// and animation, placed at X,Y,Z, scaled, turned about +Y). Repeat for more models.
+    /// A path may start with `fixtures:` for the shared fixtures folder.
+    #[arg(long = "add-model", value_name = "MODEL", value_parser = parse_model)]
+    models: Vec<(PathBuf, glam::Mat4)>,
+    /// Read the render's settings from a TOML recipe: every key is a long flag of this
+    /// program (`size = "640x480"`, `vpls = 1024`, `shadows = 512`, `light = ["point:…"]`,
+    /// `adaptive = true`), relative paths are relative to the recipe's folder, and flags on the
+    /// command line override the recipe's.
+    #[arg(long, value_name = "FILE")]
+    recipe: Option<PathBuf>,
 }
 
 #[derive(clap::Subcommand, Debug)]
@@ -680,6 +700,47 @@ fn parse_orbit(s: &str) -> Result<f32, String> {
     }
 }
 
+fn parse_camera_key(s: &str) -> Result<(f32, Vec3, Vec3), String> {
+    let parts: Vec<&str> = s.split(':').collect();
+    let [t, eye, target] = parts[..] else {
+        return Err("expected T:EX,EY,EZ:TX,TY,TZ".into());
+    };
+    let t = parse_time(t)?;
+    Ok((t, parse_vec3(eye)?, parse_vec3(target)?))
+}
+
+/// `PATH[@X,Y,Z[,SCALE[,YAW°]]]` as the path and its placement.
+fn parse_model(s: &str) -> Result<(PathBuf, glam::Mat4), String> {
+    let (path, place) = s.rsplit_once('@').unwrap_or((s, ""));
+    let v: Vec<f32> = if place.is_empty() {
+        Vec::new()
+    } else {
+        place
+            .split(',')
+            .map(|c| match c.trim().parse::<f32>() {
+                Ok(f) if f.is_finite() => Ok(f),
+                _ => Err(format!("{c:?} is not a finite number")),
+            })
+            .collect::<Result<_, _>>()?
+    };
+    let (t, scale, yaw) = match v[..] {
+        [] => (Vec3::ZERO, 1.0, 0.0),
+        [x, y, z] => (Vec3::new(x, y, z), 1.0, 0.0),
+        [x, y, z, s] => (Vec3::new(x, y, z), s, 0.0),
+        [x, y, z, s, yaw] => (Vec3::new(x, y, z), s, yaw),
+        _ => return Err("expected PATH[@X,Y,Z[,SCALE[,YAW]]]".into()),
+    };
+    if !(scale > 0.0) {
+        return Err(format!("the scale must be above 0, not {scale}"));
+    }
+    let placement = glam::Mat4::from_scale_rotation_translation(
+        Vec3::splat(scale),
+        glam::Quat::from_rotation_y(yaw.to_radians()),
+        t,
+    );
+    Ok((PathBuf::from(path), placement))
+}
+
 fn parse_fov(s: &str) -> Result<f32, String> {
     match s.trim().parse::<f32>() {
         Ok(d) if (0.1..=179.0).contains(&d) => Ok(d),
@@ -707,7 +768,36 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
     }
 }
 
+/// `path`, or for `fixtures:REST` the shared fixtures folder's `REST`
+/// ([`scene::shared_fixtures`]: `DEFERRED_FIXTURES`, else `../shared/fixtures`).
+fn resolve(path: &std::path::Path) -> Result<PathBuf> {
+    match path.to_str().and_then(|p| p.strip_prefix("fixtures:")) {
+        Some(rest) => Ok(scene::shared_fixtures()
+            .with_context(|| {
+                format!(
+                    "{}: no shared fixtures folder (set DEFERRED_FIXTURES)",
+                    path.display()
+                )
+            })?
+            .join(rest)),
+        None => Ok(path.to_owned()),
+    }
+}
+
+/// The scene with every `--add-model` inserted.
 fn load_scene(args: &Args) -> Result<Scene> {
+    let mut scene = load_base_scene(args)?;
+    for (path, placement) in &args.models {
+        let path = resolve(path)?;
+        let model = Scene::load(&path)?;
+        scene
+            .insert(model, *placement)
+            .with_context(|| format!("--add-model {}", path.display()))?;
+    }
+    Ok(scene)
+}
+
+fn load_base_scene(args: &Args) -> Result<Scene> {
     let Some(path) = &args.scene else {
         return Ok(match args.builtin.as_str() {
             "cornell" => scene::cornell_box(),
@@ -729,12 +819,103 @@ fn load_scene(args: &Args) -> Result<Scene> {
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(100));
+    let path = &resolve(path)?;
     let scene = Scene::load_with_progress(path, &mut |done, total| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     });
     bar.finish_and_clear();
     Ok(scene?)
+}
+
+/// The most bytes a recipe file may hold.
+const RECIPE_LIMIT: u64 = 1 << 20;
+
+/// `argv` with the keys of its `--recipe FILE` (if any) put before its own flags, as flags:
+/// `key = "v"` → `--key v`, numbers likewise, `key = true` → `--key`, arrays → the flag
+/// repeated. Relative paths of `scene`, `add-model` and `out` are taken from the recipe's
+/// folder; `fixtures:` paths stay as they are.
+fn with_recipe(argv: Vec<std::ffi::OsString>) -> Result<Vec<std::ffi::OsString>> {
+    use clap::CommandFactory;
+    let at = argv.iter().position(|a| {
+        a.to_str()
+            .is_some_and(|a| a == "--recipe" || a.starts_with("--recipe="))
+    });
+    let Some(at) = at else {
+        return Ok(argv);
+    };
+    let path = match argv[at].to_str().and_then(|a| a.strip_prefix("--recipe=")) {
+        Some(p) => PathBuf::from(p),
+        None => match argv.get(at + 1) {
+            Some(p) => PathBuf::from(p),
+            None => return Ok(argv), // clap reports the missing value
+        },
+    };
+    let fail = |problem: String| anyhow::anyhow!("recipe {}: {problem}", path.display());
+    let file = std::fs::File::open(&path).map_err(|e| fail(e.to_string()))?;
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut std::io::Read::take(file, RECIPE_LIMIT + 1), &mut text)
+        .map_err(|e| fail(e.to_string()))?;
+    if text.len() as u64 > RECIPE_LIMIT {
+        return Err(fail(format!("longer than {RECIPE_LIMIT} bytes")));
+    }
+    let table: toml::Table = toml::from_str(&text).map_err(|e| fail(e.to_string()))?;
+    let folder = path.parent().unwrap_or(std::path::Path::new("."));
+    let command = Args::command();
+    let known: Vec<&str> = command
+        .get_arguments()
+        .filter_map(|a| a.get_long())
+        .filter(|l| *l != "recipe" && *l != "help" && *l != "version")
+        .collect();
+    let mut flags: Vec<std::ffi::OsString> = Vec::new();
+    for (key, value) in &table {
+        let flag = key.replace('_', "-");
+        if !known.contains(&flag.as_str()) {
+            return Err(fail(format!(
+                "unknown key {key:?} (every key is a long flag of `deferred`: {})",
+                known.join(", ")
+            )));
+        }
+        let text = |v: &toml::Value| -> Result<String> {
+            let s = match v {
+                toml::Value::String(s) => s.clone(),
+                toml::Value::Integer(i) => i.to_string(),
+                toml::Value::Float(f) => f.to_string(),
+                other => {
+                    return Err(fail(format!(
+                        "{key}: a {} is not a string or number",
+                        other.type_str()
+                    )));
+                }
+            };
+            let relative = matches!(flag.as_str(), "scene" | "add-model" | "out")
+                && !s.starts_with("fixtures:")
+                && std::path::Path::new(&s).is_relative();
+            Ok(if relative {
+                folder.join(&s).to_string_lossy().into_owned()
+            } else {
+                s
+            })
+        };
+        match value {
+            toml::Value::Boolean(true) => flags.push(format!("--{flag}").into()),
+            toml::Value::Boolean(false) => {}
+            toml::Value::Array(items) => {
+                for item in items {
+                    flags.push(format!("--{flag}").into());
+                    flags.push(text(item)?.into());
+                }
+            }
+            v => {
+                flags.push(format!("--{flag}").into());
+                flags.push(text(v)?.into());
+            }
+        }
+    }
+    let mut out = vec![argv[0].clone()];
+    out.extend(flags);
+    out.extend(argv.into_iter().skip(1));
+    Ok(out)
 }
 
 /// The files this run wrote ([`save_png`], [`save_exr`], [`save_text`]). Every output is
@@ -803,7 +984,7 @@ fn main() -> Result<()> {
 
 fn run() -> Result<()> {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let args = Args::parse();
+    let args = Args::parse_from(with_recipe(std::env::args_os().collect())?);
     if let Some(Command::Subdivide {
         input,
         level,
@@ -1092,7 +1273,8 @@ fn run() -> Result<()> {
                 print_setup(&args, &setup, device);
                 return cpu_sequence(&args, &setup, frames);
             }
-            let (rendered, stages) = cpu_frame(&args, &setup, &scene, &setup.camera, None)?;
+            let (rendered, stages) =
+                cpu_frame(&args, &setup, (&scene, &setup.lights), &setup.camera, None)?;
             if args.heatmap {
                 let camera = &setup.camera;
                 let gb = gbuffer::cpu::rasterize(&scene, camera, width, height)?.gbuffer;
@@ -1229,29 +1411,40 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
 
 /// The frame's VPLs for `scene` posed at some time (the same seed, so the same Halton
 /// indices and random numbers each frame: the subsets stay put where nothing moved).
-fn posed_vpls(setup: &Setup, scene: &Scene) -> Result<Option<vpl::VplSet>> {
+fn posed_vpls(
+    setup: &Setup,
+    scene: &Scene,
+    photon_lights: &[Light],
+) -> Result<Option<vpl::VplSet>> {
     let Some((_, _, config)) = &setup.indirect else {
         return Ok(None);
     };
     let bvh = scene::Bvh::build(scene);
-    Ok(Some(vpl::generate(
-        scene,
-        &bvh,
-        &setup.photon_lights,
-        config,
-    )?))
+    Ok(Some(vpl::generate(scene, &bvh, photon_lights, config)?))
+}
+
+/// The direct and photon lights at `t` seconds turned by --light-orbit about the vertical
+/// axis through the scene's centre, or `None` when they stay.
+fn moved_lights(args: &Args, setup: &Setup, t: f32) -> Option<(Vec<Light>, Vec<Light>)> {
+    let degrees_per_second = args.light_orbit?;
+    let centre = setup.scene.bounds().center();
+    let turn = glam::Mat4::from_translation(centre)
+        * glam::Mat4::from_rotation_y((degrees_per_second * t).to_radians())
+        * glam::Mat4::from_translation(-centre);
+    let moved = |lights: &[Light]| lights.iter().map(|l| l.transformed(turn)).collect();
+    Some((moved(&setup.lights), moved(&setup.photon_lights)))
 }
 
 /// The CPU frame of `scene` from `camera` (with `vpls` instead of the set-up's, when given).
 fn cpu_frame(
     args: &Args,
     setup: &Setup,
-    scene: &Scene,
+    (scene, lights): (&Scene, &[Light]),
     camera: &scene::Camera,
     vpls: Option<&vpl::VplSet>,
 ) -> Result<(Rendered, Option<IndirectStages>)> {
     let mut inputs =
-        pipeline::cpu::FrameInputs::new(scene, camera, &setup.lights, args.size, setup.ambient)
+        pipeline::cpu::FrameInputs::new(scene, camera, lights, args.size, setup.ambient)
             .with_textures(texture_options(args));
     if let Some(config) = setup.shadow_config {
         inputs = inputs.with_shadows(config);
@@ -1278,7 +1471,7 @@ struct Sequence {
 }
 
 impl Sequence {
-    fn new(args: &Args, frames: u32) -> Result<Self> {
+    fn new(args: &Args, frames: u32, base: &scene::Camera) -> Result<Self> {
         let dir = args.out.join("frames");
         std::fs::create_dir_all(&dir)
             .with_context(|| format!("cannot create {}", dir.display()))?;
@@ -1291,10 +1484,7 @@ impl Sequence {
         );
         Ok(Self {
             clock: sequence::Clock::new(args.fps)?,
-            path: match args.orbit {
-                Some(degrees_per_second) => sequence::CameraPath::Orbit { degrees_per_second },
-                None => sequence::CameraPath::Still,
-            },
+            path: camera_path(args, base)?,
             dir,
             timeline: Default::default(),
             start: std::time::Instant::now(),
@@ -1357,6 +1547,37 @@ impl Sequence {
     }
 }
 
+/// The camera path of --orbit or --camera-key (eye and target from the keys, the rest from
+/// `base`).
+fn camera_path(args: &Args, base: &scene::Camera) -> Result<sequence::CameraPath> {
+    if let Some(degrees_per_second) = args.orbit {
+        return Ok(sequence::CameraPath::Orbit { degrees_per_second });
+    }
+    if args.camera_keys.is_empty() {
+        return Ok(sequence::CameraPath::Still);
+    }
+    if args.camera_keys.windows(2).any(|w| w[1].0 <= w[0].0) {
+        bail!("--camera-key: the keys' times must increase");
+    }
+    let keys = args
+        .camera_keys
+        .iter()
+        .map(|&(t, eye, target)| {
+            let mut camera = scene::Camera {
+                eye,
+                target,
+                ..*base
+            };
+            if (target - eye).normalize_or_zero().cross(camera.up).length() < 1e-3 {
+                camera.up = Vec3::NEG_Z;
+            }
+            gbuffer::validate_camera(&camera).with_context(|| format!("--camera-key at {t} s"))?;
+            Ok((t, camera))
+        })
+        .collect::<Result<_>>()?;
+    Ok(sequence::CameraPath::Keyframes(keys))
+}
+
 /// `--frames N` on the GPU: the renderer skins the animated meshes every frame; the VPLs are
 /// traced again on the CPU for the posed scene when it moves.
 fn gpu_sequence(
@@ -1367,20 +1588,26 @@ fn gpu_sequence(
     frames: u32,
 ) -> Result<()> {
     let (d, q) = (&gpu.device, &gpu.queue);
-    let mut seq = Sequence::new(args, frames)?;
+    let mut seq = Sequence::new(args, frames, &setup.camera)?;
     renderer.set_animation(d, q, setup.scene.rig.as_ref())?;
     let mut posed = setup.scene.clone();
     for k in 0..frames {
         let t = seq.clock.time(k);
-        if let Some(pose) = Sequence::pose(setup, t) {
-            renderer.set_pose(q, &pose)?;
-            if setup.indirect.is_some()
-                && let Some(rig) = &posed.rig
-            {
-                rig.apply(&pose, &mut posed.meshes);
-                if let Some(set) = posed_vpls(setup, &posed)? {
-                    renderer.set_vpls(q, &set)?;
-                }
+        let pose = Sequence::pose(setup, t);
+        let lights = moved_lights(args, setup, t);
+        if let Some(pose) = &pose {
+            renderer.set_pose(q, pose)?;
+        }
+        if let Some((direct, _)) = &lights {
+            renderer.set_lights(d, q, direct)?;
+        }
+        if setup.indirect.is_some() && (pose.is_some() || lights.is_some()) {
+            if let (Some(pose), Some(rig)) = (&pose, &setup.scene.rig) {
+                rig.apply(pose, &mut posed.meshes);
+            }
+            let photons = lights.as_ref().map_or(&setup.photon_lights, |(_, p)| p);
+            if let Some(set) = posed_vpls(setup, &posed, photons)? {
+                renderer.set_vpls(q, &set)?;
             }
         }
         renderer.set_camera(q, &seq.path.camera(&setup.camera, t))?;
@@ -1415,18 +1642,27 @@ fn gpu_sequence(
 /// `--frames N` on the CPU: every frame poses the scene (`Rig::deform`, the GPU skinning's
 /// twin), traces the VPLs again when it moves, and renders with the CPU frame.
 fn cpu_sequence(args: &Args, setup: &Setup, frames: u32) -> Result<()> {
-    let mut seq = Sequence::new(args, frames)?;
+    let mut seq = Sequence::new(args, frames, &setup.camera)?;
     let mut posed = setup.scene.clone();
     for k in 0..frames {
         let t = seq.clock.time(k);
-        let mut vpls = None;
-        if let (Some(pose), Some(rig)) = (Sequence::pose(setup, t), &setup.scene.rig) {
-            rig.apply(&pose, &mut posed.meshes);
-            vpls = posed_vpls(setup, &posed)?;
+        let pose = Sequence::pose(setup, t);
+        let lights = moved_lights(args, setup, t);
+        if let (Some(pose), Some(rig)) = (&pose, &setup.scene.rig) {
+            rig.apply(pose, &mut posed.meshes);
         }
+        let (direct, photons) = match &lights {
+            Some((direct, photons)) => (&direct[..], &photons[..]),
+            None => (&setup.lights[..], &setup.photon_lights[..]),
+        };
+        let vpls = if pose.is_some() || lights.is_some() {
+            posed_vpls(setup, &posed, photons)?
+        } else {
+            None
+        };
         let submitted_us = seq.start.elapsed().as_secs_f64() * 1e6;
         let camera = seq.path.camera(&setup.camera, t);
-        let (rendered, _) = cpu_frame(args, setup, &posed, &camera, vpls.as_ref())?;
+        let (rendered, _) = cpu_frame(args, setup, (&posed, direct), &camera, vpls.as_ref())?;
         let mut start_ms = 0.0;
         let passes = rendered
             .timings
@@ -1458,6 +1694,9 @@ fn cpu_sequence(args: &Args, setup: &Setup, frames: u32) -> Result<()> {
 fn print_setup(args: &Args, setup: &Setup, device: &str) {
     let (width, height) = args.size;
     let shading = &setup.shading;
+    if let Some(recipe) = &args.recipe {
+        println!("recipe:  {}", recipe.display());
+    }
     println!("device:  {device}");
     println!(
         "scene:   {} triangles, {} direct lights ({}), {width}x{height}",
