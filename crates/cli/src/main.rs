@@ -1468,7 +1468,12 @@ struct Sequence {
     timeline: sequence::Timeline,
     start: std::time::Instant,
     bar: indicatif::ProgressBar,
+    /// The frames at preview size ([`PREVIEW_WIDTH`]), for preview.gif.
+    preview: Vec<image::RgbaImage>,
 }
+
+/// The widest preview.gif frame.
+const PREVIEW_WIDTH: u32 = 320;
 
 impl Sequence {
     fn new(args: &Args, frames: u32, base: &scene::Camera) -> Result<Self> {
@@ -1489,6 +1494,7 @@ impl Sequence {
             timeline: Default::default(),
             start: std::time::Instant::now(),
             bar,
+            preview: Vec::new(),
         })
     }
 
@@ -1512,6 +1518,24 @@ impl Sequence {
         passes: Vec<gpu::PassTime>,
     ) -> Result<()> {
         save_png(display, &self.dir.join(format!("frame-{k:05}.png")))?;
+        let (w, h) = (display.width(), display.height());
+        let rgba: Vec<u8> = display
+            .to_srgb8()
+            .chunks_exact(3)
+            .flat_map(|c| [c[0], c[1], c[2], 255])
+            .collect();
+        let frame = image::RgbaImage::from_raw(w, h, rgba).context("a frame's pixels")?;
+        let scale = (PREVIEW_WIDTH as f32 / w as f32).min(1.0);
+        let size = (
+            (w as f32 * scale).round().max(1.0) as u32,
+            (h as f32 * scale).round().max(1.0) as u32,
+        );
+        self.preview.push(image::imageops::resize(
+            &frame,
+            size.0,
+            size.1,
+            image::imageops::FilterType::Triangle,
+        ));
         if let Some(radiance) = radiance.filter(|_| args.frame_exr) {
             save_exr(radiance, &self.dir.join(format!("frame-{k:05}.exr")))?;
         }
@@ -1525,15 +1549,39 @@ impl Sequence {
         self.bar.finish_and_clear();
         let csv = args.out.join("timings.csv");
         let trace = args.out.join("trace.json");
+        let (plot, gif) = (args.out.join("timings.svg"), args.out.join("preview.gif"));
         save_text(&self.timeline.csv(), &csv)?;
         save_text(&self.timeline.chrome_trace(), &trace)?;
+        save_text(
+            &self.timeline.plot_svg("GPU time per pass and frame")?,
+            &plot,
+        )?;
+        let delay =
+            image::Delay::from_numer_denom_ms(1000, (self.clock.fps().round() as u32).max(1));
+        gbuffer::write_atomically(&gif, |tmp| {
+            let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+            let mut encoder = image::codecs::gif::GifEncoder::new_with_speed(file, 10);
+            encoder
+                .set_repeat(image::codecs::gif::Repeat::Infinite)
+                .map_err(|e| e.to_string())?;
+            encoder
+                .encode_frames(
+                    self.preview
+                        .into_iter()
+                        .map(|f| image::Frame::from_parts(f, 0, 0, delay)),
+                )
+                .map_err(|e| e.to_string())
+        })?;
+        record(&gif);
         let n = self.timeline.frames.len();
         println!(
-            "wrote:   {n} frames in {} ({:.1} s), {} and {}",
+            "wrote:   {n} frames in {} ({:.1} s), {}, {}, {} and {}",
             self.dir.display(),
             self.start.elapsed().as_secs_f64(),
             csv.display(),
-            trace.display()
+            trace.display(),
+            plot.display(),
+            gif.display()
         );
         println!();
         println!(

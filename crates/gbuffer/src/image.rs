@@ -106,13 +106,17 @@ impl<T: Copy> Image<T> {
 pub use scene::{linear_to_srgb, srgb_to_linear};
 
 impl Image<[f32; 4]> {
-    /// Writes linear RGB as an 8-bit sRGB PNG (clamped to \[0, 1\]; alpha dropped).
-    pub fn write_png(&self, path: &Path) -> Result<(), ImageError> {
-        let bytes: Vec<u8> = self
-            .data
+    /// Linear RGB as 8-bit sRGB, three bytes a pixel (clamped to \[0, 1\]; alpha dropped).
+    pub fn to_srgb8(&self) -> Vec<u8> {
+        self.data
             .iter()
             .flat_map(|p| [p[0], p[1], p[2]].map(|c| (linear_to_srgb(c) * 255.0).round() as u8))
-            .collect();
+            .collect()
+    }
+
+    /// Writes linear RGB as an 8-bit sRGB PNG ([`Image::to_srgb8`]).
+    pub fn write_png(&self, path: &Path) -> Result<(), ImageError> {
+        let bytes = self.to_srgb8();
         write_atomically(path, |tmp| {
             image::save_buffer_with_format(
                 tmp,

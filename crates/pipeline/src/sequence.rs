@@ -253,6 +253,85 @@ impl Timeline {
     }
 }
 
+impl Timeline {
+    /// Milliseconds of every pass (and the total) per frame as an SVG line chart, like
+    /// Holländer 2013 Fig. 3.21: frame on x, GPU time on y, one line per pass.
+    pub fn plot_svg(&self, title: &str) -> Result<String, RenderError> {
+        use plotters::prelude::*;
+        const PALETTE: [RGBColor; 10] = [
+            RGBColor(31, 119, 180),
+            RGBColor(255, 127, 14),
+            RGBColor(44, 160, 44),
+            RGBColor(214, 39, 40),
+            RGBColor(148, 103, 189),
+            RGBColor(140, 86, 75),
+            RGBColor(227, 119, 194),
+            RGBColor(127, 127, 127),
+            RGBColor(188, 189, 34),
+            RGBColor(23, 190, 207),
+        ];
+        let mut columns = self.columns();
+        let rows: Vec<Vec<f64>> = self.frames.iter().map(|f| Self::row(f, &columns)).collect();
+        columns.push("total".into());
+        let top = rows
+            .iter()
+            .flatten()
+            .copied()
+            .fold(0.0f64, f64::max)
+            .max(1e-3)
+            * 1.05;
+        let frames = self.frames.len().max(2) as f64 - 1.0;
+        let mut svg = String::new();
+        let plot_error = |e: String| RenderError::InvalidOutput(format!("plot: {e}"));
+        {
+            let root = SVGBackend::with_string(&mut svg, (960, 540)).into_drawing_area();
+            root.fill(&WHITE).map_err(|e| plot_error(e.to_string()))?;
+            let mut chart = ChartBuilder::on(&root)
+                .caption(title, ("sans-serif", 20))
+                .margin(12)
+                .x_label_area_size(36)
+                .y_label_area_size(56)
+                .build_cartesian_2d(0.0..frames, 0.0..top)
+                .map_err(|e| plot_error(e.to_string()))?;
+            chart
+                .configure_mesh()
+                .x_desc("frame")
+                .y_desc("GPU ms")
+                .draw()
+                .map_err(|e| plot_error(e.to_string()))?;
+            for (i, name) in columns.iter().enumerate() {
+                let colour = if name == "total" {
+                    BLACK
+                } else {
+                    PALETTE[i % PALETTE.len()]
+                };
+                let points = self
+                    .frames
+                    .iter()
+                    .zip(&rows)
+                    .enumerate()
+                    .map(|(k, (_, r))| (k as f64, r[i]));
+                chart
+                    .draw_series(LineSeries::new(points, colour.stroke_width(2)))
+                    .map_err(|e| plot_error(e.to_string()))?
+                    .label(name.as_str())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(|e| plot_error(e.to_string()))?;
+            root.present().map_err(|e| plot_error(e.to_string()))?;
+        }
+        Ok(svg)
+    }
+}
+
 /// The nearest-rank `p`-th percentile of `sorted` (0 when empty).
 fn percentile(sorted: &[f64], p: f64) -> f64 {
     if sorted.is_empty() {
@@ -344,6 +423,8 @@ mod tests {
         assert_eq!(events[2]["ts"], 3000.0);
         assert_eq!(events[3]["ts"], 1000.0);
         assert_eq!(events[3]["dur"], 4000.0);
+        let svg = t.plot_svg("test").unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("shadows") && svg.contains("total"));
         let s = t.summary();
         assert_eq!(s.last().unwrap().name, "total");
         assert_eq!((s[0].median_ms, s[0].p99_ms), (2.0, 4.0));
