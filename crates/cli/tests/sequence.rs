@@ -62,6 +62,19 @@ fn an_animated_sequence_renders_alike_on_the_gpu_and_the_cpu() {
         lines[2].starts_with("1,0.166667,"),
         "frame 1 at 1/6 s:\n{csv}"
     );
+    let svg = std::fs::read_to_string(cpu.join("timings.svg")).expect("timings.svg");
+    assert!(
+        svg.starts_with("<svg") && svg.contains("gbuffer"),
+        "the plot names the passes"
+    );
+    let gif = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(cpu.join("preview.gif")).expect("preview.gif"),
+    ))
+    .expect("a GIF");
+    let frames = image::AnimationDecoder::into_frames(gif)
+        .collect_frames()
+        .expect("its frames");
+    assert_eq!(frames.len(), 4, "one preview frame per frame");
     // Things move: a frozen sequence would give equal frames.
     let (f0, f2) = (frame(&cpu, 0), frame(&cpu, 2));
     assert!(
