@@ -1191,18 +1191,15 @@ fn run() -> Result<()> {
         vpl_shadows,
         clip,
     };
+    let frozen =
+        setup.indirect.is_some() && setup.vpl_shadows.is_some_and(|m| m != VplShadows::ManyLod);
     if setup.scene.rig.is_some()
         && args.frames.is_some()
-        && (setup
-            .vpl_shadows
-            .is_some_and(|m| m != VplShadows::Rasterised)
-            || args.manylod_shadows.is_some()
-            || args.ray_shadows
-            || args.near_field)
+        && (frozen || args.ray_shadows || args.near_field)
     {
         eprintln!(
-            "note: ManyLoD/ISM surfels and the ray BVHs are built once: the moving meshes cast \
-             the VPL shadows, ManyLoD and ray shadows of the first frame's pose"
+            "note: ISM points, rasterised VPL maps and the ray BVHs are built once: the moving \
+             meshes cast those shadows in the first frame's pose (ManyLoD refits every frame)"
         );
     }
     let (device, rendered, display, stages, gbuffer) = match &gpu {
@@ -1649,10 +1646,13 @@ fn gpu_sequence(
         if let Some((direct, _)) = &lights {
             renderer.set_lights(d, q, direct)?;
         }
+        let surfels = setup.indirect.is_some() || args.manylod_shadows.is_some();
+        if let (Some(pose), Some(rig), true) = (&pose, &setup.scene.rig, surfels) {
+            rig.apply(pose, &mut posed.meshes);
+            let (positions, _) = instant_radiosity::shadows::scene_mesh(&posed);
+            renderer.set_scene_positions(q, &positions)?;
+        }
         if setup.indirect.is_some() && (pose.is_some() || lights.is_some()) {
-            if let (Some(pose), Some(rig)) = (&pose, &setup.scene.rig) {
-                rig.apply(pose, &mut posed.meshes);
-            }
             let photons = lights.as_ref().map_or(&setup.photon_lights, |(_, p)| p);
             if let Some(set) = posed_vpls(setup, &posed, photons)? {
                 renderer.set_vpls(q, &set)?;

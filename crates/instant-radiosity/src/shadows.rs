@@ -7,6 +7,7 @@
 
 use ::gpu::{PassTimer, transfer};
 use glam::Vec3;
+use manylod::gpu::GpuRefit;
 use manylod::{
     AtlasLayout, Bsh, View,
     gpu::{CutKind, GpuIsm, GpuManyLod},
@@ -63,6 +64,9 @@ pub struct ShadowConfig {
     /// storage-binding, buffer and texture limits. Views are split into batches that fit, all
     /// writing into one atlas, so the atlas is the same either way.
     pub list_bytes: Option<u64>,
+    /// ManyLoD only: keep the surfels and a refit (Holländer 2013 §3.5.3) so that
+    /// [`VplShadowMaps::set_positions`] can move the hierarchy with deforming meshes.
+    pub refit: bool,
 }
 
 impl Default for ShadowConfig {
@@ -79,6 +83,7 @@ impl Default for ShadowConfig {
             normal_offset: 1.0,
             slope: 0.0,
             list_bytes: None,
+            refit: false,
         }
     }
 }
@@ -144,6 +149,8 @@ const NODE_VIEW_BYTES: u64 = 8;
 struct Batch {
     manylod: GpuManyLod,
     ism: Option<GpuIsm>,
+    /// The refit of this batch's copy of the hierarchy ([`ShadowConfig::refit`]).
+    refit: Option<GpuRefit>,
     views: usize,
 }
 
@@ -185,6 +192,8 @@ pub struct VplShadowMaps {
     ray_offset: f32,
     mode: VplShadows,
     frames: u32,
+    /// New positions were set: the next frame refits before its cuts.
+    moved: bool,
 }
 
 impl VplShadowMaps {
@@ -229,6 +238,7 @@ impl VplShadowMaps {
             ray_offset: offset,
             mode: VplShadows::Rays,
             frames: 0,
+            moved: false,
         })
     }
 
@@ -302,6 +312,7 @@ impl VplShadowMaps {
             ray_offset: 0.0,
             mode,
             frames: 0,
+            moved: false,
         })
     }
 
@@ -316,6 +327,12 @@ impl VplShadowMaps {
             }
             Source::Rays(_) => return,
         };
+        for batch in batches.iter() {
+            if let Some(refit) = batch.refit.as_ref().filter(|_| self.moved) {
+                refit.encode(encoder, timer);
+            }
+        }
+        self.moved = false;
         for batch in batches {
             match &batch.ism {
                 Some(ism) => ism.encode(encoder, &batch.manylod, timer),
@@ -331,6 +348,34 @@ impl VplShadowMaps {
             }
         }
         self.frames += 1;
+    }
+
+    /// Moves the hierarchy with its deformed mesh: `positions` are the triangle mesh's
+    /// ([`scene_mesh`] of the posed scene, as many as at set-up); the next frame refits every
+    /// batch's hierarchy bottom-up (§3.5.3) before its (incremental) cut. Needs ManyLoD maps
+    /// made with [`ShadowConfig::refit`].
+    pub fn set_positions(
+        &mut self,
+        queue: &wgpu::Queue,
+        positions: &[Vec3],
+    ) -> Result<(), IndirectError> {
+        let refits: Vec<&GpuRefit> = match &self.source {
+            Source::Cuts(batches) => batches.iter().filter_map(|b| b.refit.as_ref()).collect(),
+            _ => Vec::new(),
+        };
+        if refits.is_empty() {
+            return Err(IndirectError::ManyLod(manylod::ManyLodError::Mismatch(
+                format!(
+                    "{:?} shadow maps made without refit cannot follow a deforming mesh (ManyLoD with ShadowConfig::refit can)",
+                    self.mode
+                ),
+            )));
+        }
+        for r in refits {
+            r.set_positions(queue, positions)?;
+        }
+        self.moved = true;
+        Ok(())
     }
 
     /// Moves the maps to another VPL set of as many VPLs (a progressive frame's new set,
@@ -496,9 +541,17 @@ fn cut_batches(
                 Some(GpuIsm::new(device, &manylod, points, &own)?)
             }
         };
+        let refit = if config.refit && ism.is_none() {
+            Some(GpuRefit::new(
+                device, &manylod, &bsh, &s, positions, indices,
+            )?)
+        } else {
+            None
+        };
         batches.push(Batch {
             manylod,
             ism,
+            refit,
             views: chunk.len(),
         });
     }

@@ -502,7 +502,10 @@ impl GpuRenderer {
     ) -> Result<(), RenderError> {
         self.light_atlas = config.map(|config| LightAtlas {
             mesh: instant_radiosity::shadows::scene_mesh(scene),
-            config: *config,
+            config: ShadowConfig {
+                refit: config.refit || scene.rig.is_some(),
+                ..*config
+            },
             plan: shadows::ShadowPlan::default(),
             views: Vec::new(),
             maps: None,
@@ -717,6 +720,34 @@ impl GpuRenderer {
         Ok(())
     }
 
+    /// Gives the ManyLoD hierarchies (VPL visibility, the lights' ManyLoD shadows) the posed
+    /// scene's triangle positions (`positions`: [`instant_radiosity::shadows::scene_mesh`] of
+    /// the scene at the pose given to [`GpuRenderer::set_pose`]); the next frame refits them
+    /// before its cuts. Set up from a scene with a rig, the ManyLoD maps can refit; ISM,
+    /// rasterised and ray visibility keep the set-up pose.
+    pub fn set_scene_positions(
+        &mut self,
+        queue: &wgpu::Queue,
+        positions: &[Vec3],
+    ) -> Result<(), RenderError> {
+        if let Some(maps) = self
+            .vpl_shadows
+            .as_mut()
+            .filter(|m| m.mode() == VplShadows::ManyLod)
+        {
+            maps.set_positions(queue, positions)?;
+        }
+        if let Some(a) = &mut self.light_atlas
+            && a.mesh.0.len() == positions.len()
+        {
+            a.mesh.0 = positions.to_vec();
+            if let Some(maps) = &mut a.maps {
+                maps.set_positions(queue, positions)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Sets the camera of the following frames (validated: finite, positive field of view).
     pub fn set_camera(&mut self, queue: &wgpu::Queue, camera: &Camera) -> Result<(), RenderError> {
         gbuffer::validate_camera(camera)?;
@@ -877,7 +908,17 @@ impl GpuRenderer {
         config: &IndirectConfig,
         set: &VplSet,
     ) -> Result<(), RenderError> {
-        self.vpl_shadows = Some(VplShadowMaps::new(device, scene, set, mode, shadow_config)?);
+        let shadow_config = ShadowConfig {
+            refit: shadow_config.refit || (scene.rig.is_some() && mode == VplShadows::ManyLod),
+            ..*shadow_config
+        };
+        self.vpl_shadows = Some(VplShadowMaps::new(
+            device,
+            scene,
+            set,
+            mode,
+            &shadow_config,
+        )?);
         self.set_indirect(device, config, set)
     }
 
