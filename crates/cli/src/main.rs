@@ -174,6 +174,10 @@ struct Args {
     /// With --vpl-shadows manylod: the cut threshold ε in micro-view pixels.
     #[arg(long, default_value_t = 2.0)]
     vpl_shadow_epsilon: f32,
+    /// With --vpl-shadows manylod or ism: 2^LOG2 surfels sampled on the scene (a small scene
+    /// needs fewer; the hierarchy is built on the CPU at start).
+    #[arg(long, value_name = "LOG2", default_value_t = 20, value_parser = clap::value_parser!(u32).range(8..=24))]
+    vpl_shadow_points: u32,
     /// Supersample with M×M samples per pixel (Holländer 2013 §4.3, GPU only): full
     /// supersampling, or with --adaptive only where the metrics ask for samples.
     #[arg(long, value_name = "M")]
@@ -828,6 +832,18 @@ fn load_base_scene(args: &Args) -> Result<Scene> {
     Ok(scene?)
 }
 
+/// What `deferred` without arguments renders: the built-in Cornell box with shadow maps and
+/// one-bounce indirect light from 1024 interleaved VPLs with ManyLoD visibility (2^16 surfels
+/// suffice for its 32 triangles), ACES tone mapping — a few seconds on a software adapter.
+const FIRST_IMPRESSION: [&str; 6] = [
+    "--shadows",
+    "512",
+    "--vpls",
+    "1024",
+    "--vpl-shadow-points",
+    "16",
+];
+
 /// The most bytes a recipe file may hold.
 const RECIPE_LIMIT: u64 = 1 << 20;
 
@@ -837,6 +853,15 @@ const RECIPE_LIMIT: u64 = 1 << 20;
 /// folder; `fixtures:` paths stay as they are.
 fn with_recipe(argv: Vec<std::ffi::OsString>) -> Result<Vec<std::ffi::OsString>> {
     use clap::CommandFactory;
+    if argv.len() == 1 {
+        println!(
+            "no arguments: the first-impression render `deferred {}` (see --help)",
+            FIRST_IMPRESSION.join(" ")
+        );
+        let mut with_defaults = argv;
+        with_defaults.extend(FIRST_IMPRESSION.iter().map(Into::into));
+        return Ok(with_defaults);
+    }
     let at = argv.iter().position(|a| {
         a.to_str()
             .is_some_and(|a| a == "--recipe" || a.starts_with("--recipe="))
@@ -1391,6 +1416,7 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
                 mode,
                 &ShadowConfig {
                     epsilon: args.vpl_shadow_epsilon,
+                    points_log2: args.vpl_shadow_points,
                     ..ShadowConfig::for_mode(mode)
                 },
                 config,
@@ -1779,6 +1805,23 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
             String::new()
         },
     );
+    let shadows = if args.ray_shadows {
+        "exact, a ray per pixel and light".to_owned()
+    } else {
+        let maps = setup
+            .shadow_config
+            .map(|c| format!("shadow maps of {0}x{0} texels a view", c.resolution));
+        let manylod = args
+            .manylod_shadows
+            .map(|t| format!("ManyLoD paraboloids of {t}x{t} for point/spot lights"));
+        let both: Vec<String> = maps.into_iter().chain(manylod).collect();
+        if both.is_empty() {
+            "none".to_owned()
+        } else {
+            both.join(", ")
+        }
+    };
+    println!("shadows: {shadows}");
     if let Some((config, set, _)) = &setup.indirect {
         println!(
             "indirect: {} VPLs in {} subsets of {} ({}), blur {}",
@@ -1800,7 +1843,27 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
                 b.kernel, b.variant
             )),
         );
+        println!(
+            "visibility: {}",
+            match setup.vpl_shadows {
+                Some(VplShadows::ManyLod) => format!(
+                    "ManyLoD cuts, ε {} px, 2^{} surfels",
+                    args.vpl_shadow_epsilon, args.vpl_shadow_points
+                ),
+                Some(VplShadows::Ism) => format!("ISM, 2^{} surfels", args.vpl_shadow_points),
+                Some(VplShadows::Rasterised) => "rasterised hemicubes (exact)".into(),
+                Some(VplShadows::Rays) => "rays (exact)".into(),
+                None => "none: VPLs light through walls".into(),
+            }
+        );
     }
+    let o = &setup.output;
+    println!(
+        "output:  {:?} tone curve, exposure {:+} EV{}",
+        o.tone_mapper,
+        o.exposure_ev,
+        if o.auto_exposure { " + automatic" } else { "" }
+    );
 }
 
 /// Writes the per-tile light counts as `heatmap.png` (the thesis's light-count figures).

@@ -168,3 +168,33 @@ fn near_field_needs_vpls_and_a_gpu() {
     );
     assert!(out.join("render.png").is_file());
 }
+
+/// `deferred` without arguments renders the first-impression Cornell box (shadows, VPL light
+/// with visibility, tone mapping) into ./out and says what it used.
+#[test]
+fn a_bare_run_renders_the_first_impression() {
+    if gpu::test_device(&pipeline::device_needs()).is_none() {
+        return;
+    }
+    let dir = out_folder("bare");
+    let run = Command::new(env!("CARGO_BIN_EXE_deferred"))
+        .current_dir(&dir)
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .expect("the deferred program runs");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for line in [
+        "first-impression",
+        "shadows: shadow maps",
+        "visibility: ManyLoD",
+        "output:",
+    ] {
+        assert!(stdout.contains(line), "{line:?} missing:\n{stdout}");
+    }
+    assert!(dir.join("out/render.png").is_file() && dir.join("out/render.exr").is_file());
+}
