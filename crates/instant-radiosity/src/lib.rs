@@ -169,10 +169,12 @@ impl IndirectConfig {
         }
     }
 
-    /// The blur that is applied (none for the reference).
+    /// The blur that is applied: none for the reference, nor for a 1×1 pattern (every pixel
+    /// shades every VPL: no interleaving noise to remove, the reference's image).
     pub fn applied_blur(&self) -> Option<Blur> {
         match self.interleaving {
             Interleaving::Reference => None,
+            _ if self.pattern.count() == 1 => None,
             _ => self.blur,
         }
     }
