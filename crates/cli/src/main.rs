@@ -240,6 +240,14 @@ struct Args {
     /// With --frames: also write each frame's linear radiance as EXR.
     #[arg(long, requires = "frames")]
     frame_exr: bool,
+    /// With --frames: write every K-th frame only (and only those into preview.gif); the
+    /// timings keep every frame.
+    #[arg(long, value_name = "K", default_value_t = 1, requires = "frames", value_parser = clap::value_parser!(u32).range(1..))]
+    frame_every: u32,
+    /// With --frames: first render N frames of the sequence's start, not recorded or written
+    /// (a GPU's clock rises under load before the timed frames).
+    #[arg(long, value_name = "N", default_value_t = 0, requires = "frames", value_parser = clap::value_parser!(u32).range(0..=10_000))]
+    warm_up: u32,
     /// With --frames: the camera through keyframes T:EX,EY,EZ:TX,TY,TZ (seconds, eye,
     /// target; repeat the flag, in time order), interpolated linearly.
     #[arg(long = "camera-key", value_name = "KEY", conflicts_with = "orbit", value_parser = parse_camera_key)]
@@ -734,7 +742,7 @@ fn parse_model(s: &str) -> Result<(PathBuf, glam::Mat4), String> {
         [x, y, z, s, yaw] => (Vec3::new(x, y, z), s, yaw),
         _ => return Err("expected PATH[@X,Y,Z[,SCALE[,YAW]]]".into()),
     };
-    if !(scale > 0.0) {
+    if scale <= 0.0 {
         return Err(format!("the scale must be above 0, not {scale}"));
     }
     let placement = glam::Mat4::from_scale_rotation_translation(
@@ -1495,6 +1503,12 @@ struct Sequence {
     preview: Vec<image::RgbaImage>,
 }
 
+/// A written frame: its display image and, with --frame-exr, its radiance.
+type FrameImages<'a> = (
+    &'a gbuffer::Image<[f32; 4]>,
+    Option<&'a gbuffer::Image<[f32; 4]>>,
+);
+
 /// The widest preview.gif frame.
 const PREVIEW_WIDTH: u32 = 320;
 
@@ -1537,9 +1551,14 @@ impl Sequence {
         k: u32,
         t: f32,
         submitted_us: f64,
-        (display, radiance): (&gbuffer::Image<[f32; 4]>, Option<&gbuffer::Image<[f32; 4]>>),
+        images: Option<FrameImages>,
         passes: Vec<gpu::PassTime>,
     ) -> Result<()> {
+        self.timeline.push(k, t, submitted_us, passes);
+        self.bar.inc(1);
+        let Some((display, radiance)) = images else {
+            return Ok(());
+        };
         save_png(display, &self.dir.join(format!("frame-{k:05}.png")))?;
         let (w, h) = (display.width(), display.height());
         let rgba: Vec<u8> = display
@@ -1562,8 +1581,6 @@ impl Sequence {
         if let Some(radiance) = radiance.filter(|_| args.frame_exr) {
             save_exr(radiance, &self.dir.join(format!("frame-{k:05}.exr")))?;
         }
-        self.timeline.push(k, t, submitted_us, passes);
-        self.bar.inc(1);
         Ok(())
     }
 
@@ -1662,7 +1679,8 @@ fn gpu_sequence(
     let mut seq = Sequence::new(args, frames, &setup.camera)?;
     renderer.set_animation(d, q, setup.scene.rig.as_ref())?;
     let mut posed = setup.scene.clone();
-    for k in 0..frames {
+    let mut warmed = 0;
+    for k in (0..args.warm_up).map(|_| 0).chain(0..frames) {
         let t = seq.clock.time(k);
         let pose = Sequence::pose(setup, t);
         let lights = moved_lights(args, setup, t);
@@ -1690,25 +1708,25 @@ fn gpu_sequence(
         renderer.encode(&mut encoder);
         q.submit([encoder.finish()]);
         let passes = renderer.pass_times(d, q)?;
-        let display = pipeline::gpu::read_display(
-            d,
-            q,
-            renderer
+        if warmed < args.warm_up {
+            warmed += 1;
+            continue;
+        }
+        let images = if k % args.frame_every == 0 {
+            let display = renderer
                 .display()
-                .context("the renderer has an output stage")?,
-        )?;
-        let radiance = args
-            .frame_exr
-            .then(|| pipeline::gpu::read_radiance(d, q, renderer.output()))
-            .transpose()?;
-        seq.finish_frame(
-            args,
-            k,
-            t,
-            submitted_us,
-            (&display, radiance.as_ref()),
-            passes,
-        )?;
+                .context("the renderer has an output stage")?;
+            let display = pipeline::gpu::read_display(d, q, display)?;
+            let radiance = args
+                .frame_exr
+                .then(|| pipeline::gpu::read_radiance(d, q, renderer.output()))
+                .transpose()?;
+            Some((display, radiance))
+        } else {
+            None
+        };
+        let images = images.as_ref().map(|(d, r)| (d, r.as_ref()));
+        seq.finish_frame(args, k, t, submitted_us, images, passes)?;
     }
     seq.finish(args)
 }
@@ -1752,14 +1770,8 @@ fn cpu_sequence(args: &Args, setup: &Setup, frames: u32) -> Result<()> {
             })
             .collect();
         let display = setup.output.apply(&rendered.image);
-        seq.finish_frame(
-            args,
-            k,
-            t,
-            submitted_us,
-            (&display, Some(&rendered.image)),
-            passes,
-        )?;
+        let images = (k % args.frame_every == 0).then_some((&display, Some(&rendered.image)));
+        seq.finish_frame(args, k, t, submitted_us, images, passes)?;
     }
     seq.finish(args)
 }

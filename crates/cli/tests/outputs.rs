@@ -3,35 +3,22 @@
 
 use std::process::Command;
 
+mod common;
+
 fn out_folder(name: &str) -> std::path::PathBuf {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("cli-outputs")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = common::out_folder("cli-outputs", name);
     std::fs::create_dir_all(&dir).expect("folder");
     dir
 }
 
+/// `deferred --cpu` at 64×48 with `extra`.
 fn deferred(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_deferred"))
-        .args(["--cpu", "--size", "64x48", "--out"])
-        .arg(out)
-        .args(extra)
-        .env_remove("RUST_BACKTRACE")
-        .output()
-        .expect("the deferred program runs")
+    common::deferred(&[&["--cpu", "--size", "64x48"], extra].concat(), out)
 }
 
 /// `deferred` on the GPU at 96×72 with `extra`.
 fn deferred_on_gpu(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_deferred"))
-        .args(["--size", "96x72"])
-        .args(extra)
-        .arg("--out")
-        .arg(out)
-        .env_remove("RUST_BACKTRACE")
-        .output()
-        .expect("the deferred program runs")
+    common::deferred(&[&["--size", "96x72"], extra].concat(), out)
 }
 
 #[test]

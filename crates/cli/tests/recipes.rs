@@ -3,7 +3,6 @@
 //! that names the file and the key.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 fn recipes() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/recipes");
@@ -16,22 +15,11 @@ fn recipes() -> Vec<PathBuf> {
     files
 }
 
-fn out_folder(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("cli-recipes")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
-}
+mod common;
+use common::deferred;
 
-fn deferred(args: &[&str], out: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_deferred"))
-        .args(args)
-        .arg("--out")
-        .arg(out)
-        .env_remove("RUST_BACKTRACE")
-        .output()
-        .expect("the deferred program runs")
+fn out_folder(name: &str) -> PathBuf {
+    common::out_folder("cli-recipes", name)
 }
 
 #[test]

@@ -3,31 +3,24 @@
 //! timings table and trace hold one frame per row / every pass.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+
+mod common;
 
 fn out_folder(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("cli-sequence")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+    common::out_folder("cli-sequence", name)
 }
 
 fn sequence(out: &Path, extra: &[&str]) {
     let cesium = scene::shared_fixtures()
         .expect("the tests need ../shared/fixtures")
         .join("animated/CesiumMan/CesiumMan.glb");
-    let run = Command::new(env!("CARGO_BIN_EXE_deferred"))
-        .arg("--scene")
-        .arg(cesium)
-        .args([
-            "--size", "96x72", "--frames", "4", "--fps", "6", "--orbit", "20",
-        ])
-        .args(extra)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .expect("the deferred program runs");
+    let cesium = cesium.to_string_lossy().into_owned();
+    let mut args = vec![
+        "--scene", &cesium, "--size", "96x72", "--frames", "4", "--fps", "6",
+    ];
+    args.extend(["--orbit", "20"]);
+    args.extend(extra);
+    let run = common::deferred(&args, out);
     assert!(
         run.status.success(),
         "{extra:?}: {}",

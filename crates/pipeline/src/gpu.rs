@@ -678,9 +678,10 @@ impl GpuRenderer {
     /// Moves the scene's meshes by `rig` (`Some`: the rig of the scene this renderer was made
     /// from; the skinning runs first in every frame, at the rest pose until
     /// [`GpuRenderer::set_pose`]), or stops moving them (`None`: they keep the last pose).
-    /// The shadow maps and the G-buffer see the moved meshes; the structures built on the CPU
-    /// from the scene at set-up (ManyLoD surfels, ray-shadow and near-field BVHs) keep the
-    /// rest pose.
+    /// The shadow maps and the G-buffer see the moved meshes; the ManyLoD hierarchies follow
+    /// them through [`GpuRenderer::set_scene_positions`]; the structures built on the CPU from
+    /// the scene at set-up (ISM points, rasterised VPL maps' meshes, ray-shadow and near-field
+    /// BVHs) keep the set-up pose.
     pub fn set_animation(
         &mut self,
         device: &wgpu::Device,

@@ -123,6 +123,18 @@ impl Mesh {
         mesh
     }
 
+    /// Generates MikkTSpace tangents ([`Mesh::generate_tangents`]) when its material (in
+    /// `materials`) has a normal map and the mesh has none.
+    pub fn complete_tangents(&mut self, materials: &[Material]) {
+        if let Some(normal) = materials
+            .get(self.material as usize)
+            .and_then(|m| m.normal_texture)
+            && self.tangents.is_empty()
+        {
+            self.generate_tangents(normal.uv_set);
+        }
+    }
+
     /// Number of triangles.
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
@@ -535,14 +547,7 @@ impl Scene {
     /// material has a normal map and whose file gave none.
     pub fn complete_tangents(&mut self) {
         for mesh in &mut self.meshes {
-            if let Some(normal) = self
-                .materials
-                .get(mesh.material as usize)
-                .and_then(|m| m.normal_texture)
-                && mesh.tangents.is_empty()
-            {
-                mesh.generate_tangents(normal.uv_set);
-            }
+            mesh.complete_tangents(&self.materials);
         }
     }
 

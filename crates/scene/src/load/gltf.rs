@@ -159,14 +159,7 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
                             default_material,
                         )?);
                         // Tangents of normal maps are made in object space, so they move too.
-                        if let Some(normal) = scene
-                            .materials
-                            .get(object.material as usize)
-                            .and_then(|m| m.normal_texture)
-                            && object.tangents.is_empty()
-                        {
-                            object.generate_tangents(normal.uv_set);
-                        }
+                        object.complete_tangents(&scene.materials);
                         pending.push(deformer(
                             &prim,
                             &buffers,

@@ -190,6 +190,9 @@ pub fn skin(
     })
 }
 
+/// Four joint indices and four weights per vertex.
+type JointsAndWeights = (Vec<[u32; 4]>, Vec<[f32; 4]>);
+
 /// `JOINTS_0` and `WEIGHTS_0` of a skinned primitive of `n` vertices: joint indices below
 /// `joint_count`, weights made to sum to 1 (all on the first joint where they sum to 0).
 pub fn joints_and_weights(
@@ -198,7 +201,7 @@ pub fn joints_and_weights(
     name: &str,
     n: usize,
     joint_count: usize,
-) -> Result<(Vec<[u32; 4]>, Vec<[f32; 4]>), SceneErrorKind> {
+) -> Result<JointsAndWeights, SceneErrorKind> {
     use gltf::Semantic;
     let bad = |problem: String| SceneErrorKind::InvalidMesh {
         mesh: name.into(),
