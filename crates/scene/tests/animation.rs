@@ -221,3 +221,46 @@ fn an_inserted_model_keeps_its_animation_under_its_placement() {
         room.meshes[first_mesh].positions
     );
 }
+
+/// Hostile animation data is an error naming the part at fault, never a panic: channel targets
+/// (which glTF's own validation leaves unchecked), key times, value counts.
+#[test]
+fn broken_animations_are_errors_that_name_the_channel() {
+    let text = std::fs::read_to_string(fixture("SimpleSkin/glTF-Embedded/SimpleSkin.gltf"))
+        .expect("SimpleSkin")
+        .replace("\r\n", "\n");
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("broken-animations");
+    std::fs::create_dir_all(&dir).expect("folder");
+    for (what, from, to, expected) in [
+        (
+            "unknown path",
+            "\"path\" : \"rotation\"",
+            "\"path\" : \"bogus\"",
+            "channel 0",
+        ),
+        (
+            "missing node",
+            "\"node\" : 2,\n        \"path\"",
+            "\"node\" : 99,\n        \"path\"",
+            "node 99",
+        ),
+        (
+            "key values",
+            "\"output\" : 6",
+            "\"output\" : 5",
+            "values of",
+        ),
+        (
+            "key times",
+            "\"input\" : 5",
+            "\"input\" : 6",
+            "key times of",
+        ),
+    ] {
+        assert!(text.contains(from), "{what}: the fixture changed");
+        let file = dir.join(format!("{}.gltf", what.replace(' ', "-")));
+        std::fs::write(&file, text.replace(from, to)).expect("write");
+        let e = Scene::load(&file).expect_err(what).to_string();
+        assert!(e.contains(expected), "{what}: {e}");
+    }
+}

@@ -114,7 +114,27 @@ property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_he
             vec![],
         ),
         ("binary.ply", ply_binary(), vec![]),
+        // Animated: a skin with an animation (glTF text), morph targets (GLB).
+        (
+            "skin.gltf",
+            animated("SimpleSkin/glTF-Embedded/SimpleSkin.gltf"),
+            vec![],
+        ),
+        (
+            "morph.glb",
+            animated("AnimatedMorphCube/AnimatedMorphCube.glb"),
+            vec![],
+        ),
     ]
+}
+
+/// The bytes of an animated fixture of `../shared/fixtures/animated`.
+fn animated(path: &str) -> Vec<u8> {
+    let file = scene::shared_fixtures()
+        .expect("the tests need ../shared/fixtures")
+        .join("animated")
+        .join(path);
+    std::fs::read(&file).unwrap_or_else(|e| panic!("{}: {e}", file.display()))
 }
 
 /// One mutant of `bytes`: a bit flip, a random byte, a run of digits (huge numbers), a
@@ -204,6 +224,20 @@ fn mutated_and_truncated_scenes_load_or_fail_cleanly() {
                     for m in &s.meshes {
                         assert!(m.positions.iter().all(|p| p.is_finite()), "{name} case {k}");
                         assert!(m.indices.iter().all(|&i| (i as usize) < m.positions.len()));
+                    }
+                    // What moves can be posed at any time of any clip without a panic.
+                    if let Some(rig) = &s.rig {
+                        for clip in (0..rig.clips.len()).map(Some).chain([None]) {
+                            for t in [0.0, 0.37, 1e6] {
+                                let pose = rig.pose(clip, t);
+                                for d in &rig.deformers {
+                                    assert_eq!(
+                                        rig.deform(d, &pose).positions.len(),
+                                        d.positions.len()
+                                    );
+                                }
+                            }
+                        }
                     }
                 }
                 Err(e) => {

@@ -39,6 +39,23 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
             }
         }
     }
+    // gltf-json does not validate animation channels' targets, which the `gltf` crate's
+    // accessors unwrap: check them first.
+    for (a, animation) in json.animations.iter().enumerate() {
+        for (c, channel) in animation.channels.iter().enumerate() {
+            let target = &channel.target;
+            let node = target.node.value();
+            let valid_path = matches!(target.path, gltf::json::validation::Checked::Valid(_));
+            if node >= json.nodes.len() || !valid_path {
+                return Err(SceneErrorKind::Gltf(format!(
+                    "animation {a} channel {c}: its target (node {node} of {}, path {}) is not \
+                     a node's translation, rotation, scale or weights",
+                    json.nodes.len(),
+                    if valid_path { "valid" } else { "unknown" }
+                )));
+            }
+        }
+    }
     let doc = gltf::Document::from_json(json).map_err(invalid)?;
     let buffers = doc
         .buffers()
