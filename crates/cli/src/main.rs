@@ -1442,16 +1442,39 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
 
 /// The frame's VPLs for `scene` posed at some time (the same seed, so the same Halton
 /// indices and random numbers each frame: the subsets stay put where nothing moved).
-fn posed_vpls(
-    setup: &Setup,
-    scene: &Scene,
-    photon_lights: &[Light],
-) -> Result<Option<vpl::VplSet>> {
-    let Some((_, _, config)) = &setup.indirect else {
-        return Ok(None);
-    };
-    let bvh = scene::Bvh::build(scene);
-    Ok(Some(vpl::generate(scene, &bvh, photon_lights, config)?))
+/// The scene as a sequence poses it on the CPU, and the BVH its VPLs are traced through
+/// (rebuilt only when the meshes move: lights alone moving reuse it).
+struct Posed {
+    scene: Scene,
+    bvh: scene::Bvh,
+}
+
+impl Posed {
+    fn new(scene: &Scene) -> Self {
+        Self {
+            scene: scene.clone(),
+            bvh: scene::Bvh::build(scene),
+        }
+    }
+
+    /// The meshes at `pose` of `rig`.
+    fn pose(&mut self, rig: &scene::animation::Rig, pose: &scene::animation::Pose) {
+        rig.apply(pose, &mut self.scene.meshes);
+        self.bvh = scene::Bvh::build(&self.scene);
+    }
+
+    /// The frame's VPLs from `photon_lights`.
+    fn vpls(&self, setup: &Setup, photon_lights: &[Light]) -> Result<Option<vpl::VplSet>> {
+        let Some((_, _, config)) = &setup.indirect else {
+            return Ok(None);
+        };
+        Ok(Some(vpl::generate(
+            &self.scene,
+            &self.bvh,
+            photon_lights,
+            config,
+        )?))
+    }
 }
 
 /// The direct and photon lights at `t` seconds turned by --light-orbit about the vertical
@@ -1678,7 +1701,7 @@ fn gpu_sequence(
     let (d, q) = (&gpu.device, &gpu.queue);
     let mut seq = Sequence::new(args, frames, &setup.camera)?;
     renderer.set_animation(d, q, setup.scene.rig.as_ref())?;
-    let mut posed = setup.scene.clone();
+    let mut posed = Posed::new(setup.scene);
     let mut warmed = 0;
     for k in (0..args.warm_up).map(|_| 0).chain(0..frames) {
         let t = seq.clock.time(k);
@@ -1692,13 +1715,13 @@ fn gpu_sequence(
         }
         let surfels = setup.indirect.is_some() || args.manylod_shadows.is_some();
         if let (Some(pose), Some(rig), true) = (&pose, &setup.scene.rig, surfels) {
-            rig.apply(pose, &mut posed.meshes);
-            let (positions, _) = instant_radiosity::shadows::scene_mesh(&posed);
+            posed.pose(rig, pose);
+            let (positions, _) = instant_radiosity::shadows::scene_mesh(&posed.scene);
             renderer.set_scene_positions(q, &positions)?;
         }
         if setup.indirect.is_some() && (pose.is_some() || lights.is_some()) {
             let photons = lights.as_ref().map_or(&setup.photon_lights, |(_, p)| p);
-            if let Some(set) = posed_vpls(setup, &posed, photons)? {
+            if let Some(set) = posed.vpls(setup, photons)? {
                 renderer.set_vpls(q, &set)?;
             }
         }
@@ -1735,26 +1758,26 @@ fn gpu_sequence(
 /// twin), traces the VPLs again when it moves, and renders with the CPU frame.
 fn cpu_sequence(args: &Args, setup: &Setup, frames: u32) -> Result<()> {
     let mut seq = Sequence::new(args, frames, &setup.camera)?;
-    let mut posed = setup.scene.clone();
+    let mut posed = Posed::new(setup.scene);
     for k in 0..frames {
         let t = seq.clock.time(k);
         let pose = Sequence::pose(setup, t);
         let lights = moved_lights(args, setup, t);
         if let (Some(pose), Some(rig)) = (&pose, &setup.scene.rig) {
-            rig.apply(pose, &mut posed.meshes);
+            posed.pose(rig, pose);
         }
         let (direct, photons) = match &lights {
             Some((direct, photons)) => (&direct[..], &photons[..]),
             None => (&setup.lights[..], &setup.photon_lights[..]),
         };
         let vpls = if pose.is_some() || lights.is_some() {
-            posed_vpls(setup, &posed, photons)?
+            posed.vpls(setup, photons)?
         } else {
             None
         };
         let submitted_us = seq.start.elapsed().as_secs_f64() * 1e6;
         let camera = seq.path.camera(&setup.camera, t);
-        let (rendered, _) = cpu_frame(args, setup, (&posed, direct), &camera, vpls.as_ref())?;
+        let (rendered, _) = cpu_frame(args, setup, (&posed.scene, direct), &camera, vpls.as_ref())?;
         let mut start_ms = 0.0;
         let passes = rendered
             .timings
