@@ -514,8 +514,7 @@ fn render_reference(
     bar.finish_and_clear();
     let pixels: Vec<[f32; 4]> = pt.image().iter().map(|c| [c.x, c.y, c.z, 1.0]).collect();
     let image = gbuffer::Image::from_vec(width, height, pixels)?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    make_dir(&args.out)?;
     let (png, exr) = (args.out.join("render.png"), args.out.join("render.exr"));
     save_png(&output_transform(args)?.apply(&image), &png)?;
     save_exr(&image, &exr)?;
@@ -581,8 +580,7 @@ fn render_ssaa(
     }
     gpu.queue.submit([encoder.finish()]);
     let image = renderer.ssaa.read_output(&gpu.device, &gpu.queue)?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    make_dir(&args.out)?;
     save_png(
         &output_transform(args)?.apply(&image),
         &args.out.join("render.png"),
@@ -962,6 +960,23 @@ fn record(path: &std::path::Path) {
     }
 }
 
+/// The folders this run created, to remove again (when empty) if it fails.
+static CREATED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Creates folder `dir` (and its parents), recording each one it creates.
+fn make_dir(dir: &std::path::Path) -> Result<()> {
+    let missing: Vec<PathBuf> = dir
+        .ancestors()
+        .take_while(|d| !d.as_os_str().is_empty() && !d.exists())
+        .map(PathBuf::from)
+        .collect();
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    if let Ok(mut created) = CREATED.lock() {
+        created.extend(missing.into_iter().rev());
+    }
+    Ok(())
+}
+
 /// Writes `image` as a PNG at `path` (atomically) and records it as this run's output.
 /// The output transform of render.png (--exposure, --auto-exposure, --tone-map).
 fn output_transform(args: &Args) -> Result<pipeline::output::OutputTransform> {
@@ -1010,6 +1025,12 @@ fn main() -> Result<()> {
     {
         for path in written.iter() {
             let _ = std::fs::remove_file(path);
+        }
+        // The folders it made, innermost first; only empty ones go.
+        if let Ok(created) = CREATED.lock() {
+            for dir in created.iter().rev() {
+                let _ = std::fs::remove_dir(dir);
+            }
         }
     }
     result
@@ -1240,8 +1261,9 @@ fn run() -> Result<()> {
             let (d, q) = (&gpu.device, &gpu.queue);
             let mut renderer = gpu_renderer(&args, gpu, &setup)?;
             if let Some(frames) = args.frames {
+                let seq = Sequence::new(&args, frames, &setup.camera)?;
                 print_setup(&args, &setup, &format!("GPU {}", gpu.describe()));
-                return gpu_sequence(&args, gpu, &mut renderer, &setup, frames);
+                return gpu_sequence(&args, gpu, &mut renderer, &setup, seq);
             }
             let (camera, ambient) = (setup.camera, setup.ambient);
             renderer.render(d, q, &camera, ambient)?; // warm-up: first use of pipelines and caches
@@ -1300,8 +1322,9 @@ fn run() -> Result<()> {
             }
             let device = "CPU (reference path, rayon)";
             if let Some(frames) = args.frames {
+                let seq = Sequence::new(&args, frames, &setup.camera)?;
                 print_setup(&args, &setup, device);
-                return cpu_sequence(&args, &setup, frames);
+                return cpu_sequence(&args, &setup, seq);
             }
             let (rendered, stages) =
                 cpu_frame(&args, &setup, (&scene, &setup.lights), &setup.camera, None)?;
@@ -1324,8 +1347,7 @@ fn run() -> Result<()> {
         }
     };
 
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    make_dir(&args.out)?;
     let png = args.out.join("render.png");
     let exr = args.out.join("render.exr");
     save_png(&display, &png)?;
@@ -1516,6 +1538,7 @@ fn cpu_frame(
 
 /// A sequence's clock, camera path and output folder, and its per-frame bookkeeping.
 struct Sequence {
+    frames: u32,
     clock: sequence::Clock,
     path: sequence::CameraPath,
     dir: PathBuf,
@@ -1536,10 +1559,11 @@ type FrameImages<'a> = (
 const PREVIEW_WIDTH: u32 = 320;
 
 impl Sequence {
+    /// The sequence's clock, camera path (checked before anything is written) and folder.
     fn new(args: &Args, frames: u32, base: &scene::Camera) -> Result<Self> {
+        let (clock, path) = (sequence::Clock::new(args.fps)?, camera_path(args, base)?);
         let dir = args.out.join("frames");
-        std::fs::create_dir_all(&dir)
-            .with_context(|| format!("cannot create {}", dir.display()))?;
+        make_dir(&dir)?;
         let bar = indicatif::ProgressBar::new(u64::from(frames)).with_message("rendering");
         bar.set_style(
             indicatif::ProgressStyle::with_template(
@@ -1548,8 +1572,9 @@ impl Sequence {
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
         Ok(Self {
-            clock: sequence::Clock::new(args.fps)?,
-            path: camera_path(args, base)?,
+            frames,
+            clock,
+            path,
             dir,
             timeline: Default::default(),
             start: std::time::Instant::now(),
@@ -1696,10 +1721,10 @@ fn gpu_sequence(
     gpu: &gpu::Gpu,
     renderer: &mut pipeline::gpu::GpuRenderer,
     setup: &Setup,
-    frames: u32,
+    mut seq: Sequence,
 ) -> Result<()> {
     let (d, q) = (&gpu.device, &gpu.queue);
-    let mut seq = Sequence::new(args, frames, &setup.camera)?;
+    let frames = seq.frames;
     renderer.set_animation(d, q, setup.scene.rig.as_ref())?;
     let mut posed = Posed::new(setup.scene);
     let mut warmed = 0;
@@ -1756,8 +1781,8 @@ fn gpu_sequence(
 
 /// `--frames N` on the CPU: every frame poses the scene (`Rig::deform`, the GPU skinning's
 /// twin), traces the VPLs again when it moves, and renders with the CPU frame.
-fn cpu_sequence(args: &Args, setup: &Setup, frames: u32) -> Result<()> {
-    let mut seq = Sequence::new(args, frames, &setup.camera)?;
+fn cpu_sequence(args: &Args, setup: &Setup, mut seq: Sequence) -> Result<()> {
+    let frames = seq.frames;
     let mut posed = Posed::new(setup.scene);
     for k in 0..frames {
         let t = seq.clock.time(k);
@@ -1910,7 +1935,7 @@ fn write_heatmap(
     counts: &[u32],
 ) -> Result<()> {
     let out = &args.out;
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
+    make_dir(out)?;
     let max = args
         .heatmap_max
         .unwrap_or_else(|| counts.iter().copied().max().unwrap_or(0));
@@ -1954,7 +1979,7 @@ fn dump_stages(
 ) -> Result<()> {
     use gbuffer::Image;
     let dir = out.join("stages");
-    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    make_dir(&dir)?;
     let normals = |img: &Image<u32>| {
         img.map(|w| {
             let n = gbuffer::normal::unpack_octahedral(w);
@@ -2048,7 +2073,7 @@ fn write_shadow_atlas(
             [d, d, d, 1.0]
         })
         .collect();
-    std::fs::create_dir_all(&args.out)?;
+    make_dir(&args.out)?;
     let path = args.out.join("vpl-shadow-atlas.png");
     save_png(&gbuffer::Image::from_vec(w, h, pixels)?, &path)?;
     println!("wrote {}", path.display());

@@ -70,6 +70,31 @@ fn a_failed_run_removes_the_outputs_it_wrote() {
     for partial in ["render.png", "render.exr", "stages/gbuffer-normal.png"] {
         assert!(!out.join(partial).exists(), "{partial} was left behind");
     }
+    // A sequence that fails after it made its folders leaves none of them: here its second
+    // frame cannot be written.
+    let fresh = common::out_folder("cli-outputs", "fail-sequence");
+    let nested = fresh.join("deeper");
+    std::fs::create_dir_all(nested.join("frames/frame-00001.png")).expect("obstacle");
+    let run = common::deferred(&["--cpu", "--size", "16x12", "--frames", "3"], &nested);
+    assert!(!run.status.success(), "the sequence should fail");
+    assert!(
+        !nested.join("frames/frame-00000.png").exists(),
+        "frame 0 was left behind"
+    );
+    // Before any frame: a bad camera key is refused and the folders it would make are not.
+    let never = fresh.join("never/made");
+    let run = common::deferred(
+        &["--cpu", "--frames", "2", "--camera-key", "1:0,0,0:0,0,0"],
+        &never,
+    );
+    assert!(
+        !run.status.success(),
+        "a camera looking at its own eye is refused"
+    );
+    assert!(
+        !fresh.join("never").exists(),
+        "a refused run made its folders"
+    );
 }
 
 /// VPL visibility for many VPLs renders on a device whose storage bindings are 128 MiB (the
