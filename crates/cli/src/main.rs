@@ -1100,6 +1100,7 @@ fn run() -> Result<()> {
         rig.apply(&rig.pose(clip, t), &mut scene.meshes);
     }
     let scene = scene;
+    let own_lights = args.lights.is_none() && !scene.lights.is_empty();
     let (mut lights, emissive_photons, lit_by) = match args.lights {
         Some(n) => (
             scene::scatter_point_lights(scene.bounds(), n, 1),
@@ -1244,6 +1245,10 @@ fn run() -> Result<()> {
         shadow_config,
         vpl_shadows,
         clip,
+        own_lights: (
+            own_lights && !args.frustum_cull && !args.indirect_only,
+            own_lights && !emissive_photons,
+        ),
     };
     let frozen =
         setup.indirect.is_some() && setup.vpl_shadows.is_some_and(|m| m != VplShadows::ManyLod);
@@ -1385,6 +1390,9 @@ struct Setup<'a> {
     vpl_shadows: Option<VplShadows>,
     /// The animation clip played, if the scene has one.
     clip: Option<usize>,
+    /// Whether the direct and the photon lights start with the scene's own lights (whose nodes
+    /// may move: `Rig::place_lights`).
+    own_lights: (bool, bool),
 }
 
 /// `--clip`: the clip of the scene's rig by name or index (the first by default), `None` for a
@@ -1501,14 +1509,42 @@ impl Posed {
 
 /// The direct and photon lights at `t` seconds turned by --light-orbit about the vertical
 /// axis through the scene's centre, or `None` when they stay.
-fn moved_lights(args: &Args, setup: &Setup, t: f32) -> Option<(Vec<Light>, Vec<Light>)> {
-    let degrees_per_second = args.light_orbit?;
+fn moved_lights(
+    args: &Args,
+    setup: &Setup,
+    t: f32,
+    pose: Option<&scene::animation::Pose>,
+) -> Option<(Vec<Light>, Vec<Light>)> {
+    // The file's lights on moving nodes, where the lists start with the scene's lights.
+    let rig = setup.scene.rig.as_ref().filter(|r| !r.lights.is_empty());
+    let placed = match (rig, pose) {
+        (Some(rig), Some(pose)) => {
+            let place = |lights: &[Light], own: bool| {
+                let mut lights = lights.to_vec();
+                if own {
+                    rig.place_lights(pose, &mut lights);
+                }
+                lights
+            };
+            let (direct, photons) = setup.own_lights;
+            Some((
+                place(&setup.lights, direct),
+                place(&setup.photon_lights, photons),
+            ))
+        }
+        _ => None,
+    };
+    let Some(degrees_per_second) = args.light_orbit else {
+        return placed;
+    };
     let centre = setup.scene.bounds().center();
     let turn = glam::Mat4::from_translation(centre)
         * glam::Mat4::from_rotation_y((degrees_per_second * t).to_radians())
         * glam::Mat4::from_translation(-centre);
     let moved = |lights: &[Light]| lights.iter().map(|l| l.transformed(turn)).collect();
-    Some((moved(&setup.lights), moved(&setup.photon_lights)))
+    let (direct, photons) =
+        placed.unwrap_or_else(|| (setup.lights.clone(), setup.photon_lights.clone()));
+    Some((moved(&direct), moved(&photons)))
 }
 
 /// The CPU frame of `scene` from `camera` (with `vpls` instead of the set-up's, when given).
@@ -1581,6 +1617,25 @@ impl Sequence {
             bar,
             preview: Vec::new(),
         })
+    }
+
+    /// The camera at `t`: the path's; or, with no path and no --eye/--target/--fov, the scene
+    /// file's camera where its node moves.
+    fn camera(
+        &self,
+        args: &Args,
+        setup: &Setup,
+        t: f32,
+        pose: Option<&scene::animation::Pose>,
+    ) -> scene::Camera {
+        let own = args.eye.is_none() && args.target.is_none() && args.fov.is_none();
+        let moving = match (&setup.scene.rig, pose) {
+            (Some(rig), Some(pose)) if own && self.path == sequence::CameraPath::Still => {
+                rig.camera(pose)
+            }
+            _ => None,
+        };
+        moving.unwrap_or_else(|| self.path.camera(&setup.camera, t))
     }
 
     /// The scene's pose at frame time `t` (looping its clip), or `None` for a still scene.
@@ -1731,7 +1786,7 @@ fn gpu_sequence(
     for k in (0..args.warm_up).map(|_| 0).chain(0..frames) {
         let t = seq.clock.time(k);
         let pose = Sequence::pose(setup, t);
-        let lights = moved_lights(args, setup, t);
+        let lights = moved_lights(args, setup, t, pose.as_ref());
         if let Some(pose) = &pose {
             renderer.set_pose(q, pose)?;
         }
@@ -1750,7 +1805,7 @@ fn gpu_sequence(
                 renderer.set_vpls(q, &set)?;
             }
         }
-        renderer.set_camera(q, &seq.path.camera(&setup.camera, t))?;
+        renderer.set_camera(q, &seq.camera(args, setup, t, pose.as_ref()))?;
         let submitted_us = seq.start.elapsed().as_secs_f64() * 1e6;
         let mut encoder = d.create_command_encoder(&Default::default());
         renderer.encode(&mut encoder);
@@ -1787,7 +1842,7 @@ fn cpu_sequence(args: &Args, setup: &Setup, mut seq: Sequence) -> Result<()> {
     for k in 0..frames {
         let t = seq.clock.time(k);
         let pose = Sequence::pose(setup, t);
-        let lights = moved_lights(args, setup, t);
+        let lights = moved_lights(args, setup, t, pose.as_ref());
         if let (Some(pose), Some(rig)) = (&pose, &setup.scene.rig) {
             posed.pose(rig, pose);
         }
@@ -1801,7 +1856,7 @@ fn cpu_sequence(args: &Args, setup: &Setup, mut seq: Sequence) -> Result<()> {
             None
         };
         let submitted_us = seq.start.elapsed().as_secs_f64() * 1e6;
-        let camera = seq.path.camera(&setup.camera, t);
+        let camera = seq.camera(args, setup, t, pose.as_ref());
         let (rendered, _) = cpu_frame(args, setup, (&posed.scene, direct), &camera, vpls.as_ref())?;
         let mut start_ms = 0.0;
         let passes = rendered

@@ -22,7 +22,7 @@
 
 use glam::{Mat3, Mat4, Quat, Vec3, Vec4};
 
-use crate::SceneErrorKind;
+use crate::{Camera, Light, SceneErrorKind};
 
 /// The channel target of the root node instances [`Rig::insert`] adds (no channel moves them).
 pub const PLACEMENT_NODE: u32 = u32::MAX;
@@ -188,6 +188,17 @@ pub struct Pose {
     pub weights: Vec<Vec<f32>>,
 }
 
+/// A camera or light on a node that moves: the node instance and the thing in its node's
+/// space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attached<T> {
+    /// The node instance.
+    pub node: u32,
+    /// In the node's space (a camera at the origin looking down −Z, a light as the file
+    /// places it on its node).
+    pub local: T,
+}
+
 /// The animated part of a scene (loaded from glTF skins, morph targets and animations).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Rig {
@@ -199,6 +210,10 @@ pub struct Rig {
     pub skins: Vec<Skin>,
     /// The meshes that move, in mesh order.
     pub deformers: Vec<Deformer>,
+    /// The scene's camera, when its node moves.
+    pub camera: Option<Attached<Camera>>,
+    /// Lights whose nodes move: their index in [`crate::Scene::lights`].
+    pub lights: Vec<(u32, Attached<Light>)>,
 }
 
 impl Channel {
@@ -337,11 +352,12 @@ impl Rig {
         out
     }
 
-    /// Adds `model` (the rig of a scene whose meshes were appended after `mesh_offset` of
-    /// this rig's scene) under a new root node instance placed by `placement`. The model's
+    /// Adds `model` (the rig of a scene whose meshes and lights were appended after
+    /// `mesh_offset` and `light_offset` of this rig's scene; its camera is dropped) under a new
+    /// root node instance placed by `placement`. The model's
     /// channel targets are renumbered past this rig's, so each clip moves only its own file's
     /// nodes; its clips are appended.
-    pub fn insert(&mut self, model: Rig, placement: Mat4, mesh_offset: u32) {
+    pub fn insert(&mut self, model: Rig, placement: Mat4, (mesh_offset, light_offset): (u32, u32)) {
         let target_offset = self
             .nodes
             .iter()
@@ -390,12 +406,40 @@ impl Rig {
                 };
                 d
             }));
+        self.lights
+            .extend(model.lights.into_iter().map(|(index, mut a)| {
+                a.node += offset;
+                (index + light_offset, a)
+            }));
         self.clips.extend(model.clips.into_iter().map(|mut c| {
             for ch in &mut c.channels {
                 ch.node += target_offset;
             }
             c
         }));
+    }
+
+    /// The scene's camera in `pose`, if its node moves.
+    pub fn camera(&self, pose: &Pose) -> Option<Camera> {
+        let a = self.camera.as_ref()?;
+        let world = pose.world[a.node as usize];
+        let c = &a.local;
+        Some(Camera {
+            eye: world.transform_point3(c.eye),
+            target: world.transform_point3(c.target),
+            up: world.transform_vector3(c.up).normalize_or(Vec3::Y),
+            ..*c
+        })
+    }
+
+    /// Writes the lights whose nodes move, as `pose` places them, into `lights` (the scene's
+    /// lights, or a list that starts with them).
+    pub fn place_lights(&self, pose: &Pose, lights: &mut [Light]) {
+        for (index, a) in &self.lights {
+            if let Some(light) = lights.get_mut(*index as usize) {
+                *light = a.local.transformed(pose.world[a.node as usize]);
+            }
+        }
     }
 
     /// Writes `pose` into the moved meshes of `meshes` (the scene's, which this rig moves):
@@ -414,9 +458,19 @@ impl Rig {
     /// Checks that every reference holds: parents before children, skins and joints inside
     /// the rig, one rest vertex (with joints, weights and displacements) per vertex of its
     /// mesh in `meshes`.
-    pub fn validate(&self, meshes: &[crate::Mesh]) -> Result<(), SceneErrorKind> {
+    pub fn validate(&self, meshes: &[crate::Mesh], lights: usize) -> Result<(), SceneErrorKind> {
         let bad = |problem: String| SceneErrorKind::Gltf(format!("animation: {problem}"));
         let nodes = self.nodes.len() as u32;
+        let attached = self.camera.iter().map(|c| c.node);
+        if attached
+            .chain(self.lights.iter().map(|(_, l)| l.node))
+            .any(|n| n >= nodes)
+            || self.lights.iter().any(|(i, _)| *i as usize >= lights)
+        {
+            return Err(bad(
+                "a moving camera or light names a node or light that does not exist".into(),
+            ));
+        }
         if let Some(i) = self
             .nodes
             .iter()

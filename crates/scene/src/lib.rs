@@ -493,6 +493,7 @@ impl Scene {
         } = model;
         let (mesh_offset, material_offset) =
             (self.meshes.len() as u32, self.materials.len() as u32);
+        let light_offset = self.lights.len() as u32;
         let texture_offset = self.textures.len() as u32;
         self.textures.extend(textures);
         self.materials.extend(materials.into_iter().map(|mut m| {
@@ -536,7 +537,7 @@ impl Scene {
             .extend(lights.iter().map(|l| l.transformed(placement)));
         if let Some(model_rig) = rig {
             let own = self.rig.get_or_insert_with(Default::default);
-            own.insert(model_rig, placement, mesh_offset);
+            own.insert(model_rig, placement, (mesh_offset, light_offset));
             let rest = own.pose(None, 0.0);
             own.apply(&rest, &mut self.meshes);
         }
@@ -567,7 +568,7 @@ impl Scene {
             }
         }
         if let Some(rig) = &self.rig {
-            rig.validate(&self.meshes)?;
+            rig.validate(&self.meshes, self.lights.len())?;
         }
         let b = self.bounds();
         let reach = b.min.abs().max(b.max.abs()).max_element();

@@ -264,3 +264,81 @@ fn broken_animations_are_errors_that_name_the_channel() {
         assert!(e.contains(expected), "{what}: {e}");
     }
 }
+
+mod common;
+
+/// A camera and a light on an animated node follow it: a hand-written glTF moves node 1 (which
+/// carries both) from x = 0 to x = 2 in one second.
+#[test]
+fn cameras_and_lights_on_moving_nodes_follow_them() {
+    let mut bytes: Vec<u8> = [0f32, 0., 0., 1., 0., 0., 0., 1., 0.]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    bytes.extend([0u16, 1, 2, 0].iter().flat_map(|i| i.to_le_bytes()));
+    bytes.extend([0f32, 1.0].iter().flat_map(|v| v.to_le_bytes()));
+    bytes.extend(
+        [0f32, 0., 5., 2., 0., 5.]
+            .iter()
+            .flat_map(|v| v.to_le_bytes()),
+    );
+    let text = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_lights_punctual"],
+"extensions":{{"KHR_lights_punctual":{{"lights":[{{"type":"point","intensity":10,"range":4}}]}}}},
+"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}],
+"bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":6}},
+{{"buffer":0,"byteOffset":44,"byteLength":8}},{{"buffer":0,"byteOffset":52,"byteLength":24}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}},
+{{"bufferView":2,"componentType":5126,"count":2,"type":"SCALAR","min":[0],"max":[1]}},
+{{"bufferView":3,"componentType":5126,"count":2,"type":"VEC3"}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+"cameras":[{{"type":"perspective","perspective":{{"yfov":0.8,"znear":0.1,"zfar":50}}}}],
+"nodes":[{{"mesh":0}},{{"translation":[0,0,5],"camera":0,"extensions":{{"KHR_lights_punctual":{{"light":0}}}}}}],
+"animations":[{{"channels":[{{"sampler":0,"target":{{"node":1,"path":"translation"}}}}],
+"samplers":[{{"input":2,"output":3,"interpolation":"LINEAR"}}]}}],
+"scenes":[{{"nodes":[0,1]}}],"scene":0}}"#,
+        bytes.len(),
+        common::base64(&bytes)
+    );
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("moving-camera");
+    std::fs::create_dir_all(&dir).expect("folder");
+    let file = dir.join("moving.gltf");
+    std::fs::write(&file, text).expect("write");
+    let scene = Scene::load(&file).expect("loads");
+    let rig = scene.rig.as_ref().expect("a rig: the node moves");
+    assert!(
+        rig.deformers.is_empty(),
+        "the triangle's node does not move"
+    );
+    let pose = rig.pose(Some(0), 0.5);
+    let camera = rig.camera(&pose).expect("the camera moves");
+    assert!(
+        camera.eye.distance(Vec3::new(1.0, 0.0, 5.0)) < 1e-6,
+        "{}",
+        camera.eye
+    );
+    assert!(
+        camera.target.distance(Vec3::new(1.0, 0.0, 4.0)) < 1e-6,
+        "{}",
+        camera.target
+    );
+    assert_eq!(
+        scene.camera.expect("the file's camera").eye,
+        Vec3::new(0.0, 0.0, 5.0)
+    );
+    let mut lights = scene.lights.clone();
+    rig.place_lights(&pose, &mut lights);
+    match lights[0] {
+        scene::Light::Point {
+            position, radius, ..
+        } => {
+            assert!(
+                position.distance(Vec3::new(1.0, 0.0, 5.0)) < 1e-6,
+                "{position}"
+            );
+            assert_eq!(radius, 4.0);
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -7,7 +7,7 @@ use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 
 use super::folder::{SceneFolder, UNDECLARED_LIMIT};
 use super::{accessor, rig};
-use crate::animation::{Deformer, Joints, NodeInstance, Rig, Trs};
+use crate::animation::{Attached, Deformer, Joints, NodeInstance, Rig, Trs};
 use crate::{
     AlphaMode, Camera, Light, Material, Mesh, Sampler, Scene, SceneErrorKind, TextureRef,
     UvTransform, Wrap, light::default_radius,
@@ -107,6 +107,8 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
     let moved = rig::moved_nodes(&doc);
     let mut nodes: Vec<NodeInstance> = Vec::new();
     let mut pending: Vec<Deformer> = Vec::new();
+    let mut camera = None;
+    let mut lights = Vec::new();
     let mut stack: Vec<Visit> = gscene
         .nodes()
         .map(|node| Visit {
@@ -195,34 +197,41 @@ pub fn load(path: &Path, progress: &mut dyn FnMut(usize, usize)) -> Result<Scene
                 progress(scene.meshes.len(), total);
             }
         }
+        // On a moving node a camera or light is kept in its node's space too.
+        let attach = instance.filter(|_| moving);
         if let Some(cam) = node.camera()
             && scene.camera.is_none()
             && let gltf::camera::Projection::Perspective(p) = cam.projection()
         {
-            let eye = world.transform_point3(Vec3::ZERO);
-            let forward = world.transform_vector3(Vec3::NEG_Z);
-            let up = world.transform_vector3(Vec3::Y);
-            scene.camera = Some(Camera {
-                eye,
-                target: eye + forward,
-                up,
+            let local = Camera {
+                eye: Vec3::ZERO,
+                target: Vec3::NEG_Z,
+                up: Vec3::Y,
                 fov_y: p.yfov(),
                 near: p.znear(),
                 far: p.zfar().unwrap_or(p.znear() * 1e4),
+            };
+            scene.camera = Some(Camera {
+                eye: world.transform_point3(local.eye),
+                target: world.transform_point3(local.target),
+                up: world.transform_vector3(local.up),
+                ..local
             });
+            camera = attach.map(|node| Attached { node, local });
         }
         if let Some(light) = node.light() {
+            if let Some(node) = attach {
+                let local = convert_light(&light, Mat4::IDENTITY);
+                lights.push((scene.lights.len() as u32, Attached { node, local }));
+            }
             scene.lights.push(convert_light(&light, world));
         }
     }
     if rigged {
-        scene.rig = Some(finish_rig(
-            &doc,
-            &buffers,
-            nodes,
-            pending,
-            &mut scene.meshes,
-        )?);
+        let mut rig = finish_rig(&doc, &buffers, nodes, pending, &mut scene.meshes)?;
+        rig.camera = camera;
+        rig.lights = lights;
+        scene.rig = Some(rig);
     }
     if let Some(cam) = &mut scene.camera
         && cam.far <= cam.near
@@ -339,6 +348,7 @@ fn finish_rig(
         clips,
         skins,
         deformers,
+        ..Default::default()
     };
     let rest = rig.pose(None, 0.0);
     rig.apply(&rest, meshes);
