@@ -1,5 +1,6 @@
 // Bottom-up refit of the bounding-sphere hierarchy after deformation (§3.5.3): `leaves`
-// evaluates every surfel (s, t, triangle) on the deformed mesh into its leaf node, `merge`
+// evaluates every surfel (s, t, triangle) on the deformed mesh into its leaf node (from node
+// `first`: the tree's leaves, or the ISM baseline's points), `merge`
 // recomputes one tree level from the level below. Mirrors `manylod::Bsh::refit`,
 // `Node::{leaf, merge}` and `surfels::evaluate`.
 // #import manylod/common.wgsl
@@ -55,7 +56,7 @@ fn leaves(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
         node.axis = vec3<f32>(0.0, 0.0, 1.0);
         node.angle = PI;
     }
-    nodes[refit.leaves - 1u + k] = node;
+    nodes[refit.first + k] = node;
 }
 
 fn merge_nodes(x: Node, y: Node) -> Node {

@@ -1250,15 +1250,17 @@ fn run() -> Result<()> {
             own_lights && !emissive_photons,
         ),
     };
-    let frozen =
-        setup.indirect.is_some() && setup.vpl_shadows.is_some_and(|m| m != VplShadows::ManyLod);
+    let frozen = setup.indirect.is_some()
+        && setup
+            .vpl_shadows
+            .is_some_and(|m| !matches!(m, VplShadows::ManyLod | VplShadows::Ism));
     if setup.scene.rig.is_some()
         && args.frames.is_some()
         && (frozen || args.ray_shadows || args.near_field)
     {
         eprintln!(
-            "note: ISM points, rasterised VPL maps and the ray BVHs are built once: the moving \
-             meshes cast those shadows in the first frame's pose (ManyLoD refits every frame)"
+            "note: rasterised VPL maps and the ray BVHs are built once: the moving meshes cast \
+             those shadows in the first frame's pose (ManyLoD and ISM refit every frame)"
         );
     }
     let (device, rendered, display, stages, gbuffer) = match &gpu {

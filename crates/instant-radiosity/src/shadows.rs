@@ -64,8 +64,9 @@ pub struct ShadowConfig {
     /// storage-binding, buffer and texture limits. Views are split into batches that fit, all
     /// writing into one atlas, so the atlas is the same either way.
     pub list_bytes: Option<u64>,
-    /// ManyLoD only: keep the surfels and a refit (Holländer 2013 §3.5.3) so that
-    /// [`VplShadowMaps::set_positions`] can move the hierarchy with deforming meshes.
+    /// ManyLoD and ISM: keep the surfels and a refit (Holländer 2013 §3.5.3) so that
+    /// [`VplShadowMaps::set_positions`] can move the hierarchy (and the ISM points) with
+    /// deforming meshes.
     pub refit: bool,
 }
 
@@ -352,8 +353,8 @@ impl VplShadowMaps {
 
     /// Moves the hierarchy with its deformed mesh: `positions` are the triangle mesh's
     /// ([`scene_mesh`] of the posed scene, as many as at set-up); the next frame refits every
-    /// batch's hierarchy bottom-up (§3.5.3) before its (incremental) cut. Needs ManyLoD maps
-    /// made with [`ShadowConfig::refit`].
+    /// batch's hierarchy bottom-up (§3.5.3) before its (incremental) cut, and the ISM points
+    /// with its leaves. Needs ManyLoD or ISM maps made with [`ShadowConfig::refit`].
     pub fn set_positions(
         &mut self,
         queue: &wgpu::Queue,
@@ -366,7 +367,7 @@ impl VplShadowMaps {
         if refits.is_empty() {
             return Err(IndirectError::ManyLod(manylod::ManyLodError::Mismatch(
                 format!(
-                    "{:?} shadow maps made without refit cannot follow a deforming mesh (ManyLoD with ShadowConfig::refit can)",
+                    "{:?} shadow maps made without refit cannot follow a deforming mesh (ManyLoD and ISM with ShadowConfig::refit can)",
                     self.mode
                 ),
             )));
@@ -528,7 +529,7 @@ fn cut_batches(
             capacity,
             Some(atlas),
         )?;
-        let ism = match &ism {
+        let gpu_ism = match &ism {
             None => None,
             Some((per_view, (points, list))) => {
                 let own: Vec<_> = list[first * per_view..(first + chunk.len()) * per_view]
@@ -541,16 +542,20 @@ fn cut_batches(
                 Some(GpuIsm::new(device, &manylod, points, &own)?)
             }
         };
-        let refit = if config.refit && ism.is_none() {
-            Some(GpuRefit::new(
-                device, &manylod, &bsh, &s, positions, indices,
-            )?)
+        let refit = if config.refit {
+            let mut refit = GpuRefit::new(device, &manylod, &bsh, &s, positions, indices)?;
+            // The ISM points are the leaves with grown discs: they follow the refit leaves.
+            if let (Some(g), Some((_, (points, _)))) = (&gpu_ism, &ism) {
+                let radius = points.first().map_or(bsh.leaf_radius, |p| p.radius);
+                refit.follow_points(device, &g.points, radius)?;
+            }
+            Some(refit)
         } else {
             None
         };
         batches.push(Batch {
             manylod,
-            ism,
+            ism: gpu_ism,
             refit,
             views: chunk.len(),
         });

@@ -679,9 +679,9 @@ impl GpuRenderer {
     /// from; the skinning runs first in every frame, at the rest pose until
     /// [`GpuRenderer::set_pose`]), or stops moving them (`None`: they keep the last pose).
     /// The shadow maps and the G-buffer see the moved meshes; the ManyLoD hierarchies follow
-    /// them through [`GpuRenderer::set_scene_positions`]; the structures built on the CPU from
-    /// the scene at set-up (ISM points, rasterised VPL maps' meshes, ray-shadow and near-field
-    /// BVHs) keep the set-up pose.
+    /// them through [`GpuRenderer::set_scene_positions`] (ISM points too); the structures built
+    /// on the CPU from the scene at set-up (rasterised VPL maps' meshes, ray-shadow and
+    /// near-field BVHs) keep the set-up pose.
     pub fn set_animation(
         &mut self,
         device: &wgpu::Device,
@@ -724,7 +724,7 @@ impl GpuRenderer {
     /// Gives the ManyLoD hierarchies (VPL visibility, the lights' ManyLoD shadows) the posed
     /// scene's triangle positions (`positions`: [`instant_radiosity::shadows::scene_mesh`] of
     /// the scene at the pose given to [`GpuRenderer::set_pose`]); the next frame refits them
-    /// before its cuts. Set up from a scene with a rig, the ManyLoD maps can refit; ISM,
+    /// before its cuts. Set up from a scene with a rig, the ManyLoD and ISM maps can refit;
     /// rasterised and ray visibility keep the set-up pose.
     pub fn set_scene_positions(
         &mut self,
@@ -734,7 +734,7 @@ impl GpuRenderer {
         if let Some(maps) = self
             .vpl_shadows
             .as_mut()
-            .filter(|m| m.mode() == VplShadows::ManyLod)
+            .filter(|m| matches!(m.mode(), VplShadows::ManyLod | VplShadows::Ism))
         {
             maps.set_positions(queue, positions)?;
         }
@@ -910,7 +910,8 @@ impl GpuRenderer {
         set: &VplSet,
     ) -> Result<(), RenderError> {
         let shadow_config = ShadowConfig {
-            refit: shadow_config.refit || (scene.rig.is_some() && mode == VplShadows::ManyLod),
+            refit: shadow_config.refit
+                || (scene.rig.is_some() && matches!(mode, VplShadows::ManyLod | VplShadows::Ism)),
             ..*shadow_config
         };
         self.vpl_shadows = Some(VplShadowMaps::new(

@@ -332,8 +332,8 @@ fn every_sampled_combination_renders_and_keeps_the_invariants() {
             );
             checks.push("= reference");
         }
-        // Structures built on the CPU (ray BVHs, ISM points, the near field's BVH) keep the
-        // set-up pose and a refit ManyLoD tree cuts slightly otherwise than a fresh one, so
+        // Structures built on the CPU (ray BVHs, the near field's BVH) keep the set-up pose
+        // and refit ManyLoD/ISM trees cut slightly otherwise than fresh ones, so
         // the stages compared with a still posed scene are those that follow the skinning
         // exactly.
         let exact = matches!(c.shadows, Shadows::None | Shadows::Maps)

@@ -11,6 +11,8 @@ use crate::{ManyLodError, Node, NodeView};
 pub struct GpuIsm {
     bind: wgpu::BindGroup,
     count: u32,
+    /// The points (nodes) the list indexes.
+    pub points: wgpu::Buffer,
 }
 
 impl GpuIsm {
@@ -59,6 +61,7 @@ impl GpuIsm {
         Ok(Self {
             bind,
             count: list.len() as u32,
+            points: node_buffer,
         })
     }
 

@@ -6,7 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::{GpuManyLod, STORAGE, groups, uniform};
-use crate::{Bsh, ManyLodError, Surfel, surfels::check_mesh};
+use crate::{Bsh, ManyLodError, Node, Surfel, surfels::check_mesh};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -35,6 +35,10 @@ pub struct GpuRefit {
     leaves_bind: wgpu::BindGroup,
     /// One bind group per level `l = depth − 1 … 0` with its node count.
     levels: Vec<(wgpu::BindGroup, u32)>,
+    /// The surfels, their leaf order and the mesh indices, for [`GpuRefit::follow_points`].
+    inputs: [wgpu::Buffer; 3],
+    /// Point sets that follow the leaves ([`GpuRefit::follow_points`]).
+    points: Vec<wgpu::BindGroup>,
     leaf_count: u32,
     vertex_count: usize,
 }
@@ -125,9 +129,45 @@ impl GpuRefit {
             positions: position_buffer,
             leaves_bind,
             levels,
+            inputs: [surfel_buffer, order, index_buffer],
+            points: Vec::new(),
             leaf_count: n,
             vertex_count: positions.len(),
         })
+    }
+
+    /// Also rewrites `points` (one node per leaf in leaf order, e.g. the ISM baseline's points,
+    /// [`crate::splat::ism`]) with the refit leaves at `radius` each refit.
+    pub fn follow_points(
+        &mut self,
+        device: &wgpu::Device,
+        points: &wgpu::Buffer,
+        radius: f32,
+    ) -> Result<(), ManyLodError> {
+        let size = u64::from(self.leaf_count) * size_of::<Node>() as u64;
+        if points.size() < size {
+            return Err(ManyLodError::Mismatch(format!(
+                "{} bytes of points for {} leaves",
+                points.size(),
+                self.leaf_count
+            )));
+        }
+        let params = uniform(
+            device,
+            "manylod points",
+            bytemuck::bytes_of(&RefitParams {
+                first: 0,
+                count: self.leaf_count,
+                leaves: self.leaf_count,
+                leaf_radius: radius,
+            }),
+        )?;
+        let [surfels, order, indices] = &self.inputs;
+        self.points.push(self.leaves.bind_buffers(
+            device,
+            &[points, &params, surfels, order, &self.positions, indices],
+        ));
+        Ok(())
     }
 
     /// Uploads deformed mesh positions (same vertex count).
@@ -168,6 +208,11 @@ impl GpuRefit {
             let (x, y) = groups(*count);
             self.merge.dispatch(bind, Workgroups::Direct([x, y, 1]))
         }));
+        dispatches.extend(
+            self.points
+                .iter()
+                .map(|bind| self.leaves.dispatch(bind, Workgroups::Direct([x, y, 1]))),
+        );
         Passes::new()
             .pass("refit", dispatches)
             .encode(encoder, timer);
