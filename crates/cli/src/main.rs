@@ -1474,38 +1474,36 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
 
 /// The frame's VPLs for `scene` posed at some time (the same seed, so the same Halton
 /// indices and random numbers each frame: the subsets stay put where nothing moved).
-/// The scene as a sequence poses it on the CPU, and the BVH its VPLs are traced through
-/// (rebuilt only when the meshes move: lights alone moving reuse it).
+/// The scene as a sequence poses it on the CPU, and the BVH its VPLs are traced through: built
+/// when VPLs are first traced and again only after meshes moved (lights alone moving reuse it;
+/// without indirect light none is built).
 struct Posed {
     scene: Scene,
-    bvh: scene::Bvh,
+    bvh: Option<scene::Bvh>,
 }
 
 impl Posed {
     fn new(scene: &Scene) -> Self {
         Self {
             scene: scene.clone(),
-            bvh: scene::Bvh::build(scene),
+            bvh: None,
         }
     }
 
     /// The meshes at `pose` of `rig`.
     fn pose(&mut self, rig: &scene::animation::Rig, pose: &scene::animation::Pose) {
         rig.apply(pose, &mut self.scene.meshes);
-        self.bvh = scene::Bvh::build(&self.scene);
+        self.bvh = None;
     }
 
     /// The frame's VPLs from `photon_lights`.
-    fn vpls(&self, setup: &Setup, photon_lights: &[Light]) -> Result<Option<vpl::VplSet>> {
+    fn vpls(&mut self, setup: &Setup, photon_lights: &[Light]) -> Result<Option<vpl::VplSet>> {
         let Some((_, _, config)) = &setup.indirect else {
             return Ok(None);
         };
-        Ok(Some(vpl::generate(
-            &self.scene,
-            &self.bvh,
-            photon_lights,
-            config,
-        )?))
+        let scene = &self.scene;
+        let bvh = self.bvh.get_or_insert_with(|| scene::Bvh::build(scene));
+        Ok(Some(vpl::generate(scene, bvh, photon_lights, config)?))
     }
 }
 

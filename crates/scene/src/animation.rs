@@ -285,12 +285,14 @@ impl Rig {
         let mut animated = vec![false; self.nodes.len()];
         let mut weights: Vec<Vec<f32>> = self.nodes.iter().map(|n| n.weights.clone()).collect();
         if let Some(c) = clip {
+            // The instances of each channel target, found once per pose.
+            let mut instances: std::collections::HashMap<u32, Vec<usize>> = Default::default();
+            for (i, n) in self.nodes.iter().enumerate() {
+                instances.entry(n.node).or_default().push(i);
+            }
             for ch in &self.clips[c].channels {
                 let v = ch.sample(t);
-                for (i, n) in self.nodes.iter().enumerate() {
-                    if n.node != ch.node {
-                        continue;
-                    }
+                for &i in instances.get(&ch.node).map_or(&[][..], Vec::as_slice) {
                     let l = &mut local[i];
                     match ch.property {
                         Property::Translation => l.translation = Vec3::from_slice(&v),
