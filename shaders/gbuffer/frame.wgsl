@@ -8,7 +8,8 @@ struct Frame {
     eye: vec4<f32>,
     // width, height, 1 / width, 1 / height.
     viewport: vec4<f32>,
-    // x: tan(fov_y / 2) * aspect, y: tan(fov_y / 2) (view ray at unit view depth).
+    // x: tan(fov_y / 2) * aspect, y: tan(fov_y / 2) (view ray at unit view depth);
+    // z: texture footprint in G-buffer pixels (`Frame::with_texture_footprint`).
     tan_half_fov: vec4<f32>,
 };
 

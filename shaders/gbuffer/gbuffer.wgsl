@@ -111,8 +111,10 @@ struct SurfaceFragment {
 // its evaluated material; a fragment its material's alpha does not keep is discarded. Call
 // in uniform control flow (the derivatives).
 fn surface_fragment(in: VertexOut) -> SurfaceFragment {
-    let uv_dx = dpdxFine(in.uv);
-    let uv_dy = dpdyFine(in.uv);
+    // The derivatives over the texture footprint (`Frame::with_texture_footprint`).
+    let footprint = max(frame.tan_half_fov.z, 1.0);
+    let uv_dx = dpdxFine(in.uv) * footprint;
+    let uv_dy = dpdyFine(in.uv) * footprint;
     let facing = facing_normal(in.normal, in.to_eye);
     let at = SurfaceAttributes(in.uv, uv_dx, uv_dy, facing.normal, facing.back_face, in.tangent, in.color);
     let m = evaluate_material(at);

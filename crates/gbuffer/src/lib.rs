@@ -163,7 +163,9 @@ pub struct Frame {
     pub eye: Vec4,
     /// Width, height, 1 / width, 1 / height.
     pub viewport: Vec4,
-    /// tan(fov_y / 2) × aspect, tan(fov_y / 2): the view ray at unit view depth.
+    /// x, y: tan(fov_y / 2) × aspect, tan(fov_y / 2), the view ray at unit view depth;
+    /// z: the texture footprint in G-buffer pixels ([`Frame::with_texture_footprint`]; 0 and 1
+    /// both mean one pixel); w: 0.
     pub tan_half_fov: Vec4,
 }
 
@@ -186,8 +188,17 @@ impl Frame {
                 1.0 / width as f32,
                 1.0 / height as f32,
             ),
-            tan_half_fov: Vec4::new(t * aspect, t, 0.0, 0.0),
+            tan_half_fov: Vec4::new(t * aspect, t, 1.0, 0.0),
         }
+    }
+
+    /// The frame with textures filtered over `pixels` G-buffer pixels on a side instead of
+    /// one: a supersampled G-buffer of `m × m` samples per image pixel takes `m`, so each
+    /// sample's texture lookup covers its whole image pixel (the G-buffer pass scales the
+    /// texture-coordinate derivatives; Holländer 2013 §4.3.4 filters over the pixel too).
+    pub fn with_texture_footprint(mut self, pixels: f32) -> Self {
+        self.tan_half_fov.z = pixels;
+        self
     }
 }
 

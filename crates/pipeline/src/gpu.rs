@@ -8,6 +8,7 @@ use gbuffer::{
     Frame, Image, TextureOptions,
     gpu::{GBufferPass, GBufferTargets, GpuScene},
 };
+use adaptive_ssaa::SsaaConfig;
 use glam::{Vec3, Vec4};
 use scene::{Camera, Light, Scene};
 
@@ -15,6 +16,7 @@ use crate::output::{self, BoundOutput, OutputPass, OutputTransform};
 use wgpu::util::DeviceExt;
 
 use crate::skinning::{BoundSkinning, Skinning};
+use crate::supersampling::Supersampling;
 use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
 use instant_radiosity::{
     IndirectConfig,
@@ -130,6 +132,7 @@ pub struct GpuRenderer {
     near_field: Option<NearFieldStage>,
     output: Option<OutputStage>,
     animation: Option<Animation>,
+    supersampling: Option<Supersampling>,
     bounds: scene::Aabb,
     timer: PassTimer,
 }
@@ -316,8 +319,9 @@ impl GpuRenderer {
             near_field: None,
             output: None,
             animation: None,
+            supersampling: None,
             bounds: scene.bounds(),
-            timer: PassTimer::new(device, 32),
+            timer: PassTimer::new(device, 48),
         })
     }
 
@@ -356,6 +360,9 @@ impl GpuRenderer {
             bound.set_camera(queue, camera);
         }
         self.shading_bound = bound;
+        if let Some(config) = self.supersampling.take().map(|s| *s.config()) {
+            self.supersampling = Some(self.new_supersampling(device, queue, &config)?);
+        }
         self.bind_shadow_lookup(device)?;
         self.bind_composition(device);
         if let Some(output) = self.output.take() {
@@ -425,6 +432,73 @@ impl GpuRenderer {
             &self.sized.radiance,
             indirect,
         );
+        if let Some(s) = &mut self.supersampling {
+            s.bind(device, &self.ambient, indirect, &self.sized.radiance);
+        }
+    }
+
+    /// The supersampling stage for `config` at the frame size, bound to the current lights,
+    /// camera (cascades set with it) and shadows by the caller.
+    fn new_supersampling(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        config: &SsaaConfig,
+    ) -> Result<Supersampling, RenderError> {
+        let mut s = Supersampling::new(
+            device,
+            queue,
+            &self.gbuffer_pass,
+            &self.shading,
+            config,
+            self.size(),
+            &self.lights,
+        )?;
+        if let Some(camera) = &self.camera {
+            s.set_camera(queue, camera);
+        }
+        Ok(s)
+    }
+
+    /// Supersamples the frame (`Some`: `config.m × config.m` samples per pixel — adaptively as
+    /// Holländer 2013 §4.3 decides with `config`'s metrics, or every sample when
+    /// `config.min_samples` is `m²`), or stops (`None`). The direct light of the samples runs
+    /// through the frame's light accumulation with its method, culling and shadows; indirect
+    /// light is shaded once per pixel on the pixel-resolution G-buffer and shared by the
+    /// pixel's samples (each composed with its own albedo and material); textures are filtered
+    /// over the whole pixel. `config`'s ambient, background, resolve and stall are not used:
+    /// the frame's ambient ([`GpuRenderer::set_ambient`]) applies, no surface is black.
+    pub fn set_ssaa(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        config: Option<&SsaaConfig>,
+    ) -> Result<(), RenderError> {
+        self.supersampling = match config {
+            Some(config) => Some(self.new_supersampling(device, queue, config)?),
+            None => None,
+        };
+        self.bind_shadow_lookup(device)?;
+        self.bind_composition(device);
+        Ok(())
+    }
+
+    /// The supersampling configuration, if set.
+    pub fn ssaa(&self) -> Option<&SsaaConfig> {
+        self.supersampling.as_ref().map(Supersampling::config)
+    }
+
+    /// Reads back how many samples each pixel took in the last frame (`None` without
+    /// supersampling).
+    pub fn ssaa_counts(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<Image<u32>>, RenderError> {
+        self.supersampling
+            .as_ref()
+            .map(|s| s.read_counts(device, queue))
+            .transpose()
     }
 
     /// Switches the light accumulation to `config` (brute force, tiled, tiled with normal
@@ -448,7 +522,11 @@ impl GpuRenderer {
         lights: &[Light],
     ) -> Result<(), RenderError> {
         let lights = crate::validate_lights(lights)?;
-        let rebind = lights.len() > self.shading_bound.capacity();
+        let rebind = lights.len() > self.shading_bound.capacity()
+            || self
+                .supersampling
+                .as_ref()
+                .is_some_and(|s| lights.len() > s.shading().capacity());
         self.lights = lights;
         if rebind {
             self.rebind(device, queue)?;
@@ -550,9 +628,20 @@ impl GpuRenderer {
                 }),
             rays: self.ray_shadows.as_ref(),
         };
+        if let Some(s) = &mut self.supersampling {
+            s.bind_shadows(device, &self.shading, inputs)?;
+        }
         Ok(self
             .shading
             .bind_shadows(device, &mut self.shading_bound, inputs)?)
+    }
+
+    /// Writes the lights (with their shadow views) into the light accumulation's buffers.
+    fn write_lights(&mut self, queue: &wgpu::Queue) -> Result<(), RenderError> {
+        if let Some(s) = &mut self.supersampling {
+            s.shading_mut().set_lights(queue, &self.lights)?;
+        }
+        Ok(self.shading_bound.set_lights(queue, &self.lights)?)
     }
 
     /// Plans the lights' shadows — ManyLoD paraboloids where set (remade for the lights),
@@ -572,7 +661,7 @@ impl GpuRenderer {
             };
         }
         if self.ray_shadows.is_some() {
-            self.shading_bound.set_lights(queue, &self.lights)?;
+            self.write_lights(queue)?;
             return self.bind_shadow_lookup(device);
         }
         let diagonal = self.bounds.diagonal();
@@ -618,7 +707,7 @@ impl GpuRenderer {
             self.write_shadow_plan(queue, &plan)?;
         } else {
             self.assign_paraboloids();
-            self.shading_bound.set_lights(queue, &self.lights)?;
+            self.write_lights(queue)?;
         }
         self.bind_shadow_lookup(device)
     }
@@ -672,7 +761,7 @@ impl GpuRenderer {
         }
         plan.assign(&mut self.lights);
         self.assign_paraboloids();
-        Ok(self.shading_bound.set_lights(queue, &self.lights)?)
+        self.write_lights(queue)
     }
 
     /// Moves the scene's meshes by `rig` (`Some`: the rig of the scene this renderer was made
@@ -755,6 +844,9 @@ impl GpuRenderer {
         let frame = Frame::new(camera, self.sized.targets.width, self.sized.targets.height);
         self.gbuffer_pass.write_frame(queue, &frame);
         self.shading_bound.set_camera(queue, camera);
+        if let Some(s) = &mut self.supersampling {
+            s.set_camera(queue, camera);
+        }
         self.camera = Some(*camera);
         // Directional cascades follow the camera (the view count does not change); the other
         // lights' views do not depend on it.
@@ -804,13 +896,19 @@ impl GpuRenderer {
         &self.shading
     }
 
-    /// Reads back each tile's light count of the last frame (`None` for brute force).
+    /// Reads back each tile's light count of the last frame (`None` for brute force); with
+    /// supersampling, of the tiles of samples (the grid of `m` times the frame size) in the
+    /// last light accumulation pass.
     pub fn light_counts(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Option<Vec<u32>>, RenderError> {
-        Ok(self.shading_bound.read_counts(device, queue)?)
+        let bound = match &self.supersampling {
+            Some(s) => s.shading(),
+            None => &self.shading_bound,
+        };
+        Ok(bound.read_counts(device, queue)?)
     }
 
     /// Adds one-bounce indirect light from `set`'s VPLs as `config` says (the stage reads this
@@ -996,6 +1094,9 @@ impl GpuRenderer {
             self.timer.render_pass("z-prepass"),
             self.timer.render_pass("gbuffer"),
         );
+        if let Some(s) = &self.supersampling {
+            s.encode_gbuffer(encoder, &self.gbuffer_pass, &self.scene, &self.timer);
+        }
         if let Some(shadows) = &mut self.vpl_shadows
             && self.indirect.is_some()
         {
@@ -1013,22 +1114,30 @@ impl GpuRenderer {
         {
             maps.encode(encoder, Some(&self.timer));
         }
-        self.shading
-            .encode(&self.shading_bound, encoder, Some(&self.timer));
+        match &self.supersampling {
+            Some(s) => s.encode_direct(encoder, &self.shading, &self.timer),
+            None => self
+                .shading
+                .encode(&self.shading_bound, encoder, Some(&self.timer)),
+        }
         if let Some(i) = &self.indirect {
             i.stage.encode(&i.bound, encoder, Some(&self.timer));
         }
         if let Some((bound, _)) = self.near_field.as_ref().and_then(|n| n.bound.as_ref()) {
             bound.encode(encoder, Some(&self.timer));
         }
-        let (w, h) = self.size();
-        Passes::one(
-            "composition",
-            &self.composition.pipeline,
-            vec![self.composition_group.clone()],
-            Workgroups::covering(w, h, 8),
-        )
-        .encode(encoder, Some(&self.timer));
+        if let Some(s) = &self.supersampling {
+            s.encode_resolve(encoder, &self.shading, &self.timer);
+        } else {
+            let (w, h) = self.size();
+            Passes::one(
+                "composition",
+                &self.composition.pipeline,
+                vec![self.composition_group.clone()],
+                Workgroups::covering(w, h, 8),
+            )
+            .encode(encoder, Some(&self.timer));
+        }
         if let Some(output) = &self.output {
             output.bound.encode(encoder, Some(&self.timer));
         }

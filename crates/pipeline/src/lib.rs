@@ -25,6 +25,7 @@ pub mod output;
 pub mod progressive;
 pub mod sequence;
 pub mod skinning;
+mod supersampling;
 
 use gbuffer::Image;
 use glam::Vec3;
@@ -40,7 +41,9 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "pipeline",
     imports: [gbuffer::SHADERS],
     files: [
+        "compose.wgsl",
         "composition.wgsl",
+        "supersampling.wgsl",
         "accumulate.wgsl",
         "output.wgsl",
         "skinning.wgsl",
@@ -84,6 +87,9 @@ pub enum RenderError {
     /// The light accumulation failed (tile size, light buffer, GPU).
     #[error(transparent)]
     Shading(tiled_shading::ShadingError),
+    /// Supersampling cannot be set up (window size, constants, size).
+    #[error(transparent)]
+    Ssaa(#[from] adaptive_ssaa::SsaaError),
     /// The animation cannot be bound (a rig that does not fit the uploaded scene).
     #[error("animation: {0}")]
     Animation(String),

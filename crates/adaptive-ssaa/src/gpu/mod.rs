@@ -187,6 +187,69 @@ impl Ssaa {
         {
             return Err(SsaaError::InvalidSize { width, height, m });
         }
+        let t = inputs.targets;
+        let samples = [&t.linear_depth, &t.normal, &t.uv, &t.uv_grad, &t.material, &t.tint];
+        let bound = (samples, inputs.textures, inputs.materials);
+        let size = (width, height);
+        Self::build(device, inputs.frame, bound, inputs.output, config, size, light_capacity)
+    }
+
+    /// Only the sample-count evaluation (§4.3.3, [`Ssaa::encode_evaluate`]) for a caller that
+    /// shades the samples itself: `geometry` = the linear depth, normal and material targets of
+    /// its supersampled G-buffer (`m` times `width × height`, the `gbuffer` formats), `frame`
+    /// its frame uniform. The caller writes `S` into [`Ssaa::first`] before the evaluation and
+    /// reads [`Ssaa::counts`] after it; the shading passes of this value read placeholders.
+    pub fn evaluation(
+        device: &wgpu::Device,
+        frame: &wgpu::Buffer,
+        geometry: [&wgpu::Texture; 3],
+        config: &SsaaConfig,
+        (width, height): (u32, u32),
+    ) -> Result<Self, SsaaError> {
+        config.validate()?;
+        let m = config.m;
+        let [linear_depth, normal, material] = geometry;
+        let size = (width.saturating_mul(m), height.saturating_mul(m));
+        if width == 0 || height == 0 {
+            return Err(SsaaError::InvalidSize { width, height, m });
+        }
+        let input = wgpu::TextureUsages::TEXTURE_BINDING;
+        for (what, texture, format) in [
+            ("linear depth", linear_depth, ::gbuffer::LINEAR_DEPTH_FORMAT),
+            ("normals", normal, ::gbuffer::NORMAL_FORMAT),
+            ("material", material, ::gbuffer::MATERIAL_FORMAT),
+        ] {
+            kernel::check_texture(what, texture, size, format, input)?;
+        }
+        let placeholder = |label: &str, format| {
+            transfer::texture_2d(device, label, 1, 1, format, input)
+        };
+        let uv = placeholder("ssaa uv placeholder", crate::UV_FORMAT);
+        let uv_grad = placeholder("ssaa uv grad placeholder", crate::UV_GRAD_FORMAT);
+        let tint = placeholder("ssaa tint placeholder", crate::TINT_FORMAT);
+        let textures = GpuTextures::placeholder(device);
+        let materials = storage(
+            device,
+            "ssaa materials placeholder",
+            size_of::<crate::SsaaMaterial>() as u64,
+            wgpu::BufferUsages::empty(),
+        )?;
+        let samples = [linear_depth, normal, &uv, &uv_grad, material, &tint];
+        let bound = (samples, &textures, &materials);
+        Self::build(device, frame, bound, None, config, (width, height), 1)
+    }
+
+    /// The passes over the sample textures (linear depth, normal, uv, uv gradient, material,
+    /// tint), the texture array and the materials, for up to `light_capacity` lights.
+    fn build(
+        device: &wgpu::Device,
+        frame: &wgpu::Buffer,
+        (samples, textures, materials): ([&wgpu::Texture; 6], &GpuTextures, &wgpu::Buffer),
+        output: Option<&wgpu::Buffer>,
+        config: &SsaaConfig,
+        (width, height): (u32, u32),
+        light_capacity: usize,
+    ) -> Result<Self, SsaaError> {
         let [shade, evaluate, sort, fxaa] = ["shade", "evaluate", "sort", "fxaa"]
             .map(|stage| crate::SHADERS.module(device, &format!("{stage}.wgsl")));
         let (shade, evaluate, sort) = (shade?, evaluate?, sort?);
@@ -236,7 +299,7 @@ impl Ssaa {
         ]
         .map(|(label, size)| storage(device, label, size, none));
         let [first, counts, sort, list] = [first?, counts?, sort?, list?];
-        let output = match inputs.output {
+        let output = match output {
             Some(output) => {
                 let usage = wgpu::BufferUsages::STORAGE;
                 kernel::check_buffer("SSAA output", output, pixels * 16, usage)?;
@@ -250,22 +313,17 @@ impl Ssaa {
             12,
             wgpu::BufferUsages::INDIRECT,
         )?;
-        let t = inputs.targets;
-        let views = [&t.linear_depth, &t.normal, &t.uv, &t.uv_grad, &t.material]
-            .map(|t| t.create_view(&Default::default()));
+        let views = samples.map(|t| t.create_view(&Default::default()));
         let view = wgpu::BindingResource::TextureView;
-        let mut resources = vec![
-            inputs.frame.as_entire_binding(),
-            params_buffer.as_entire_binding(),
-        ];
-        resources.extend(views.iter().map(view));
+        let mut resources = vec![frame.as_entire_binding(), params_buffer.as_entire_binding()];
+        resources.extend(views[..5].iter().map(view));
         resources.extend([
-            view(&inputs.textures.view),
-            wgpu::BindingResource::Sampler(&inputs.textures.sampler),
+            view(&textures.view),
+            wgpu::BindingResource::Sampler(&textures.sampler),
         ]);
         resources.extend(
             [
-                inputs.materials,
+                materials,
                 &lights,
                 &first,
                 &counts,
@@ -275,8 +333,7 @@ impl Ssaa {
             ]
             .map(|b| b.as_entire_binding()),
         );
-        let tint = t.tint.create_view(&Default::default());
-        resources.push(view(&tint));
+        resources.push(view(&views[5]));
         let group = group_layout.bind(device, &resources);
         let args_group = args_layout.bind_buffers(device, &[&args]);
         Ok(Self {
@@ -368,6 +425,18 @@ impl Ssaa {
         self.encode_first(encoder, timer);
         self.encode_evaluate(encoder, timer);
         self.encode_resolve(encoder, timer);
+    }
+
+    /// `S`, the first sample's radiance per pixel (`w·h` RGBA32F, row-major), which the
+    /// shading metric of [`Ssaa::encode_evaluate`] reads.
+    pub fn first(&self) -> &wgpu::Buffer {
+        &self.first
+    }
+
+    /// The samples per pixel [`Ssaa::encode_evaluate`] chose (`w·h` u32, row-major; the
+    /// shading clamps them to `1..=m²`).
+    pub fn counts(&self) -> &wgpu::Buffer {
+        &self.counts
     }
 
     /// The output buffer (`w·h` RGBA32F, row-major), e.g. to copy into a texture.

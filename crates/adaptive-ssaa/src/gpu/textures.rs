@@ -49,6 +49,29 @@ impl GpuTextures {
         })
     }
 
+    /// A one-layer white 1×1 array for passes that bind the array but never sample it
+    /// ([`super::Ssaa::evaluation`]).
+    pub fn placeholder(device: &wgpu::Device) -> Self {
+        let texture = transfer::texture_2d(
+            device,
+            "texture array placeholder",
+            1,
+            1,
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        let sampler = device.create_sampler(&Default::default());
+        Self {
+            texture,
+            view,
+            sampler,
+        }
+    }
+
     /// Reads every level and layer back: the array the GPU samples, for the CPU twin of the
     /// shading.
     pub fn read(

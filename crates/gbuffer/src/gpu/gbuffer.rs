@@ -37,8 +37,38 @@ pub struct GBufferPass {
     after_prepass: BySides,
     frame_layout: Layout,
     pub(super) material_layout: Layout,
-    frame: wgpu::Buffer,
-    frame_group: wgpu::BindGroup,
+    frame: FrameUniform,
+}
+
+/// A [`Frame`] uniform buffer and its bind group for [`GBufferPass`]'s pipelines: the pass
+/// holds one ([`GBufferPass::frame_buffer`]); [`GBufferPass::frame_uniform`] makes more, to
+/// draw the same scene at another size in the same encoder (e.g. a supersampled G-buffer).
+pub struct FrameUniform {
+    buffer: wgpu::Buffer,
+    group: wgpu::BindGroup,
+}
+
+impl FrameUniform {
+    fn new(device: &wgpu::Device, layout: &Layout) -> Self {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame"),
+            size: size_of::<Frame>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let group = layout.bind_buffers(device, &[&buffer]);
+        Self { buffer, group }
+    }
+
+    /// The uniform buffer; screen-space passes of the same size bind it too.
+    pub fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
+    /// Writes `frame`.
+    pub fn write(&self, queue: &wgpu::Queue, frame: &Frame) {
+        queue.write_buffer(&self.buffer, 0, bytemuck::bytes_of(frame));
+    }
 }
 
 impl GBufferPass {
@@ -110,13 +140,7 @@ impl GBufferPass {
             false,
             Some(("fs_main", &targets[..])),
         );
-        let frame = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("frame"),
-            size: size_of::<Frame>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let frame_group = frame_layout.bind_buffers(device, &[&frame]);
+        let frame = FrameUniform::new(device, &frame_layout);
         Ok(Self {
             single,
             prepass,
@@ -125,7 +149,6 @@ impl GBufferPass {
             frame_layout,
             material_layout,
             frame,
-            frame_group,
         })
     }
 
@@ -146,17 +169,22 @@ impl GBufferPass {
         pipelines: [&wgpu::RenderPipeline; 2],
         scene: &GpuScene,
     ) {
-        self.draw(pass, scene, |s| pipelines[usize::from(s.cull)]);
+        self.draw(pass, &self.frame, scene, |s| pipelines[usize::from(s.cull)]);
     }
 
     /// The uniform buffer holding the [`Frame`]; later screen-space passes bind it too.
     pub fn frame_buffer(&self) -> &wgpu::Buffer {
-        &self.frame
+        &self.frame.buffer
+    }
+
+    /// Another frame uniform for this pass's pipelines ([`GBufferPass::encode_with_prepass_at`]).
+    pub fn frame_uniform(&self, device: &wgpu::Device) -> FrameUniform {
+        FrameUniform::new(device, &self.frame_layout)
     }
 
     /// Writes the camera for the next [`GBufferPass::encode`].
     pub fn write_frame(&self, queue: &wgpu::Queue, frame: &Frame) {
-        queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(frame));
+        self.frame.write(queue, frame);
     }
 
     /// Records the G-buffer pass: clears every target and draws the scene.
@@ -168,7 +196,7 @@ impl GBufferPass {
         timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
         let mut pass = Self::begin(encoder, targets, "gbuffer", true, true, timestamp_writes);
-        self.draw(&mut pass, scene, |s| self.single.get(s.cull));
+        self.draw(&mut pass, &self.frame, scene, |s| self.single.get(s.cull));
     }
 
     /// Records a z-prepass (depth only, Holländer 2013 §4.2) and then the G-buffer pass with
@@ -183,6 +211,23 @@ impl GBufferPass {
         prepass_timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
         gbuffer_timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) {
+        let timestamps = (prepass_timestamps, gbuffer_timestamps);
+        self.encode_with_prepass_at(encoder, &self.frame, scene, targets, timestamps);
+    }
+
+    /// [`GBufferPass::encode_with_prepass`] with the camera of `frame` (a
+    /// [`GBufferPass::frame_uniform`] of `targets`' size) and the (z-prepass, G-buffer) timestamps.
+    pub fn encode_with_prepass_at(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        frame: &FrameUniform,
+        scene: &GpuScene,
+        targets: &GBufferTargets,
+        (prepass_timestamps, gbuffer_timestamps): (
+            Option<wgpu::RenderPassTimestampWrites<'_>>,
+            Option<wgpu::RenderPassTimestampWrites<'_>>,
+        ),
+    ) {
         let mut pass = Self::begin(
             encoder,
             targets,
@@ -191,7 +236,7 @@ impl GBufferPass {
             true,
             prepass_timestamps,
         );
-        self.draw(&mut pass, scene, |s| {
+        self.draw(&mut pass, frame, scene, |s| {
             if s.alpha_tested {
                 self.alpha_prepass.get(s.cull)
             } else {
@@ -207,18 +252,19 @@ impl GBufferPass {
             false,
             gbuffer_timestamps,
         );
-        self.draw(&mut pass, scene, |s| self.after_prepass.get(s.cull));
+        self.draw(&mut pass, frame, scene, |s| self.after_prepass.get(s.cull));
     }
 
     /// Draws every draw of `scene` with the pipeline `pick` chooses for its state, binding
-    /// the frame and each draw's material.
+    /// `frame` and each draw's material.
     fn draw<'p>(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
+        frame: &FrameUniform,
         scene: &GpuScene,
         pick: impl Fn(DrawState) -> &'p wgpu::RenderPipeline,
     ) {
-        pass.set_bind_group(0, &self.frame_group, &[]);
+        pass.set_bind_group(0, &frame.group, &[]);
         pass.set_vertex_buffer(0, scene.positions.slice(..));
         pass.set_vertex_buffer(1, scene.attributes.slice(..));
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);

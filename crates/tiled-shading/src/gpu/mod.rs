@@ -284,13 +284,24 @@ impl LightShading {
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&PassTimer>,
     ) {
+        self.encode_as(bound, encoder, timer, &self.pass_name());
+    }
+
+    /// [`LightShading::encode`] timed under `name` (a frame that runs the pass twice).
+    pub fn encode_as(
+        &self,
+        bound: &BoundShading,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: Option<&PassTimer>,
+        name: &str,
+    ) {
         let workgroups = if bound.brute_force {
             Workgroups::covering(bound.size.0, bound.size.1, 8)
         } else {
             Workgroups::Direct([bound.tiles.0, bound.tiles.1, 1])
         };
         Passes::one(
-            &self.pass_name(),
+            name,
             &self.pipeline,
             vec![bound.group.clone(), bound.shadow_group.clone()],
             workgroups,

@@ -1,0 +1,377 @@
+//! Supersampling inside the frame (`shaders/pipeline/supersampling.wgsl`): the scene drawn
+//! into a second G-buffer of `m × m` samples per pixel, its samples lit by the frame's own
+//! light accumulation (the same method, culling and shadows as without supersampling) and
+//! resolved into the frame's radiance — adaptively (Holländer 2013 §4.3, Listing 4.1: the
+//! first sample of every pixel, [`adaptive_ssaa`]'s sample-count evaluation, the remaining
+//! samples) or fully.
+//!
+//! The rule for indirect light: it is shaded once per pixel on the pixel-resolution G-buffer
+//! (Segovia's interleaved pipeline unchanged, its split, discontinuity buffer and blur at the
+//! pixel grid) and shared by the pixel's samples. A sample's radiance is the composition of its
+//! own G-buffer (albedo, material, emission, occlusion) and direct light with the pixel's
+//! indirect diffuse, near-field and indirect specular light, so an edge pixel mixes the
+//! albedos of its surfaces under one irradiance. Textures are filtered over the whole pixel
+//! for every sample ([`gbuffer::Frame::with_texture_footprint`]): right for the pixels of one
+//! sample, which are most; an average of `k` samples is then blurred a little more than a
+//! pixel's footprint.
+//!
+//! How a sample is skipped: the `mask_*` passes copy the linear depth of the samples to shade
+//! and write 0 (no surface) for the others, and the light accumulation reads that copy, so its
+//! tiles bound only the samples it shades.
+
+use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
+use ::gpu::{PassTimer, transfer};
+use adaptive_ssaa::SsaaConfig;
+use adaptive_ssaa::gpu::Ssaa;
+use gbuffer::gpu::{FrameUniform, GBufferPass, GBufferTargets, GBufferTextures, GpuScene};
+use gbuffer::{Frame, LINEAR_DEPTH_FORMAT};
+use scene::Camera;
+use tiled_shading::GpuLight;
+use tiled_shading::gpu::shadows::ShadowInputs;
+use tiled_shading::gpu::{BoundShading, LightShading};
+
+use crate::RenderError;
+use crate::gpu::RADIANCE_FORMAT;
+
+/// Uniform block of `supersampling.wgsl` (`Params`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    width: u32,
+    height: u32,
+    m: u32,
+    n: u32,
+    /// Dither order, `x | y << 8` per sample.
+    order: [u32; 64],
+    /// The order's inverse: cell `y·m + x` → its rank.
+    rank: [u32; 64],
+}
+
+impl Params {
+    fn new(m: u32, (width, height): (u32, u32)) -> Self {
+        let mut order = [0u32; 64];
+        let mut rank = [0u32; 64];
+        for (i, c) in adaptive_ssaa::dither_order(m).into_iter().enumerate() {
+            order[i] = c[0] | (c[1] << 8);
+            rank[(c[1] * m + c[0]) as usize] = i as u32;
+        }
+        Self {
+            width,
+            height,
+            m,
+            n: m * m,
+            order,
+            rank,
+        }
+    }
+}
+
+/// `supersampling.wgsl`'s bindings: params, ambient; linear depth, masked depth (storage);
+/// emission, albedo, material, direct diffuse and specular (samples); indirect diffuse,
+/// specular, near field (pixels); counts, S; radiance (storage).
+const BINDINGS: [Binding; 15] = [
+    Binding::Uniform,
+    Binding::Uniform,
+    Binding::TextureUnfilterable,
+    Binding::StorageTexture(LINEAR_DEPTH_FORMAT),
+    Binding::TextureUnfilterable,
+    Binding::TextureUnfilterable,
+    Binding::TextureUint,
+    Binding::TextureUnfilterable,
+    Binding::TextureUnfilterable,
+    Binding::TextureUnfilterable,
+    Binding::TextureUnfilterable,
+    Binding::TextureUnfilterable,
+    Binding::StorageRead,
+    Binding::Storage,
+    Binding::StorageTexture(RADIANCE_FORMAT),
+];
+
+/// The entry points of `supersampling.wgsl`.
+struct Pipelines {
+    mask_first: wgpu::ComputePipeline,
+    mask_rest: wgpu::ComputePipeline,
+    mask_all: wgpu::ComputePipeline,
+    compose_first: wgpu::ComputePipeline,
+    resolve_adaptive: wgpu::ComputePipeline,
+    resolve_full: wgpu::ComputePipeline,
+}
+
+/// The supersampling stage of one frame size: the supersampled G-buffer and its frame, the
+/// masked depth, the samples' direct light, the light accumulation bound to them, the
+/// sample-count evaluation and the resolve kernels (bound by [`Supersampling::bind`]).
+pub(crate) struct Supersampling {
+    config: SsaaConfig,
+    size: (u32, u32),
+    frame: FrameUniform,
+    targets: GBufferTargets,
+    masked_depth: wgpu::Texture,
+    direct: [wgpu::Texture; 2],
+    shading: BoundShading,
+    evaluation: Ssaa,
+    params: wgpu::Buffer,
+    layout: Layout,
+    pipelines: Pipelines,
+    group: Option<wgpu::BindGroup>,
+}
+
+impl Supersampling {
+    /// Builds the stage for `config` at `size` pixels, the light accumulation `shading`
+    /// bound to the samples for `lights` (the caller then binds the shadow lookup).
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        gbuffer_pass: &GBufferPass,
+        shading: &LightShading,
+        config: &SsaaConfig,
+        size: (u32, u32),
+        lights: &[GpuLight],
+    ) -> Result<Self, RenderError> {
+        config.validate()?;
+        let m = config.m;
+        let samples = (size.0.checked_mul(m), size.1.checked_mul(m));
+        let (Some(sw), Some(sh)) = samples else {
+            return Err(adaptive_ssaa::SsaaError::InvalidSize {
+                width: size.0,
+                height: size.1,
+                m,
+            }
+            .into());
+        };
+        transfer::check_texture_size(device, "supersampled G-buffer", sw, sh)?;
+        let (targets, masked_depth, direct) = transfer::allocation(
+            device,
+            &format!("the {sw}×{sh} supersampled G-buffer"),
+            || -> Result<_, RenderError> {
+                Ok((
+                    GBufferTargets::new(device, sw, sh)?,
+                    transfer::texture_2d(
+                        device,
+                        "masked linear depth",
+                        sw,
+                        sh,
+                        LINEAR_DEPTH_FORMAT,
+                        wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+                    ),
+                    LightShading::output_textures(device, sw, sh),
+                ))
+            },
+        )?;
+        let frame = gbuffer_pass.frame_uniform(device);
+        let masked = GBufferTextures {
+            linear_depth: &masked_depth,
+            ..(&targets).into()
+        };
+        let mut bound = shading.bind(
+            device,
+            frame.buffer(),
+            masked,
+            [&direct[0], &direct[1]],
+            lights.len(),
+            false,
+        )?;
+        bound.set_lights(queue, lights)?;
+        let geometry = [&targets.linear_depth, &targets.normal, &targets.material];
+        let evaluation = Ssaa::evaluation(device, frame.buffer(), geometry, config, size)?;
+        let params = transfer::buffer_init(
+            device,
+            "supersampling params",
+            bytemuck::bytes_of(&Params::new(m, size)),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let module = crate::SHADERS.module(device, "supersampling.wgsl")?;
+        let layout = Layout::compute(device, "supersampling", &BINDINGS);
+        let make = |entry: &str| kernel::pipeline(device, &module, entry, &[&layout], &[]);
+        let pipelines = Pipelines {
+            mask_first: make("mask_first"),
+            mask_rest: make("mask_rest"),
+            mask_all: make("mask_all"),
+            compose_first: make("compose_first"),
+            resolve_adaptive: make("resolve_adaptive"),
+            resolve_full: make("resolve_full"),
+        };
+        Ok(Self {
+            config: *config,
+            size,
+            frame,
+            targets,
+            masked_depth,
+            direct,
+            shading: bound,
+            evaluation,
+            params,
+            layout,
+            pipelines,
+            group: None,
+        })
+    }
+
+    /// The configuration.
+    pub(crate) fn config(&self) -> &SsaaConfig {
+        &self.config
+    }
+
+    /// Full supersampling: every pixel takes `m²` samples (`min_samples` = `m²`).
+    fn full(&self) -> bool {
+        self.config.min_samples >= self.config.samples()
+    }
+
+    /// The light accumulation bound to the samples.
+    pub(crate) fn shading_mut(&mut self) -> &mut BoundShading {
+        &mut self.shading
+    }
+
+    /// The light accumulation bound to the samples.
+    pub(crate) fn shading(&self) -> &BoundShading {
+        &self.shading
+    }
+
+    /// Binds the light accumulation's shadow lookup.
+    pub(crate) fn bind_shadows(
+        &mut self,
+        device: &wgpu::Device,
+        shading: &LightShading,
+        inputs: ShadowInputs<'_>,
+    ) -> Result<(), RenderError> {
+        Ok(shading.bind_shadows(device, &mut self.shading, inputs)?)
+    }
+
+    /// Binds the resolve to the composition's `ambient`, the pixels' `indirect` light
+    /// (diffuse, specular, near field) and the frame's `radiance`.
+    pub(crate) fn bind(
+        &mut self,
+        device: &wgpu::Device,
+        ambient: &wgpu::Buffer,
+        indirect: [&wgpu::Texture; 3],
+        radiance: &wgpu::Texture,
+    ) {
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let t = &self.targets;
+        let views = [
+            view(&t.linear_depth),
+            view(&self.masked_depth),
+            view(&t.emission),
+            view(&t.albedo),
+            view(&t.material),
+            view(&self.direct[0]),
+            view(&self.direct[1]),
+            view(indirect[0]),
+            view(indirect[1]),
+            view(indirect[2]),
+        ];
+        let mut resources = vec![self.params.as_entire_binding(), ambient.as_entire_binding()];
+        resources.extend(views.iter().map(wgpu::BindingResource::TextureView));
+        resources.extend([
+            self.evaluation.counts().as_entire_binding(),
+            self.evaluation.first().as_entire_binding(),
+        ]);
+        let radiance = view(radiance);
+        resources.push(wgpu::BindingResource::TextureView(&radiance));
+        self.group = Some(self.layout.bind(device, &resources));
+    }
+
+    /// Writes `camera` at the sample resolution (textures filtered over the pixel).
+    pub(crate) fn set_camera(&mut self, queue: &wgpu::Queue, camera: &Camera) {
+        let m = self.config.m;
+        let (w, h) = (self.size.0 * m, self.size.1 * m);
+        let frame = Frame::new(camera, w, h).with_texture_footprint(m as f32);
+        self.frame.write(queue, &frame);
+        self.shading.set_camera(queue, camera);
+        self.evaluation.set_far(queue, camera.far);
+    }
+
+    /// Records the supersampled G-buffer (z-prepass, G-buffer).
+    pub(crate) fn encode_gbuffer(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        gbuffer_pass: &GBufferPass,
+        scene: &GpuScene,
+        timer: &PassTimer,
+    ) {
+        let timestamps = (
+            timer.render_pass("ss z-prepass"),
+            timer.render_pass("ss gbuffer"),
+        );
+        gbuffer_pass.encode_with_prepass_at(encoder, &self.frame, scene, &self.targets, timestamps);
+    }
+
+    fn dispatch(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        pipeline: &wgpu::ComputePipeline,
+        (width, height): (u32, u32),
+        (name, timer): (&str, &PassTimer),
+    ) {
+        let Some(group) = &self.group else {
+            return;
+        };
+        Passes::one(
+            name,
+            pipeline,
+            vec![group.clone()],
+            Workgroups::covering(width, height, 8),
+        )
+        .encode(encoder, Some(timer));
+    }
+
+    /// Records the direct light of the first samples (adaptive) or of every sample (full):
+    /// the mask, then `shading`.
+    pub(crate) fn encode_direct(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        shading: &LightShading,
+        timer: &PassTimer,
+    ) {
+        let (mask, which) = if self.full() {
+            (&self.pipelines.mask_all, "all samples")
+        } else {
+            (&self.pipelines.mask_first, "first samples")
+        };
+        let samples = self.targets_size();
+        self.dispatch(encoder, mask, samples, (&format!("ss mask ({which})"), timer));
+        let name = format!("{}, {which}", shading.pass_name());
+        shading.encode_as(&self.shading, encoder, Some(timer), &name);
+    }
+
+    /// Records the resolve after the indirect light: adaptive — S, the evaluation, the
+    /// remaining samples' direct light, their average; full — every sample's average.
+    pub(crate) fn encode_resolve(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        shading: &LightShading,
+        timer: &PassTimer,
+    ) {
+        let p = &self.pipelines;
+        if self.full() {
+            self.dispatch(encoder, &p.resolve_full, self.size, ("ss resolve (full)", timer));
+            return;
+        }
+        self.dispatch(encoder, &p.compose_first, self.size, ("ss first sample", timer));
+        self.evaluation.encode_evaluate(encoder, Some(timer));
+        let samples = self.targets_size();
+        self.dispatch(encoder, &p.mask_rest, samples, ("ss mask (rest)", timer));
+        let name = format!("{}, rest", shading.pass_name());
+        shading.encode_as(&self.shading, encoder, Some(timer), &name);
+        self.dispatch(encoder, &p.resolve_adaptive, self.size, ("ss resolve (adaptive)", timer));
+    }
+
+    fn targets_size(&self) -> (u32, u32) {
+        (self.targets.width, self.targets.height)
+    }
+
+    /// Reads back the samples each pixel took in the last frame (`m²` everywhere when full).
+    pub(crate) fn read_counts(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<gbuffer::Image<u32>, RenderError> {
+        if self.full() {
+            let (w, h) = self.size;
+            let n = self.config.samples();
+            return Ok(gbuffer::Image::filled(w, h, n));
+        }
+        let n = self.config.samples();
+        let counts = self.evaluation.read_counts(device, queue)?;
+        Ok(counts.map(|c| c.clamp(1, n)))
+    }
+}
