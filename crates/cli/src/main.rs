@@ -178,8 +178,10 @@ struct Args {
     /// needs fewer; the hierarchy is built on the CPU at start).
     #[arg(long, value_name = "LOG2", default_value_t = 20, value_parser = clap::value_parser!(u32).range(8..=24))]
     vpl_shadow_points: u32,
-    /// Supersample with M×M samples per pixel (Holländer 2013 §4.3, GPU only): full
-    /// supersampling, or with --adaptive only where the metrics ask for samples.
+    /// Supersample with M×M samples per pixel (2..=8; Holländer 2013 §4.3, GPU only): full
+    /// supersampling, or with --adaptive only where the metrics ask for samples. The samples'
+    /// direct light goes through the frame's light accumulation and shadows; indirect light is
+    /// shaded per pixel and shared by its samples.
     #[arg(long, value_name = "M")]
     ssaa: Option<u32>,
     /// With --ssaa: adaptive supersampling (geometric + shading metric, dither-ordered samples);
@@ -189,9 +191,6 @@ struct Args {
     /// With --ssaa --adaptive: the geometric metric, MM, NC, DV, NV or ND.
     #[arg(long, default_value = "ND", requires = "adaptive")]
     ssaa_metric: adaptive_ssaa::GeometricMetric,
-    /// With --ssaa --adaptive: how the remaining samples are shaded, loop or sorted.
-    #[arg(long, default_value = "loop", requires = "adaptive")]
-    ssaa_resolve: adaptive_ssaa::Resolve,
     /// Render the path-traced ground truth instead, with SPP samples per pixel (CPU;
     /// `scene::reference`): every light casts shadows, emissive meshes are area lights, light
     /// interreflects up to --max-bounces times. No ambient term.
@@ -534,78 +533,6 @@ fn render_reference(
     Ok(())
 }
 
-/// `--ssaa M [--adaptive]`: the supersampled G-buffer and (adaptive) supersampling of the
-/// direct lights on the GPU; writes render.png/.exr and, adaptive, ssaa-samples.png.
-fn render_ssaa(
-    args: &Args,
-    scene: &Scene,
-    camera: &scene::Camera,
-    lights: &[Light],
-    (width, height): (u32, u32),
-    ambient: Vec3,
-    m: u32,
-) -> Result<()> {
-    if args.cpu || args.vpls.is_some() || args.frames.is_some() {
-        bail!(
-            "--ssaa runs on the GPU only, for one frame of direct light (no --cpu, --vpls or \
-             --frames yet)"
-        );
-    }
-    let gpu = gpu::Gpu::from_env().context("--ssaa needs a GPU adapter")?;
-    let config = adaptive_ssaa::SsaaConfig {
-        m,
-        metric: Some(args.ssaa_metric),
-        resolve: args.ssaa_resolve,
-        ambient,
-        anisotropy: args.anisotropy,
-        ..Default::default()
-    };
-    let lights = pipeline::validate_lights(lights)?;
-    let mut renderer = adaptive_ssaa::gpu::SsaaRenderer::new(
-        &gpu.device,
-        &gpu.queue,
-        scene,
-        &lights,
-        width,
-        height,
-        &config,
-    )?;
-    renderer.set_camera(&gpu.queue, camera)?;
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    renderer.encode_gbuffer(&mut encoder, None);
-    if args.adaptive {
-        renderer.ssaa.encode(&mut encoder, None);
-    } else {
-        renderer.ssaa.encode_full(&mut encoder, None);
-    }
-    gpu.queue.submit([encoder.finish()]);
-    let image = renderer.ssaa.read_output(&gpu.device, &gpu.queue)?;
-    make_dir(&args.out)?;
-    save_png(
-        &output_transform(args)?.apply(&image),
-        &args.out.join("render.png"),
-    )?;
-    save_exr(&image, &args.out.join("render.exr"))?;
-    println!("device:  GPU {}", gpu.describe());
-    if args.adaptive {
-        let counts = renderer.ssaa.read_counts(&gpu.device, &gpu.queue)?;
-        let n = m * m;
-        let samples = adaptive_ssaa::cpu::sample_heatmap(&counts, n);
-        save_png(&samples, &args.out.join("ssaa-samples.png"))?;
-        let total: u64 = counts.pixels().iter().map(|&k| u64::from(k)).sum();
-        println!(
-            "ssaa:    adaptive {m}x{m}, {} + shading metric, {} resolve: {:.1} % of the samples",
-            args.ssaa_metric,
-            args.ssaa_resolve.name(),
-            100.0 * total as f64 / (counts.pixels().len() as f64 * f64::from(n))
-        );
-    } else {
-        println!("ssaa:    full {m}x{m} supersampling");
-    }
-    println!("wrote {}", args.out.join("render.png").display());
-    Ok(())
-}
-
 fn indirect_config(args: &Args, scene: &Scene) -> Result<IndirectConfig> {
     let interleaving = if args.no_interleave {
         Interleaving::Reference
@@ -840,14 +767,18 @@ fn load_base_scene(args: &Args) -> Result<Scene> {
 
 /// What `deferred` without arguments renders: the built-in Cornell box with shadow maps and
 /// one-bounce indirect light from 1024 interleaved VPLs with ManyLoD visibility (2^16 surfels
-/// suffice for its 32 triangles), ACES tone mapping — a few seconds on a software adapter.
-const FIRST_IMPRESSION: [&str; 6] = [
+/// suffice for its 32 triangles), adaptive 2×2 supersampling (4×4 costs a software adapter
+/// another ten seconds), ACES tone mapping — about ten seconds on a software adapter.
+const FIRST_IMPRESSION: [&str; 9] = [
     "--shadows",
     "512",
     "--vpls",
     "1024",
     "--vpl-shadow-points",
     "16",
+    "--ssaa",
+    "2",
+    "--adaptive",
 ];
 
 /// The most bytes a recipe file may hold.
@@ -1173,16 +1104,8 @@ fn run() -> Result<()> {
         }
         return render_reference(&args, &scene, camera, &reference_lights, spp);
     }
-    if let Some(m) = args.ssaa {
-        return render_ssaa(
-            &args,
-            &scene,
-            &camera,
-            &direct_lights,
-            (width, height),
-            ambient,
-            m,
-        );
+    if args.ssaa.is_some() && args.cpu {
+        bail!("--ssaa runs on the GPU only (the CPU frame has no supersampling; drop --cpu)");
     }
     let vpl_shadows = match (args.vpl_shadows, args.cpu) {
         (ShadowMode::Auto, false) => Some(VplShadows::ManyLod),
@@ -1288,10 +1211,13 @@ fn run() -> Result<()> {
             {
                 write_shadow_atlas(&args, gpu, shadows)?;
             }
+            write_ssaa_samples(&args, gpu, &renderer)?;
             if args.heatmap {
+                // With supersampling the tiles are of samples.
+                let m = renderer.ssaa().map_or(1, |c| c.m);
                 match renderer.light_counts(d, q)? {
                     Some(counts) => {
-                        write_heatmap(&args, &setup.shading, width, height, &counts)?;
+                        write_heatmap(&args, &setup.shading, width * m, height * m, &counts)?;
                     }
                     None => eprintln!("no heatmap: brute force keeps no per-tile lists"),
                 }
@@ -1321,6 +1247,9 @@ fn run() -> Result<()> {
             }
             if args.near_field {
                 bail!("--near-field needs a GPU (the CPU frame has no near field)");
+            }
+            if args.ssaa.is_some() {
+                bail!("--ssaa needs a GPU (the CPU frame has no supersampling)");
             }
             if u64::from(width) * u64::from(height) > MAX_CPU_PIXELS {
                 bail!(
@@ -1468,8 +1397,59 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
             renderer.set_near_field(d, Some(scene))?;
         }
     }
+    renderer.set_ssaa(d, q, ssaa_config(args)?.as_ref())?;
     renderer.set_ambient(q, setup.ambient);
     Ok(renderer)
+}
+
+/// `--ssaa M [--adaptive --ssaa-metric METRIC]` as the frame's supersampling (checked).
+fn ssaa_config(args: &Args) -> Result<Option<adaptive_ssaa::SsaaConfig>> {
+    let Some(m) = args.ssaa else {
+        return Ok(None);
+    };
+    let config = adaptive_ssaa::SsaaConfig {
+        m,
+        metric: Some(args.ssaa_metric),
+        min_samples: if args.adaptive {
+            1
+        } else {
+            m.saturating_mul(m)
+        },
+        anisotropy: args.anisotropy,
+        ..Default::default()
+    };
+    config.validate().with_context(|| format!("--ssaa {m}"))?;
+    Ok(Some(config))
+}
+
+/// Writes the samples each pixel took as `ssaa-samples.png` and says their share.
+fn write_ssaa_samples(
+    args: &Args,
+    gpu: &gpu::Gpu,
+    renderer: &pipeline::gpu::GpuRenderer,
+) -> Result<()> {
+    let (Some(config), Some(counts)) = (
+        renderer.ssaa(),
+        renderer.ssaa_counts(&gpu.device, &gpu.queue)?,
+    ) else {
+        return Ok(());
+    };
+    let (m, n) = (config.m, config.samples());
+    let total: u64 = counts.pixels().iter().map(|&k| u64::from(k)).sum();
+    let share = 100.0 * total as f64 / (counts.pixels().len() as f64 * f64::from(n));
+    if args.adaptive {
+        make_dir(&args.out)?;
+        let path = args.out.join("ssaa-samples.png");
+        save_png(&adaptive_ssaa::cpu::sample_heatmap(&counts, n), &path)?;
+        println!(
+            "ssaa:    adaptive {m}x{m}, {} + shading metric: {share:.1} % of the samples ({})",
+            args.ssaa_metric,
+            path.display()
+        );
+    } else {
+        println!("ssaa:    full {m}x{m} supersampling");
+    }
+    Ok(())
 }
 
 /// The frame's VPLs for `scene` posed at some time (the same seed, so the same Halton

@@ -147,6 +147,48 @@ fn exact_shadows_by_rays_render_on_the_gpu_and_are_refused_on_the_cpu() {
     assert!(out.join("render.png").is_file() && !out.join("vpl-shadow-atlas.png").exists());
 }
 
+/// Supersampling is a stage of the frame: with VPLs, a light-count heatmap of the sample
+/// tiles, the per-pass table with the supersampled passes, and the sample counts.
+#[test]
+fn supersampling_composes_with_the_frame() {
+    if gpu::test_device(&pipeline::device_needs()).is_none() {
+        return;
+    }
+    let out = out_folder("ssaa");
+    let run = deferred_on_gpu(
+        &out,
+        &[
+            "--ssaa",
+            "4",
+            "--adaptive",
+            "--vpls",
+            "64",
+            "--shading",
+            "tiled-cones",
+            "--heatmap",
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for pass in ["ss gbuffer", "ss resolve (adaptive)", "rest", "SNSM"] {
+        assert!(stdout.contains(pass), "no {pass} in {stdout}");
+    }
+    assert!(stdout.contains("ssaa:    adaptive 4x4"), "{stdout}");
+    for file in ["render.png", "ssaa-samples.png", "heatmap.png"] {
+        assert!(out.join(file).is_file(), "no {file}");
+    }
+    let heatmap = image::open(out.join("heatmap.png")).expect("heatmap");
+    assert_eq!(
+        (heatmap.width(), heatmap.height()),
+        (384, 288),
+        "sample tiles"
+    );
+}
+
 /// The VPLs' near field (`--near-field`) needs VPLs, is refused on the CPU with a clear line,
 /// and renders on the GPU.
 #[test]

@@ -4,11 +4,11 @@
 
 use ::gpu::kernel::{Binding, Kernel, Passes, Workgroups};
 use ::gpu::{PassTimer, transfer};
+use adaptive_ssaa::SsaaConfig;
 use gbuffer::{
     Frame, Image, TextureOptions,
     gpu::{GBufferPass, GBufferTargets, GpuScene},
 };
-use adaptive_ssaa::SsaaConfig;
 use glam::{Vec3, Vec4};
 use scene::{Camera, Light, Scene};
 

@@ -328,7 +328,12 @@ impl Supersampling {
             (&self.pipelines.mask_first, "first samples")
         };
         let samples = self.targets_size();
-        self.dispatch(encoder, mask, samples, (&format!("ss mask ({which})"), timer));
+        self.dispatch(
+            encoder,
+            mask,
+            samples,
+            (&format!("ss mask ({which})"), timer),
+        );
         let name = format!("{}, {which}", shading.pass_name());
         shading.encode_as(&self.shading, encoder, Some(timer), &name);
     }
@@ -343,16 +348,31 @@ impl Supersampling {
     ) {
         let p = &self.pipelines;
         if self.full() {
-            self.dispatch(encoder, &p.resolve_full, self.size, ("ss resolve (full)", timer));
+            self.dispatch(
+                encoder,
+                &p.resolve_full,
+                self.size,
+                ("ss resolve (full)", timer),
+            );
             return;
         }
-        self.dispatch(encoder, &p.compose_first, self.size, ("ss first sample", timer));
+        self.dispatch(
+            encoder,
+            &p.compose_first,
+            self.size,
+            ("ss first sample", timer),
+        );
         self.evaluation.encode_evaluate(encoder, Some(timer));
         let samples = self.targets_size();
         self.dispatch(encoder, &p.mask_rest, samples, ("ss mask (rest)", timer));
         let name = format!("{}, rest", shading.pass_name());
         shading.encode_as(&self.shading, encoder, Some(timer), &name);
-        self.dispatch(encoder, &p.resolve_adaptive, self.size, ("ss resolve (adaptive)", timer));
+        self.dispatch(
+            encoder,
+            &p.resolve_adaptive,
+            self.size,
+            ("ss resolve (adaptive)", timer),
+        );
     }
 
     fn targets_size(&self) -> (u32, u32) {

@@ -1,12 +1,14 @@
 //! The frame's stages in combination (issue 23 item 5): a pairwise-covering sample of the
 //! stage switches — light accumulation, direct shadows, indirect light, VPL visibility,
-//! animation, near field, output transform — rendered small on the test device. Every
-//! combination renders without error to finite radiance, and:
+//! animation, near field, output transform, supersampling — rendered small on the test
+//! device. Every combination renders without error to finite radiance, and:
 //! - light culling does not change the image (each culled method equals brute force);
 //! - interleaving with a 1×1 pattern equals the non-interleaved reference;
 //! - the skinning stage at a pose equals the scene posed on the CPU and rendered still;
-//! - where the CPU frame has the stages (shadow maps or none, no visibility, no near field),
-//!   the CPU frame equals the GPU frame.
+//! - where the CPU frame has the stages (shadow maps or none, no visibility, no near field,
+//!   no supersampling), the CPU frame equals the GPU frame.
+//! (Supersampling's own rules — adaptive pixels of every sample equal full supersampling,
+//! indirect light shared per pixel — are tested in `supersampling.rs`.)
 
 use glam::Vec3;
 use instant_radiosity::{
@@ -52,12 +54,36 @@ struct Combo {
     posed: bool,
     near_field: bool,
     output: bool,
+    ssaa: Ssaa,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Ssaa {
+    None,
+    Adaptive4x4,
+    Full2x2,
+}
+
+impl Ssaa {
+    fn config(self) -> Option<adaptive_ssaa::SsaaConfig> {
+        let (m, min_samples) = match self {
+            Ssaa::None => return None,
+            Ssaa::Adaptive4x4 => (4, 1),
+            Ssaa::Full2x2 => (2, 4),
+        };
+        Some(adaptive_ssaa::SsaaConfig {
+            m,
+            min_samples,
+            anisotropy: 1,
+            ..Default::default()
+        })
+    }
 }
 
 /// Levels of each switch.
-const LEVELS: [usize; 7] = [4, 4, 4, 4, 2, 2, 2];
+const LEVELS: [usize; 8] = [4, 4, 4, 4, 2, 2, 2, 3];
 
-fn combo(levels: [usize; 7]) -> Combo {
+fn combo(levels: [usize; 8]) -> Combo {
     Combo {
         shading: ShadingMethod::ALL[levels[0]],
         shadows: [
@@ -81,13 +107,14 @@ fn combo(levels: [usize; 7]) -> Combo {
         posed: levels[4] == 1,
         near_field: levels[5] == 1,
         output: levels[6] == 1,
+        ssaa: [Ssaa::None, Ssaa::Adaptive4x4, Ssaa::Full2x2][levels[7]],
     }
 }
 
 /// A greedy pairwise covering of [`LEVELS`]: every level pair of every two switches appears in
 /// some combination (deterministic).
-fn pairwise() -> Vec<[usize; 7]> {
-    let all: Vec<[usize; 7]> = (0..LEVELS.iter().product::<usize>())
+fn pairwise() -> Vec<[usize; 8]> {
+    let all: Vec<[usize; 8]> = (0..LEVELS.iter().product::<usize>())
         .map(|mut k| {
             std::array::from_fn(|i| {
                 let l = k % LEVELS[i];
@@ -96,10 +123,10 @@ fn pairwise() -> Vec<[usize; 7]> {
             })
         })
         .collect();
-    let pairs = |c: &[usize; 7]| {
+    let pairs = |c: &[usize; 8]| {
         let mut p = Vec::new();
-        for i in 0..7 {
-            for j in i + 1..7 {
+        for i in 0..8 {
+            for j in i + 1..8 {
                 p.push((i, c[i], j, c[j]));
             }
         }
@@ -243,6 +270,7 @@ fn render_gpu(gpu: &gpu::Gpu, scene: &Scene, c: &Combo, animate: bool) -> gbuffe
         r.set_output(d, Some(pipeline::output::OutputTransform::default()))
             .expect("output");
     }
+    r.set_ssaa(d, q, c.ssaa.config().as_ref()).expect("ssaa");
     let camera = scene.camera_or_framed();
     let out = r
         .render(d, q, &camera, pipeline::DEFAULT_AMBIENT)
@@ -290,10 +318,10 @@ fn every_sampled_combination_renders_and_keeps_the_invariants() {
     assert!(combos.len() >= 16, "{} combinations", combos.len());
     // And what the CPU frame has, across methods, indirect modes and poses.
     combos.extend([
-        [1, 1, 1, 0, 1, 0, 0],
-        [3, 0, 3, 0, 0, 0, 1],
-        [2, 1, 2, 0, 1, 0, 0],
-        [0, 1, 1, 0, 0, 0, 0],
+        [1, 1, 1, 0, 1, 0, 0, 0],
+        [3, 0, 3, 0, 0, 0, 1, 0],
+        [2, 1, 2, 0, 1, 0, 0, 0],
+        [0, 1, 1, 0, 0, 0, 0, 0],
     ]);
     let mut cpu_checked = 0;
     for levels in combos {
@@ -348,7 +376,8 @@ fn every_sampled_combination_renders_and_keeps_the_invariants() {
             );
             checks.push("= posed still");
         }
-        let cpu_has = matches!(c.shadows, Shadows::None | Shadows::Maps)
+        let cpu_has = c.ssaa == Ssaa::None
+            && matches!(c.shadows, Shadows::None | Shadows::Maps)
             && (c.visibility.is_none() || c.indirect == Indirect::None)
             && (!c.near_field || c.indirect == Indirect::None);
         if cpu_has {

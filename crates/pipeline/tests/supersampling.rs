@@ -83,16 +83,9 @@ fn the_frame_supersamples_as_the_adaptive_ssaa_renderer() {
     let gpu_lights = tiled_shading::gpu_lights(&lights).expect("lights");
     for config in [full(4), adaptive(4), adaptive(2)] {
         let (image, counts) = frame(gpu, &scene, &lights, Some(&config), None, config.ambient);
-        let expected = adaptive_ssaa::gpu::run(
-            gpu,
-            &scene,
-            &camera,
-            &gpu_lights,
-            SIZE.0,
-            SIZE.1,
-            &config,
-        )
-        .expect("adaptive-ssaa");
+        let expected =
+            adaptive_ssaa::gpu::run(gpu, &scene, &camera, &gpu_lights, SIZE.0, SIZE.1, &config)
+                .expect("adaptive-ssaa");
         let counts = counts.expect("counts");
         let n = config.samples();
         let same: Vec<bool> = counts
@@ -143,7 +136,14 @@ fn adaptive_pixels_of_every_sample_equal_full_supersampling() {
     let scene = scene::cornell_box();
     let ambient = pipeline::DEFAULT_AMBIENT;
     let (full_image, _) = frame(gpu, &scene, &scene.lights, Some(&full(4)), None, ambient);
-    let (image, counts) = frame(gpu, &scene, &scene.lights, Some(&adaptive(4)), None, ambient);
+    let (image, counts) = frame(
+        gpu,
+        &scene,
+        &scene.lights,
+        Some(&adaptive(4)),
+        None,
+        ambient,
+    );
     let counts = counts.expect("counts");
     let mut compared = 0;
     for ((a, b), &k) in image
@@ -205,12 +205,18 @@ fn supersampled_pixels_share_their_indirect_light() {
         }
     }
     let share = equal as f32 / plain.len() as f32;
-    println!("{:.1} % of the pixels gain the same indirect light", 100.0 * share);
+    println!(
+        "{:.1} % of the pixels gain the same indirect light",
+        100.0 * share
+    );
     // The others are edge pixels whose samples mix albedos (and the box's far corners).
     assert!(share > 0.8, "{share}");
     let total = |v: &[[f32; 4]]| v.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>();
     let ratio = total(&supersampled) / total(&plain);
-    assert!((ratio - 1.0).abs() < 0.02, "indirect light total ratio {ratio}");
+    assert!(
+        (ratio - 1.0).abs() < 0.02,
+        "indirect light total ratio {ratio}"
+    );
 }
 
 /// Against the path tracer's pixel integral (rays jittered over each pixel) of delta lights
@@ -240,7 +246,12 @@ fn supersampling_approaches_the_path_traced_pixel_integral() {
     let one = render(None);
     let supersampled = render(Some(&full(4)));
     let adaptive = render(Some(&adaptive(4)));
-    println!("against the pixel integral: one sample {one:?}, full 4x4 {supersampled:?}, adaptive 4x4 {adaptive:?}");
-    assert!(supersampled.rms < 0.6 * one.rms, "{supersampled:?} vs {one:?}");
+    println!(
+        "against the pixel integral: one sample {one:?}, full 4x4 {supersampled:?}, adaptive 4x4 {adaptive:?}"
+    );
+    assert!(
+        supersampled.rms < 0.6 * one.rms,
+        "{supersampled:?} vs {one:?}"
+    );
     assert!(adaptive.rms < 0.8 * one.rms, "{adaptive:?} vs {one:?}");
 }

@@ -188,10 +188,25 @@ impl Ssaa {
             return Err(SsaaError::InvalidSize { width, height, m });
         }
         let t = inputs.targets;
-        let samples = [&t.linear_depth, &t.normal, &t.uv, &t.uv_grad, &t.material, &t.tint];
+        let samples = [
+            &t.linear_depth,
+            &t.normal,
+            &t.uv,
+            &t.uv_grad,
+            &t.material,
+            &t.tint,
+        ];
         let bound = (samples, inputs.textures, inputs.materials);
         let size = (width, height);
-        Self::build(device, inputs.frame, bound, inputs.output, config, size, light_capacity)
+        Self::build(
+            device,
+            inputs.frame,
+            bound,
+            inputs.output,
+            config,
+            size,
+            light_capacity,
+        )
     }
 
     /// Only the sample-count evaluation (§4.3.3, [`Ssaa::encode_evaluate`]) for a caller that
@@ -221,9 +236,8 @@ impl Ssaa {
         ] {
             kernel::check_texture(what, texture, size, format, input)?;
         }
-        let placeholder = |label: &str, format| {
-            transfer::texture_2d(device, label, 1, 1, format, input)
-        };
+        let placeholder =
+            |label: &str, format| transfer::texture_2d(device, label, 1, 1, format, input);
         let uv = placeholder("ssaa uv placeholder", crate::UV_FORMAT);
         let uv_grad = placeholder("ssaa uv grad placeholder", crate::UV_GRAD_FORMAT);
         let tint = placeholder("ssaa tint placeholder", crate::TINT_FORMAT);
@@ -322,16 +336,8 @@ impl Ssaa {
             wgpu::BindingResource::Sampler(&textures.sampler),
         ]);
         resources.extend(
-            [
-                materials,
-                &lights,
-                &first,
-                &counts,
-                &output,
-                &sort,
-                &list,
-            ]
-            .map(|b| b.as_entire_binding()),
+            [materials, &lights, &first, &counts, &output, &sort, &list]
+                .map(|b| b.as_entire_binding()),
         );
         resources.push(view(&views[5]));
         let group = group_layout.bind(device, &resources);
