@@ -8,14 +8,17 @@ struct Frame {
     eye: vec4<f32>,
     // width, height, 1 / width, 1 / height.
     viewport: vec4<f32>,
-    // x: tan(fov_y / 2) * aspect, y: tan(fov_y / 2) (view ray at unit view depth);
-    // z: texture footprint in G-buffer pixels (`Frame::with_texture_footprint`).
+    // x: tan(fov_y / 2) * aspect, y: tan(fov_y / 2) (view ray at unit view depth).
     tan_half_fov: vec4<f32>,
+    // xy: sample offset from the pixel centres in pixels (`Frame::with_jitter`; view_proj is
+    // shifted by it, inv_view_proj is not); z: texture footprint in G-buffer pixels.
+    sampling: vec4<f32>,
 };
 
-// Normalized device xy of a pixel centre (x right, y up), thesis §3.6 step 1.
+// Normalized device xy of a pixel's sample position, its centre moved by the jitter (x right,
+// y up), thesis §3.6 step 1.
 fn pixel_to_ndc(frame: Frame, pixel: vec2<u32>) -> vec2<f32> {
-    let uv = (vec2<f32>(pixel) + 0.5) * frame.viewport.zw;
+    let uv = (vec2<f32>(pixel) + 0.5 + frame.sampling.xy) * frame.viewport.zw;
     return vec2<f32>(uv.x * 2.0 - 1.0, (1.0 - uv.y) * 2.0 - 1.0);
 }
 

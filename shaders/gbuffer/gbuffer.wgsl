@@ -112,7 +112,7 @@ struct SurfaceFragment {
 // in uniform control flow (the derivatives).
 fn surface_fragment(in: VertexOut) -> SurfaceFragment {
     // The derivatives over the texture footprint (`Frame::with_texture_footprint`).
-    let footprint = max(frame.tan_half_fov.z, 1.0);
+    let footprint = max(frame.sampling.z, 1.0);
     let uv_dx = dpdxFine(in.uv) * footprint;
     let uv_dy = dpdyFine(in.uv) * footprint;
     let facing = facing_normal(in.normal, in.to_eye);

@@ -1,13 +1,16 @@
 // #import pipeline/compose.wgsl
 // Supersampling inside the frame (`pipeline::supersampling`): the frame's stages on a
 // supersampled G-buffer of m × m samples per pixel, adaptive after Holländer 2013 §4.3
-// (Listing 4.1) or full. The light accumulation (`tiled.wgsl`, any method, with shadows)
-// shades the samples whose linear depth the `mask_*` passes keep (the others read as no
-// surface), so the direct light of a sample is culled and shadowed as in the frame without
-// supersampling. Indirect light is shaded once per pixel on the pixel-resolution G-buffer and
-// shared by the pixel's samples: sample radiance = `compose` of the sample's G-buffer with its
-// own direct light and the pixel's indirect light. Pixel p's window holds the samples
-// p·m + (0..m)², visited in the ordered-dither order `order` (`adaptive_ssaa::dither_order`).
+// (Listing 4.1) or full. Pixel p's window holds the samples p·m + (0..m)², visited in the
+// ordered-dither order `order` (`adaptive_ssaa::dither_order`). The frame's pixel-resolution
+// G-buffer is jittered onto each window's first sample, so the frame without supersampling —
+// light accumulation, indirect light, composition — computes S, the first sample's radiance
+// (`store_first` keeps it for the evaluation and the resolve). The light accumulation
+// (`tiled.wgsl`, any method, with shadows) then shades the remaining samples whose linear
+// depth `mask_rest`/`mask_full` keep (the others read as no surface), so the direct light of a
+// sample is culled and shadowed as in the frame without supersampling. Indirect light is the
+// pixel's, shared by its samples: sample radiance = `compose` of the sample's G-buffer and
+// direct light with the pixel's indirect light.
 
 struct Params {
     width: u32,
@@ -41,6 +44,8 @@ struct CompositionParams {
 // S, the first sample's radiance per pixel (`Ssaa::first`, the shading metric's input).
 @group(0) @binding(13) var<storage, read_write> first: array<vec4<f32>>;
 @group(0) @binding(14) var radiance_out: texture_storage_2d<rgba32float, write>;
+// The frame's radiance as `store_first` reads it (its own layout: 0, 13, 15).
+@group(0) @binding(15) var radiance_in: texture_2d<f32>;
 
 fn pixel_index(p: vec2<u32>) -> u32 {
     return p.y * params.width + p.x;
@@ -60,12 +65,13 @@ fn pixel_samples(p: vec2<u32>) -> u32 {
     return clamp(counts[pixel_index(p)], 1u, params.n);
 }
 
-// Writes sample q's linear depth where `keep(rank of q in its window, its pixel)`, else 0.
+// Writes sample q's linear depth where `keep`, else 0 (no surface).
 fn mask_sample(q: vec2<u32>, keep: bool) {
     let depth = textureLoad(linear_depth_in, q, 0).r;
     textureStore(masked_depth_out, q, vec4<f32>(select(0.0, depth, keep), 0.0, 0.0, 0.0));
 }
 
+// Rank of sample q in its window's dither order.
 fn sample_rank(q: vec2<u32>) -> u32 {
     let c = (q.y % params.m) * params.m + q.x % params.m;
     return params.rank[c / 4u][c % 4u];
@@ -75,29 +81,31 @@ fn in_samples(q: vec2<u32>) -> bool {
     return q.x < params.width * params.m && q.y < params.height * params.m;
 }
 
-// Keeps the first sample of every window (S).
+// S: the frame's radiance, the first sample of every window.
 @compute @workgroup_size(8, 8)
-fn mask_first(@builtin(global_invocation_id) id: vec3<u32>) {
-    if in_samples(id.xy) {
-        mask_sample(id.xy, sample_rank(id.xy) == 0u);
+fn store_first(@builtin(global_invocation_id) id: vec3<u32>) {
+    let p = id.xy;
+    if in_image(p) {
+        first[pixel_index(p)] = textureLoad(radiance_in, p, 0);
     }
 }
 
-// Keeps the first k samples of every window whose pixel takes k > 1 (Listing 4.1's
-// ShadeRestAdaptively; the first sample again, as the accumulation rewrites every sample).
+// Keeps samples 1..k of every window whose pixel takes k > 1 (Listing 4.1's
+// ShadeRestAdaptively).
 @compute @workgroup_size(8, 8)
 fn mask_rest(@builtin(global_invocation_id) id: vec3<u32>) {
     if in_samples(id.xy) {
         let k = pixel_samples(id.xy / params.m);
-        mask_sample(id.xy, k > 1u && sample_rank(id.xy) < k);
+        let rank = sample_rank(id.xy);
+        mask_sample(id.xy, rank > 0u && rank < k);
     }
 }
 
-// Keeps every sample (full supersampling).
+// Keeps every sample but the first (full supersampling).
 @compute @workgroup_size(8, 8)
-fn mask_all(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mask_full(@builtin(global_invocation_id) id: vec3<u32>) {
     if in_samples(id.xy) {
-        mask_sample(id.xy, true);
+        mask_sample(id.xy, sample_rank(id.xy) > 0u);
     }
 }
 
@@ -116,24 +124,13 @@ fn sample_radiance(q: vec2<u32>, p: vec2<u32>) -> vec4<f32> {
     );
 }
 
-// The average radiance of the first k samples of p's window.
+// The average radiance of the first k samples of p's window: S and samples 1..k.
 fn average(p: vec2<u32>, k: u32) -> vec4<f32> {
-    var sum = vec4<f32>(0.0);
-    for (var i = 0u; i < k; i++) {
+    var sum = first[pixel_index(p)];
+    for (var i = 1u; i < k; i++) {
         sum += sample_radiance(window_sample(p, i), p);
     }
     return sum / f32(k);
-}
-
-// S and the pixels of one sample: the first sample's radiance.
-@compute @workgroup_size(8, 8)
-fn compose_first(@builtin(global_invocation_id) id: vec3<u32>) {
-    let p = id.xy;
-    if in_image(p) {
-        let s = sample_radiance(window_sample(p, 0u), p);
-        first[pixel_index(p)] = s;
-        textureStore(radiance_out, p, s);
-    }
 }
 
 // The pixels of k > 1 samples: their average (the others keep S).

@@ -151,11 +151,12 @@ pub fn unpack_albedo(texel: [u8; 4]) -> (glam::Vec3, f32) {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct Frame {
-    /// World → clip.
+    /// World → clip (the G-buffer pass's; shifted by the jitter).
     pub view_proj: Mat4,
     /// World → view.
     pub view: Mat4,
-    /// Clip → world.
+    /// Clip → world of the unjittered projection (with the NDC of the sample positions
+    /// [`position::pixel_to_ndc`] gives).
     pub inv_view_proj: Mat4,
     /// View → world.
     pub inv_view: Mat4,
@@ -163,10 +164,12 @@ pub struct Frame {
     pub eye: Vec4,
     /// Width, height, 1 / width, 1 / height.
     pub viewport: Vec4,
-    /// x, y: tan(fov_y / 2) × aspect, tan(fov_y / 2), the view ray at unit view depth;
-    /// z: the texture footprint in G-buffer pixels ([`Frame::with_texture_footprint`]; 0 and 1
-    /// both mean one pixel); w: 0.
+    /// tan(fov_y / 2) × aspect, tan(fov_y / 2): the view ray at unit view depth.
     pub tan_half_fov: Vec4,
+    /// Where the pixels sample: x, y, the offset of the sample positions from the pixel centres
+    /// in pixels, x right, y down ([`Frame::with_jitter`]); z, the texture footprint in
+    /// G-buffer pixels ([`Frame::with_texture_footprint`]; 0 and 1 both mean one pixel); w, 0.
+    pub sampling: Vec4,
 }
 
 impl Frame {
@@ -188,8 +191,25 @@ impl Frame {
                 1.0 / width as f32,
                 1.0 / height as f32,
             ),
-            tan_half_fov: Vec4::new(t * aspect, t, 1.0, 0.0),
+            tan_half_fov: Vec4::new(t * aspect, t, 0.0, 0.0),
+            sampling: Vec4::new(0.0, 0.0, 1.0, 0.0),
         }
+    }
+
+    /// The frame with every pixel sampling at `offset` pixels from its centre (x right, y
+    /// down; each within ±½): the G-buffer pass's projection is shifted so the rasteriser's
+    /// pixel centres land there, and positions are reconstructed there. A supersampled
+    /// G-buffer's sample k of every pixel is then the G-buffer of this frame.
+    pub fn with_jitter(mut self, offset: glam::Vec2) -> Self {
+        let shift = glam::Vec3::new(
+            -2.0 * offset.x * self.viewport.z,
+            2.0 * offset.y * self.viewport.w,
+            0.0,
+        );
+        self.view_proj = Mat4::from_translation(shift) * self.view_proj;
+        self.sampling.x = offset.x;
+        self.sampling.y = offset.y;
+        self
     }
 
     /// The frame with textures filtered over `pixels` G-buffer pixels on a side instead of
@@ -197,7 +217,7 @@ impl Frame {
     /// sample's texture lookup covers its whole image pixel (the G-buffer pass scales the
     /// texture-coordinate derivatives; Holländer 2013 §4.3.4 filters over the pixel too).
     pub fn with_texture_footprint(mut self, pixels: f32) -> Self {
-        self.tan_half_fov.z = pixels;
+        self.sampling.z = pixels;
         self
     }
 }
@@ -327,10 +347,11 @@ mod tests {
 
     #[test]
     fn frame_matches_wgsl_layout() {
-        // 4 mat4 + 3 vec4, no padding: WGSL `Frame` is 320 bytes with these offsets.
-        assert_eq!(size_of::<Frame>(), 4 * 64 + 3 * 16);
+        // 4 mat4 + 4 vec4, no padding: WGSL `Frame` is 336 bytes with these offsets.
+        assert_eq!(size_of::<Frame>(), 4 * 64 + 4 * 16);
         assert_eq!(std::mem::offset_of!(Frame, eye), 256);
         assert_eq!(std::mem::offset_of!(Frame, tan_half_fov), 288);
+        assert_eq!(std::mem::offset_of!(Frame, sampling), 304);
     }
 
     #[test]

@@ -5,9 +5,11 @@ use glam::{Vec2, Vec3, Vec4};
 
 use crate::Frame;
 
-/// NDC xy of the centre of pixel (x, y): x right, y up (thesis §3.6 step 1).
+/// NDC xy of pixel (x, y)'s sample position — its centre, moved by the frame's jitter
+/// ([`Frame::with_jitter`]): x right, y up (thesis §3.6 step 1).
 pub fn pixel_to_ndc(frame: &Frame, x: u32, y: u32) -> Vec2 {
-    let uv = (Vec2::new(x as f32, y as f32) + 0.5) * Vec2::new(frame.viewport.z, frame.viewport.w);
+    let at = Vec2::new(x as f32, y as f32) + 0.5 + Vec2::new(frame.sampling.x, frame.sampling.y);
+    let uv = at * Vec2::new(frame.viewport.z, frame.viewport.w);
     Vec2::new(uv.x * 2.0 - 1.0, (1.0 - uv.y) * 2.0 - 1.0)
 }
 

@@ -480,7 +480,11 @@ impl GpuRenderer {
         };
         self.bind_shadow_lookup(device)?;
         self.bind_composition(device);
-        Ok(())
+        // The pixels sample at their first samples with supersampling, at their centres without.
+        match self.camera {
+            Some(camera) => self.set_camera(queue, &camera),
+            None => Ok(()),
+        }
     }
 
     /// The supersampling configuration, if set.
@@ -841,7 +845,10 @@ impl GpuRenderer {
     /// Sets the camera of the following frames (validated: finite, positive field of view).
     pub fn set_camera(&mut self, queue: &wgpu::Queue, camera: &Camera) -> Result<(), RenderError> {
         gbuffer::validate_camera(camera)?;
-        let frame = Frame::new(camera, self.sized.targets.width, self.sized.targets.height);
+        let mut frame = Frame::new(camera, self.sized.targets.width, self.sized.targets.height);
+        if let Some(s) = &self.supersampling {
+            frame = frame.with_jitter(s.jitter());
+        }
         self.gbuffer_pass.write_frame(queue, &frame);
         self.shading_bound.set_camera(queue, camera);
         if let Some(s) = &mut self.supersampling {
@@ -1114,29 +1121,24 @@ impl GpuRenderer {
         {
             maps.encode(encoder, Some(&self.timer));
         }
-        match &self.supersampling {
-            Some(s) => s.encode_direct(encoder, &self.shading, &self.timer),
-            None => self
-                .shading
-                .encode(&self.shading_bound, encoder, Some(&self.timer)),
-        }
+        self.shading
+            .encode(&self.shading_bound, encoder, Some(&self.timer));
         if let Some(i) = &self.indirect {
             i.stage.encode(&i.bound, encoder, Some(&self.timer));
         }
         if let Some((bound, _)) = self.near_field.as_ref().and_then(|n| n.bound.as_ref()) {
             bound.encode(encoder, Some(&self.timer));
         }
+        let (w, h) = self.size();
+        Passes::one(
+            "composition",
+            &self.composition.pipeline,
+            vec![self.composition_group.clone()],
+            Workgroups::covering(w, h, 8),
+        )
+        .encode(encoder, Some(&self.timer));
         if let Some(s) = &self.supersampling {
-            s.encode_resolve(encoder, &self.shading, &self.timer);
-        } else {
-            let (w, h) = self.size();
-            Passes::one(
-                "composition",
-                &self.composition.pipeline,
-                vec![self.composition_group.clone()],
-                Workgroups::covering(w, h, 8),
-            )
-            .encode(encoder, Some(&self.timer));
+            s.encode(encoder, &self.shading, &self.timer);
         }
         if let Some(output) = &self.output {
             output.bound.encode(encoder, Some(&self.timer));

@@ -1,23 +1,25 @@
 //! Supersampling inside the frame (`shaders/pipeline/supersampling.wgsl`): the scene drawn
-//! into a second G-buffer of `m × m` samples per pixel, its samples lit by the frame's own
-//! light accumulation (the same method, culling and shadows as without supersampling) and
-//! resolved into the frame's radiance — adaptively (Holländer 2013 §4.3, Listing 4.1: the
-//! first sample of every pixel, [`adaptive_ssaa`]'s sample-count evaluation, the remaining
-//! samples) or fully.
+//! into a second G-buffer of `m × m` samples per pixel and resolved into the frame's radiance —
+//! adaptively (Holländer 2013 §4.3, Listing 4.1: the first sample of every pixel,
+//! [`adaptive_ssaa`]'s sample-count evaluation, the remaining samples) or fully.
 //!
-//! The rule for indirect light: it is shaded once per pixel on the pixel-resolution G-buffer
-//! (Segovia's interleaved pipeline unchanged, its split, discontinuity buffer and blur at the
+//! The first sample of every pixel is the frame itself: the pixel-resolution G-buffer is
+//! jittered onto each window's first sample ([`gbuffer::Frame::with_jitter`]), so the frame's
+//! light accumulation, indirect light and composition compute `S`, the first sample's radiance,
+//! exactly as without supersampling. The remaining samples are lit by the same light
+//! accumulation (method, culling, shadows) bound to the sample grid: the `mask_*` passes copy
+//! the linear depth of the samples to shade and write 0 (no surface) for the others, so its
+//! tiles bound only the samples it shades.
+//!
+//! The rule for indirect light: it is shaded once per pixel on the first sample's G-buffer
+//! (Segovia's interleaved pipeline unchanged, its split, discontinuity buffer and blur on the
 //! pixel grid) and shared by the pixel's samples. A sample's radiance is the composition of its
 //! own G-buffer (albedo, material, emission, occlusion) and direct light with the pixel's
-//! indirect diffuse, near-field and indirect specular light, so an edge pixel mixes the
-//! albedos of its surfaces under one irradiance. Textures are filtered over the whole pixel
-//! for every sample ([`gbuffer::Frame::with_texture_footprint`]): right for the pixels of one
-//! sample, which are most; an average of `k` samples is then blurred a little more than a
-//! pixel's footprint.
-//!
-//! How a sample is skipped: the `mask_*` passes copy the linear depth of the samples to shade
-//! and write 0 (no surface) for the others, and the light accumulation reads that copy, so its
-//! tiles bound only the samples it shades.
+//! indirect diffuse, near-field and indirect specular light, so an edge pixel mixes the albedos
+//! of its surfaces under one irradiance. Textures are filtered over the whole pixel for every
+//! sample ([`gbuffer::Frame::with_texture_footprint`]): right for the pixels of one sample,
+//! which are most; an average of `k` samples is then blurred a little more than a pixel's
+//! footprint.
 
 use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
 use ::gpu::{PassTimer, transfer};
@@ -87,12 +89,18 @@ const BINDINGS: [Binding; 15] = [
     Binding::StorageTexture(RADIANCE_FORMAT),
 ];
 
+/// `store_first`'s bindings: params, S, the frame's radiance (sampled).
+const STORE_FIRST_BINDINGS: [(u32, Binding); 3] = [
+    (0, Binding::Uniform),
+    (13, Binding::Storage),
+    (15, Binding::TextureUnfilterable),
+];
+
 /// The entry points of `supersampling.wgsl`.
 struct Pipelines {
-    mask_first: wgpu::ComputePipeline,
+    store_first: wgpu::ComputePipeline,
     mask_rest: wgpu::ComputePipeline,
-    mask_all: wgpu::ComputePipeline,
-    compose_first: wgpu::ComputePipeline,
+    mask_full: wgpu::ComputePipeline,
     resolve_adaptive: wgpu::ComputePipeline,
     resolve_full: wgpu::ComputePipeline,
 }
@@ -111,8 +119,9 @@ pub(crate) struct Supersampling {
     evaluation: Ssaa,
     params: wgpu::Buffer,
     layout: Layout,
+    store_layout: Layout,
     pipelines: Pipelines,
-    group: Option<wgpu::BindGroup>,
+    groups: Option<[wgpu::BindGroup; 2]>,
 }
 
 impl Supersampling {
@@ -181,12 +190,13 @@ impl Supersampling {
         )?;
         let module = crate::SHADERS.module(device, "supersampling.wgsl")?;
         let layout = Layout::compute(device, "supersampling", &BINDINGS);
+        let store_layout =
+            Layout::compute_numbered(device, "supersampling S", &STORE_FIRST_BINDINGS);
         let make = |entry: &str| kernel::pipeline(device, &module, entry, &[&layout], &[]);
         let pipelines = Pipelines {
-            mask_first: make("mask_first"),
+            store_first: kernel::pipeline(device, &module, "store_first", &[&store_layout], &[]),
             mask_rest: make("mask_rest"),
-            mask_all: make("mask_all"),
-            compose_first: make("compose_first"),
+            mask_full: make("mask_full"),
             resolve_adaptive: make("resolve_adaptive"),
             resolve_full: make("resolve_full"),
         };
@@ -201,8 +211,9 @@ impl Supersampling {
             evaluation,
             params,
             layout,
+            store_layout,
             pipelines,
-            group: None,
+            groups: None,
         })
     }
 
@@ -267,7 +278,24 @@ impl Supersampling {
         ]);
         let radiance = view(radiance);
         resources.push(wgpu::BindingResource::TextureView(&radiance));
-        self.group = Some(self.layout.bind(device, &resources));
+        let group = self.layout.bind(device, &resources);
+        let store = self.store_layout.bind(
+            device,
+            &[
+                self.params.as_entire_binding(),
+                self.evaluation.first().as_entire_binding(),
+                wgpu::BindingResource::TextureView(&radiance),
+            ],
+        );
+        self.groups = Some([group, store]);
+    }
+
+    /// Where the frame's pixels sample: the first sample of their windows, in pixels from the
+    /// centre ([`gbuffer::Frame::with_jitter`]).
+    pub(crate) fn jitter(&self) -> glam::Vec2 {
+        let m = self.config.m;
+        let [x, y] = adaptive_ssaa::dither_order(m)[0];
+        (glam::Vec2::new(x as f32, y as f32) + 0.5) / m as f32 - 0.5
     }
 
     /// Writes `camera` at the sample resolution (textures filtered over the pixel).
@@ -302,9 +330,11 @@ impl Supersampling {
         (width, height): (u32, u32),
         (name, timer): (&str, &PassTimer),
     ) {
-        let Some(group) = &self.group else {
+        let Some(groups) = &self.groups else {
             return;
         };
+        let store = std::ptr::eq(pipeline, &self.pipelines.store_first);
+        let group = &groups[usize::from(store)];
         Passes::one(
             name,
             pipeline,
@@ -314,18 +344,30 @@ impl Supersampling {
         .encode(encoder, Some(timer));
     }
 
-    /// Records the direct light of the first samples (adaptive) or of every sample (full):
-    /// the mask, then `shading`.
-    pub(crate) fn encode_direct(
+    /// Records the supersampling after the frame's composition (which wrote `S` into the
+    /// radiance): `S` kept, the evaluation (adaptive), the remaining samples' direct light
+    /// through `shading`, their averages.
+    pub(crate) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         shading: &LightShading,
         timer: &PassTimer,
     ) {
-        let (mask, which) = if self.full() {
-            (&self.pipelines.mask_all, "all samples")
+        let p = &self.pipelines;
+        self.dispatch(
+            encoder,
+            &p.store_first,
+            self.size,
+            ("ss first sample", timer),
+        );
+        let full = self.full();
+        if !full {
+            self.evaluation.encode_evaluate(encoder, Some(timer));
+        }
+        let (mask, resolve, which) = if full {
+            (&p.mask_full, &p.resolve_full, "full")
         } else {
-            (&self.pipelines.mask_first, "first samples")
+            (&p.mask_rest, &p.resolve_adaptive, "adaptive")
         };
         let samples = self.targets_size();
         self.dispatch(
@@ -334,44 +376,13 @@ impl Supersampling {
             samples,
             (&format!("ss mask ({which})"), timer),
         );
-        let name = format!("{}, {which}", shading.pass_name());
-        shading.encode_as(&self.shading, encoder, Some(timer), &name);
-    }
-
-    /// Records the resolve after the indirect light: adaptive — S, the evaluation, the
-    /// remaining samples' direct light, their average; full — every sample's average.
-    pub(crate) fn encode_resolve(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        shading: &LightShading,
-        timer: &PassTimer,
-    ) {
-        let p = &self.pipelines;
-        if self.full() {
-            self.dispatch(
-                encoder,
-                &p.resolve_full,
-                self.size,
-                ("ss resolve (full)", timer),
-            );
-            return;
-        }
-        self.dispatch(
-            encoder,
-            &p.compose_first,
-            self.size,
-            ("ss first sample", timer),
-        );
-        self.evaluation.encode_evaluate(encoder, Some(timer));
-        let samples = self.targets_size();
-        self.dispatch(encoder, &p.mask_rest, samples, ("ss mask (rest)", timer));
-        let name = format!("{}, rest", shading.pass_name());
+        let name = format!("{}, samples", shading.pass_name());
         shading.encode_as(&self.shading, encoder, Some(timer), &name);
         self.dispatch(
             encoder,
-            &p.resolve_adaptive,
+            resolve,
             self.size,
-            ("ss resolve (adaptive)", timer),
+            (&format!("ss resolve ({which})"), timer),
         );
     }
 

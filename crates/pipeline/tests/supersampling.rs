@@ -98,25 +98,29 @@ fn the_frame_supersamples_as_the_adaptive_ssaa_renderer() {
         // The G-buffer stores albedo in 8 bits (the adaptive-ssaa renderer reads the
         // material's factor): up to half a step of 1/255, relative to the albedo; the shading
         // metric's thresholds see S through it, so a pixel at a threshold may take another
-        // count (compared where the counts agree).
-        let worst = image
+        // count (compared where the counts agree). The frame's S comes from the pixel grid
+        // jittered onto the first samples, whose vertices the rasteriser snaps to 1/256 pixel
+        // instead of 1/256 sample: a first sample within that of a silhouette may see the other
+        // surface (a pixel or two of 3072).
+        let relative: Vec<f32> = image
             .pixels()
             .iter()
             .zip(expected.image.pixels())
             .zip(&same)
             .filter(|(_, same)| **same)
             .map(|((a, b), _)| max_difference(a, b) / (1e-2 + b[0].max(b[1]).max(b[2])))
-            .fold(0.0, f32::max);
+            .collect();
+        let off = relative.iter().filter(|&&r| r >= 1e-2).count();
         let mean = counts.pixels().iter().sum::<u32>() as f32 / counts.pixels().len() as f32;
         println!(
-            "m {} min {}: largest relative difference {worst:.2e}, {differing} counts differ, {mean:.2} samples per pixel",
+            "m {} min {}: {off} pixels differ by 1 % or more, {differing} counts differ, {mean:.2} samples per pixel",
             config.m, config.min_samples
         );
         assert!(
             differing * 100 <= same.len(),
             "sample counts differ at {differing} pixels"
         );
-        assert!(worst < 1e-2, "largest relative difference {worst}");
+        assert!(off <= 3, "{off} pixels differ by 1 % or more");
         if config.min_samples == 1 {
             assert!(
                 mean > 1.0 && mean < 0.5 * n as f32,
@@ -160,9 +164,11 @@ fn adaptive_pixels_of_every_sample_equal_full_supersampling() {
     assert!(compared > 20, "only {compared} pixels of 16 samples");
 }
 
-/// Indirect light is shaded once per pixel and shared by its samples: with full
-/// supersampling, a pixel whose samples all see the surface its pixel-resolution G-buffer sees
-/// gains exactly the indirect light the frame without supersampling adds there.
+/// Indirect light is shaded once per pixel and shared by its samples. The pixels adaptive
+/// supersampling gives one sample show the first sample (S), lit by the first sample's
+/// indirect light; full supersampling composes every sample with that same pixel light, so
+/// where a pixel's samples see one surface (the adaptive pixels of one sample, with and
+/// without indirect light) both gain exactly the same indirect light.
 #[test]
 fn supersampled_pixels_share_their_indirect_light() {
     let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
@@ -183,40 +189,50 @@ fn supersampled_pixels_share_their_indirect_light() {
         },
     )
     .expect("vpls");
-    let indirect = Some((&config, &set));
-    let ssaa = Some(full(4));
-    let lit = |ssaa: Option<&SsaaConfig>, indirect| {
-        frame(gpu, &scene, &scene.lights, ssaa, indirect, Vec3::ZERO).0
+    let lit = |ssaa: &SsaaConfig, indirect| {
+        frame(gpu, &scene, &scene.lights, Some(ssaa), indirect, Vec3::ZERO)
     };
-    let added = |with: &Image<[f32; 4]>, without: &Image<[f32; 4]>| -> Vec<[f32; 4]> {
-        with.pixels()
+    let gain = |ssaa: &SsaaConfig| {
+        let (with, with_counts) = lit(ssaa, Some((&config, &set)));
+        let (without, without_counts) = lit(ssaa, None);
+        let gains: Vec<[f32; 4]> = with
+            .pixels()
             .iter()
             .zip(without.pixels())
             .map(|(a, b)| std::array::from_fn(|k| a[k] - b[k]))
-            .collect()
+            .collect();
+        let ones: Vec<bool> = with_counts
+            .expect("counts")
+            .pixels()
+            .iter()
+            .zip(without_counts.expect("counts").pixels())
+            .map(|(a, b)| *a == 1 && *b == 1)
+            .collect();
+        (gains, ones)
     };
-    let plain = added(&lit(None, indirect), &lit(None, None));
-    let supersampled = added(&lit(ssaa.as_ref(), indirect), &lit(ssaa.as_ref(), None));
-    let mut equal = 0;
-    for (a, b) in plain.iter().zip(&supersampled) {
-        let scale = a.iter().take(3).fold(1e-3f32, |m, v| m.max(v.abs()));
-        if max_difference(a, b) <= 1e-4 * scale.max(1.0) {
-            equal += 1;
+    let (full_gain, _) = gain(&full(4));
+    let (first_gain, ones) = gain(&adaptive(4));
+    let (mut single, mut equal) = (0, 0);
+    for ((a, b), one) in full_gain.iter().zip(&first_gain).zip(&ones) {
+        let scale = b.iter().take(3).fold(0.0f32, |m, v| m.max(v.abs()));
+        if *one && scale > 1e-3 {
+            single += 1;
+            if max_difference(a, b) <= 1e-4 * scale {
+                equal += 1;
+            }
         }
     }
-    let share = equal as f32 / plain.len() as f32;
+    let share = equal as f32 / single as f32;
     println!(
-        "{:.1} % of the pixels gain the same indirect light",
+        "{single} lit pixels of one sample; {:.1} % of them gain the same indirect light in full supersampling",
         100.0 * share
     );
-    // The others are edge pixels whose samples mix albedos (and the box's far corners).
-    assert!(share > 0.8, "{share}");
-    let total = |v: &[[f32; 4]]| v.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>();
-    let ratio = total(&supersampled) / total(&plain);
     assert!(
-        (ratio - 1.0).abs() < 0.02,
-        "indirect light total ratio {ratio}"
+        single * 8 > full_gain.len(),
+        "{single} lit pixels of one sample"
     );
+    // The others have a sample on another surface than the first (an edge the metrics missed).
+    assert!(share > 0.97, "{share}");
 }
 
 /// Against the path tracer's pixel integral (rays jittered over each pixel) of delta lights
