@@ -462,12 +462,14 @@ impl GpuRenderer {
 
     /// Supersamples the frame (`Some`: `config.m × config.m` samples per pixel — adaptively as
     /// Holländer 2013 §4.3 decides with `config`'s metrics, or every sample when
-    /// `config.min_samples` is `m²`), or stops (`None`). The direct light of the samples runs
-    /// through the frame's light accumulation with its method, culling and shadows; indirect
-    /// light is shaded once per pixel on the pixel-resolution G-buffer and shared by the
-    /// pixel's samples (each composed with its own albedo and material); textures are filtered
-    /// over the whole pixel. `config`'s ambient, background, resolve and stall are not used:
-    /// the frame's ambient ([`GpuRenderer::set_ambient`]) applies, no surface is black.
+    /// `config.min_samples` is `m²`), or stops (`None`). The frame's own G-buffer is jittered
+    /// onto every pixel's first sample, so the frame without supersampling computes the first
+    /// sample's radiance; the other samples' direct light runs through the frame's light
+    /// accumulation with its method, culling and shadows; indirect light is shaded once per
+    /// pixel on the first sample's G-buffer and shared by the pixel's samples (each composed
+    /// with its own albedo and material); textures are filtered over the whole pixel.
+    /// `config`'s ambient, background, resolve and stall are not used: the frame's ambient
+    /// ([`GpuRenderer::set_ambient`]) applies, no surface is black.
     pub fn set_ssaa(
         &mut self,
         device: &wgpu::Device,
@@ -513,6 +515,9 @@ impl GpuRenderer {
         queue: &wgpu::Queue,
         config: &ShadingConfig,
     ) -> Result<(), RenderError> {
+        if self.shading.config() == config {
+            return Ok(());
+        }
         self.shading = LightShading::new(device, config)?;
         self.rebind(device, queue)
     }
@@ -685,21 +690,28 @@ impl GpuRenderer {
                     size,
                 })
                 .collect();
-            // Sampling the surfels and building the hierarchy is CPU work: only when the views
-            // change (new lights), not when the other shadows are set.
-            if views != a.views || a.maps.is_none() {
-                let mesh = (&a.mesh.0[..], &a.mesh.1[..]);
-                a.maps = if views.is_empty() {
-                    None
-                } else {
-                    let (mode, config) = (VplShadows::ManyLod, &a.config);
-                    let v = views.clone();
-                    Some(VplShadowMaps::from_views(
-                        device, mesh, diagonal, v, 0.0, mode, config,
-                    )?)
-                };
-                a.views = views;
+            // Sampling the surfels and building the hierarchy is CPU work: only when the number
+            // of views changes (lights added or removed); lights that move only move the views.
+            match &a.maps {
+                Some(maps) if views.len() == a.views.len() => {
+                    if views != a.views {
+                        maps.set_views(queue, &views)?;
+                    }
+                }
+                _ => {
+                    let mesh = (&a.mesh.0[..], &a.mesh.1[..]);
+                    a.maps = if views.is_empty() {
+                        None
+                    } else {
+                        let (mode, config) = (VplShadows::ManyLod, &a.config);
+                        let v = views.clone();
+                        Some(VplShadowMaps::from_views(
+                            device, mesh, diagonal, v, 0.0, mode, config,
+                        )?)
+                    };
+                }
             }
+            a.views = views;
             a.plan = plan;
         }
         if let Some(plan) = self.shadow_plan(device.limits().max_texture_array_layers)? {
@@ -905,7 +917,7 @@ impl GpuRenderer {
 
     /// Reads back each tile's light count of the last frame (`None` for brute force); with
     /// supersampling, of the tiles of samples (the grid of `m` times the frame size) in the
-    /// last light accumulation pass.
+    /// samples' light accumulation (samples 2..k of each pixel).
     pub fn light_counts(
         &self,
         device: &wgpu::Device,

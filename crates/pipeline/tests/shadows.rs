@@ -187,3 +187,46 @@ fn manylod_light_shadows_agree_with_shadow_rays() {
     assert!(a.fraction() >= 0.95, "{a}");
     assert!(a.found * 10 >= a.occluded * 8, "{a}");
 }
+
+/// Moving lights move their ManyLoD views (`VplShadowMaps::set_views`, no new hierarchy): a
+/// frame after `set_lights` with the lights moved equals a frame of a renderer made with them
+/// there.
+#[test]
+fn moved_lights_keep_their_manylod_hierarchy_and_match_a_fresh_one() {
+    let scene = scene::spheres_on_plane(5);
+    let at = |x: f32| -> Vec<Light> {
+        [format!("point:{x},2.5,0.5,8,1,0.9,0.8,2")]
+            .iter()
+            .map(|s| s.parse().expect("light"))
+            .collect()
+    };
+    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
+        return;
+    };
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let camera = scene.camera_or_framed();
+    let config = instant_radiosity::shadows::ShadowConfig {
+        points_log2: 16,
+        tile: 64,
+        ..Default::default()
+    };
+    let renderer = |lights: &[Light]| {
+        let mut r = GpuRenderer::new(d, q, &scene, lights, 96, 64).expect("renderer");
+        r.set_manylod_shadows(d, q, &scene, Some(&config))
+            .expect("manylod shadows");
+        r
+    };
+    let mut moved = renderer(&at(0.5));
+    moved.render(d, q, &camera, Vec3::ZERO).expect("frame");
+    moved.set_lights(d, q, &at(-0.8)).expect("lights");
+    let after = moved
+        .render(d, q, &camera, Vec3::ZERO)
+        .expect("frame")
+        .image;
+    let fresh = renderer(&at(-0.8))
+        .render(d, q, &camera, Vec3::ZERO)
+        .expect("frame")
+        .image;
+    let db = pipeline::psnr(&fresh, &after);
+    assert!(db >= 60.0, "PSNR {db:.1} dB");
+}
