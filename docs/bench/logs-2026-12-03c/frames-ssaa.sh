@@ -25,6 +25,11 @@ run sponza-no-ssaa --recipe /tmp/sponza-no-ssaa.toml
 run sponza-adaptive-ssaa --recipe $r
 run sponza-full-ssaa --recipe /tmp/sponza-full-ssaa.toml
 run cornell-gi-adaptive-ssaa --recipe fixtures/recipes/cornell-gi.toml --ssaa 4 --adaptive
+# One frame of the recipe (no sequence keys) says the share of samples adaptive SSAA took.
+grep -v -e '^frames' -e '^fps' -e '^light-orbit' $r > /tmp/sponza-one.toml
+.gpu-bin/deferred --recipe /tmp/sponza-one.toml --size 1920x1080 --out /tmp/sponza-one \
+  > "$OUT/sponza-one-frame.txt" 2>&1
+cp /tmp/sponza-one/ssaa-samples.png "$OUT/sponza-ssaa-samples.png"
 cp /tmp/sponza-adaptive-ssaa/timings.svg "$OUT/sponza-adaptive-ssaa.svg"
 cp /tmp/sponza-adaptive-ssaa/frames/frame-00060.png "$OUT/sponza-adaptive-ssaa.png"
 tar czf "$RESULTS/results.tgz" -C /tmp/res .
