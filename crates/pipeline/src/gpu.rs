@@ -16,6 +16,7 @@ use crate::output::{self, BoundOutput, OutputPass, OutputTransform};
 use wgpu::util::DeviceExt;
 
 use crate::skinning::{BoundSkinning, Skinning};
+use crate::subdivision::{SubdivisionPlan, SubdivisionStage};
 use crate::supersampling::Supersampling;
 use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
 use instant_radiosity::{
@@ -133,6 +134,7 @@ pub struct GpuRenderer {
     output: Option<OutputStage>,
     animation: Option<Animation>,
     supersampling: Option<Supersampling>,
+    subdivision: Option<SubdivisionStage>,
     bounds: scene::Aabb,
     timer: PassTimer,
 }
@@ -320,6 +322,7 @@ impl GpuRenderer {
             output: None,
             animation: None,
             supersampling: None,
+            subdivision: None,
             bounds: scene.bounds(),
             timer: PassTimer::new(device, 48),
         })
@@ -807,6 +810,26 @@ impl GpuRenderer {
         Ok(())
     }
 
+    /// Subdivides the meshes of `plan` every frame (`Some`: this renderer was made from the
+    /// scene [`crate::subdivision::prepare`] returned with `plan`): the control meshes are no
+    /// longer drawn; after the skinning, each is gathered into M⁰, its limit surface evaluated
+    /// at the plan's level on the GPU and written into its refined mesh, which every pass
+    /// draws. Give the setters that build on the CPU ([`GpuRenderer::set_vpl_shadows`], the
+    /// shadows, the near field) [`SubdivisionPlan::drawn`]. Set once: there is no way back to
+    /// the control meshes.
+    pub fn set_subdivision(
+        &mut self,
+        device: &wgpu::Device,
+        plan: &SubdivisionPlan,
+    ) -> Result<(), RenderError> {
+        let stage = SubdivisionStage::new(device, plan, &self.scene)?;
+        for control in plan.controls() {
+            self.scene.hide(control);
+        }
+        self.subdivision = Some(stage);
+        Ok(())
+    }
+
     /// Poses the animated meshes for the following frames (a pose of the rig given to
     /// [`GpuRenderer::set_animation`]; only joint matrices and morph weights are written).
     pub fn set_pose(&self, queue: &wgpu::Queue, pose: &Pose) -> Result<(), RenderError> {
@@ -1103,6 +1126,9 @@ impl GpuRenderer {
         self.timer.reset();
         if let Some(a) = &self.animation {
             a.bound.encode(encoder, Some(&self.timer));
+        }
+        if let Some(s) = &self.subdivision {
+            s.encode(encoder, &self.timer);
         }
         // The z-prepass path: 1.3× faster than the single MRT pass on Sponza on an H100
         // (docs/bench), and the same G-buffer.

@@ -25,6 +25,7 @@ pub mod output;
 pub mod progressive;
 pub mod sequence;
 pub mod skinning;
+pub mod subdivision;
 mod supersampling;
 
 use gbuffer::Image;
@@ -47,6 +48,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "accumulate.wgsl",
         "output.wgsl",
         "skinning.wgsl",
+        "subdivision.wgsl",
     ],
 );
 
@@ -90,6 +92,10 @@ pub enum RenderError {
     /// Supersampling cannot be set up (window size, constants, size).
     #[error(transparent)]
     Ssaa(#[from] adaptive_ssaa::SsaaError),
+    /// Subdivision cannot be set up (a mesh the subdivider refuses, a plan that does not fit
+    /// the uploaded scene).
+    #[error("subdivision: {0}")]
+    Subdivision(String),
     /// The animation cannot be bound (a rig that does not fit the uploaded scene).
     #[error("animation: {0}")]
     Animation(String),

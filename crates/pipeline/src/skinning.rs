@@ -98,8 +98,8 @@ impl Skinning {
         })
     }
 
-    /// Uploads `rig`'s rest vertices for `scene` (uploaded from the scene that holds `rig`, so
-    /// its vertex buffers can be written) and binds them.
+    /// Uploads `rig`'s rest vertices for `scene` (uploaded from the scene that holds `rig`) and
+    /// binds them.
     pub fn bind(
         &self,
         device: &wgpu::Device,
@@ -107,12 +107,6 @@ impl Skinning {
         scene: &GpuScene,
     ) -> Result<BoundSkinning, RenderError> {
         let [positions, attributes] = scene.vertex_buffers();
-        if !positions.usage().contains(wgpu::BufferUsages::STORAGE) {
-            return Err(RenderError::Animation(
-                "the scene was uploaded without its rig (its vertex buffers cannot be written)"
-                    .into(),
-            ));
-        }
         let mut vertices = Vec::new();
         let mut deformers = Vec::new();
         let mut deltas: Vec<[f32; 4]> = Vec::new();

@@ -202,23 +202,34 @@ impl TriMesh {
     /// A mesh from a render mesh whose vertices are split at texture seams: vertices with
     /// bit-identical positions are merged first, so the topology is the surface's.
     pub fn welded(positions: &[Vec3], indices: &[u32]) -> Result<Self, SubdivError> {
+        Self::welding(positions, indices).map(|(mesh, _)| mesh)
+    }
+
+    /// [`TriMesh::welded`] and, for each merged vertex, the first render vertex merged into it
+    /// (to gather moved render vertices into M⁰ each frame).
+    pub fn welding(positions: &[Vec3], indices: &[u32]) -> Result<(Self, Vec<u32>), SubdivError> {
         let mut map = std::collections::HashMap::new();
-        let mut unique = Vec::new();
+        let mut first = Vec::new();
         let remap: Vec<u32> = positions
             .iter()
-            .map(|p| {
+            .enumerate()
+            .map(|(i, p)| {
                 *map.entry(p.to_array().map(f32::to_bits))
                     .or_insert_with(|| {
-                        unique.push(p.to_array());
-                        unique.len() as u32 - 1
+                        first.push(i as u32);
+                        first.len() as u32 - 1
                     })
             })
+            .collect();
+        let unique: Vec<[f32; 3]> = first
+            .iter()
+            .map(|&i| positions[i as usize].to_array())
             .collect();
         let indices: Vec<u32> = indices
             .iter()
             .map(|&i| remap.get(i as usize).copied().unwrap_or(u32::MAX))
             .collect();
-        Self::from_f32(&unique, &indices)
+        Ok((Self::from_f32(&unique, &indices)?, first))
     }
 
     /// Positions as f32 (what the GPU path takes).

@@ -55,11 +55,19 @@ impl GpuScene {
         }
     }
 
-    /// The vertex buffers: positions (`[f32; 3]` a vertex) and [`GpuAttributes`]. A scene
-    /// with a [`scene::animation::Rig`] has them with `STORAGE | COPY_SRC` usage too, for the
-    /// skinning kernel that moves them.
+    /// The vertex buffers: positions (`[f32; 3]` a vertex) and [`GpuAttributes`], with
+    /// `STORAGE | COPY_SRC` usage too, for kernels that move them (skinning, subdivision).
     pub fn vertex_buffers(&self) -> [&wgpu::Buffer; 2] {
         [&self.positions, &self.attributes]
+    }
+
+    /// Stops drawing mesh `mesh` (its index in [`Scene::meshes`]) in every pass: a control
+    /// mesh whose subdivision surface is drawn instead. Its vertices stay (kernels read them).
+    pub fn hide(&mut self, mesh: usize) {
+        if let Some(d) = self.draws.get_mut(mesh) {
+            self.triangle_count -= u64::from(d.index_count / 3);
+            d.index_count = 0;
+        }
     }
 
     /// The first vertex of mesh `mesh` (its index in [`Scene::meshes`]) in the vertex buffers.
@@ -113,12 +121,10 @@ impl GpuScene {
                 color: m.colors.get(i).map_or([1.0; 4], |c| c.to_array()),
             }));
         }
-        // A scene that moves is written by the skinning kernel (and read back by its tests).
-        let usage = if scene.rig.is_some() {
-            wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC
-        } else {
-            wgpu::BufferUsages::VERTEX
-        };
+        // Kernels may move the vertices: the skinning of a scene with a rig, the per-frame
+        // subdivision (and their tests read them back).
+        let usage =
+            wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let vertex_buffer =
             |label, bytes: &[u8]| transfer::buffer_init(device, label, bytes, usage);
         let positions = vertex_buffer("scene positions", bytemuck::cast_slice(&positions))?;
