@@ -202,7 +202,9 @@ struct Args {
     max_bounces: u32,
     /// Replace every mesh by its Loop subdivision surface at this level (1–6; Holländer 2013
     /// ch. 2: computational entries, then basis-function tables, on the GPU unless --cpu),
-    /// with Subdivision Shading normals. Meshes are welded by position first.
+    /// with Subdivision Shading normals. Meshes are welded by position first. In an animated
+    /// scene only the meshes its animation moves are subdivided, every frame from their posed
+    /// control meshes (texture coordinates through the same stencils).
     #[arg(long, value_name = "LEVEL")]
     subdiv: Option<u32>,
     /// With --subdiv: adaptive tessellation up to LEVEL, each control edge split so its fine
@@ -1017,20 +1019,51 @@ fn run() -> Result<()> {
         "the camera framing the scene"
     };
     gbuffer::validate_camera(&camera).context(camera_source)?;
-    if let Some(level) = args.subdiv {
-        if scene.rig.take().is_some() {
-            eprintln!("note: --subdiv is evaluated once at load: the scene's animation is dropped");
+    // Uniform smooth subdivision runs every frame from the (animated) control meshes; adaptive,
+    // flat or level-coloured subdivision is evaluated once at load.
+    let per_frame = args.subdiv_pixels.is_none() && !args.subdiv_flat;
+    let plan = match args.subdiv {
+        Some(level) if per_frame => {
+            let meshes: Vec<usize> = match &scene.rig {
+                Some(rig) => {
+                    let mut moved: Vec<usize> =
+                        rig.deformers.iter().map(|d| d.mesh as usize).collect();
+                    moved.sort_unstable();
+                    moved.dedup();
+                    moved
+                }
+                None => (0..scene.meshes.len()).collect(),
+            };
+            let (prepared, plan) =
+                pipeline::subdivision::prepare(&scene, &meshes, level, bft_tables()?)
+                    .with_context(|| format!("--subdiv {level}"))?;
+            scene = prepared;
+            Some(plan)
         }
-        subdivide_scene(&mut scene, &args, level, &camera)?;
-    }
+        Some(level) => {
+            if scene.rig.take().is_some() {
+                eprintln!(
+                    "note: adaptive or flat --subdiv is evaluated once at load: the scene's animation is dropped"
+                );
+            }
+            subdivide_scene(&mut scene, &args, level, &camera)?;
+            None
+        }
+        None => None,
+    };
     let clip = animation_clip(&args, &scene)?;
     // The scene at the single frame's time, or at the sequence's start: what the structures
     // built on the CPU (VPLs, BVHs, surfels) see.
     if let Some(rig) = &scene.rig {
         let t = clip.map_or(0.0, |c| sequence::looped(args.time, rig.clips[c].duration));
         rig.apply(&rig.pose(clip, t), &mut scene.meshes);
+        if let Some(plan) = &plan {
+            plan.refine_cpu(&mut scene)?;
+        }
     }
     let scene = scene;
+    // What is drawn of it (without the subdivided control meshes): what the CPU builds from.
+    let drawn_scene = drawn(plan.as_ref(), &scene);
     let own_lights = args.lights.is_none() && !scene.lights.is_empty();
     let (mut lights, emissive_photons, lit_by) = match args.lights {
         Some(n) => (
@@ -1059,7 +1092,12 @@ fn run() -> Result<()> {
                 emissive: emissive_photons,
                 bounces: args.vpl_bounces,
             };
-            let set = vpl::generate(&scene, &scene::Bvh::build(&scene), &photon_lights, &vpls)?;
+            let set = vpl::generate(
+                &drawn_scene,
+                &scene::Bvh::build(&drawn_scene),
+                &photon_lights,
+                &vpls,
+            )?;
             Some((config, set, vpls))
         }
         None => None,
@@ -1102,7 +1140,7 @@ fn run() -> Result<()> {
         if emissive_photons {
             reference_lights.extend(args.extra_lights.iter().copied());
         }
-        return render_reference(&args, &scene, camera, &reference_lights, spp);
+        return render_reference(&args, &drawn_scene, camera, &reference_lights, spp);
     }
     if args.ssaa.is_some() && args.cpu {
         bail!("--ssaa runs on the GPU only (the CPU frame has no supersampling; drop --cpu)");
@@ -1156,6 +1194,7 @@ fn run() -> Result<()> {
     };
     let setup = Setup {
         scene: &scene,
+        plan: plan.as_ref(),
         camera,
         lights: direct_lights,
         photon_lights,
@@ -1266,7 +1305,7 @@ fn run() -> Result<()> {
                 cpu_frame(&args, &setup, (&scene, &setup.lights), &setup.camera, None)?;
             if args.heatmap {
                 let camera = &setup.camera;
-                let gb = gbuffer::cpu::rasterize(&scene, camera, width, height)?.gbuffer;
+                let gb = gbuffer::cpu::rasterize(&drawn_scene, camera, width, height)?.gbuffer;
                 let frame = gbuffer::Frame::new(camera, width, height);
                 let lights = pipeline::validate_lights(&setup.lights)?;
                 let shaded =
@@ -1275,7 +1314,7 @@ fn run() -> Result<()> {
             }
             let gbuffer = args
                 .dump_stages
-                .then(|| gbuffer::cpu::rasterize(&scene, &setup.camera, width, height))
+                .then(|| gbuffer::cpu::rasterize(&drawn_scene, &setup.camera, width, height))
                 .transpose()?
                 .map(|r| r.gbuffer);
             let display = setup.output.apply(&rendered.image);
@@ -1304,7 +1343,11 @@ fn run() -> Result<()> {
 /// What a render is made of, after the arguments were read: the scene (at the first frame's
 /// pose), camera, direct lights, indirect light, output transform and shadows.
 struct Setup<'a> {
+    /// The scene the GPU draws: with --subdiv, the control meshes and their refined meshes
+    /// ([`pipeline::subdivision::prepare`]).
     scene: &'a Scene,
+    /// The per-frame subdivision of --subdiv, if any.
+    plan: Option<&'a pipeline::subdivision::SubdivisionPlan>,
     camera: scene::Camera,
     /// The direct lights the frame shades (after --indirect-only and --frustum-cull).
     lights: Vec<Light>,
@@ -1355,21 +1398,29 @@ fn animation_clip(args: &Args, scene: &Scene) -> Result<Option<usize>> {
 /// The GPU renderer with every stage the arguments ask for.
 fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::gpu::GpuRenderer> {
     let (d, q) = (&gpu.device, &gpu.queue);
-    let scene = setup.scene;
     let mut renderer = pipeline::gpu::GpuRenderer::new_with(
         d,
         q,
-        scene,
+        setup.scene,
         &setup.lights,
         args.size,
         &texture_options(args),
     )?;
+    if let Some(plan) = setup.plan {
+        renderer.set_subdivision(d, plan)?;
+    }
+    // The structures built on the CPU see what is drawn (without the rig, so say whether the
+    // surfels must follow moving meshes).
+    let drawn = drawn(setup.plan, setup.scene);
+    let scene = &*drawn;
+    let moves = setup.scene.rig.is_some();
     renderer.set_output(d, Some(setup.output))?;
     renderer.set_shading(d, q, &setup.shading)?;
     renderer.set_shadows(d, q, setup.shadow_config.as_ref())?;
     if let Some(tile) = args.manylod_shadows {
         let config = ShadowConfig {
             tile,
+            refit: moves,
             ..ShadowConfig::default()
         };
         renderer.set_manylod_shadows(d, q, scene, Some(&config))?;
@@ -1386,6 +1437,7 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
                 &ShadowConfig {
                     epsilon: args.vpl_shadow_epsilon,
                     points_log2: args.vpl_shadow_points,
+                    refit: moves,
                     ..ShadowConfig::for_mode(mode)
                 },
                 config,
@@ -1457,23 +1509,39 @@ fn write_ssaa_samples(
 /// The scene as a sequence poses it on the CPU, and the BVH its VPLs are traced through: built
 /// when VPLs are first traced and again only after meshes moved (lights alone moving reuse it;
 /// without indirect light none is built).
-struct Posed {
+struct Posed<'a> {
     scene: Scene,
-    bvh: Option<scene::Bvh>,
+    plan: Option<&'a pipeline::subdivision::SubdivisionPlan>,
+    /// What is drawn of `scene` and its BVH, made when first asked for after a pose.
+    drawn: Option<(Scene, Option<scene::Bvh>)>,
 }
 
-impl Posed {
-    fn new(scene: &Scene) -> Self {
+impl<'a> Posed<'a> {
+    fn new(setup: &Setup<'a>) -> Self {
         Self {
-            scene: scene.clone(),
-            bvh: None,
+            scene: setup.scene.clone(),
+            plan: setup.plan,
+            drawn: None,
         }
     }
 
-    /// The meshes at `pose` of `rig`.
-    fn pose(&mut self, rig: &scene::animation::Rig, pose: &scene::animation::Pose) {
+    /// The meshes at `pose` of `rig` (and their subdivision surfaces, CPU).
+    fn pose(&mut self, rig: &scene::animation::Rig, pose: &scene::animation::Pose) -> Result<()> {
         rig.apply(pose, &mut self.scene.meshes);
-        self.bvh = None;
+        if let Some(plan) = self.plan {
+            plan.refine_cpu(&mut self.scene)?;
+        }
+        self.drawn = None;
+        Ok(())
+    }
+
+    /// What is drawn of the posed scene.
+    fn drawn(&mut self) -> &Scene {
+        let (scene, plan) = (&self.scene, self.plan);
+        &self
+            .drawn
+            .get_or_insert_with(|| (drawn(plan, scene).into_owned(), None))
+            .0
     }
 
     /// The frame's VPLs from `photon_lights`.
@@ -1481,9 +1549,23 @@ impl Posed {
         let Some((_, _, config)) = &setup.indirect else {
             return Ok(None);
         };
-        let scene = &self.scene;
-        let bvh = self.bvh.get_or_insert_with(|| scene::Bvh::build(scene));
+        self.drawn();
+        let Some((scene, bvh)) = &mut self.drawn else {
+            return Ok(None);
+        };
+        let bvh = bvh.get_or_insert_with(|| scene::Bvh::build(scene));
         Ok(Some(vpl::generate(scene, bvh, photon_lights, config)?))
+    }
+}
+
+/// What the GPU draws of `scene`: without the control meshes `plan` subdivides.
+fn drawn<'s>(
+    plan: Option<&pipeline::subdivision::SubdivisionPlan>,
+    scene: &'s Scene,
+) -> std::borrow::Cow<'s, Scene> {
+    match plan {
+        Some(plan) => std::borrow::Cow::Owned(plan.drawn(scene)),
+        None => std::borrow::Cow::Borrowed(scene),
     }
 }
 
@@ -1535,6 +1617,7 @@ fn cpu_frame(
     camera: &scene::Camera,
     vpls: Option<&vpl::VplSet>,
 ) -> Result<(Rendered, Option<IndirectStages>)> {
+    let scene = &*drawn(setup.plan, scene);
     let mut inputs =
         pipeline::cpu::FrameInputs::new(scene, camera, lights, args.size, setup.ambient)
             .with_textures(texture_options(args));
@@ -1761,7 +1844,7 @@ fn gpu_sequence(
     let (d, q) = (&gpu.device, &gpu.queue);
     let frames = seq.frames;
     renderer.set_animation(d, q, setup.scene.rig.as_ref())?;
-    let mut posed = Posed::new(setup.scene);
+    let mut posed = Posed::new(setup);
     let mut warmed = 0;
     for k in (0..args.warm_up).map(|_| 0).chain(0..frames) {
         let t = seq.clock.time(k);
@@ -1775,8 +1858,8 @@ fn gpu_sequence(
         }
         let surfels = setup.indirect.is_some() || args.manylod_shadows.is_some();
         if let (Some(pose), Some(rig), true) = (&pose, &setup.scene.rig, surfels) {
-            posed.pose(rig, pose);
-            let (positions, _) = instant_radiosity::shadows::scene_mesh(&posed.scene);
+            posed.pose(rig, pose)?;
+            let (positions, _) = instant_radiosity::shadows::scene_mesh(posed.drawn());
             renderer.set_scene_positions(q, &positions)?;
         }
         if setup.indirect.is_some() && (pose.is_some() || lights.is_some()) {
@@ -1818,13 +1901,13 @@ fn gpu_sequence(
 /// twin), traces the VPLs again when it moves, and renders with the CPU frame.
 fn cpu_sequence(args: &Args, setup: &Setup, mut seq: Sequence) -> Result<()> {
     let frames = seq.frames;
-    let mut posed = Posed::new(setup.scene);
+    let mut posed = Posed::new(setup);
     for k in 0..frames {
         let t = seq.clock.time(k);
         let pose = Sequence::pose(setup, t);
         let lights = moved_lights(args, setup, t, pose.as_ref());
         if let (Some(pose), Some(rig)) = (&pose, &setup.scene.rig) {
-            posed.pose(rig, pose);
+            posed.pose(rig, pose)?;
         }
         let (direct, photons) = match &lights {
             Some((direct, photons)) => (&direct[..], &photons[..]),
@@ -1869,10 +1952,17 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
     println!("device:  {device}");
     println!(
         "scene:   {} triangles, {} direct lights ({}), {width}x{height}",
-        setup.scene.triangle_count(),
+        drawn(setup.plan, setup.scene).triangle_count(),
         setup.all_direct,
         setup.lit_by,
     );
+    if let Some(plan) = setup.plan {
+        println!(
+            "subdiv:  Loop level {} of {} control meshes, every frame from their posed vertices",
+            plan.level(),
+            plan.controls().count()
+        );
+    }
     if let (Some(rig), Some(c)) = (&setup.scene.rig, setup.clip) {
         let clip = &rig.clips[c];
         println!(

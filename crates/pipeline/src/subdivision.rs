@@ -75,7 +75,8 @@ pub fn prepare(
         }
         let (control, welded_from) =
             TriMesh::welding(&mesh.positions, &mesh.indices).map_err(|e| subdiv_error(mesh, e))?;
-        let sub = Subdivider::new(&control.topology, &plan.bft).map_err(|e| subdiv_error(mesh, e))?;
+        let sub =
+            Subdivider::new(&control.topology, &plan.bft).map_err(|e| subdiv_error(mesh, e))?;
         let mut subdivided = Subdivided {
             control: k,
             refined: prepared.meshes.len(),
@@ -260,7 +261,9 @@ impl SubdivisionStage {
         for m in &plan.meshes {
             let error = |e: subdiv_bft::SubdivError| RenderError::Subdivision(e.to_string());
             let subdivider = GpuSubdivider::new(device, &m.sub, &plan.bft).map_err(error)?;
-            let level = subdivider.level(device, &m.sub, plan.level).map_err(error)?;
+            let level = subdivider
+                .level(device, &m.sub, plan.level)
+                .map_err(error)?;
             if level.vertex_count as usize != m.vertices {
                 return Err(RenderError::Subdivision(format!(
                     "level {}: {} vertices on the GPU, {} in the refined mesh",

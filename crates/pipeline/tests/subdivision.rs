@@ -87,7 +87,10 @@ fn a_skinned_subdivided_character_matches_its_cpu_twin() {
         println!("t {t}: PSNR {db:.1} dB against the CPU-posed, CPU-subdivided scene");
         assert!(db >= 45.0, "t {t}: PSNR {db:.1} dB");
         let moved = pipeline::psnr(&rest, &frame);
-        assert!(moved < db - 5.0, "t {t}: the pose changes the frame ({moved:.1} dB)");
+        assert!(
+            moved < db - 5.0,
+            "t {t}: the pose changes the frame ({moved:.1} dB)"
+        );
     }
 }
 
