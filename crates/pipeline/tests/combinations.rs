@@ -1,7 +1,7 @@
 //! The frame's stages in combination (issue 23 item 5): a pairwise-covering sample of the
 //! stage switches — light accumulation, direct shadows, indirect light, VPL visibility,
-//! animation, near field, output transform, supersampling — rendered small on the test
-//! device. Every combination renders without error to finite radiance, and:
+//! animation, near field, output transform, supersampling, subdivision per frame — rendered
+//! small on the test device. Every combination renders without error to finite radiance, and:
 //! - light culling does not change the image (each culled method equals brute force);
 //! - interleaving with a 1×1 pattern equals the non-interleaved reference;
 //! - the skinning stage at a pose equals the scene posed on the CPU and rendered still;
@@ -17,6 +17,7 @@ use instant_radiosity::{
     vpl,
 };
 use interleave::Pattern;
+use pipeline::subdivision::{self, SubdivisionPlan};
 use pipeline::{
     ShadingMethod,
     cpu::{self, FrameInputs},
@@ -55,6 +56,7 @@ struct Combo {
     near_field: bool,
     output: bool,
     ssaa: Ssaa,
+    subdiv: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -81,9 +83,9 @@ impl Ssaa {
 }
 
 /// Levels of each switch.
-const LEVELS: [usize; 8] = [4, 4, 4, 4, 2, 2, 2, 3];
+const LEVELS: [usize; 9] = [4, 4, 4, 4, 2, 2, 2, 3, 2];
 
-fn combo(levels: [usize; 8]) -> Combo {
+fn combo(levels: [usize; 9]) -> Combo {
     Combo {
         shading: ShadingMethod::ALL[levels[0]],
         shadows: [
@@ -108,13 +110,14 @@ fn combo(levels: [usize; 8]) -> Combo {
         near_field: levels[5] == 1,
         output: levels[6] == 1,
         ssaa: [Ssaa::None, Ssaa::Adaptive4x4, Ssaa::Full2x2][levels[7]],
+        subdiv: levels[8] == 1,
     }
 }
 
 /// A greedy pairwise covering of [`LEVELS`]: every level pair of every two switches appears in
 /// some combination (deterministic).
-fn pairwise() -> Vec<[usize; 8]> {
-    let all: Vec<[usize; 8]> = (0..LEVELS.iter().product::<usize>())
+fn pairwise() -> Vec<[usize; 9]> {
+    let all: Vec<[usize; 9]> = (0..LEVELS.iter().product::<usize>())
         .map(|mut k| {
             std::array::from_fn(|i| {
                 let l = k % LEVELS[i];
@@ -123,10 +126,10 @@ fn pairwise() -> Vec<[usize; 8]> {
             })
         })
         .collect();
-    let pairs = |c: &[usize; 8]| {
+    let pairs = |c: &[usize; 9]| {
         let mut p = Vec::new();
-        for i in 0..8 {
-            for j in i + 1..8 {
+        for i in 0..9 {
+            for j in i + 1..9 {
                 p.push((i, c[i], j, c[j]));
             }
         }
@@ -205,22 +208,57 @@ const MAPS: ShadowMapConfig = ShadowMapConfig {
     normal_offset: 1.0,
 };
 
-fn surfels(mode: VplShadows) -> ShadowConfig {
+fn surfels(mode: VplShadows, refit: bool) -> ShadowConfig {
     ShadowConfig {
         points_log2: 12,
         tile: 16,
         ism_points: 512,
+        refit,
         ..ShadowConfig::for_mode(mode)
     }
 }
 
 /// `c` rendered on the GPU from `rest` (posed by the skinning stage when `c.posed` and
 /// `animate`, else `scene` is rendered still as given): linear radiance.
-fn render_gpu(gpu: &gpu::Gpu, scene: &Scene, c: &Combo, animate: bool) -> gbuffer::Image<[f32; 4]> {
+/// The meshes CesiumMan's rig moves in [`room`] (the subdivided ones).
+fn moved_meshes() -> Vec<usize> {
+    let room = room();
+    let rig = room.rig.as_ref().expect("rig");
+    rig.deformers.iter().map(|d| d.mesh as usize).collect()
+}
+
+/// `scene` with the moved meshes subdivided to level 2 (their control meshes kept, the refined
+/// ones appended) when `on`, and the plan.
+fn subdivided(scene: &Scene, on: bool) -> (Scene, Option<SubdivisionPlan>) {
+    if !on {
+        return (scene.clone(), None);
+    }
+    static TABLES: std::sync::OnceLock<subdiv_bft::BftSet> = std::sync::OnceLock::new();
+    let tables = TABLES
+        .get_or_init(|| subdiv_bft::BftSet::build(2, subdiv_bft::MAX_VALENCE).expect("tables"));
+    let (prepared, plan) =
+        subdivision::prepare(scene, &moved_meshes(), 2, tables.clone()).expect("subdivided");
+    (prepared, Some(plan))
+}
+
+/// What is drawn of `scene` (without the subdivided control meshes).
+fn drawn(scene: &Scene, plan: Option<&SubdivisionPlan>) -> Scene {
+    plan.map_or_else(|| scene.clone(), |p| p.drawn(scene))
+}
+
+fn render_gpu(gpu: &gpu::Gpu, given: &Scene, c: &Combo, animate: bool) -> gbuffer::Image<[f32; 4]> {
     let (d, q) = (&gpu.device, &gpu.queue);
     let textures = gbuffer::TextureOptions { max_anisotropy: 1 };
-    let mut r =
-        GpuRenderer::new_with(d, q, scene, &scene.lights, SIZE, &textures).expect("renderer");
+    let (uploaded, plan) = subdivided(given, c.subdiv);
+    let mut r = GpuRenderer::new_with(d, q, &uploaded, &uploaded.lights, SIZE, &textures)
+        .expect("renderer");
+    if let Some(plan) = &plan {
+        r.set_subdivision(d, plan).expect("subdivision");
+    }
+    // What the CPU builds (surfels, BVHs, VPLs) sees what is drawn; the surfels refit where
+    // meshes move.
+    let scene = &drawn(&uploaded, plan.as_ref());
+    let refit = uploaded.rig.is_some();
     r.set_shading(
         d,
         q,
@@ -234,23 +272,27 @@ fn render_gpu(gpu: &gpu::Gpu, scene: &Scene, c: &Combo, animate: bool) -> gbuffe
         Shadows::None => {}
         Shadows::Maps => r.set_shadows(d, q, Some(&MAPS)).expect("maps"),
         Shadows::ManyLod => r
-            .set_manylod_shadows(d, q, scene, Some(&surfels(VplShadows::ManyLod)))
+            .set_manylod_shadows(d, q, scene, Some(&surfels(VplShadows::ManyLod, refit)))
             .expect("manylod shadows"),
         Shadows::Rays => r.set_ray_shadows(d, q, Some(scene)).expect("rays"),
     }
     let animated = c.posed && animate;
-    let rig = scene.rig.as_ref().filter(|_| animated);
+    let rig = uploaded.rig.as_ref().filter(|_| animated);
     let pose = rig.map(|rig| rig.pose(Some(0), POSE_TIME));
-    let mut posed = scene.clone();
+    let mut posed = uploaded.clone();
     if let (Some(rig), Some(pose)) = (rig, &pose) {
         rig.apply(pose, &mut posed.meshes);
+        if let Some(plan) = &plan {
+            plan.refine_cpu(&mut posed).expect("cpu subdivision");
+        }
     }
+    let posed = drawn(&posed, plan.as_ref());
     if let Some(config) = indirect_config(scene, c.indirect) {
         let set = vpls(scene, &config);
         match c.visibility {
             None => r.set_indirect(d, &config, &set).expect("indirect"),
             Some(mode) => r
-                .set_vpl_shadows(d, scene, mode, &surfels(mode), &config, &set)
+                .set_vpl_shadows(d, scene, mode, &surfels(mode, refit), &config, &set)
                 .expect("visibility"),
         }
         if c.near_field {
@@ -318,10 +360,10 @@ fn every_sampled_combination_renders_and_keeps_the_invariants() {
     assert!(combos.len() >= 16, "{} combinations", combos.len());
     // And what the CPU frame has, across methods, indirect modes and poses.
     combos.extend([
-        [1, 1, 1, 0, 1, 0, 0, 0],
-        [3, 0, 3, 0, 0, 0, 1, 0],
-        [2, 1, 2, 0, 1, 0, 0, 0],
-        [0, 1, 1, 0, 0, 0, 0, 0],
+        [1, 1, 1, 0, 1, 0, 0, 0, 0],
+        [3, 0, 3, 0, 0, 0, 1, 0, 1],
+        [2, 1, 2, 0, 1, 0, 0, 0, 1],
+        [0, 1, 1, 0, 0, 0, 0, 0, 0],
     ]);
     let mut cpu_checked = 0;
     for levels in combos {
@@ -381,7 +423,9 @@ fn every_sampled_combination_renders_and_keeps_the_invariants() {
             && (c.visibility.is_none() || c.indirect == Indirect::None)
             && (!c.near_field || c.indirect == Indirect::None);
         if cpu_has {
-            let scene = if c.posed { &posed } else { &rest };
+            let given = if c.posed { &posed } else { &rest };
+            let (prepared, plan) = subdivided(given, c.subdiv);
+            let scene = &drawn(&prepared, plan.as_ref());
             let camera = rest.camera_or_framed();
             let mut inputs = FrameInputs::new(
                 scene,
