@@ -1019,9 +1019,13 @@ fn run() -> Result<()> {
         "the camera framing the scene"
     };
     gbuffer::validate_camera(&camera).context(camera_source)?;
-    // Uniform smooth subdivision runs every frame from the (animated) control meshes; adaptive,
-    // flat or level-coloured subdivision is evaluated once at load.
-    let per_frame = args.subdiv_pixels.is_none() && !args.subdiv_flat;
+    // Smooth subdivision (uniform or adaptive) runs every frame from the (animated) control
+    // meshes; flat or level-coloured subdivision is evaluated once at load.
+    let per_frame = !args.subdiv_flat && !args.subdiv_show_levels;
+    let tessellation = match args.subdiv_pixels {
+        Some(target_pixels) => pipeline::subdivision::Tessellation::Adaptive { target_pixels },
+        None => pipeline::subdivision::Tessellation::Uniform,
+    };
     let plan = match args.subdiv {
         Some(level) if per_frame => {
             let meshes: Vec<usize> = match &scene.rig {
@@ -1034,16 +1038,20 @@ fn run() -> Result<()> {
                 }
                 None => (0..scene.meshes.len()).collect(),
             };
-            let (prepared, plan) =
-                pipeline::subdivision::prepare(&scene, &meshes, level, bft_tables()?)
-                    .with_context(|| format!("--subdiv {level}"))?;
+            let (prepared, plan) = pipeline::subdivision::prepare(
+                &scene,
+                &meshes,
+                (level, tessellation),
+                bft_tables()?,
+            )
+            .with_context(|| format!("--subdiv {level}"))?;
             scene = prepared;
             Some(plan)
         }
         Some(level) => {
             if scene.rig.take().is_some() {
                 eprintln!(
-                    "note: adaptive or flat --subdiv is evaluated once at load: the scene's animation is dropped"
+                    "note: --subdiv-flat and --subdiv-show-levels are evaluated once at load: the scene's animation is dropped"
                 );
             }
             subdivide_scene(&mut scene, &args, level, &camera)?;
@@ -1057,9 +1065,9 @@ fn run() -> Result<()> {
     if let Some(rig) = &scene.rig {
         let t = clip.map_or(0.0, |c| sequence::looped(args.time, rig.clips[c].duration));
         rig.apply(&rig.pose(clip, t), &mut scene.meshes);
-        if let Some(plan) = &plan {
-            plan.refine_cpu(&mut scene)?;
-        }
+    }
+    if let Some(plan) = &plan {
+        plan.refine_cpu(&mut scene, &camera, args.size)?;
     }
     let scene = scene;
     // What is drawn of it (without the subdivided control meshes): what the CPU builds from.
@@ -1407,7 +1415,7 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
         &texture_options(args),
     )?;
     if let Some(plan) = setup.plan {
-        renderer.set_subdivision(d, plan)?;
+        renderer.set_subdivision(d, q, plan)?;
     }
     // The structures built on the CPU see what is drawn (without the rig, so say whether the
     // surfels must follow moving meshes).
@@ -1525,14 +1533,32 @@ impl<'a> Posed<'a> {
         }
     }
 
-    /// The meshes at `pose` of `rig` (and their subdivision surfaces, CPU).
-    fn pose(&mut self, rig: &scene::animation::Rig, pose: &scene::animation::Pose) -> Result<()> {
-        rig.apply(pose, &mut self.scene.meshes);
+    /// The meshes at `pose` of `rig`, if given, and their subdivision surfaces (CPU; adaptive
+    /// surfaces for `camera` over a `size` frame, whether the meshes moved or not). Whether
+    /// anything moved.
+    fn pose(
+        &mut self,
+        posed: Option<(&scene::animation::Rig, &scene::animation::Pose)>,
+        camera: &scene::Camera,
+        size: (u32, u32),
+    ) -> Result<bool> {
+        let adaptive = self.plan.is_some_and(|p| {
+            matches!(
+                p.tessellation(),
+                pipeline::subdivision::Tessellation::Adaptive { .. }
+            )
+        });
+        if posed.is_none() && !adaptive {
+            return Ok(false);
+        }
+        if let Some((rig, pose)) = posed {
+            rig.apply(pose, &mut self.scene.meshes);
+        }
         if let Some(plan) = self.plan {
-            plan.refine_cpu(&mut self.scene)?;
+            plan.refine_cpu(&mut self.scene, camera, size)?;
         }
         self.drawn = None;
-        Ok(())
+        Ok(true)
     }
 
     /// What is drawn of the posed scene.
@@ -1856,19 +1882,27 @@ fn gpu_sequence(
         if let Some((direct, _)) = &lights {
             renderer.set_lights(d, q, direct)?;
         }
+        let camera = seq.camera(args, setup, t, pose.as_ref());
+        // The CPU follows the meshes where it builds from them (surfels, VPLs); an adaptive
+        // tessellation changes with the camera, a refit needs the same triangles, so the
+        // surfels follow only moving meshes.
         let surfels = setup.indirect.is_some() || args.manylod_shadows.is_some();
-        if let (Some(pose), Some(rig), true) = (&pose, &setup.scene.rig, surfels) {
-            posed.pose(rig, pose)?;
-            let (positions, _) = instant_radiosity::shadows::scene_mesh(posed.drawn());
-            renderer.set_scene_positions(q, &positions)?;
-        }
-        if setup.indirect.is_some() && (pose.is_some() || lights.is_some()) {
+        let moved = match (&pose, &setup.scene.rig, surfels) {
+            (Some(pose), Some(rig), true) => {
+                posed.pose(Some((rig, pose)), &camera, args.size)?;
+                let (positions, _) = instant_radiosity::shadows::scene_mesh(posed.drawn());
+                renderer.set_scene_positions(q, &positions)?;
+                true
+            }
+            _ => false,
+        };
+        if setup.indirect.is_some() && (moved || lights.is_some()) {
             let photons = lights.as_ref().map_or(&setup.photon_lights, |(_, p)| p);
             if let Some(set) = posed.vpls(setup, photons)? {
                 renderer.set_vpls(q, &set)?;
             }
         }
-        renderer.set_camera(q, &seq.camera(args, setup, t, pose.as_ref()))?;
+        renderer.set_camera(q, &camera)?;
         let submitted_us = seq.start.elapsed().as_secs_f64() * 1e6;
         let mut encoder = d.create_command_encoder(&Default::default());
         renderer.encode(&mut encoder);
@@ -1906,20 +1940,22 @@ fn cpu_sequence(args: &Args, setup: &Setup, mut seq: Sequence) -> Result<()> {
         let t = seq.clock.time(k);
         let pose = Sequence::pose(setup, t);
         let lights = moved_lights(args, setup, t, pose.as_ref());
-        if let (Some(pose), Some(rig)) = (&pose, &setup.scene.rig) {
-            posed.pose(rig, pose)?;
-        }
+        let camera = seq.camera(args, setup, t, pose.as_ref());
+        let rigged = pose
+            .as_ref()
+            .zip(setup.scene.rig.as_ref())
+            .map(|(p, r)| (r, p));
+        let moved = posed.pose(rigged, &camera, args.size)?;
         let (direct, photons) = match &lights {
             Some((direct, photons)) => (&direct[..], &photons[..]),
             None => (&setup.lights[..], &setup.photon_lights[..]),
         };
-        let vpls = if pose.is_some() || lights.is_some() {
+        let vpls = if moved || lights.is_some() {
             posed.vpls(setup, photons)?
         } else {
             None
         };
         let submitted_us = seq.start.elapsed().as_secs_f64() * 1e6;
-        let camera = seq.camera(args, setup, t, pose.as_ref());
         let (rendered, _) = cpu_frame(args, setup, (&posed.scene, direct), &camera, vpls.as_ref())?;
         let mut start_ms = 0.0;
         let passes = rendered

@@ -99,36 +99,47 @@ fn an_animated_sequence_renders_alike_on_the_gpu_and_the_cpu() {
 }
 
 /// `--subdiv` on an animated scene subdivides the moving meshes every frame from their posed
-/// control meshes: on the GPU (skinning, then subdivision in the frame) as on the CPU (the
-/// rig's and the subdivision's twins), and the frames move.
+/// control meshes, uniformly or adaptively for the frame's camera (`--subdiv-pixels`): on the
+/// GPU (skinning, then subdivision in the frame) as on the CPU (the rig's and the
+/// subdivision's twins), and the frames move.
 #[test]
 fn a_subdivided_animated_sequence_renders_alike_on_the_gpu_and_the_cpu() {
-    let cpu = out_folder("subdiv-cpu");
-    sequence(&cpu, &["--cpu", "--subdiv", "2"]);
-    let (f0, f2) = (frame(&cpu, 0), frame(&cpu, 2));
-    assert!(mean_abs(&f0, &f2) > 2e-3, "frames 0 and 2 are alike");
-    if gpu::test_device(&pipeline::device_needs()).is_none() {
-        return;
-    }
-    let gpu = out_folder("subdiv-gpu");
-    sequence(&gpu, &["--subdiv", "2"]);
-    let csv = std::fs::read_to_string(gpu.join("timings.csv")).expect("timings.csv");
-    assert!(
-        csv.lines()
-            .next()
-            .is_some_and(|h| h.contains("main step: evaluate")),
-        "the subdivision is a pass of every frame:\n{csv}"
-    );
-    for k in 0..4 {
-        let d = mean_abs(&frame(&gpu, k), &frame(&cpu, k));
-        assert!(
-            d < 2.0 / 255.0,
-            "frame {k}: GPU and CPU differ by {d} on average"
-        );
-    }
-    // Subdivided, the character differs from its control mesh.
     let plain = out_folder("subdiv-none");
     sequence(&plain, &["--cpu"]);
-    let d = mean_abs(&frame(&plain, 1), &frame(&cpu, 1));
-    assert!(d > 1e-4, "subdivision changes nothing: {d}");
+    for (name, subdiv, pass) in [
+        ("uniform", &["--subdiv", "2"][..], "main step: evaluate"),
+        (
+            "adaptive",
+            &["--subdiv", "3", "--subdiv-pixels", "1"][..],
+            "main step: evaluate adaptive",
+        ),
+    ] {
+        let cpu = out_folder(&format!("subdiv-{name}-cpu"));
+        sequence(&cpu, &[&["--cpu"], subdiv].concat());
+        let (f0, f2) = (frame(&cpu, 0), frame(&cpu, 2));
+        assert!(
+            mean_abs(&f0, &f2) > 2e-3,
+            "{name}: frames 0 and 2 are alike"
+        );
+        // Subdivided, the character differs from its control mesh.
+        let d = mean_abs(&frame(&plain, 1), &frame(&cpu, 1));
+        assert!(d > 1e-4, "{name}: subdivision changes nothing: {d}");
+        if gpu::test_device(&pipeline::device_needs()).is_none() {
+            continue;
+        }
+        let gpu = out_folder(&format!("subdiv-{name}-gpu"));
+        sequence(&gpu, subdiv);
+        let csv = std::fs::read_to_string(gpu.join("timings.csv")).expect("timings.csv");
+        assert!(
+            csv.lines().next().is_some_and(|h| h.contains(pass)),
+            "{name}: the subdivision is a pass of every frame:\n{csv}"
+        );
+        for k in 0..4 {
+            let d = mean_abs(&frame(&gpu, k), &frame(&cpu, k));
+            assert!(
+                d < 2.0 / 255.0,
+                "{name}: frame {k}: GPU and CPU differ by {d} on average"
+            );
+        }
+    }
 }

@@ -814,12 +814,14 @@ impl GpuRenderer {
     /// scene [`crate::subdivision::prepare`] returned with `plan`): the control meshes are no
     /// longer drawn; after the skinning, each is gathered into M⁰, its limit surface evaluated
     /// at the plan's level on the GPU and written into its refined mesh, which every pass
-    /// draws. Give the setters that build on the CPU ([`GpuRenderer::set_vpl_shadows`], the
-    /// shadows, the near field) [`SubdivisionPlan::drawn`]. Set once: there is no way back to
-    /// the control meshes.
+    /// draws; adaptive plans tessellate for the camera of each frame
+    /// ([`GpuRenderer::set_camera`]) and need [`subdiv_bft::adaptive_device_needs`]. Give the
+    /// setters that build on the CPU ([`GpuRenderer::set_vpl_shadows`], the shadows, the near
+    /// field) [`SubdivisionPlan::drawn`]. Set once: there is no way back to the control meshes.
     pub fn set_subdivision(
         &mut self,
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         plan: &SubdivisionPlan,
     ) -> Result<(), RenderError> {
         let stage = SubdivisionStage::new(device, plan, &self.scene)?;
@@ -827,7 +829,15 @@ impl GpuRenderer {
             self.scene.hide(control);
         }
         self.subdivision = Some(stage);
-        Ok(())
+        self.set_subdivision_view(queue)
+    }
+
+    /// Sets the view of adaptive subdivision's factors (the camera over the frame).
+    fn set_subdivision_view(&self, queue: &wgpu::Queue) -> Result<(), RenderError> {
+        match (&self.subdivision, &self.camera) {
+            (Some(s), Some(camera)) => s.set_camera(queue, camera, self.size()),
+            _ => Ok(()),
+        }
     }
 
     /// Poses the animated meshes for the following frames (a pose of the rig given to
@@ -890,6 +900,7 @@ impl GpuRenderer {
             s.set_camera(queue, camera);
         }
         self.camera = Some(*camera);
+        self.set_subdivision_view(queue)?;
         // Directional cascades follow the camera (the view count does not change); the other
         // lights' views do not depend on it.
         let cascaded = self.lights.iter().any(|l| {

@@ -5,8 +5,10 @@
 //! ([`crate::gpu::GpuRenderer::set_subdivision`]) hides the control meshes and, every frame
 //! after the skinning, gathers their vertices into M⁰ (`shaders/pipeline/subdivision.wgsl`),
 //! runs the initial and main steps on the GPU and writes the limit surface's positions and
-//! normals into the refined meshes. [`SubdivisionPlan::refine_cpu`] is the CPU twin (the
-//! posed scene's refined meshes, for what the CPU builds from the scene: VPLs, BVHs, surfels).
+//! normals into the refined meshes (adaptive tessellation, §2.4: the screen-space factors for
+//! the frame's camera first, and the triangles too, the slots past them degenerate).
+//! [`SubdivisionPlan::refine_cpu`] is the CPU twin (the posed scene's refined meshes, for what
+//! the CPU builds from the scene: VPLs, BVHs, surfels).
 //!
 //! A mesh is welded by bit-identical positions first (its texture seams joined), so a vertex
 //! on a seam takes the texture coordinates of one side: textures across seams are stretched
@@ -16,8 +18,10 @@
 use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
 use ::gpu::{PassTimer, transfer};
 use glam::{Vec2, Vec3};
+use scene::Camera;
 use scene::{Mesh, Scene};
-use subdiv_bft::gpu::{GpuLevel, GpuSubdivider};
+use subdiv_bft::adaptive::ScreenView;
+use subdiv_bft::gpu::{GpuAdaptive, GpuLevel, GpuSubdivider};
 use subdiv_bft::{BftSet, Subdivider, TriMesh};
 
 use crate::RenderError;
@@ -29,14 +33,31 @@ struct Subdivided {
     control: usize,
     refined: usize,
     vertices: usize,
+    /// Index slots of the refined mesh (the uniform tessellation's count).
+    index_slots: usize,
     welded_from: Vec<u32>,
     sub: Subdivider,
 }
 
-/// Which meshes are subdivided to which level ([`prepare`]), with the tables.
+/// How the refined meshes are tessellated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tessellation {
+    /// Every patch at the plan's level.
+    Uniform,
+    /// Each M¹ edge split so its fine edges are about `target_pixels` long on screen for the
+    /// frame's camera, up to the plan's level (Holländer 2013 §2.4; `subdiv_bft::adaptive`).
+    /// Needs [`subdiv_bft::adaptive_device_needs`].
+    Adaptive {
+        /// Wanted fine-edge length in pixels.
+        target_pixels: f32,
+    },
+}
+
+/// Which meshes are subdivided to which level and how ([`prepare`]), with the tables.
 #[derive(Clone, Debug)]
 pub struct SubdivisionPlan {
     level: u32,
+    tessellation: Tessellation,
     bft: BftSet,
     meshes: Vec<Subdivided>,
 }
@@ -45,21 +66,31 @@ fn subdiv_error(mesh: &Mesh, e: subdiv_bft::SubdivError) -> RenderError {
     RenderError::Subdivision(format!("mesh {:?}: {e}", mesh.name))
 }
 
-/// The scene with `meshes` (indices into `scene.meshes`) subdivided uniformly to surface
-/// `level` (1 = M¹; at most the tables' level + 1): each control mesh stays where it is (its
-/// index, the rig's deformers) and its refined mesh is appended, evaluated at the control
-/// mesh's current positions. Render the returned scene with
+/// The scene with `meshes` (indices into `scene.meshes`) subdivided to surface `level`
+/// (1 = M¹; at most the tables' level + 1; adaptive: the finest level) as `tessellation` says:
+/// each control mesh stays where it is (its index, the rig's deformers) and its refined mesh
+/// is appended, evaluated uniformly at `level` at the control mesh's current positions (for
+/// adaptive tessellation: the vertex layout every adaptive frame writes into, and as many
+/// triangle slots). Render the returned scene with
 /// [`crate::gpu::GpuRenderer::set_subdivision`]; give what the CPU builds from the scene
-/// [`SubdivisionPlan::drawn`].
+/// [`SubdivisionPlan::drawn`] after [`SubdivisionPlan::refine_cpu`].
 pub fn prepare(
     scene: &Scene,
     meshes: &[usize],
-    level: u32,
+    (level, tessellation): (u32, Tessellation),
     bft: BftSet,
 ) -> Result<(Scene, SubdivisionPlan), RenderError> {
+    if let Tessellation::Adaptive { target_pixels } = tessellation
+        && !(target_pixels.is_finite() && target_pixels > 0.0)
+    {
+        return Err(RenderError::Subdivision(format!(
+            "adaptive target of {target_pixels} pixels: give a positive length"
+        )));
+    }
     let mut prepared = scene.clone();
     let mut plan = SubdivisionPlan {
         level,
+        tessellation,
         bft,
         meshes: Vec::new(),
     };
@@ -81,11 +112,13 @@ pub fn prepare(
             control: k,
             refined: prepared.meshes.len(),
             vertices: 0,
+            index_slots: 0,
             welded_from,
             sub,
         };
-        let refined = plan.refine(&subdivided, mesh)?;
+        let refined = plan.uniform(&subdivided, mesh)?;
         subdivided.vertices = refined.positions.len();
+        subdivided.index_slots = refined.indices.len();
         let gathered = |values: &dyn Fn(usize) -> Vec3| -> Vec<Vec3> {
             subdivided
                 .welded_from
@@ -142,27 +175,72 @@ impl SubdivisionPlan {
         self.meshes.iter().map(|m| m.control)
     }
 
-    /// The refined mesh of `m` from `control`'s current positions (CPU).
-    fn refine(&self, m: &Subdivided, control: &Mesh) -> Result<subdiv_bft::Refined, RenderError> {
-        let m0: Vec<Vec3> = m
-            .welded_from
+    /// How the refined meshes are tessellated.
+    pub fn tessellation(&self) -> Tessellation {
+        self.tessellation
+    }
+
+    /// M⁰ of `m`: `control`'s current positions at the welded vertices.
+    fn m0(m: &Subdivided, control: &Mesh) -> Vec<Vec3> {
+        m.welded_from
             .iter()
             .map(|&v| control.positions[v as usize])
-            .collect();
+            .collect()
+    }
+
+    /// The uniform tessellation of `m` at the plan's level from `control` (CPU).
+    fn uniform(&self, m: &Subdivided, control: &Mesh) -> Result<subdiv_bft::Refined, RenderError> {
         m.sub
-            .evaluate_cpu(&self.bft, &m0, self.level)
+            .evaluate_cpu(&self.bft, &Self::m0(m, control), self.level)
             .map_err(|e| subdiv_error(control, e))
     }
 
     /// The CPU twin of the frame's subdivision: every refined mesh of `prepared` (the scene
     /// [`prepare`] returned, its control meshes posed as the frame poses them) evaluated again
-    /// from its control mesh.
-    pub fn refine_cpu(&self, prepared: &mut Scene) -> Result<(), RenderError> {
+    /// from its control mesh — adaptively for `camera` over a `size` image (the frame's), its
+    /// triangles those the factors keep.
+    pub fn refine_cpu(
+        &self,
+        prepared: &mut Scene,
+        camera: &Camera,
+        size: (u32, u32),
+    ) -> Result<(), RenderError> {
         for m in &self.meshes {
-            let refined = self.refine(m, &prepared.meshes[m.control])?;
+            let control = &prepared.meshes[m.control];
+            let refined = match self.tessellation {
+                Tessellation::Uniform => self.uniform(m, control)?,
+                Tessellation::Adaptive { target_pixels } => {
+                    let error = |e| subdiv_error(control, e);
+                    let m0 = Self::m0(m, control);
+                    let s_max = m.sub.segments(self.level).map_err(error)?;
+                    let (p1, _) = m.sub.initial_step_f32(&m0).map_err(error)?;
+                    let view = screen_view(camera, size, target_pixels);
+                    let factors =
+                        subdiv_bft::adaptive::screen_factors(&m.sub.m1, &p1, &view, s_max);
+                    let mut r = m
+                        .sub
+                        .evaluate_adaptive_cpu(&self.bft, &m0, &factors, self.level)
+                        .map_err(error)?;
+                    // The kept triangles first, the other slots degenerate, as the GPU fills
+                    // them (the upload keeps every slot; `drawn` drops the degenerate ones).
+                    r.indices = r
+                        .indices
+                        .chunks_exact(3)
+                        .filter(|t| !degenerate(t))
+                        .flatten()
+                        .copied()
+                        .collect();
+                    r.indices.resize(m.index_slots, 0);
+                    r
+                }
+            };
+            let adaptive = matches!(self.tessellation, Tessellation::Adaptive { .. });
             let mesh = &mut prepared.meshes[m.refined];
             mesh.positions = refined.positions;
             mesh.normals = refined.normals;
+            if adaptive {
+                mesh.indices = refined.indices;
+            }
         }
         Ok(())
     }
@@ -173,12 +251,36 @@ impl SubdivisionPlan {
     pub fn drawn(&self, prepared: &Scene) -> Scene {
         let mut drawn = prepared.clone();
         drawn.rig = None;
+        for m in &self.meshes {
+            let mesh = &mut drawn.meshes[m.refined];
+            mesh.indices = mesh
+                .indices
+                .chunks_exact(3)
+                .filter(|t| !degenerate(t))
+                .flatten()
+                .copied()
+                .collect();
+        }
         let mut controls: Vec<usize> = self.meshes.iter().map(|m| m.control).collect();
         controls.sort_unstable();
         for k in controls.into_iter().rev() {
             drawn.meshes.remove(k);
         }
         drawn
+    }
+}
+
+/// A triangle with a repeated vertex (an adaptive tessellation's collapsed or unused slot).
+fn degenerate(t: &[u32]) -> bool {
+    t[0] == t[1] || t[1] == t[2] || t[2] == t[0]
+}
+
+/// The screen-space view of the adaptive factors: `camera` over a `size` image.
+fn screen_view(camera: &Camera, size: (u32, u32), target_pixels: f32) -> ScreenView {
+    ScreenView {
+        view_proj: camera.view_projection(size.0 as f32 / size.1.max(1) as f32),
+        viewport: size,
+        target_pixels,
     }
 }
 
@@ -193,11 +295,18 @@ struct Params {
 
 const WORKGROUP: u32 = 64;
 
-/// One mesh's subdivision on the GPU: the subdivider, its level's buffers and the gather and
-/// scatter dispatches.
+/// A mesh's tessellation on the GPU: a uniform level's buffers, or the adaptive buffers with
+/// where the refined mesh's triangles are in the scene's index buffer (byte offset).
+enum Output {
+    Uniform(GpuLevel),
+    Adaptive(GpuAdaptive, u64),
+}
+
+/// One mesh's subdivision on the GPU: the subdivider, its output and the gather and scatter
+/// dispatches.
 struct GpuMesh {
     subdivider: GpuSubdivider,
-    level: GpuLevel,
+    output: Output,
     gather: Passes,
     scatter: Passes,
 }
@@ -205,6 +314,8 @@ struct GpuMesh {
 /// The frame's subdivision stage: every mesh of a plan, bound to the uploaded scene.
 pub(crate) struct SubdivisionStage {
     meshes: Vec<GpuMesh>,
+    tessellation: Tessellation,
+    scene_indices: wgpu::Buffer,
 }
 
 impl SubdivisionStage {
@@ -261,13 +372,38 @@ impl SubdivisionStage {
         for m in &plan.meshes {
             let error = |e: subdiv_bft::SubdivError| RenderError::Subdivision(e.to_string());
             let subdivider = GpuSubdivider::new(device, &m.sub, &plan.bft).map_err(error)?;
-            let level = subdivider
-                .level(device, &m.sub, plan.level)
-                .map_err(error)?;
-            if level.vertex_count as usize != m.vertices {
+            let (output, vertex_count, [fine_positions, fine_normals]) = match plan.tessellation {
+                Tessellation::Uniform => {
+                    let level = subdivider
+                        .level(device, &m.sub, plan.level)
+                        .map_err(error)?;
+                    let (n, buffers) = (level.vertex_count, [&level.positions, &level.normals]);
+                    let buffers = buffers.map(Clone::clone);
+                    (Output::Uniform(level), n, buffers)
+                }
+                Tessellation::Adaptive { .. } => {
+                    let a = subdivider
+                        .adaptive(device, &m.sub, plan.level)
+                        .map_err(error)?;
+                    let (_, first, count) = scene.indices(m.refined).ok_or_else(|| {
+                        RenderError::Subdivision(format!("mesh {} is not uploaded", m.refined))
+                    })?;
+                    if u64::from(count) * 4 != a.indices.size() {
+                        return Err(RenderError::Subdivision(format!(
+                            "mesh {}: {count} index slots for {} adaptive indices",
+                            m.refined,
+                            a.indices.size() / 4
+                        )));
+                    }
+                    let (n, buffers) = (a.vertex_capacity, [&a.positions, &a.normals]);
+                    let buffers = buffers.map(Clone::clone);
+                    (Output::Adaptive(a, u64::from(first) * 4), n, buffers)
+                }
+            };
+            if vertex_count as usize != m.vertices {
                 return Err(RenderError::Subdivision(format!(
-                    "level {}: {} vertices on the GPU, {} in the refined mesh",
-                    plan.level, level.vertex_count, m.vertices
+                    "level {}: {vertex_count} vertices on the GPU, {} in the refined mesh",
+                    plan.level, m.vertices
                 )));
             }
             let welded = m.welded_from.len() as u32;
@@ -287,13 +423,13 @@ impl SubdivisionStage {
                     positions,
                 ],
             );
-            let scatter_params = params(level.vertex_count, base(m.refined)?)?;
+            let scatter_params = params(vertex_count, base(m.refined)?)?;
             let scatter_group = scatter_layout.bind_buffers(
                 device,
                 &[
                     &scatter_params,
-                    &level.positions,
-                    &level.normals,
+                    &fine_positions,
+                    &fine_normals,
                     positions,
                     attributes,
                 ],
@@ -309,20 +445,66 @@ impl SubdivisionStage {
                     "subdivision scatter",
                     &scatter,
                     vec![scatter_group],
-                    Workgroups::linear(level.vertex_count, WORKGROUP),
+                    Workgroups::linear(vertex_count, WORKGROUP),
                 ),
                 subdivider,
-                level,
+                output,
             });
         }
-        Ok(Self { meshes })
+        let scene_indices = match scene.indices(0) {
+            Some((buffer, _, _)) => buffer.clone(),
+            None => return Err(RenderError::Subdivision("the scene has no meshes".into())),
+        };
+        Ok(Self {
+            meshes,
+            tessellation: plan.tessellation,
+            scene_indices,
+        })
     }
 
-    /// Records every mesh's gather, initial and main steps and scatter.
+    /// Sets the view of the adaptive factors: `camera` over a `size` frame.
+    pub(crate) fn set_camera(
+        &self,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        size: (u32, u32),
+    ) -> Result<(), RenderError> {
+        let Tessellation::Adaptive { target_pixels } = self.tessellation else {
+            return Ok(());
+        };
+        let view = screen_view(camera, size, target_pixels);
+        for m in &self.meshes {
+            if let Output::Adaptive(a, _) = &m.output {
+                a.set_view(queue, &view)
+                    .map_err(|e| RenderError::Subdivision(e.to_string()))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Records every mesh's gather, initial and main steps (adaptive: the factors first, and
+    /// the triangles copied into the scene's index buffer) and scatter.
     pub(crate) fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: &PassTimer) {
         for m in &self.meshes {
             m.gather.encode(encoder, Some(timer));
-            m.subdivider.encode(encoder, &m.level, Some(timer));
+            match &m.output {
+                Output::Uniform(level) => m.subdivider.encode(encoder, level, Some(timer)),
+                Output::Adaptive(a, offset) => {
+                    m.subdivider.encode_initial(encoder, Some(timer));
+                    m.subdivider.encode_screen_factors(encoder, a, Some(timer));
+                    // The slots past the appended triangles stay (0, 0, 0): degenerate.
+                    encoder.clear_buffer(&a.indices, 0, None);
+                    m.subdivider.encode_adaptive(encoder, a, Some(timer));
+                    let bytes = a.indices.size();
+                    encoder.copy_buffer_to_buffer(
+                        &a.indices,
+                        0,
+                        &self.scene_indices,
+                        *offset,
+                        bytes,
+                    );
+                }
+            }
             m.scatter.encode(encoder, Some(timer));
         }
     }

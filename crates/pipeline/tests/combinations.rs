@@ -17,7 +17,7 @@ use instant_radiosity::{
     vpl,
 };
 use interleave::Pattern;
-use pipeline::subdivision::{self, SubdivisionPlan};
+use pipeline::subdivision::{self, SubdivisionPlan, Tessellation};
 use pipeline::{
     ShadingMethod,
     cpu::{self, FrameInputs},
@@ -236,8 +236,13 @@ fn subdivided(scene: &Scene, on: bool) -> (Scene, Option<SubdivisionPlan>) {
     static TABLES: std::sync::OnceLock<subdiv_bft::BftSet> = std::sync::OnceLock::new();
     let tables = TABLES
         .get_or_init(|| subdiv_bft::BftSet::build(2, subdiv_bft::MAX_VALENCE).expect("tables"));
-    let (prepared, plan) =
-        subdivision::prepare(scene, &moved_meshes(), 2, tables.clone()).expect("subdivided");
+    let (prepared, plan) = subdivision::prepare(
+        scene,
+        &moved_meshes(),
+        (2, Tessellation::Uniform),
+        tables.clone(),
+    )
+    .expect("subdivided");
     (prepared, Some(plan))
 }
 
@@ -253,7 +258,7 @@ fn render_gpu(gpu: &gpu::Gpu, given: &Scene, c: &Combo, animate: bool) -> gbuffe
     let mut r = GpuRenderer::new_with(d, q, &uploaded, &uploaded.lights, SIZE, &textures)
         .expect("renderer");
     if let Some(plan) = &plan {
-        r.set_subdivision(d, plan).expect("subdivision");
+        r.set_subdivision(d, q, plan).expect("subdivision");
     }
     // What the CPU builds (surfels, BVHs, VPLs) sees what is drawn; the surfels refit where
     // meshes move.
@@ -283,7 +288,9 @@ fn render_gpu(gpu: &gpu::Gpu, given: &Scene, c: &Combo, animate: bool) -> gbuffe
     if let (Some(rig), Some(pose)) = (rig, &pose) {
         rig.apply(pose, &mut posed.meshes);
         if let Some(plan) = &plan {
-            plan.refine_cpu(&mut posed).expect("cpu subdivision");
+            let camera = uploaded.camera_or_framed();
+            plan.refine_cpu(&mut posed, &camera, SIZE)
+                .expect("cpu subdivision");
         }
     }
     let posed = drawn(&posed, plan.as_ref());

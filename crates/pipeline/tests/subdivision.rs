@@ -5,7 +5,7 @@
 
 use glam::{Vec2, Vec3};
 use pipeline::gpu::GpuRenderer;
-use pipeline::subdivision::{self, SubdivisionPlan};
+use pipeline::subdivision::{self, SubdivisionPlan, Tessellation};
 use scene::Scene;
 
 const SIZE: (u32, u32) = (96, 72);
@@ -14,8 +14,9 @@ fn tables() -> subdiv_bft::BftSet {
     subdiv_bft::BftSet::build(2, subdiv_bft::MAX_VALENCE).expect("tables")
 }
 
-/// CesiumMan in the Cornell box, its meshes subdivided to surface level 2.
-fn subdivided_room() -> (Scene, SubdivisionPlan) {
+/// CesiumMan in the Cornell box, its meshes subdivided to surface `level` as `tessellation`
+/// says.
+fn subdivided_room(level: u32, tessellation: Tessellation) -> (Scene, SubdivisionPlan) {
     let man = scene::shared_fixtures()
         .expect("the tests need ../shared/fixtures")
         .join("animated/CesiumMan/CesiumMan.glb");
@@ -35,7 +36,7 @@ fn subdivided_room() -> (Scene, SubdivisionPlan) {
         .iter()
         .map(|d| d.mesh as usize)
         .collect();
-    subdivision::prepare(&room, &moved, 2, tables()).expect("prepared")
+    subdivision::prepare(&room, &moved, (level, tessellation), tables()).expect("prepared")
 }
 
 fn render(gpu: &gpu::Gpu, r: &mut GpuRenderer, scene: &Scene) -> gbuffer::Image<[f32; 4]> {
@@ -62,12 +63,12 @@ fn a_skinned_subdivided_character_matches_its_cpu_twin() {
         return;
     };
     let (d, q) = (&gpu.device, &gpu.queue);
-    let (prepared, plan) = subdivided_room();
+    let (prepared, plan) = subdivided_room(2, Tessellation::Uniform);
     let rig = prepared.rig.clone().expect("rig");
     let textures = gbuffer::TextureOptions { max_anisotropy: 1 };
     let mut r = GpuRenderer::new_with(d, q, &prepared, &prepared.lights, SIZE, &textures)
         .expect("renderer");
-    r.set_subdivision(d, &plan).expect("subdivision");
+    r.set_subdivision(d, q, &plan).expect("subdivision");
     // The rest pose: the GPU's evaluation equals the CPU's at set-up.
     let rest = render(gpu, &mut r, &prepared);
     let expected = still(gpu, &plan.drawn(&prepared));
@@ -81,7 +82,8 @@ fn a_skinned_subdivided_character_matches_its_cpu_twin() {
         let frame = render(gpu, &mut r, &prepared);
         let mut posed = prepared.clone();
         rig.apply(&pose, &mut posed.meshes);
-        plan.refine_cpu(&mut posed).expect("cpu subdivision");
+        plan.refine_cpu(&mut posed, &prepared.camera_or_framed(), SIZE)
+            .expect("cpu subdivision");
         let expected = still(gpu, &plan.drawn(&posed));
         let db = pipeline::psnr(&expected, &frame);
         println!("t {t}: PSNR {db:.1} dB against the CPU-posed, CPU-subdivided scene");
@@ -92,6 +94,53 @@ fn a_skinned_subdivided_character_matches_its_cpu_twin() {
             "t {t}: the pose changes the frame ({moved:.1} dB)"
         );
     }
+}
+
+/// Adaptive tessellation every frame (§2.4): the factors for the frame's camera, the patches
+/// tessellated and their triangles drawn from the scene's index buffer — against the CPU's
+/// factors and tessellation of the posed control mesh, rendered still.
+#[test]
+fn adaptive_subdivision_per_frame_matches_its_cpu_twin() {
+    let needs = pipeline::device_needs().and(&subdiv_bft::adaptive_device_needs());
+    let Some(gpu) = gpu::test_device(&needs) else {
+        return;
+    };
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let adaptive = Tessellation::Adaptive { target_pixels: 0.5 };
+    let (prepared, plan) = subdivided_room(3, adaptive);
+    let rig = prepared.rig.clone().expect("rig");
+    let camera = prepared.camera_or_framed();
+    let textures = gbuffer::TextureOptions { max_anisotropy: 1 };
+    let mut r = GpuRenderer::new_with(d, q, &prepared, &prepared.lights, SIZE, &textures)
+        .expect("renderer");
+    r.set_subdivision(d, q, &plan).expect("subdivision");
+    r.set_animation(d, q, Some(&rig)).expect("animation");
+    let pose = rig.pose(Some(0), 0.9);
+    r.set_pose(q, &pose).expect("pose");
+    let frame = render(gpu, &mut r, &prepared);
+    let mut posed = prepared.clone();
+    rig.apply(&pose, &mut posed.meshes);
+    plan.refine_cpu(&mut posed, &camera, SIZE)
+        .expect("cpu subdivision");
+    let drawn = plan.drawn(&posed);
+    let capacity = prepared.meshes.last().expect("refined").indices.len();
+    let kept = drawn.meshes.last().expect("refined").indices.len();
+    assert_eq!(
+        posed.meshes.last().expect("refined").indices.len(),
+        capacity,
+        "the prepared scene keeps every slot (the upload's size)"
+    );
+    println!("adaptive: {} of {} triangle slots", kept / 3, capacity / 3);
+    // Level 3 has 16 triangles a patch: more than 1/16 of the slots means some patches were
+    // split, fewer than half that most were not (the character is small on screen).
+    assert!(
+        kept > capacity / 16 && kept < capacity / 2,
+        "{kept} of {capacity} indices"
+    );
+    let expected = still(gpu, &drawn);
+    let db = pipeline::psnr(&expected, &frame);
+    println!("adaptive, posed: PSNR {db:.1} dB against the CPU twin");
+    assert!(db >= 40.0, "PSNR {db:.1} dB");
 }
 
 /// Texture coordinates go through the positions' stencils, whose weights sum to one: on a flat
@@ -130,7 +179,8 @@ fn attributes_through_the_stencils_keep_an_affine_map() {
     let mut scene = Scene::default();
     scene.materials.push(scene::Material::default());
     scene.meshes.push(mesh);
-    let (prepared, plan) = subdivision::prepare(&scene, &[0], 3, tables()).expect("prepared");
+    let (prepared, plan) =
+        subdivision::prepare(&scene, &[0], (3, Tessellation::Uniform), tables()).expect("prepared");
     assert_eq!(plan.level(), 3);
     let refined = &prepared.meshes[1];
     assert!(refined.positions.len() > 4 * scene.meshes[0].positions.len());
@@ -150,10 +200,13 @@ fn attributes_through_the_stencils_keep_an_affine_map() {
 #[test]
 fn bad_plans_are_refused_by_name() {
     let scene = scene::cornell_box();
-    let e = subdivision::prepare(&scene, &[99], 2, tables()).expect_err("no mesh 99");
+    let e = subdivision::prepare(&scene, &[99], (2, Tessellation::Uniform), tables())
+        .expect_err("no mesh 99");
     assert!(e.to_string().contains("mesh 99"), "{e}");
-    let e = subdivision::prepare(&scene, &[0, 0], 2, tables()).expect_err("twice");
+    let e = subdivision::prepare(&scene, &[0, 0], (2, Tessellation::Uniform), tables())
+        .expect_err("twice");
     assert!(e.to_string().contains("twice"), "{e}");
-    let e = subdivision::prepare(&scene, &[0], 9, tables()).expect_err("level 9");
+    let e = subdivision::prepare(&scene, &[0], (9, Tessellation::Uniform), tables())
+        .expect_err("level 9");
     assert!(e.to_string().contains("level"), "{e}");
 }

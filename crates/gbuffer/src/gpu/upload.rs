@@ -61,6 +61,14 @@ impl GpuScene {
         [&self.positions, &self.attributes]
     }
 
+    /// The index buffer (`u32`, `INDEX | COPY_DST`) and mesh `mesh`'s range in it (first
+    /// index, index count): kernels that rewrite its triangles copy them there.
+    pub fn indices(&self, mesh: usize) -> Option<(&wgpu::Buffer, u32, u32)> {
+        self.draws
+            .get(mesh)
+            .map(|d| (&self.indices, d.first_index, d.index_count))
+    }
+
     /// Stops drawing mesh `mesh` (its index in [`Scene::meshes`]) in every pass: a control
     /// mesh whose subdivision surface is drawn instead. Its vertices stay (kernels read them).
     pub fn hide(&mut self, mesh: usize) {
@@ -133,7 +141,8 @@ impl GpuScene {
             device,
             "scene indices",
             bytemuck::cast_slice(&indices),
-            wgpu::BufferUsages::INDEX,
+            // Kernels may rewrite a mesh's triangles (adaptive subdivision).
+            wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
         )?;
         let textures = MaterialTextures::upload(device, queue, scene, options)?;
         let material_groups = scene

@@ -44,7 +44,9 @@ pub struct GpuAdaptive {
     pub positions: wgpu::Buffer,
     /// Unit normals (xyz, 0); `VERTEX | STORAGE | COPY_SRC`.
     pub normals: wgpu::Buffer,
-    /// Triangle list (u32; collapsed triangles included); `INDEX | STORAGE | COPY_SRC`.
+    /// Triangle list (u32; collapsed triangles included); `INDEX | STORAGE | COPY_SRC |
+    /// COPY_DST` (clear it to draw a fixed count: the slots past the appended triangles are
+    /// then degenerate).
     pub indices: wgpu::Buffer,
     /// `DrawIndexedIndirect` arguments (index count, 1, 0, 0, 0) for `draw_indexed_indirect`.
     pub draw_args: wgpu::Buffer,
@@ -121,7 +123,10 @@ impl GpuSubdivider {
             device,
             "adaptive indices",
             index_count * 4,
-            wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            wgpu::BufferUsages::INDEX
+                | wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
         )?;
         let draw_args = transfer::buffer_init(
             device,
