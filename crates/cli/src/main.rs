@@ -1070,8 +1070,10 @@ fn run() -> Result<()> {
         plan.refine_cpu(&mut scene, &camera, args.size)?;
     }
     let scene = scene;
-    // What is drawn of it (without the subdivided control meshes): what the CPU builds from.
+    // What is drawn of it (without the subdivided control meshes), and what the CPU traces VPLs
+    // and samples surfels on (with the control meshes instead of their subdivision surfaces).
     let drawn_scene = drawn(plan.as_ref(), &scene);
+    let proxy_scene = proxy(plan.as_ref(), &scene);
     let own_lights = args.lights.is_none() && !scene.lights.is_empty();
     let (mut lights, emissive_photons, lit_by) = match args.lights {
         Some(n) => (
@@ -1101,8 +1103,8 @@ fn run() -> Result<()> {
                 bounces: args.vpl_bounces,
             };
             let set = vpl::generate(
-                &drawn_scene,
-                &scene::Bvh::build(&drawn_scene),
+                &proxy_scene,
+                &scene::Bvh::build(&proxy_scene),
                 &photon_lights,
                 &vpls,
             )?;
@@ -1417,10 +1419,12 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
     if let Some(plan) = setup.plan {
         renderer.set_subdivision(d, q, plan)?;
     }
-    // The structures built on the CPU see what is drawn (without the rig, so say whether the
-    // surfels must follow moving meshes).
+    // The structures built on the CPU: those built once see what is drawn, those that follow
+    // the moving meshes (surfels) the control meshes (without the rig, so say whether they
+    // must follow).
     let drawn = drawn(setup.plan, setup.scene);
-    let scene = &*drawn;
+    let proxy = proxy(setup.plan, setup.scene);
+    let (scene, surfels) = (&*drawn, &*proxy);
     let moves = setup.scene.rig.is_some();
     renderer.set_output(d, Some(setup.output))?;
     renderer.set_shading(d, q, &setup.shading)?;
@@ -1431,7 +1435,7 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
             refit: moves,
             ..ShadowConfig::default()
         };
-        renderer.set_manylod_shadows(d, q, scene, Some(&config))?;
+        renderer.set_manylod_shadows(d, q, surfels, Some(&config))?;
     }
     if args.ray_shadows {
         renderer.set_ray_shadows(d, q, Some(scene))?;
@@ -1440,7 +1444,7 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
         match setup.vpl_shadows {
             Some(mode) => renderer.set_vpl_shadows(
                 d,
-                scene,
+                surfels,
                 mode,
                 &ShadowConfig {
                     epsilon: args.vpl_shadow_epsilon,
@@ -1520,22 +1524,26 @@ fn write_ssaa_samples(
 struct Posed<'a> {
     scene: Scene,
     plan: Option<&'a pipeline::subdivision::SubdivisionPlan>,
-    /// What is drawn of `scene` and its BVH, made when first asked for after a pose.
-    drawn: Option<(Scene, Option<scene::Bvh>)>,
+    /// Whether the subdivision surfaces are evaluated on the CPU too (the CPU frame draws them).
+    refine: bool,
+    /// The scene the VPLs and surfels follow (the control meshes of subdivided ones) and its
+    /// BVH, made when first asked for after a pose.
+    proxy: Option<(Scene, Option<scene::Bvh>)>,
 }
 
 impl<'a> Posed<'a> {
-    fn new(setup: &Setup<'a>) -> Self {
+    fn new(setup: &Setup<'a>, refine: bool) -> Self {
         Self {
             scene: setup.scene.clone(),
             plan: setup.plan,
-            drawn: None,
+            refine,
+            proxy: None,
         }
     }
 
-    /// The meshes at `pose` of `rig`, if given, and their subdivision surfaces (CPU; adaptive
-    /// surfaces for `camera` over a `size` frame, whether the meshes moved or not). Whether
-    /// anything moved.
+    /// The meshes at `pose` of `rig`, if given, and, when refining, their subdivision surfaces
+    /// (CPU; adaptive surfaces for `camera` over a `size` frame, whether the meshes moved or
+    /// not). Whether the meshes moved.
     fn pose(
         &mut self,
         posed: Option<(&scene::animation::Rig, &scene::animation::Pose)>,
@@ -1548,25 +1556,25 @@ impl<'a> Posed<'a> {
                 pipeline::subdivision::Tessellation::Adaptive { .. }
             )
         });
-        if posed.is_none() && !adaptive {
-            return Ok(false);
-        }
         if let Some((rig, pose)) = posed {
             rig.apply(pose, &mut self.scene.meshes);
+            self.proxy = None;
         }
-        if let Some(plan) = self.plan {
+        if let Some(plan) = self
+            .plan
+            .filter(|_| self.refine && (posed.is_some() || adaptive))
+        {
             plan.refine_cpu(&mut self.scene, camera, size)?;
         }
-        self.drawn = None;
-        Ok(true)
+        Ok(posed.is_some())
     }
 
-    /// What is drawn of the posed scene.
-    fn drawn(&mut self) -> &Scene {
+    /// What the VPLs and surfels follow of the posed scene.
+    fn proxy(&mut self) -> &Scene {
         let (scene, plan) = (&self.scene, self.plan);
         &self
-            .drawn
-            .get_or_insert_with(|| (drawn(plan, scene).into_owned(), None))
+            .proxy
+            .get_or_insert_with(|| (proxy(plan, scene).into_owned(), None))
             .0
     }
 
@@ -1575,12 +1583,24 @@ impl<'a> Posed<'a> {
         let Some((_, _, config)) = &setup.indirect else {
             return Ok(None);
         };
-        self.drawn();
-        let Some((scene, bvh)) = &mut self.drawn else {
+        self.proxy();
+        let Some((scene, bvh)) = &mut self.proxy else {
             return Ok(None);
         };
         let bvh = bvh.get_or_insert_with(|| scene::Bvh::build(scene));
         Ok(Some(vpl::generate(scene, bvh, photon_lights, config)?))
+    }
+}
+
+/// What the CPU traces VPLs and samples surfels on: `scene` with the control meshes `plan`
+/// subdivides instead of their subdivision surfaces.
+fn proxy<'s>(
+    plan: Option<&pipeline::subdivision::SubdivisionPlan>,
+    scene: &'s Scene,
+) -> std::borrow::Cow<'s, Scene> {
+    match plan {
+        Some(plan) => std::borrow::Cow::Owned(plan.proxy(scene)),
+        None => std::borrow::Cow::Borrowed(scene),
     }
 }
 
@@ -1870,7 +1890,7 @@ fn gpu_sequence(
     let (d, q) = (&gpu.device, &gpu.queue);
     let frames = seq.frames;
     renderer.set_animation(d, q, setup.scene.rig.as_ref())?;
-    let mut posed = Posed::new(setup);
+    let mut posed = Posed::new(setup, false);
     let mut warmed = 0;
     for k in (0..args.warm_up).map(|_| 0).chain(0..frames) {
         let t = seq.clock.time(k);
@@ -1890,7 +1910,7 @@ fn gpu_sequence(
         let moved = match (&pose, &setup.scene.rig, surfels) {
             (Some(pose), Some(rig), true) => {
                 posed.pose(Some((rig, pose)), &camera, args.size)?;
-                let (positions, _) = instant_radiosity::shadows::scene_mesh(posed.drawn());
+                let (positions, _) = instant_radiosity::shadows::scene_mesh(posed.proxy());
                 renderer.set_scene_positions(q, &positions)?;
                 true
             }
@@ -1935,7 +1955,7 @@ fn gpu_sequence(
 /// twin), traces the VPLs again when it moves, and renders with the CPU frame.
 fn cpu_sequence(args: &Args, setup: &Setup, mut seq: Sequence) -> Result<()> {
     let frames = seq.frames;
-    let mut posed = Posed::new(setup);
+    let mut posed = Posed::new(setup, true);
     for k in 0..frames {
         let t = seq.clock.time(k);
         let pose = Sequence::pose(setup, t);

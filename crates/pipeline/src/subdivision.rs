@@ -245,6 +245,23 @@ impl SubdivisionPlan {
         Ok(())
     }
 
+    /// The control meshes as a proxy of the limit surface: `prepared` without the refined
+    /// meshes (and without the rig). Cheap to pose every frame — no subdivision, few triangles
+    /// for a BVH — for what the CPU rebuilds per frame (VPLs traced against it, ManyLoD surfels
+    /// sampled on it and refit to its posed triangles); the limit surface lies within the
+    /// control mesh's hull, a subdivision step or so away, so surfel visibility of points on it
+    /// may be off by that much.
+    pub fn proxy(&self, prepared: &Scene) -> Scene {
+        let mut proxy = prepared.clone();
+        proxy.rig = None;
+        let mut refined: Vec<usize> = self.meshes.iter().map(|m| m.refined).collect();
+        refined.sort_unstable();
+        for k in refined.into_iter().rev() {
+            proxy.meshes.remove(k);
+        }
+        proxy
+    }
+
     /// What is drawn of `prepared`: the scene without the control meshes (and without the rig,
     /// whose mesh indices are `prepared`'s), for what the CPU builds from the scene — VPLs,
     /// BVHs, surfels, shadows.
