@@ -828,6 +828,9 @@ impl GpuRenderer {
         for control in plan.controls() {
             self.scene.hide(control);
         }
+        for (mesh, args) in stage.indirect_draws() {
+            self.scene.draw_indirect(mesh, args.clone());
+        }
         self.subdivision = Some(stage);
         self.set_subdivision_view(queue)
     }

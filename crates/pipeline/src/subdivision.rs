@@ -316,7 +316,14 @@ const WORKGROUP: u32 = 64;
 /// where the refined mesh's triangles are in the scene's index buffer (byte offset).
 enum Output {
     Uniform(GpuLevel),
-    Adaptive(GpuAdaptive, u64),
+    Adaptive(GpuAdaptive, u64, IndirectDraw),
+}
+
+/// The refined mesh's indirect draw of its appended triangles: the mesh and its arguments
+/// (the count copied in each frame).
+struct IndirectDraw {
+    mesh: usize,
+    args: wgpu::Buffer,
 }
 
 /// One mesh's subdivision on the GPU: the subdivider, its output and the gather and scatter
@@ -414,7 +421,17 @@ impl SubdivisionStage {
                     }
                     let (n, buffers) = (a.vertex_capacity, [&a.positions, &a.normals]);
                     let buffers = buffers.map(Clone::clone);
-                    (Output::Adaptive(a, u64::from(first) * 4), n, buffers)
+                    let args = transfer::buffer_init(
+                        device,
+                        "adaptive mesh draw arguments",
+                        bytemuck::cast_slice(&[0, 1, first, base(m.refined)?, 0]),
+                        wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                    )?;
+                    let draw = IndirectDraw {
+                        mesh: m.refined,
+                        args,
+                    };
+                    (Output::Adaptive(a, u64::from(first) * 4, draw), n, buffers)
                 }
             };
             if vertex_count as usize != m.vertices {
@@ -479,6 +496,15 @@ impl SubdivisionStage {
         })
     }
 
+    /// The refined meshes drawn indirectly (adaptive) and their draw arguments, for
+    /// [`gbuffer::gpu::GpuScene::draw_indirect`].
+    pub(crate) fn indirect_draws(&self) -> impl Iterator<Item = (usize, &wgpu::Buffer)> {
+        self.meshes.iter().filter_map(|m| match &m.output {
+            Output::Adaptive(_, _, draw) => Some((draw.mesh, &draw.args)),
+            Output::Uniform(_) => None,
+        })
+    }
+
     /// Sets the view of the adaptive factors: `camera` over a `size` frame.
     pub(crate) fn set_camera(
         &self,
@@ -491,7 +517,7 @@ impl SubdivisionStage {
         };
         let view = screen_view(camera, size, target_pixels);
         for m in &self.meshes {
-            if let Output::Adaptive(a, _) = &m.output {
+            if let Output::Adaptive(a, _, _) = &m.output {
                 a.set_view(queue, &view)
                     .map_err(|e| RenderError::Subdivision(e.to_string()))?;
             }
@@ -506,7 +532,7 @@ impl SubdivisionStage {
             m.gather.encode(encoder, Some(timer));
             match &m.output {
                 Output::Uniform(level) => m.subdivider.encode(encoder, level, Some(timer)),
-                Output::Adaptive(a, offset) => {
+                Output::Adaptive(a, offset, draw) => {
                     m.subdivider.encode_initial(encoder, Some(timer));
                     m.subdivider.encode_screen_factors(encoder, a, Some(timer));
                     // The slots past the appended triangles stay (0, 0, 0): degenerate.
@@ -520,6 +546,7 @@ impl SubdivisionStage {
                         *offset,
                         bytes,
                     );
+                    encoder.copy_buffer_to_buffer(&a.draw_args, 0, &draw.args, 0, 4);
                 }
             }
             m.scatter.encode(encoder, Some(timer));

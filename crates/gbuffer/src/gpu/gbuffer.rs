@@ -276,11 +276,14 @@ impl GBufferPass {
                 bound = Some(pipeline);
             }
             pass.set_bind_group(1, &scene.material_groups[d.material], &[]);
-            pass.draw_indexed(
-                d.first_index..d.first_index + d.index_count,
-                d.base_vertex,
-                0..1,
-            );
+            match &d.indirect {
+                Some(args) if d.index_count > 0 => pass.draw_indexed_indirect(args, 0),
+                _ => pass.draw_indexed(
+                    d.first_index..d.first_index + d.index_count,
+                    d.base_vertex,
+                    0..1,
+                ),
+            }
         }
     }
 

@@ -21,6 +21,9 @@ pub(super) struct Draw {
     pub(super) base_vertex: i32,
     pub(super) material: usize,
     pub(super) state: DrawState,
+    /// `DrawIndexedIndirect` arguments the G-buffer passes draw this mesh with instead
+    /// ([`GpuScene::draw_indirect`]).
+    pub(super) indirect: Option<wgpu::Buffer>,
 }
 
 /// A scene uploaded for the G-buffer pass: positions (vertex buffer slot 0) and the other
@@ -67,6 +70,17 @@ impl GpuScene {
         self.draws
             .get(mesh)
             .map(|d| (&self.indices, d.first_index, d.index_count))
+    }
+
+    /// Makes the G-buffer passes draw mesh `mesh` with `draw_indexed_indirect` from `args`
+    /// (`INDIRECT`; index count, 1, its first index, its base vertex, 0 — a kernel writes the
+    /// count): a mesh whose triangles a kernel appends each frame (adaptive subdivision).
+    /// Instanced geometry passes (shadow maps) still draw all its index slots, so the slots
+    /// past the count must be degenerate.
+    pub fn draw_indirect(&mut self, mesh: usize, args: wgpu::Buffer) {
+        if let Some(d) = self.draws.get_mut(mesh) {
+            d.indirect = Some(args);
+        }
     }
 
     /// Stops drawing mesh `mesh` (its index in [`Scene::meshes`]) in every pass: a control
@@ -118,6 +132,7 @@ impl GpuScene {
                     cull: !material.double_sided,
                     alpha_tested: material.alpha_mode != AlphaMode::Opaque,
                 },
+                indirect: None,
             });
             indices.extend_from_slice(&m.indices);
             positions.extend(m.positions.iter().map(|p| p.to_array()));
