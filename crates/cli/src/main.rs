@@ -1598,10 +1598,7 @@ fn proxy<'s>(
     plan: Option<&pipeline::subdivision::SubdivisionPlan>,
     scene: &'s Scene,
 ) -> std::borrow::Cow<'s, Scene> {
-    match plan {
-        Some(plan) => std::borrow::Cow::Owned(plan.proxy(scene)),
-        None => std::borrow::Cow::Borrowed(scene),
-    }
+    planned(plan, scene, pipeline::subdivision::SubdivisionPlan::proxy)
 }
 
 /// What the GPU draws of `scene`: without the control meshes `plan` subdivides.
@@ -1609,8 +1606,17 @@ fn drawn<'s>(
     plan: Option<&pipeline::subdivision::SubdivisionPlan>,
     scene: &'s Scene,
 ) -> std::borrow::Cow<'s, Scene> {
+    planned(plan, scene, pipeline::subdivision::SubdivisionPlan::drawn)
+}
+
+/// `scene` as `view` of `plan` sees it, or `scene` itself without a plan.
+fn planned<'s>(
+    plan: Option<&pipeline::subdivision::SubdivisionPlan>,
+    scene: &'s Scene,
+    view: fn(&pipeline::subdivision::SubdivisionPlan, &Scene) -> Scene,
+) -> std::borrow::Cow<'s, Scene> {
     match plan {
-        Some(plan) => std::borrow::Cow::Owned(plan.drawn(scene)),
+        Some(plan) => std::borrow::Cow::Owned(view(plan, scene)),
         None => std::borrow::Cow::Borrowed(scene),
     }
 }

@@ -252,14 +252,7 @@ impl SubdivisionPlan {
     /// control mesh's hull, a subdivision step or so away, so surfel visibility of points on it
     /// may be off by that much.
     pub fn proxy(&self, prepared: &Scene) -> Scene {
-        let mut proxy = prepared.clone();
-        proxy.rig = None;
-        let mut refined: Vec<usize> = self.meshes.iter().map(|m| m.refined).collect();
-        refined.sort_unstable();
-        for k in refined.into_iter().rev() {
-            proxy.meshes.remove(k);
-        }
-        proxy
+        without(prepared.clone(), self.meshes.iter().map(|m| m.refined))
     }
 
     /// What is drawn of `prepared`: the scene without the control meshes (and without the rig,
@@ -267,7 +260,6 @@ impl SubdivisionPlan {
     /// BVHs, surfels, shadows.
     pub fn drawn(&self, prepared: &Scene) -> Scene {
         let mut drawn = prepared.clone();
-        drawn.rig = None;
         for m in &self.meshes {
             let mesh = &mut drawn.meshes[m.refined];
             mesh.indices = mesh
@@ -278,13 +270,19 @@ impl SubdivisionPlan {
                 .copied()
                 .collect();
         }
-        let mut controls: Vec<usize> = self.meshes.iter().map(|m| m.control).collect();
-        controls.sort_unstable();
-        for k in controls.into_iter().rev() {
-            drawn.meshes.remove(k);
-        }
-        drawn
+        without(drawn, self.meshes.iter().map(|m| m.control))
     }
+}
+
+/// `scene` without the meshes `removed` and without its rig (whose mesh indices they change).
+fn without(mut scene: Scene, removed: impl Iterator<Item = usize>) -> Scene {
+    scene.rig = None;
+    let mut removed: Vec<usize> = removed.collect();
+    removed.sort_unstable();
+    for k in removed.into_iter().rev() {
+        scene.meshes.remove(k);
+    }
+    scene
 }
 
 /// A triangle with a repeated vertex (an adaptive tessellation's collapsed or unused slot).

@@ -10,11 +10,9 @@
 //! (Supersampling's own rules — adaptive pixels of every sample equal full supersampling,
 //! indirect light shared per pixel — are tested in `supersampling.rs`.)
 
-use glam::Vec3;
 use instant_radiosity::{
     IndirectConfig, Interleaving,
     shadows::{ShadowConfig, VplShadows, scene_mesh},
-    vpl,
 };
 use interleave::Pattern;
 use pipeline::subdivision::{self, SubdivisionPlan, Tessellation};
@@ -26,6 +24,8 @@ use pipeline::{
 };
 use scene::Scene;
 use tiled_shading::shadows::ShadowMapConfig;
+
+mod scenes;
 
 const SIZE: (u32, u32) = (64, 48);
 const POSE_TIME: f32 = 0.7;
@@ -150,22 +150,6 @@ fn pairwise() -> Vec<[usize; 9]> {
     chosen
 }
 
-/// The Cornell box with CesiumMan walking in it.
-fn room() -> Scene {
-    let man = scene::shared_fixtures()
-        .expect("the tests need ../shared/fixtures")
-        .join("animated/CesiumMan/CesiumMan.glb");
-    let mut room = scene::cornell_box();
-    let placement = glam::Mat4::from_scale_rotation_translation(
-        Vec3::splat(0.25),
-        glam::Quat::from_rotation_y(-std::f32::consts::FRAC_PI_2),
-        Vec3::new(0.2, 0.0, 0.14),
-    );
-    room.insert(Scene::load(man).expect("CesiumMan"), placement)
-        .expect("inserted");
-    room
-}
-
 fn indirect_config(scene: &Scene, indirect: Indirect) -> Option<IndirectConfig> {
     let defaults = IndirectConfig::new(scene.bounds());
     Some(match indirect {
@@ -182,22 +166,6 @@ fn indirect_config(scene: &Scene, indirect: Indirect) -> Option<IndirectConfig> 
             ..defaults
         },
     })
-}
-
-fn vpls(scene: &Scene, config: &IndirectConfig) -> vpl::VplSet {
-    vpl::generate(
-        scene,
-        &scene::Bvh::build(scene),
-        &scene.lights,
-        &vpl::VplConfig {
-            count: 64,
-            subsets: config.subsets(),
-            seed: 3,
-            emissive: false,
-            bounces: 1,
-        },
-    )
-    .expect("vpls")
 }
 
 const MAPS: ShadowMapConfig = ShadowMapConfig {
@@ -222,7 +190,7 @@ fn surfels(mode: VplShadows, refit: bool) -> ShadowConfig {
 /// `animate`, else `scene` is rendered still as given): linear radiance.
 /// The meshes CesiumMan's rig moves in [`room`] (the subdivided ones).
 fn moved_meshes() -> Vec<usize> {
-    let room = room();
+    let room = scenes::cesium_room();
     let rig = room.rig.as_ref().expect("rig");
     rig.deformers.iter().map(|d| d.mesh as usize).collect()
 }
@@ -295,7 +263,7 @@ fn render_gpu(gpu: &gpu::Gpu, given: &Scene, c: &Combo, animate: bool) -> gbuffe
     }
     let posed = drawn(&posed, plan.as_ref());
     if let Some(config) = indirect_config(scene, c.indirect) {
-        let set = vpls(scene, &config);
+        let set = scenes::vpls(scene, &config);
         match c.visibility {
             None => r.set_indirect(d, &config, &set).expect("indirect"),
             Some(mode) => r
@@ -306,7 +274,8 @@ fn render_gpu(gpu: &gpu::Gpu, given: &Scene, c: &Combo, animate: bool) -> gbuffe
             r.set_near_field(d, Some(scene)).expect("near field");
         }
         if animated {
-            r.set_vpls(q, &vpls(&posed, &config)).expect("posed vpls");
+            r.set_vpls(q, &scenes::vpls(&posed, &config))
+                .expect("posed vpls");
         }
     }
     if let (Some(rig), Some(pose)) = (rig, &pose) {
@@ -358,7 +327,7 @@ fn every_sampled_combination_renders_and_keeps_the_invariants() {
     let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
         return;
     };
-    let rest = room();
+    let rest = scenes::cesium_room();
     let rig = rest.rig.as_ref().expect("rig");
     let mut posed = rest.clone();
     rig.apply(&rig.pose(Some(0), POSE_TIME), &mut posed.meshes);
@@ -446,7 +415,7 @@ fn every_sampled_combination_renders_and_keeps_the_invariants() {
                 inputs = inputs.with_shadows(MAPS);
             }
             let config = indirect_config(scene, c.indirect);
-            let set = config.map(|config| vpls(scene, &config));
+            let set = config.map(|config| scenes::vpls(scene, &config));
             let indirect = config.as_ref().zip(set.as_ref());
             let shading = pipeline::ShadingConfig {
                 method: c.shading,

@@ -8,6 +8,8 @@ use pipeline::gpu::GpuRenderer;
 use pipeline::subdivision::{self, SubdivisionPlan, Tessellation};
 use scene::Scene;
 
+mod scenes;
+
 const SIZE: (u32, u32) = (96, 72);
 
 fn tables() -> subdiv_bft::BftSet {
@@ -17,17 +19,7 @@ fn tables() -> subdiv_bft::BftSet {
 /// CesiumMan in the Cornell box, its meshes subdivided to surface `level` as `tessellation`
 /// says.
 fn subdivided_room(level: u32, tessellation: Tessellation) -> (Scene, SubdivisionPlan) {
-    let man = scene::shared_fixtures()
-        .expect("the tests need ../shared/fixtures")
-        .join("animated/CesiumMan/CesiumMan.glb");
-    let mut room = scene::cornell_box();
-    let placement = glam::Mat4::from_scale_rotation_translation(
-        Vec3::splat(0.25),
-        glam::Quat::from_rotation_y(-std::f32::consts::FRAC_PI_2),
-        Vec3::new(0.2, 0.0, 0.14),
-    );
-    room.insert(Scene::load(man).expect("CesiumMan"), placement)
-        .expect("inserted");
+    let room = scenes::cesium_room();
     let moved: Vec<usize> = room
         .rig
         .as_ref()

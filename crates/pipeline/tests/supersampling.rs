@@ -10,6 +10,8 @@ use instant_radiosity::{IndirectConfig, vpl};
 use pipeline::gpu::GpuRenderer;
 use scene::Scene;
 
+mod scenes;
+
 const SIZE: (u32, u32) = (64, 48);
 
 fn lights() -> Vec<scene::Light> {
@@ -176,19 +178,7 @@ fn supersampled_pixels_share_their_indirect_light() {
     };
     let scene = scene::cornell_box();
     let config = IndirectConfig::new(scene.bounds());
-    let set = vpl::generate(
-        &scene,
-        &scene::Bvh::build(&scene),
-        &scene.lights,
-        &vpl::VplConfig {
-            count: 64,
-            subsets: config.subsets(),
-            seed: 3,
-            emissive: false,
-            bounces: 1,
-        },
-    )
-    .expect("vpls");
+    let set = scenes::vpls(&scene, &config);
     let lit = |ssaa: &SsaaConfig, indirect| {
         frame(gpu, &scene, &scene.lights, Some(ssaa), indirect, Vec3::ZERO)
     };

@@ -5,22 +5,10 @@
 # 4x4 supersampling in the same run; and the Cornell box with GI with adaptive 4x4. The SM
 # clock is sampled every 50 ms while each runs (clock-<run>.log).
 set -e
-# At most 8 files come back from the device: everything is written under /tmp/res and packed.
-RESULTS=$OUT; OUT=/tmp/res; mkdir -p $OUT
-source docs/bench/device-env.sh
-chmod +x .gpu-bin/deferred
+source docs/bench/sequence-runs.sh
 r=fixtures/recipes/sponza-lights-gi.toml
 grep -v -e '^ssaa' -e '^adaptive' $r > /tmp/sponza-no-ssaa.toml
 grep -v -e '^adaptive' $r > /tmp/sponza-full-ssaa.toml
-run() {
-  name=$1; shift
-  nvidia-smi --query-gpu=clocks.sm --format=csv,noheader,nounits -lms 50 > "$OUT/clock-$name.log" &
-  sampler=$!
-  .gpu-bin/deferred "$@" --size 1920x1080 --frames 120 --warm-up 120 --frame-every 60 \
-    --out /tmp/$name > "$OUT/$name.txt" 2>&1 || echo "$name failed" >> "$OUT/$name.txt"
-  kill $sampler
-  cp /tmp/$name/timings.csv "$OUT/$name.csv" || true
-}
 run sponza-no-ssaa --recipe /tmp/sponza-no-ssaa.toml
 run sponza-adaptive-ssaa --recipe $r
 run sponza-full-ssaa --recipe /tmp/sponza-full-ssaa.toml
@@ -32,4 +20,4 @@ grep -v -e '^frames' -e '^fps' -e '^light-orbit' $r > /tmp/sponza-one.toml
 cp /tmp/sponza-one/ssaa-samples.png "$OUT/sponza-ssaa-samples.png"
 cp /tmp/sponza-adaptive-ssaa/timings.svg "$OUT/sponza-adaptive-ssaa.svg"
 cp /tmp/sponza-adaptive-ssaa/frames/frame-00060.png "$OUT/sponza-adaptive-ssaa.png"
-tar czf "$RESULTS/results.tgz" -C /tmp/res .
+pack

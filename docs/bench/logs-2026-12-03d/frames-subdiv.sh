@@ -6,23 +6,11 @@
 # three with direct light only. The SM clock is sampled every 50 ms while each runs
 # (clock-<run>.log).
 set -e
-# At most 8 files come back from the device: everything is written under /tmp/res and packed.
-RESULTS=$OUT; OUT=/tmp/res; mkdir -p $OUT
-source docs/bench/device-env.sh
-chmod +x .gpu-bin/deferred
+source docs/bench/sequence-runs.sh
 r=fixtures/recipes/cesium-man-cornell.toml
 grep -v -e '^subdiv' $r > /tmp/cesium-plain.toml
 grep -v -e '^subdiv' $r > /tmp/cesium-uniform.toml
 echo 'subdiv = 2' >> /tmp/cesium-uniform.toml
-run() {
-  name=$1; shift
-  nvidia-smi --query-gpu=clocks.sm --format=csv,noheader,nounits -lms 50 > "$OUT/clock-$name.log" &
-  sampler=$!
-  .gpu-bin/deferred "$@" --size 1920x1080 --frames 120 --warm-up 120 --frame-every 60 \
-    --out /tmp/$name > "$OUT/$name.txt" 2>&1 || echo "$name failed" >> "$OUT/$name.txt"
-  kill $sampler
-  cp /tmp/$name/timings.csv "$OUT/$name.csv" || true
-}
 run cesium-plain --recipe /tmp/cesium-plain.toml
 run cesium-uniform-2 --recipe /tmp/cesium-uniform.toml
 run cesium-adaptive --recipe $r
@@ -38,4 +26,4 @@ run cesium-adaptive-direct --recipe /tmp/cesium-adaptive-direct.toml
 cp /tmp/cesium-adaptive/timings.svg "$OUT/cesium-adaptive.svg"
 cp /tmp/cesium-adaptive/trace.json "$OUT/cesium-adaptive.trace.json"
 cp /tmp/cesium-adaptive/frames/frame-00060.png "$OUT/cesium-adaptive.png"
-tar czf "$RESULTS/results.tgz" -C /tmp/res .
+pack
