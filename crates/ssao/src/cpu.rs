@@ -134,16 +134,27 @@ pub fn kernel_2d(
     }))
 }
 
-/// The angle of pixel (x, y)'s local frame: its place in the k × k interleaving tile.
-pub fn frame_angle(x: i32, y: i32, k: u32) -> f32 {
-    let k = k as i32;
-    let index = x.rem_euclid(k) + k * y.rem_euclid(k);
-    std::f32::consts::PI * (index as f32 + 0.5) / (k * k) as f32
+/// The frame directions u of a k × k interleaving tile: entry x + k·y at angle
+/// π·(x + k·y + ½)/k² (the GPU kernels read the same table).
+pub fn frame_directions(k: u32) -> Vec<Vec2> {
+    let n = k * k;
+    (0..n)
+        .map(|i| {
+            let a = std::f32::consts::PI * (i as f32 + 0.5) / n as f32;
+            Vec2::new(a.cos(), a.sin())
+        })
+        .collect()
 }
 
-/// The pixel `t` steps along `direction` from (x, y).
+/// Pixel (x, y)'s frame direction u in `directions` ([`frame_directions`] of k).
+fn frame_direction(directions: &[Vec2], x: i32, y: i32, k: u32) -> Vec2 {
+    let k = k as i32;
+    directions[(x.rem_euclid(k) + k * y.rem_euclid(k)) as usize]
+}
+
+/// The pixel `t` steps along `direction` from (x, y), rounded half up.
 fn step(x: i32, y: i32, direction: Vec2, t: i32) -> (i32, i32) {
-    let o = (direction * t as f32).round();
+    let o = (direction * t as f32 + 0.5).floor();
     (x + o.x as i32, y + o.y as i32)
 }
 
@@ -187,10 +198,8 @@ pub fn separable(
     config: &KernelConfig,
 ) -> Result<Image<f32>, SsaoError> {
     let k = config.size;
-    let u = |x: i32, y: i32| {
-        let a = frame_angle(x, y, k);
-        Vec2::new(a.cos(), a.sin())
-    };
+    let directions = frame_directions(k);
+    let u = |x: i32, y: i32| frame_direction(&directions, x, y, k);
     let first = pass_1d(gbuffer, frame, config, u)?;
     let s = Surfaces { gbuffer, frame };
     let half = (k / 2) as i32;

@@ -12,12 +12,25 @@
 //! the ground truth.
 //!
 //! [`cpu`] has the screen-space estimators of eq. 7.1 — the non-separable k × k kernel and the
-//! separable approximation — over the G-buffer. Status: CPU only; the GPU kernels, the other
-//! baselines (Crytek SSAO, volumetric obscurance, HBAO, GTAO) and the renderer stage are not
-//! built yet.
+//! separable approximation — over the G-buffer, and [`gpu`] their kernels. Status: the other
+//! baselines (Crytek SSAO, volumetric obscurance, HBAO, GTAO), the feature-preserving smoothing
+//! and the renderer stage are not built yet.
 
 pub mod cpu;
+pub mod gpu;
 pub mod reference;
+
+/// This crate's WGSL (`shaders/ssao/`, carried into the package by the `shaders` link).
+pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
+    "ssao",
+    imports: [gbuffer::SHADERS],
+    files: ["common.wgsl", "kernel_2d.wgsl", "separable.wgsl"],
+);
+
+/// What this crate's kernels need of a device: nothing beyond `wgpu::Limits::default()`.
+pub fn device_needs() -> ::gpu::DeviceNeeds {
+    ::gpu::DeviceNeeds::default()
+}
 
 /// Errors of the ambient-occlusion passes.
 #[derive(Debug, thiserror::Error)]
@@ -31,6 +44,9 @@ pub enum SsaoError {
     /// Too few or too many rays per pixel.
     #[error("{0} rays per pixel: give 1 to {max}", max = reference::MAX_SAMPLES)]
     InvalidSamples(u32),
+    /// A GPU resource could not be made, bound or read.
+    #[error(transparent)]
+    Gpu(#[from] ::gpu::GpuError),
     /// The G-buffer and the frame disagree on the image size.
     #[error("a {gbuffer:?} G-buffer for a {frame:?} frame")]
     SizeMismatch {

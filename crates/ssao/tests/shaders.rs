@@ -1,0 +1,6 @@
+//! Every WGSL file of this crate validates with naga; no GPU.
+
+#[test]
+fn every_shader_validates() {
+    gpu::shader::assert_valid(&ssao::SHADERS, env!("CARGO_MANIFEST_DIR"), &[]);
+}
