@@ -24,6 +24,7 @@ struct Params {
 };
 
 struct CompositionParams {
+    // rgb: ambient radiance; w: 1 when `accessibility` holds screen-space ambient occlusion.
     ambient: vec4<f32>,
 };
 
@@ -46,6 +47,8 @@ struct CompositionParams {
 @group(0) @binding(14) var radiance_out: texture_storage_2d<rgba32float, write>;
 // The frame's radiance as `store_first` reads it (its own layout: 0, 13, 15).
 @group(0) @binding(15) var radiance_in: texture_2d<f32>;
+// Screen-space ambient occlusion per pixel (`ssao`), read where ambient.w is 1.
+@group(0) @binding(16) var<storage, read> accessibility: array<f32>;
 
 fn pixel_index(p: vec2<u32>) -> u32 {
     return p.y * params.width + p.x;
@@ -114,10 +117,15 @@ fn sample_radiance(q: vec2<u32>, p: vec2<u32>) -> vec4<f32> {
     let direct = array<vec3<f32>, 2>(textureLoad(diffuse_in, q, 0).rgb, textureLoad(specular_in, q, 0).rgb);
     let indirect_diffuse = textureLoad(indirect_diffuse_in, p, 0).rgb + textureLoad(near_field_in, p, 0).rgb;
     let indirect = array<vec3<f32>, 2>(indirect_diffuse, textureLoad(indirect_specular_in, p, 0).rgb);
+    // The sample's material occlusion times its pixel's screen-space occlusion.
+    var emission = textureLoad(emission_in, q, 0);
+    if composition.ambient.w > 0.5 {
+        emission.a *= accessibility[pixel_index(p)];
+    }
     return compose(
         textureLoad(albedo_in, q, 0).rgb,
         textureLoad(material_in, q, 0).x,
-        textureLoad(emission_in, q, 0),
+        emission,
         direct,
         indirect,
         composition.ambient.rgb,

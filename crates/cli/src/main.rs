@@ -191,6 +191,16 @@ struct Args {
     /// With --ssaa --adaptive: the geometric metric, MM, NC, DV, NV or ND.
     #[arg(long, default_value = "ND", requires = "adaptive")]
     ssaa_metric: adaptive_ssaa::GeometricMetric,
+    /// Screen-space ambient occlusion of the ambient and indirect light (GPU): `separable`
+    /// (Holländer 2013 annex 7.2, two 1D passes) or `2d` (eq. 7.1's k×k kernel).
+    #[arg(long, value_name = "METHOD")]
+    ssao: Option<SsaoMethod>,
+    /// With --ssao: the kernel side in pixels (odd, 3 to 63).
+    #[arg(long, value_name = "K", default_value_t = 11, requires = "ssao")]
+    ssao_kernel: u32,
+    /// With --ssao: the occlusion radius in world units (default: 5 % of the scene's diagonal).
+    #[arg(long, value_name = "R", requires = "ssao")]
+    ssao_radius: Option<f32>,
     /// Render the path-traced ground truth instead, with SPP samples per pixel (CPU;
     /// `scene::reference`): every light casts shadows, emissive meshes are area lights, light
     /// interreflects up to --max-bounces times. No ambient term.
@@ -1152,6 +1162,9 @@ fn run() -> Result<()> {
         }
         return render_reference(&args, &drawn_scene, camera, &reference_lights, spp);
     }
+    if args.ssao.is_some() && args.cpu {
+        bail!("--ssao runs on the GPU only (the CPU frame has no ambient occlusion; drop --cpu)");
+    }
     if args.ssaa.is_some() && args.cpu {
         bail!("--ssaa runs on the GPU only (the CPU frame has no supersampling; drop --cpu)");
     }
@@ -1299,6 +1312,9 @@ fn run() -> Result<()> {
             }
             if args.ssaa.is_some() {
                 bail!("--ssaa needs a GPU (the CPU frame has no supersampling)");
+            }
+            if args.ssao.is_some() {
+                bail!("--ssao needs a GPU (the CPU frame has no ambient occlusion)");
             }
             if u64::from(width) * u64::from(height) > MAX_CPU_PIXELS {
                 bail!(
@@ -1462,8 +1478,33 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
         }
     }
     renderer.set_ssaa(d, q, ssaa_config(args)?.as_ref())?;
+    if let Some((config, estimator)) = ssao_setting(args, setup.scene)? {
+        renderer.set_ssao(d, q, Some((&config, estimator)))?;
+    }
     renderer.set_ambient(q, setup.ambient);
     Ok(renderer)
+}
+
+/// `--ssao METHOD [--ssao-kernel K --ssao-radius R]` (checked).
+fn ssao_setting(
+    args: &Args,
+    scene: &Scene,
+) -> Result<Option<(ssao::cpu::KernelConfig, ssao::gpu::Estimator)>> {
+    let Some(method) = args.ssao else {
+        return Ok(None);
+    };
+    let config = ssao::cpu::KernelConfig {
+        size: args.ssao_kernel,
+        ao: ssao::AoConfig {
+            radius: args.ssao_radius.unwrap_or(0.05 * scene.bounds().diagonal()),
+        },
+    };
+    config.validate().context("--ssao")?;
+    let estimator = match method {
+        SsaoMethod::Kernel2d => ssao::gpu::Estimator::Kernel2d,
+        SsaoMethod::Separable => ssao::gpu::Estimator::Separable,
+    };
+    Ok(Some((config, estimator)))
 }
 
 /// `--ssaa M [--adaptive --ssaa-metric METRIC]` as the frame's supersampling (checked).
@@ -2018,6 +2059,12 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
         setup.all_direct,
         setup.lit_by,
     );
+    if let Ok(Some((config, estimator))) = ssao_setting(args, setup.scene) {
+        println!(
+            "ssao:    {estimator:?}, kernel {}, radius {}",
+            config.size, config.ao.radius
+        );
+    }
     if let Some(plan) = setup.plan {
         println!(
             "subdiv:  Loop level {} of {} control meshes, every frame from their posed vertices",
@@ -2226,6 +2273,16 @@ fn dump_stages(
         irradiance("indirect-specular-blurred", sp)?;
     }
     Ok(())
+}
+
+/// `--ssao` estimators.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum SsaoMethod {
+    /// Eq. 7.1: every neighbour of the k×k window.
+    #[value(name = "2d")]
+    Kernel2d,
+    /// The separable approximation: two 1D passes along per-pixel frames.
+    Separable,
 }
 
 /// `--vpl-shadows` modes.

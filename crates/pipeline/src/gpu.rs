@@ -39,8 +39,9 @@ fn view(t: &wgpu::Texture) -> wgpu::TextureView {
 }
 
 /// `composition.wgsl`: ambient, emission and occlusion; albedo, material, direct diffuse and
-/// specular; radiance output; indirect diffuse and specular; the VPLs' near field.
-const COMPOSITION_BINDINGS: [Binding; 10] = [
+/// specular; radiance output; indirect diffuse and specular; the VPLs' near field; the
+/// screen-space ambient occlusion.
+const COMPOSITION_BINDINGS: [Binding; 11] = [
     Binding::Uniform,
     Binding::TextureUnfilterable,
     Binding::TextureUnfilterable,
@@ -51,6 +52,7 @@ const COMPOSITION_BINDINGS: [Binding; 10] = [
     Binding::TextureUnfilterable,
     Binding::TextureUnfilterable,
     Binding::TextureUnfilterable,
+    Binding::StorageRead,
 ];
 
 /// Format of the renderer's output ([`GpuRenderer::output`]): linear radiance.
@@ -76,7 +78,7 @@ fn composition_group(
     targets: &GBufferTargets,
     direct: [&wgpu::Texture; 2],
     radiance: &wgpu::Texture,
-    indirect: [&wgpu::Texture; 3],
+    (indirect, accessibility): ([&wgpu::Texture; 3], &wgpu::Buffer),
 ) -> wgpu::BindGroup {
     let views = [
         view(&targets.emission),
@@ -91,6 +93,7 @@ fn composition_group(
     ];
     let mut resources = vec![ambient.as_entire_binding()];
     resources.extend(views.iter().map(wgpu::BindingResource::TextureView));
+    resources.push(accessibility.as_entire_binding());
     composition.bind(device, &resources)
 }
 
@@ -135,8 +138,24 @@ pub struct GpuRenderer {
     animation: Option<Animation>,
     supersampling: Option<Supersampling>,
     subdivision: Option<SubdivisionStage>,
+    ssao: Option<SsaoStage>,
+    /// The ambient radiance of the composition (the buffer's w says whether SSAO is on).
+    ambient_radiance: Vec3,
+    /// The composition's accessibility when SSAO is off (one unread value).
+    no_ssao: wgpu::Buffer,
     bounds: scene::Aabb,
     timer: PassTimer,
+}
+
+/// Screen-space ambient occlusion as the renderer holds it ([`GpuRenderer::set_ssao`]): the
+/// kernels, their binding to the G-buffer, the accessibility they write and what they were
+/// set with (to rebind on a resize).
+struct SsaoStage {
+    kernels: ssao::gpu::SsaoKernels,
+    bound: ssao::gpu::BoundSsao,
+    accessibility: wgpu::Buffer,
+    config: ssao::cpu::KernelConfig,
+    estimator: ssao::gpu::Estimator,
 }
 
 /// The skinning stage as the renderer holds it ([`GpuRenderer::set_animation`]): the rig and
@@ -289,6 +308,12 @@ impl GpuRenderer {
         );
         let shading_bound =
             Self::bind_shading(device, queue, &shading, &gbuffer_pass, &sized, &gpu_lights)?;
+        let no_ssao = transfer::buffer_init(
+            device,
+            "no ssao",
+            bytemuck::bytes_of(&1.0f32),
+            wgpu::BufferUsages::STORAGE,
+        )?;
         let composition_group = composition_group(
             device,
             &composition,
@@ -296,11 +321,14 @@ impl GpuRenderer {
             &sized.targets,
             [&sized.direct[0], &sized.direct[1]],
             &sized.radiance,
-            [
-                &sized.no_indirect[0],
-                &sized.no_indirect[1],
-                &sized.no_indirect[0],
-            ],
+            (
+                [
+                    &sized.no_indirect[0],
+                    &sized.no_indirect[1],
+                    &sized.no_indirect[0],
+                ],
+                &no_ssao,
+            ),
         );
         Ok(Self {
             gbuffer_pass,
@@ -323,6 +351,9 @@ impl GpuRenderer {
             animation: None,
             supersampling: None,
             subdivision: None,
+            ssao: None,
+            ambient_radiance: crate::DEFAULT_AMBIENT,
+            no_ssao,
             bounds: scene.bounds(),
             timer: PassTimer::new(device, 48),
         })
@@ -365,6 +396,9 @@ impl GpuRenderer {
         self.shading_bound = bound;
         if let Some(config) = self.supersampling.take().map(|s| *s.config()) {
             self.supersampling = Some(self.new_supersampling(device, queue, &config)?);
+        }
+        if let Some((config, estimator)) = self.ssao.take().map(|s| (s.config, s.estimator)) {
+            self.ssao = Some(self.new_ssao(device, &config, estimator)?);
         }
         self.bind_shadow_lookup(device)?;
         self.bind_composition(device);
@@ -426,6 +460,10 @@ impl GpuRenderer {
             Some(i) => [&i.outputs[0], &i.outputs[1], near_field],
             None => [no_diffuse, no_specular, no_diffuse],
         };
+        let accessibility = self
+            .ssao
+            .as_ref()
+            .map_or(&self.no_ssao, |s| &s.accessibility);
         self.composition_group = composition_group(
             device,
             &self.composition,
@@ -433,10 +471,16 @@ impl GpuRenderer {
             &self.sized.targets,
             [&self.sized.direct[0], &self.sized.direct[1]],
             &self.sized.radiance,
-            indirect,
+            (indirect, accessibility),
         );
         if let Some(s) = &mut self.supersampling {
-            s.bind(device, &self.ambient, indirect, &self.sized.radiance);
+            s.bind(
+                device,
+                &self.ambient,
+                indirect,
+                accessibility,
+                &self.sized.radiance,
+            );
         }
     }
 
@@ -917,8 +961,74 @@ impl GpuRenderer {
     }
 
     /// Sets the ambient light of the composition.
-    pub fn set_ambient(&self, queue: &wgpu::Queue, ambient: Vec3) {
-        queue.write_buffer(&self.ambient, 0, bytemuck::bytes_of(&ambient.extend(0.0)));
+    pub fn set_ambient(&mut self, queue: &wgpu::Queue, ambient: Vec3) {
+        self.ambient_radiance = ambient;
+        self.write_ambient(queue);
+    }
+
+    /// Writes the ambient radiance and whether SSAO scales it.
+    fn write_ambient(&self, queue: &wgpu::Queue) {
+        let on = if self.ssao.is_some() { 1.0 } else { 0.0 };
+        let value = self.ambient_radiance.extend(on);
+        queue.write_buffer(&self.ambient, 0, bytemuck::bytes_of(&value));
+    }
+
+    /// Adds screen-space ambient occlusion (`Some`: [`ssao`]'s `estimator` with `config`, run
+    /// after the G-buffer on its depth and normals), or removes it (`None`). Its accessibility
+    /// multiplies the material's occlusion, so it darkens the ambient and the indirect light,
+    /// not the direct light (with supersampling: each sample by its pixel's).
+    pub fn set_ssao(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        ssao: Option<(&ssao::cpu::KernelConfig, ssao::gpu::Estimator)>,
+    ) -> Result<(), RenderError> {
+        self.ssao = match ssao {
+            Some((config, estimator)) => Some(self.new_ssao(device, config, estimator)?),
+            None => None,
+        };
+        self.bind_composition(device);
+        self.write_ambient(queue);
+        Ok(())
+    }
+
+    /// The SSAO stage for the current targets.
+    fn new_ssao(
+        &self,
+        device: &wgpu::Device,
+        config: &ssao::cpu::KernelConfig,
+        estimator: ssao::gpu::Estimator,
+    ) -> Result<SsaoStage, RenderError> {
+        let (w, h) = self.size();
+        let accessibility = transfer::buffer(
+            device,
+            "accessibility",
+            u64::from(w) * u64::from(h) * 4,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        )?;
+        let kernels = ssao::gpu::SsaoKernels::new(device)?;
+        let t = &self.sized.targets;
+        let bound = kernels.bind(
+            device,
+            self.gbuffer_pass.frame_buffer(),
+            [&t.linear_depth, &t.normal],
+            &accessibility,
+            config,
+            estimator,
+        )?;
+        Ok(SsaoStage {
+            kernels,
+            bound,
+            accessibility,
+            config: *config,
+            estimator,
+        })
+    }
+
+    /// The screen-space accessibility of the last frame, one `f32` a pixel (`None` without
+    /// SSAO): copy or read it after a frame.
+    pub fn ssao_accessibility(&self) -> Option<&wgpu::Buffer> {
+        self.ssao.as_ref().map(|s| &s.accessibility)
     }
 
     /// Resizes the frame: new targets and output, rebinds the light accumulation, the
@@ -1153,6 +1263,9 @@ impl GpuRenderer {
             self.timer.render_pass("z-prepass"),
             self.timer.render_pass("gbuffer"),
         );
+        if let Some(s) = &self.ssao {
+            s.kernels.encode(&s.bound, encoder, Some(&self.timer));
+        }
         if let Some(s) = &self.supersampling {
             s.encode_gbuffer(encoder, &self.gbuffer_pass, &self.scene, &self.timer);
         }

@@ -60,6 +60,7 @@ pub fn device_needs() -> ::gpu::DeviceNeeds {
         .and(&adaptive_ssaa::device_needs())
         .and(&subdiv_bft::device_needs())
         .and(&manylod::device_needs())
+        .and(&ssao::device_needs())
 }
 
 /// Time one pass of a frame took (`z-prepass` (GPU only), `gbuffer`, `light accumulation`,
@@ -89,6 +90,9 @@ pub enum RenderError {
     /// The light accumulation failed (tile size, light buffer, GPU).
     #[error(transparent)]
     Shading(tiled_shading::ShadingError),
+    /// Screen-space ambient occlusion cannot be set up (kernel size, radius).
+    #[error(transparent)]
+    Ssao(#[from] ssao::SsaoError),
     /// Supersampling cannot be set up (window size, constants, size).
     #[error(transparent)]
     Ssaa(#[from] adaptive_ssaa::SsaaError),

@@ -68,25 +68,27 @@ impl Params {
     }
 }
 
-/// `supersampling.wgsl`'s bindings: params, ambient; linear depth, masked depth (storage);
-/// emission, albedo, material, direct diffuse and specular (samples); indirect diffuse,
-/// specular, near field (pixels); counts, S; radiance (storage).
-const BINDINGS: [Binding; 15] = [
-    Binding::Uniform,
-    Binding::Uniform,
-    Binding::TextureUnfilterable,
-    Binding::StorageTexture(LINEAR_DEPTH_FORMAT),
-    Binding::TextureUnfilterable,
-    Binding::TextureUnfilterable,
-    Binding::TextureUint,
-    Binding::TextureUnfilterable,
-    Binding::TextureUnfilterable,
-    Binding::TextureUnfilterable,
-    Binding::TextureUnfilterable,
-    Binding::TextureUnfilterable,
-    Binding::StorageRead,
-    Binding::Storage,
-    Binding::StorageTexture(RADIANCE_FORMAT),
+/// `supersampling.wgsl`'s bindings but `store_first`'s radiance (15): params, ambient; linear
+/// depth, masked depth (storage); emission, albedo, material, direct diffuse and specular
+/// (samples); indirect diffuse, specular, near field (pixels); counts, S; radiance (storage);
+/// screen-space ambient occlusion (16).
+const BINDINGS: [(u32, Binding); 16] = [
+    (0, Binding::Uniform),
+    (1, Binding::Uniform),
+    (2, Binding::TextureUnfilterable),
+    (3, Binding::StorageTexture(LINEAR_DEPTH_FORMAT)),
+    (4, Binding::TextureUnfilterable),
+    (5, Binding::TextureUnfilterable),
+    (6, Binding::TextureUint),
+    (7, Binding::TextureUnfilterable),
+    (8, Binding::TextureUnfilterable),
+    (9, Binding::TextureUnfilterable),
+    (10, Binding::TextureUnfilterable),
+    (11, Binding::TextureUnfilterable),
+    (12, Binding::StorageRead),
+    (13, Binding::Storage),
+    (14, Binding::StorageTexture(RADIANCE_FORMAT)),
+    (16, Binding::StorageRead),
 ];
 
 /// `store_first`'s bindings: params, S, the frame's radiance (sampled).
@@ -189,7 +191,7 @@ impl Supersampling {
             wgpu::BufferUsages::UNIFORM,
         )?;
         let module = crate::SHADERS.module(device, "supersampling.wgsl")?;
-        let layout = Layout::compute(device, "supersampling", &BINDINGS);
+        let layout = Layout::compute_numbered(device, "supersampling", &BINDINGS);
         let store_layout =
             Layout::compute_numbered(device, "supersampling S", &STORE_FIRST_BINDINGS);
         let make = |entry: &str| kernel::pipeline(device, &module, entry, &[&layout], &[]);
@@ -248,12 +250,14 @@ impl Supersampling {
     }
 
     /// Binds the resolve to the composition's `ambient`, the pixels' `indirect` light
-    /// (diffuse, specular, near field) and the frame's `radiance`.
+    /// (diffuse, specular, near field), their screen-space `accessibility` and the frame's
+    /// `radiance`.
     pub(crate) fn bind(
         &mut self,
         device: &wgpu::Device,
         ambient: &wgpu::Buffer,
         indirect: [&wgpu::Texture; 3],
+        accessibility: &wgpu::Buffer,
         radiance: &wgpu::Texture,
     ) {
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
@@ -278,6 +282,7 @@ impl Supersampling {
         ]);
         let radiance = view(radiance);
         resources.push(wgpu::BindingResource::TextureView(&radiance));
+        resources.push(accessibility.as_entire_binding());
         let group = self.layout.bind(device, &resources);
         let store = self.store_layout.bind(
             device,
