@@ -1,12 +1,12 @@
 //! The frame's stages in combination (issue 23 item 5): a pairwise-covering sample of the
 //! stage switches — light accumulation, direct shadows, indirect light, VPL visibility,
-//! animation, near field, output transform, supersampling, subdivision per frame — rendered
-//! small on the test device. Every combination renders without error to finite radiance, and:
+//! animation, near field, output transform, supersampling, subdivision per frame, SSAO —
+//! rendered small on the test device. Every combination renders without error to finite radiance, and:
 //! - light culling does not change the image (each culled method equals brute force);
 //! - interleaving with a 1×1 pattern equals the non-interleaved reference;
 //! - the skinning stage at a pose equals the scene posed on the CPU and rendered still;
 //! - where the CPU frame has the stages (shadow maps or none, no visibility, no near field,
-//!   no supersampling), the CPU frame equals the GPU frame.
+//!   no supersampling, no SSAO), the CPU frame equals the GPU frame.
 //! (Supersampling's own rules — adaptive pixels of every sample equal full supersampling,
 //! indirect light shared per pixel — are tested in `supersampling.rs`.)
 
@@ -57,6 +57,7 @@ struct Combo {
     output: bool,
     ssaa: Ssaa,
     subdiv: bool,
+    ssao: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,9 +84,9 @@ impl Ssaa {
 }
 
 /// Levels of each switch.
-const LEVELS: [usize; 9] = [4, 4, 4, 4, 2, 2, 2, 3, 2];
+const LEVELS: [usize; 10] = [4, 4, 4, 4, 2, 2, 2, 3, 2, 2];
 
-fn combo(levels: [usize; 9]) -> Combo {
+fn combo(levels: [usize; 10]) -> Combo {
     Combo {
         shading: ShadingMethod::ALL[levels[0]],
         shadows: [
@@ -111,13 +112,14 @@ fn combo(levels: [usize; 9]) -> Combo {
         output: levels[6] == 1,
         ssaa: [Ssaa::None, Ssaa::Adaptive4x4, Ssaa::Full2x2][levels[7]],
         subdiv: levels[8] == 1,
+        ssao: levels[9] == 1,
     }
 }
 
 /// A greedy pairwise covering of [`LEVELS`]: every level pair of every two switches appears in
 /// some combination (deterministic).
-fn pairwise() -> Vec<[usize; 9]> {
-    let all: Vec<[usize; 9]> = (0..LEVELS.iter().product::<usize>())
+fn pairwise() -> Vec<[usize; 10]> {
+    let all: Vec<[usize; 10]> = (0..LEVELS.iter().product::<usize>())
         .map(|mut k| {
             std::array::from_fn(|i| {
                 let l = k % LEVELS[i];
@@ -126,10 +128,10 @@ fn pairwise() -> Vec<[usize; 9]> {
             })
         })
         .collect();
-    let pairs = |c: &[usize; 9]| {
+    let pairs = |c: &[usize; 10]| {
         let mut p = Vec::new();
-        for i in 0..9 {
-            for j in i + 1..9 {
+        for i in 0..10 {
+            for j in i + 1..10 {
                 p.push((i, c[i], j, c[j]));
             }
         }
@@ -289,6 +291,16 @@ fn render_gpu(gpu: &gpu::Gpu, given: &Scene, c: &Combo, animate: bool) -> gbuffe
             .expect("output");
     }
     r.set_ssaa(d, q, c.ssaa.config().as_ref()).expect("ssaa");
+    if c.ssao {
+        let config = ssao::cpu::KernelConfig {
+            size: 5,
+            ao: ssao::AoConfig {
+                radius: 0.05 * uploaded.bounds().diagonal(),
+            },
+        };
+        r.set_ssao(d, q, Some((&config, ssao::gpu::Estimator::Separable)))
+            .expect("ssao");
+    }
     let camera = scene.camera_or_framed();
     let out = r
         .render(d, q, &camera, pipeline::DEFAULT_AMBIENT)
@@ -336,10 +348,10 @@ fn every_sampled_combination_renders_and_keeps_the_invariants() {
     assert!(combos.len() >= 16, "{} combinations", combos.len());
     // And what the CPU frame has, across methods, indirect modes and poses.
     combos.extend([
-        [1, 1, 1, 0, 1, 0, 0, 0, 0],
-        [3, 0, 3, 0, 0, 0, 1, 0, 1],
-        [2, 1, 2, 0, 1, 0, 0, 0, 1],
-        [0, 1, 1, 0, 0, 0, 0, 0, 0],
+        [1, 1, 1, 0, 1, 0, 0, 0, 0, 0],
+        [3, 0, 3, 0, 0, 0, 1, 0, 1, 0],
+        [2, 1, 2, 0, 1, 0, 0, 0, 1, 0],
+        [0, 1, 1, 0, 0, 0, 0, 0, 0, 0],
     ]);
     let mut cpu_checked = 0;
     for levels in combos {
@@ -395,6 +407,7 @@ fn every_sampled_combination_renders_and_keeps_the_invariants() {
             checks.push("= posed still");
         }
         let cpu_has = c.ssaa == Ssaa::None
+            && !c.ssao
             && matches!(c.shadows, Shadows::None | Shadows::Maps)
             && (c.visibility.is_none() || c.indirect == Indirect::None)
             && (!c.near_field || c.indirect == Indirect::None);
