@@ -397,8 +397,9 @@ impl GpuRenderer {
         if let Some(config) = self.supersampling.take().map(|s| *s.config()) {
             self.supersampling = Some(self.new_supersampling(device, queue, &config)?);
         }
-        if let Some((config, estimator)) = self.ssao.take().map(|s| (s.config, s.estimator)) {
-            self.ssao = Some(self.new_ssao(device, &config, estimator)?);
+        if let Some(s) = self.ssao.take() {
+            let kernels = Some(s.kernels);
+            self.ssao = Some(self.new_ssao(device, kernels, &s.config, s.estimator)?);
         }
         self.bind_shadow_lookup(device)?;
         self.bind_composition(device);
@@ -984,7 +985,10 @@ impl GpuRenderer {
         ssao: Option<(&ssao::cpu::KernelConfig, ssao::gpu::Estimator)>,
     ) -> Result<(), RenderError> {
         self.ssao = match ssao {
-            Some((config, estimator)) => Some(self.new_ssao(device, config, estimator)?),
+            Some((config, estimator)) => {
+                let kernels = self.ssao.take().map(|s| s.kernels);
+                Some(self.new_ssao(device, kernels, config, estimator)?)
+            }
             None => None,
         };
         self.bind_composition(device);
@@ -992,10 +996,12 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// The SSAO stage for the current targets.
+    /// The SSAO stage for the current targets (with `kernels` if already built: a rebind
+    /// compiles nothing).
     fn new_ssao(
         &self,
         device: &wgpu::Device,
+        kernels: Option<ssao::gpu::SsaoKernels>,
         config: &ssao::cpu::KernelConfig,
         estimator: ssao::gpu::Estimator,
     ) -> Result<SsaoStage, RenderError> {
@@ -1006,7 +1012,10 @@ impl GpuRenderer {
             u64::from(w) * u64::from(h) * 4,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         )?;
-        let kernels = ssao::gpu::SsaoKernels::new(device)?;
+        let kernels = match kernels {
+            Some(k) => k,
+            None => ssao::gpu::SsaoKernels::new(device)?,
+        };
         let t = &self.sized.targets;
         let bound = kernels.bind(
             device,

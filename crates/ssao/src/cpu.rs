@@ -21,7 +21,6 @@
 
 use gbuffer::{Frame, GBuffer, Image};
 use glam::{Vec2, Vec3};
-use rayon::prelude::*;
 
 use crate::{AoConfig, SsaoError};
 
@@ -97,17 +96,6 @@ fn accessibility(mean_occlusion: f32) -> f32 {
     (1.0 - 2.0 * mean_occlusion).clamp(0.0, 1.0)
 }
 
-fn per_pixel(gbuffer: &GBuffer, f: impl Fn(i32, i32) -> f32 + Sync + Send) -> Image<f32> {
-    let (w, h) = (gbuffer.linear_depth.width(), gbuffer.linear_depth.height());
-    let values: Vec<f32> = (0..w * h)
-        .into_par_iter()
-        .map(|i| f((i % w) as i32, (i / w) as i32))
-        .collect();
-    let mut image = Image::filled(w, h, 1.0);
-    image.pixels_mut().copy_from_slice(&values);
-    image
-}
-
 /// Eq. 7.1: every neighbour of the k × k window (k² − 1 samples a pixel).
 pub fn kernel_2d(
     gbuffer: &GBuffer,
@@ -118,7 +106,8 @@ pub fn kernel_2d(
     let s = Surfaces { gbuffer, frame };
     let half = (config.size / 2) as i32;
     let samples = (config.size * config.size - 1) as f32;
-    Ok(per_pixel(gbuffer, |x, y| {
+    Ok(crate::per_pixel(gbuffer, |x, y, _| {
+        let (x, y) = (x as i32, y as i32);
         let Some((p, n, _)) = s.at(x, y) else {
             return 1.0;
         };
@@ -169,7 +158,8 @@ pub fn pass_1d(
     let s = Surfaces { gbuffer, frame };
     let half = (config.size / 2) as i32;
     let samples = (config.size - 1) as f32;
-    Ok(per_pixel(gbuffer, |x, y| {
+    Ok(crate::per_pixel(gbuffer, |x, y, _| {
+        let (x, y) = (x as i32, y as i32);
         let Some((p, n, _)) = s.at(x, y) else {
             return 0.0;
         };
@@ -203,7 +193,8 @@ pub fn separable(
     let first = pass_1d(gbuffer, frame, config, u)?;
     let s = Surfaces { gbuffer, frame };
     let half = (k / 2) as i32;
-    Ok(per_pixel(gbuffer, |x, y| {
+    Ok(crate::per_pixel(gbuffer, |x, y, _| {
+        let (x, y) = (x as i32, y as i32);
         let Some(here) = s.at(x, y) else {
             return 1.0;
         };

@@ -75,6 +75,22 @@ impl AoConfig {
     }
 }
 
+/// The image of `f(x, y, pixel index)` over `gbuffer`'s pixels, in parallel.
+pub(crate) fn per_pixel(
+    gbuffer: &gbuffer::GBuffer,
+    f: impl Fn(u32, u32, u32) -> f32 + Sync + Send,
+) -> gbuffer::Image<f32> {
+    use rayon::prelude::*;
+    let (w, h) = (gbuffer.linear_depth.width(), gbuffer.linear_depth.height());
+    let values: Vec<f32> = (0..w * h)
+        .into_par_iter()
+        .map(|i| f(i % w, i / w, i))
+        .collect();
+    let mut image = gbuffer::Image::filled(w, h, 1.0);
+    image.pixels_mut().copy_from_slice(&values);
+    image
+}
+
 /// Checks that `gbuffer` and `frame` describe one image size.
 pub(crate) fn check_size(
     gbuffer: &gbuffer::GBuffer,

@@ -4,7 +4,6 @@
 
 use gbuffer::{Frame, GBuffer, Image};
 use glam::{Vec2, Vec3};
-use rayon::prelude::*;
 use scene::{Bvh, reference::ray_lift};
 
 use crate::{AoConfig, SsaoError};
@@ -32,34 +31,26 @@ pub fn ray_traced(
         return Err(SsaoError::InvalidSamples(samples));
     }
     crate::check_size(gbuffer, frame)?;
-    let (width, height) = (gbuffer.linear_depth.width(), gbuffer.linear_depth.height());
-    let pixels: Vec<f32> = (0..width * height)
-        .into_par_iter()
-        .map(|i| {
-            let (x, y) = (i % width, i / width);
-            let depth = gbuffer.linear_depth.get(x, y);
-            if depth <= 0.0 {
-                return 1.0;
-            }
-            let p = gbuffer::position::from_view_ray(frame, x, y, depth);
-            let n = gbuffer::normal::unpack_octahedral(gbuffer.normal.get(x, y));
-            let origin = p + n * ray_lift(p);
-            let (t, b) = tangent_frame(n);
-            let rotation = pixel_rotation(i);
-            let open = (0..samples)
-                .filter(|&k| {
-                    let u = hammersley(k, samples) + rotation;
-                    let d = cosine_direction(Vec2::new(u.x.fract(), u.y.fract()));
-                    let direction = t * d.x + b * d.y + n * d.z;
-                    !bvh.any_hit(origin, direction, config.radius)
-                })
-                .count();
-            open as f32 / samples as f32
-        })
-        .collect();
-    let mut image = Image::filled(width, height, 1.0);
-    image.pixels_mut().copy_from_slice(&pixels);
-    Ok(image)
+    Ok(crate::per_pixel(gbuffer, |x, y, i| {
+        let depth = gbuffer.linear_depth.get(x, y);
+        if depth <= 0.0 {
+            return 1.0;
+        }
+        let p = gbuffer::position::from_view_ray(frame, x, y, depth);
+        let n = gbuffer::normal::unpack_octahedral(gbuffer.normal.get(x, y));
+        let origin = p + n * ray_lift(p);
+        let (t, b) = tangent_frame(n);
+        let rotation = pixel_rotation(i);
+        let open = (0..samples)
+            .filter(|&k| {
+                let u = hammersley(k, samples) + rotation;
+                let d = cosine_direction(Vec2::new(u.x.fract(), u.y.fract()));
+                let direction = t * d.x + b * d.y + n * d.z;
+                !bvh.any_hit(origin, direction, config.radius)
+            })
+            .count();
+        open as f32 / samples as f32
+    }))
 }
 
 /// Point k of the n-point Hammersley set in [0, 1)².
