@@ -31,8 +31,12 @@ fn position_from_depth(frame: Frame, pixel: vec2<u32>, depth: f32) -> vec3<f32> 
 // Thesis §3.6, ray and view frustum: world position as eye + view ray × linear view depth,
 // with the view ray scaled to unit view depth.
 fn position_from_view_ray(frame: Frame, pixel: vec2<u32>, linear_depth: f32) -> vec3<f32> {
+    return frame.eye.xyz + view_ray(frame, pixel) * linear_depth;
+}
+
+// The view ray through a pixel in world space, scaled to unit view depth.
+fn view_ray(frame: Frame, pixel: vec2<u32>) -> vec3<f32> {
     let ndc = pixel_to_ndc(frame, pixel);
     let ray_view = vec3<f32>(ndc * frame.tan_half_fov.xy, -1.0);
-    let ray = (frame.inv_view * vec4<f32>(ray_view, 0.0)).xyz;
-    return frame.eye.xyz + ray * linear_depth;
+    return (frame.inv_view * vec4<f32>(ray_view, 0.0)).xyz;
 }

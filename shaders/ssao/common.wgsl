@@ -1,7 +1,7 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
 // What the screen-space estimators share (`ssao::cpu`, function for function): parameters,
-// the G-buffer's surfaces, the occlusion of one neighbour, the accessibility.
+// bindings and the G-buffer's surfaces.
 
 struct Params {
     width: u32,
@@ -17,48 +17,116 @@ struct Params {
 @group(0) @binding(3) var normal_tex: texture_2d<u32>;
 // The per-pixel frame directions u of the k × k interleaving tile (`cpu::frame_directions`).
 @group(0) @binding(4) var<storage, read> directions: array<vec2<f32>>;
-// Pass 1's mean occlusion (separable), or unused.
+// Pass 1's line values, then their weights in pass 2 (separable: 2 × pixels), or unused.
 @group(0) @binding(5) var<storage, read_write> first: array<f32>;
 // The accessibility A per pixel.
 @group(0) @binding(6) var<storage, read_write> accessibility_out: array<f32>;
+
+// Workgroup tiles (a speed-up; the results are the untiled ones): a 16 × 16 workgroup first
+// loads the linear depth — and in pass 2 the normals and pass 1's values — of its pixels and
+// an apron of APRON pixels into workgroup memory, and the samples read them there. Every
+// sample of a kernel of side k ≤ 2·APRON + 1 lies in the apron; wider kernels read textures.
+override TILED: bool = false;
+// Pass 2 reads normals and pass 1's values from the tiles too.
+override TILED_SURFACES: bool = false;
+const TILE: i32 = 16;
+const APRON: i32 = 10;
+const TILE_SIDE: i32 = 36;
+const TILE_ENTRIES: u32 = 1296u;
+var<workgroup> depth_tile: array<f32, 1296>;
+var<workgroup> normal_tile: array<u32, 1296>;
+var<workgroup> first_tile: array<f32, 1296>;
+// The image pixel of the tile's entry 0.
+var<private> tile_origin: vec2<i32>;
+
+// The linear depth of pixel (x, y) from the texture; 0 outside the image or where nothing was
+// drawn.
+fn texture_depth(x: i32, y: i32) -> f32 {
+    if !in_bounds(x, y) {
+        return 0.0;
+    }
+    return max(textureLoad(linear_depth_tex, vec2<u32>(u32(x), u32(y)), 0).r, 0.0);
+}
+
+fn texture_normal(x: i32, y: i32) -> u32 {
+    return textureLoad(normal_tex, vec2<u32>(u32(x), u32(y)), 0).r;
+}
+
+fn tile_entry(x: i32, y: i32) -> u32 {
+    let o = vec2<i32>(x, y) - tile_origin;
+    return u32(o.y * TILE_SIDE + o.x);
+}
+
+// Fills the tiles of workgroup `group` (every invocation calls it, before any return).
+fn load_tiles(group: vec3<u32>, local_index: u32) {
+    if !TILED {
+        return;
+    }
+    tile_origin = vec2<i32>(group.xy) * TILE - APRON;
+    for (var i = local_index; i < TILE_ENTRIES; i += u32(TILE * TILE)) {
+        let q = tile_origin + vec2<i32>(i32(i) % TILE_SIDE, i32(i) / TILE_SIDE);
+        let depth = texture_depth(q.x, q.y);
+        depth_tile[i] = depth;
+        if TILED_SURFACES {
+            if depth > 0.0 {
+                normal_tile[i] = texture_normal(q.x, q.y);
+                first_tile[i] = first[u32(q.y) * params.width + u32(q.x)];
+            }
+        }
+    }
+    workgroupBarrier();
+}
 
 struct Surface {
     position: vec3<f32>,
     normal: vec3<f32>,
     depth: f32,
+    // The view ray at unit view depth.
+    ray: vec3<f32>,
     present: bool,
 };
 
+fn in_bounds(x: i32, y: i32) -> bool {
+    return x >= 0 && y >= 0 && x < i32(params.width) && y < i32(params.height);
+}
+
+// The linear depth of pixel (x, y); 0 outside the image or where nothing was drawn.
+fn depth_at(x: i32, y: i32) -> f32 {
+    if TILED {
+        return depth_tile[tile_entry(x, y)];
+    }
+    return texture_depth(x, y);
+}
+
+// Pass 1's value at pixel (x, y), which has a surface.
+fn first_at(x: i32, y: i32) -> f32 {
+    if TILED_SURFACES {
+        return first_tile[tile_entry(x, y)];
+    }
+    return first[u32(y) * params.width + u32(x)];
+}
+
+fn ray_at(x: i32, y: i32) -> vec3<f32> {
+    return view_ray(frame, vec2<u32>(u32(x), u32(y)));
+}
+
 fn surface_at(x: i32, y: i32) -> Surface {
     var s: Surface;
-    s.present = false;
-    if x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height) {
+    s.depth = depth_at(x, y);
+    s.present = s.depth > 0.0;
+    if !s.present {
         return s;
     }
-    let q = vec2<u32>(u32(x), u32(y));
-    let depth = textureLoad(linear_depth_tex, q, 0).r;
-    if depth <= 0.0 {
-        return s;
+    s.ray = ray_at(x, y);
+    s.position = frame.eye.xyz + s.ray * s.depth;
+    var packed: u32;
+    if TILED_SURFACES {
+        packed = normal_tile[tile_entry(x, y)];
+    } else {
+        packed = texture_normal(x, y);
     }
-    s.present = true;
-    s.depth = depth;
-    s.position = position_from_view_ray(frame, q, depth);
-    s.normal = decode_octahedral_snorm(unpack2x16snorm(textureLoad(normal_tex, q, 0).r));
+    s.normal = decode_octahedral_snorm(unpack2x16snorm(packed));
     return s;
-}
-
-// o(p, q): the cosine of the direction to q when it blocks it within the radius, else 0.
-fn occlusion(p: vec3<f32>, n: vec3<f32>, q: vec3<f32>) -> f32 {
-    let v = q - p;
-    let d = length(v);
-    if d <= 0.0 || d >= params.radius {
-        return 0.0;
-    }
-    return max(dot(n, v) / d, 0.0);
-}
-
-fn accessibility(mean_occlusion: f32) -> f32 {
-    return clamp(1.0 - 2.0 * mean_occlusion, 0.0, 1.0);
 }
 
 // The pixel t steps along `direction` from (x, y), rounded half up.
@@ -67,11 +135,10 @@ fn step_along(x: i32, y: i32, direction: vec2<f32>, t: i32) -> vec2<i32> {
     return vec2<i32>(x + i32(o.x), y + i32(o.y));
 }
 
-// The direction u of pixel (x, y)'s local frame.
-fn frame_direction(x: i32, y: i32) -> vec2<f32> {
+// Pixel (x, y)'s entry of the k × k interleaving tile.
+fn pattern_index(x: i32, y: i32) -> u32 {
     let k = i32(params.size);
-    let index = ((x % k) + k) % k + k * (((y % k) + k) % k);
-    return directions[index];
+    return u32(((x % k) + k) % k + k * (((y % k) + k) % k));
 }
 
 fn in_image(id: vec3<u32>) -> bool {

@@ -191,10 +191,11 @@ struct Args {
     /// With --ssaa --adaptive: the geometric metric, MM, NC, DV, NV or ND.
     #[arg(long, default_value = "ND", requires = "adaptive")]
     ssaa_metric: adaptive_ssaa::GeometricMetric,
-    /// Screen-space ambient occlusion of the ambient and indirect light (GPU): `separable`
-    /// (Holländer 2013 annex 7.2, two 1D passes) or `2d` (eq. 7.1's k×k kernel).
+    /// Screen-space ambient occlusion of the ambient and indirect light (GPU): `filter` (eq. 7.1),
+    /// `crytek`, `vo` (volumetric obscurance), `hbao` or `gtao`, over the k×k kernel, or with
+    /// `-separable` (e.g. `filter-separable`, Holländer 2013 annex 7.2: two 1D passes).
     #[arg(long, value_name = "METHOD")]
-    ssao: Option<SsaoMethod>,
+    ssao: Option<ssao::Estimator>,
     /// With --ssao: the kernel side in pixels (odd, 3 to 63).
     #[arg(long, value_name = "K", default_value_t = 11, requires = "ssao")]
     ssao_kernel: u32,
@@ -1489,8 +1490,8 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
 fn ssao_setting(
     args: &Args,
     scene: &Scene,
-) -> Result<Option<(ssao::cpu::KernelConfig, ssao::gpu::Estimator)>> {
-    let Some(method) = args.ssao else {
+) -> Result<Option<(ssao::cpu::KernelConfig, ssao::Estimator)>> {
+    let Some(estimator) = args.ssao else {
         return Ok(None);
     };
     let config = ssao::cpu::KernelConfig {
@@ -1500,10 +1501,6 @@ fn ssao_setting(
         },
     };
     config.validate().context("--ssao")?;
-    let estimator = match method {
-        SsaoMethod::Kernel2d => ssao::gpu::Estimator::Kernel2d,
-        SsaoMethod::Separable => ssao::gpu::Estimator::Separable,
-    };
     Ok(Some((config, estimator)))
 }
 
@@ -2273,16 +2270,6 @@ fn dump_stages(
         irradiance("indirect-specular-blurred", sp)?;
     }
     Ok(())
-}
-
-/// `--ssao` estimators.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum SsaoMethod {
-    /// Eq. 7.1: every neighbour of the k×k window.
-    #[value(name = "2d")]
-    Kernel2d,
-    /// The separable approximation: two 1D passes along per-pixel frames.
-    Separable,
 }
 
 /// `--vpl-shadows` modes.

@@ -26,12 +26,16 @@ pub fn from_depth(frame: &Frame, x: u32, y: u32, depth: f32) -> Vec3 {
 /// distance; storing the view-axis depth instead needs no normalization and is what the
 /// rasterizer interpolates exactly.)
 pub fn from_view_ray(frame: &Frame, x: u32, y: u32, linear_depth: f32) -> Vec3 {
+    frame.eye.truncate() + view_ray(frame, x, y) * linear_depth
+}
+
+/// The view ray through pixel (x, y) in world space, scaled to unit view depth.
+pub fn view_ray(frame: &Frame, x: u32, y: u32) -> Vec3 {
     let ndc = pixel_to_ndc(frame, x, y);
     let ray_view = Vec3::new(
         ndc.x * frame.tan_half_fov.x,
         ndc.y * frame.tan_half_fov.y,
         -1.0,
     );
-    let ray = frame.inv_view.transform_vector3(ray_view);
-    frame.eye.truncate() + ray * linear_depth
+    frame.inv_view.transform_vector3(ray_view)
 }

@@ -155,7 +155,7 @@ struct SsaoStage {
     bound: ssao::gpu::BoundSsao,
     accessibility: wgpu::Buffer,
     config: ssao::cpu::KernelConfig,
-    estimator: ssao::gpu::Estimator,
+    estimator: ssao::Estimator,
 }
 
 /// The skinning stage as the renderer holds it ([`GpuRenderer::set_animation`]): the rig and
@@ -982,7 +982,7 @@ impl GpuRenderer {
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        ssao: Option<(&ssao::cpu::KernelConfig, ssao::gpu::Estimator)>,
+        ssao: Option<(&ssao::cpu::KernelConfig, ssao::Estimator)>,
     ) -> Result<(), RenderError> {
         self.ssao = match ssao {
             Some((config, estimator)) => {
@@ -1003,7 +1003,7 @@ impl GpuRenderer {
         device: &wgpu::Device,
         kernels: Option<ssao::gpu::SsaoKernels>,
         config: &ssao::cpu::KernelConfig,
-        estimator: ssao::gpu::Estimator,
+        estimator: ssao::Estimator,
     ) -> Result<SsaoStage, RenderError> {
         let (w, h) = self.size();
         let accessibility = transfer::buffer(

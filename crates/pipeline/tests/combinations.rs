@@ -298,8 +298,12 @@ fn render_gpu(gpu: &gpu::Gpu, given: &Scene, c: &Combo, animate: bool) -> gbuffe
                 radius: 0.05 * uploaded.bounds().diagonal(),
             },
         };
-        r.set_ssao(d, q, Some((&config, ssao::gpu::Estimator::Separable)))
-            .expect("ssao");
+        r.set_ssao(
+            d,
+            q,
+            Some((&config, "filter-separable".parse().expect("estimator"))),
+        )
+        .expect("ssao");
     }
     let camera = scene.camera_or_framed();
     let out = r

@@ -3,7 +3,8 @@
 
 use gbuffer::gpu::UploadedGBuffer;
 use ssao::cpu::KernelConfig;
-use ssao::gpu::{Estimator, SsaoKernels};
+use ssao::gpu::SsaoKernels;
+use ssao::{Estimator, Method};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let adapter =
@@ -32,6 +33,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             radius: 0.1 * scene.bounds().diagonal(),
         },
     };
+    // The paper's estimator: eq. 7.1 in two 1D passes (`deferred --ssao filter-separable`).
+    let estimator = Estimator {
+        method: Method::Filter,
+        separable: true,
+    };
     let kernels = SsaoKernels::new(&device)?;
     let textures = [&uploaded.linear_depth, &uploaded.normal];
     let bound = kernels.bind(
@@ -40,14 +46,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         textures,
         &output,
         &config,
-        Estimator::Separable,
+        estimator,
     )?;
     let mut encoder = device.create_command_encoder(&Default::default());
     kernels.encode(&bound, &mut encoder, None);
     queue.submit([encoder.finish()]);
 
     let gpu: Vec<f32> = gpu::transfer::read_pod(&device, &queue, &output)?;
-    let cpu = ssao::cpu::separable(&gbuffer, &frame, &config)?;
+    let cpu = ssao::cpu::estimate(&gbuffer, &frame, &config, estimator)?;
     let worst = gpu
         .iter()
         .zip(cpu.pixels())
@@ -55,7 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .fold(0.0f32, f32::max);
     assert!(worst < 1e-4, "GPU and CPU differ by {worst}");
     println!(
-        "separable AO of {w}×{h} on {}: equal to the CPU twin (within {worst:.1e})",
+        "{estimator} AO of {w}×{h} on {}: equal to the CPU twin (within {worst:.1e})",
         adapter.get_info().name
     );
     Ok(())

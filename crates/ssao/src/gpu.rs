@@ -1,25 +1,19 @@
-//! The estimators on the GPU (`shaders/ssao/`): `kernel_2d.wgsl` (eq. 7.1) and
-//! `separable.wgsl` (`pass_1d`, `pass_2`), twins of [`crate::cpu`], over the caller's G-buffer
-//! textures (linear depth, normals) and [`gbuffer::Frame`] uniform, writing the accessibility
-//! into the caller's buffer (one `f32` a pixel, row-major). Pipelines are built once
-//! ([`SsaoKernels::new`]); [`SsaoKernels::bind`] binds one image and kernel;
-//! [`SsaoKernels::encode`] records.
+//! The estimators on the GPU (`shaders/ssao/estimators.wgsl`: `full`, `pass_1`, `pass_2`),
+//! twins of [`crate::cpu`], over the caller's G-buffer textures (linear depth, normals) and
+//! [`gbuffer::Frame`] uniform, writing the accessibility into the caller's buffer (one `f32` a
+//! pixel, row-major). [`SsaoKernels::new`] compiles the shader; [`SsaoKernels::bind`] binds
+//! one image, kernel and estimator (building its pipelines on first use: kernels up to 21
+//! pixels read their samples from workgroup tiles); [`SsaoKernels::encode`] records.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
 use ::gpu::{PassTimer, transfer};
 use gbuffer::{Frame, GBuffer, Image};
 
-use crate::SsaoError;
 use crate::cpu::{KernelConfig, frame_directions};
-
-/// Which estimator runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Estimator {
-    /// Eq. 7.1, k² − 1 samples a pixel.
-    Kernel2d,
-    /// The separable approximation, 2k − 1 samples a pixel in two passes.
-    Separable,
-}
+use crate::{Estimator, Method, SsaoError};
 
 /// `common.wgsl`'s `Params`.
 #[repr(C)]
@@ -43,12 +37,21 @@ const BINDINGS: [Binding; 7] = [
     Binding::Storage,
 ];
 
-/// The estimators' pipelines.
+/// The widest kernel whose samples the workgroup tiles hold (`common.wgsl`'s APRON).
+const TILED_KERNEL: u32 = 21;
+
+/// One method's pipelines, tiled or not.
+struct MethodPipelines {
+    full: wgpu::ComputePipeline,
+    pass_1: wgpu::ComputePipeline,
+    pass_2: wgpu::ComputePipeline,
+}
+
+/// The estimators' pipelines, built on first use of each method.
 pub struct SsaoKernels {
     layout: Layout,
-    kernel_2d: wgpu::ComputePipeline,
-    pass_1d: wgpu::ComputePipeline,
-    pass_2: wgpu::ComputePipeline,
+    module: wgpu::ShaderModule,
+    pipelines: Mutex<HashMap<(Method, bool), Arc<MethodPipelines>>>,
 }
 
 /// [`SsaoKernels`] bound to one image, kernel and estimator.
@@ -56,22 +59,45 @@ pub struct BoundSsao {
     group: wgpu::BindGroup,
     size: (u32, u32),
     estimator: Estimator,
+    pipelines: Arc<MethodPipelines>,
 }
 
 impl SsaoKernels {
-    /// Builds the pipelines.
+    /// Compiles the estimators' shader.
     pub fn new(device: &wgpu::Device) -> Result<Self, SsaoError> {
-        let layout = Layout::compute(device, "ssao", &BINDINGS);
-        let make = |file: &str, entry: &str| -> Result<_, SsaoError> {
-            let module = crate::SHADERS.module(device, file)?;
-            Ok(kernel::pipeline(device, &module, entry, &[&layout], &[]))
-        };
         Ok(Self {
-            kernel_2d: make("kernel_2d.wgsl", "kernel_2d")?,
-            pass_1d: make("separable.wgsl", "pass_1d")?,
-            pass_2: make("separable.wgsl", "pass_2")?,
-            layout,
+            layout: Layout::compute(device, "ssao", &BINDINGS),
+            module: crate::SHADERS.module(device, "estimators.wgsl")?,
+            pipelines: Mutex::default(),
         })
+    }
+
+    /// The pipelines of `method`, workgroup-tiled or not.
+    fn pipelines(
+        &self,
+        device: &wgpu::Device,
+        method: Method,
+        tiled: bool,
+    ) -> Arc<MethodPipelines> {
+        let mut built = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+        let entry = built.entry((method, tiled)).or_insert_with(|| {
+            let index = Method::ALL.iter().position(|&m| m == method).unwrap_or(0);
+            let tiled = f64::from(u8::from(tiled));
+            let make = |entry: &str, surfaces: f64| {
+                let constants = [
+                    ("METHOD", index as f64),
+                    ("TILED", tiled),
+                    ("TILED_SURFACES", surfaces),
+                ];
+                kernel::pipeline(device, &self.module, entry, &[&self.layout], &constants)
+            };
+            Arc::new(MethodPipelines {
+                full: make("full", 0.0),
+                pass_1: make("pass_1", 0.0),
+                pass_2: make("pass_2", tiled),
+            })
+        });
+        entry.clone()
     }
 
     /// Binds `estimator` with `config` to `frame` (a [`Frame`] uniform), the G-buffer's
@@ -121,10 +147,7 @@ impl SsaoKernels {
             bytemuck::cast_slice(&frame_directions(config.size)),
             wgpu::BufferUsages::STORAGE,
         )?;
-        let first_bytes = match estimator {
-            Estimator::Separable => pixels * 4,
-            Estimator::Kernel2d => 4,
-        };
+        let first_bytes = if estimator.separable { pixels * 8 } else { 4 };
         let first = transfer::buffer(
             device,
             "ssao pass 1",
@@ -149,26 +172,30 @@ impl SsaoKernels {
             group,
             size,
             estimator,
+            pipelines: self.pipelines(device, estimator.method, config.size <= TILED_KERNEL),
         })
     }
 
-    /// Records the estimator's passes (`ssao 2d`, or `ssao pass 1` and `ssao pass 2`).
+    /// Records the estimator's passes (`ssao <estimator>`, or its `pass 1` and `pass 2`).
     pub fn encode(
         &self,
         bound: &BoundSsao,
         encoder: &mut wgpu::CommandEncoder,
         timer: Option<&PassTimer>,
     ) {
-        let passes: &[(&str, &wgpu::ComputePipeline)] = match bound.estimator {
-            Estimator::Kernel2d => &[("ssao 2d", &self.kernel_2d)],
-            Estimator::Separable => &[
-                ("ssao pass 1", &self.pass_1d),
-                ("ssao pass 2", &self.pass_2),
-            ],
+        let pipelines = &bound.pipelines;
+        let name = |pass: &str| format!("ssao {} {pass}", bound.estimator);
+        let passes = if bound.estimator.separable {
+            vec![
+                (name("pass 1"), &pipelines.pass_1),
+                (name("pass 2"), &pipelines.pass_2),
+            ]
+        } else {
+            vec![(format!("ssao {}", bound.estimator), &pipelines.full)]
         };
         for (name, pipeline) in passes {
-            let workgroups = Workgroups::covering(bound.size.0, bound.size.1, 8);
-            Passes::one(name, pipeline, vec![bound.group.clone()], workgroups)
+            let workgroups = Workgroups::covering(bound.size.0, bound.size.1, 16);
+            Passes::one(&name, pipeline, vec![bound.group.clone()], workgroups)
                 .encode(encoder, timer);
         }
     }

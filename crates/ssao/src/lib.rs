@@ -11,10 +11,9 @@
 //! direction is blocked within r. [`reference::ray_traced`] evaluates it with rays on the CPU:
 //! the ground truth.
 //!
-//! [`cpu`] has the screen-space estimators of eq. 7.1 — the non-separable k × k kernel and the
-//! separable approximation — over the G-buffer, and [`gpu`] their kernels. Status: the other
-//! baselines (Crytek SSAO, volumetric obscurance, HBAO, GTAO), the feature-preserving smoothing
-//! and the renderer stage are not built yet.
+//! [`cpu`] has the screen-space estimators ([`Method`]) — eq. 7.1's local filter, Crytek SSAO,
+//! volumetric obscurance, HBAO and GTAO — each non-separable or separable ([`Estimator`]),
+//! and [`gpu`] their kernels.
 
 pub mod cpu;
 pub mod gpu;
@@ -24,7 +23,7 @@ pub mod reference;
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "ssao",
     imports: [gbuffer::SHADERS],
-    files: ["common.wgsl", "kernel_2d.wgsl", "separable.wgsl"],
+    files: ["common.wgsl", "estimators.wgsl"],
 );
 
 /// What this crate's kernels need of a device: nothing beyond `wgpu::Limits::default()`.
@@ -44,6 +43,11 @@ pub enum SsaoError {
     /// Too few or too many rays per pixel.
     #[error("{0} rays per pixel: give 1 to {max}", max = reference::MAX_SAMPLES)]
     InvalidSamples(u32),
+    /// An estimator name that is not `METHOD` or `METHOD-separable`.
+    #[error(
+        "unknown ambient-occlusion estimator {0:?}: give filter, crytek, vo, hbao or gtao, optionally followed by -separable"
+    )]
+    UnknownEstimator(String),
     /// A GPU resource could not be made, bound or read.
     #[error(transparent)]
     Gpu(#[from] ::gpu::GpuError),
@@ -55,6 +59,88 @@ pub enum SsaoError {
         /// The frame's viewport.
         frame: (u32, u32),
     },
+}
+
+/// A screen-space estimator of A (the [`cpu`] module says how each one samples).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Eq. 7.1 (Holländer 2013 §7.2.1, Huang et al. 2011): the cosine of the direction to each
+    /// neighbour pixel's point that lies above the tangent plane within the radius.
+    Filter,
+    /// Crytek SSAO (Mittring 2007): points of the sphere of radius r around p, tested against
+    /// the depth buffer; normal-free.
+    Crytek,
+    /// Volumetric obscurance (Loos & Sloan 2010): the fraction of line segments through the
+    /// sphere that lies behind the depth buffer.
+    VolumetricObscurance,
+    /// Horizon-based AO (Bavoil et al. 2008): sin h − sin t per screen direction.
+    Hbao,
+    /// Ground-truth-based AO (Jimenez et al. 2016): the cosine-weighted visible arc between
+    /// the two horizons of each slice, with the projected normal.
+    Gtao,
+}
+
+impl Method {
+    /// Every method, in the paper's order, then GTAO.
+    pub const ALL: [Method; 5] = [
+        Method::Filter,
+        Method::Crytek,
+        Method::VolumetricObscurance,
+        Method::Hbao,
+        Method::Gtao,
+    ];
+
+    /// The method's name on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Filter => "filter",
+            Method::Crytek => "crytek",
+            Method::VolumetricObscurance => "vo",
+            Method::Hbao => "hbao",
+            Method::Gtao => "gtao",
+        }
+    }
+
+    /// Whether the method walks lines (horizon-based): its k × k form is k lines through p
+    /// instead of the k × k window.
+    pub fn is_horizon_based(self) -> bool {
+        matches!(self, Method::Hbao | Method::Gtao)
+    }
+}
+
+/// A method and how it is evaluated: over the whole kernel, or separably (§7.2.2: one line
+/// along the pixel's interleaved direction, then the feature-preserving pass along the
+/// perpendicular).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Estimator {
+    /// What is estimated.
+    pub method: Method,
+    /// Two 1D passes (2k − 1 samples a pixel) instead of the k × k kernel.
+    pub separable: bool,
+}
+
+impl std::fmt::Display for Estimator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let suffix = if self.separable { "-separable" } else { "" };
+        write!(f, "{}{suffix}", self.method.name())
+    }
+}
+
+impl std::str::FromStr for Estimator {
+    type Err = SsaoError;
+
+    /// `METHOD` or `METHOD-separable`, METHOD one of filter, crytek, vo, hbao, gtao.
+    fn from_str(s: &str) -> Result<Self, SsaoError> {
+        let (name, separable) = match s.strip_suffix("-separable") {
+            Some(name) => (name, true),
+            None => (s, false),
+        };
+        Method::ALL
+            .into_iter()
+            .find(|m| m.name() == name)
+            .map(|method| Estimator { method, separable })
+            .ok_or_else(|| SsaoError::UnknownEstimator(s.to_owned()))
+    }
 }
 
 /// What the occlusion is: the radius of V_r in world units.
@@ -76,17 +162,17 @@ impl AoConfig {
 }
 
 /// The image of `f(x, y, pixel index)` over `gbuffer`'s pixels, in parallel.
-pub(crate) fn per_pixel(
+pub(crate) fn per_pixel<T: Copy + Default + Send>(
     gbuffer: &gbuffer::GBuffer,
-    f: impl Fn(u32, u32, u32) -> f32 + Sync + Send,
-) -> gbuffer::Image<f32> {
+    f: impl Fn(u32, u32, u32) -> T + Sync + Send,
+) -> gbuffer::Image<T> {
     use rayon::prelude::*;
     let (w, h) = (gbuffer.linear_depth.width(), gbuffer.linear_depth.height());
-    let values: Vec<f32> = (0..w * h)
+    let values: Vec<T> = (0..w * h)
         .into_par_iter()
         .map(|i| f(i % w, i / w, i))
         .collect();
-    let mut image = gbuffer::Image::filled(w, h, 1.0);
+    let mut image = gbuffer::Image::filled(w, h, T::default());
     image.pixels_mut().copy_from_slice(&values);
     image
 }

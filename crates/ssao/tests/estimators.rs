@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3};
 use scene::{Camera, Scene};
 use ssao::cpu::{self, KernelConfig};
-use ssao::{AoConfig, reference};
+use ssao::{AoConfig, Estimator, Method, reference};
 
 const SIZE: (u32, u32) = (96, 72);
 
@@ -13,6 +13,13 @@ fn gbuffer(scene: &Scene, camera: &Camera) -> (gbuffer::GBuffer, gbuffer::Frame)
         .expect("G-buffer")
         .gbuffer;
     (g, gbuffer::Frame::new(camera, SIZE.0, SIZE.1))
+}
+
+/// Every method, whole and separable.
+fn estimators() -> impl Iterator<Item = Estimator> {
+    Method::ALL
+        .into_iter()
+        .flat_map(|method| [false, true].map(|separable| Estimator { method, separable }))
 }
 
 fn config(size: u32, radius: f32) -> KernelConfig {
@@ -44,31 +51,40 @@ fn an_open_plane_has_no_occlusion() {
     };
     let (g, frame) = gbuffer(&scene, &camera);
     for k in [5, 11] {
-        for image in [
-            cpu::kernel_2d(&g, &frame, &config(k, 1.0)).expect("2D"),
-            cpu::separable(&g, &frame, &config(k, 1.0)).expect("separable"),
-        ] {
+        for estimator in estimators() {
+            let image = cpu::estimate(&g, &frame, &config(k, 1.0), estimator).expect("A");
             let least = image.pixels().iter().copied().fold(1.0f32, f32::min);
-            assert!(least > 0.999, "k {k}: A {least} on an open plane");
+            println!("{estimator} k {k}: least A {least}");
+            assert!(
+                least > 0.999,
+                "{estimator} k {k}: A {least} on an open plane"
+            );
         }
     }
 }
 
+/// The filter and the horizon methods measure a fixed hemisphere: a larger radius only adds
+/// occluders. (Crytek and VO measure a fraction of a sphere that grows with the radius: a thin
+/// occluder near p fills less of a larger sphere, so they are not monotone.)
 #[test]
 fn occlusion_is_monotone_in_the_radius() {
     let scene = scene::cornell_box();
     let (g, frame) = gbuffer(&scene, &scene.camera_or_framed());
-    let small = cpu::kernel_2d(&g, &frame, &config(11, 0.1)).expect("small");
-    let large = cpu::kernel_2d(&g, &frame, &config(11, 0.4)).expect("large");
-    assert!(
-        small
-            .pixels()
-            .iter()
-            .zip(large.pixels())
-            .all(|(a, b)| b <= a),
-        "a larger radius never unoccludes"
-    );
-    assert!(large.pixels().iter().sum::<f32>() < small.pixels().iter().sum::<f32>());
+    for estimator in
+        estimators().filter(|e| matches!(e.method, Method::Filter | Method::Hbao | Method::Gtao))
+    {
+        let small = cpu::estimate(&g, &frame, &config(11, 0.1), estimator).expect("small");
+        let large = cpu::estimate(&g, &frame, &config(11, 0.4), estimator).expect("large");
+        assert!(
+            small
+                .pixels()
+                .iter()
+                .zip(large.pixels())
+                .all(|(a, b)| *b <= a + 1e-6),
+            "{estimator}: a larger radius never unoccludes"
+        );
+        assert!(large.pixels().iter().sum::<f32>() < small.pixels().iter().sum::<f32>());
+    }
 }
 
 /// Pass 1 along the image's x axis is eq. 7.1 restricted to the pixel's row.
@@ -77,7 +93,7 @@ fn pass_1d_along_x_is_the_row_of_the_2d_kernel() {
     let scene = scene::cornell_box();
     let (g, frame) = gbuffer(&scene, &scene.camera_or_framed());
     let c = config(7, 0.3);
-    let row = cpu::pass_1d(&g, &frame, &c, |_, _| Vec2::X).expect("pass 1");
+    let row = cpu::pass_1d(&g, &frame, &c, Method::Filter, |_, _| Vec2::X).expect("pass 1");
     let position = |x: u32, y: u32| {
         let d = g.linear_depth.get(x, y);
         (d > 0.0).then(|| gbuffer::position::from_view_ray(&frame, x, y, d))
@@ -99,10 +115,10 @@ fn pass_1d_along_x_is_the_row_of_the_2d_kernel() {
                 }
             }
         }
-        let expected = sum / 6.0;
+        let expected = 1.0 - 2.0 * sum / 6.0;
         assert!(
-            (row.get(x, y) - expected).abs() < 1e-6,
-            "({x}, {y}): {} vs {expected}",
+            (row.get(x, y)[0] - expected).abs() < 1e-6 && row.get(x, y)[1] == 1.0,
+            "({x}, {y}): {:?} vs {expected}",
             row.get(x, y)
         );
     }
@@ -132,11 +148,85 @@ fn the_separable_approximation_is_close_to_the_2d_kernel_against_ray_traced_ao()
                 .sum::<f32>()
                 / surfaces as f32
         };
-        let full = error(&cpu::kernel_2d(&g, &frame, &c).expect("2D"));
-        let separable = error(&cpu::separable(&g, &frame, &c).expect("separable"));
-        println!(
-            "k {k}, r {radius}: mean absolute error against ray-traced AO: 2D {full:.4}, separable {separable:.4}"
-        );
-        assert!(separable <= 1.25 * full, "k {k}: {separable} vs {full}");
+        for method in Method::ALL {
+            let estimate = |separable| {
+                let image = cpu::estimate(&g, &frame, &c, Estimator { method, separable });
+                error(&image.expect("A"))
+            };
+            let (full, separable) = (estimate(false), estimate(true));
+            println!(
+                "{} k {k}, r {radius}: mean absolute error against ray-traced AO: k×k {full:.4}, separable {separable:.4}",
+                method.name()
+            );
+            if method == Method::Filter {
+                assert!(separable <= 1.25 * full, "k {k}: {separable} vs {full}");
+            }
+        }
+    }
+}
+
+/// A quad through four corners (counter-clockwise seen from its front), facing `normal`.
+fn quad(corners: [Vec3; 4], normal: Vec3) -> scene::Mesh {
+    scene::Mesh {
+        name: "quad".into(),
+        positions: corners.to_vec(),
+        normals: vec![normal; 4],
+        uvs: vec![Vec2::ZERO; 4],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: 0,
+        ..Default::default()
+    }
+}
+
+/// Ground truth at the foot of a wall (a floor meeting a wall at a right angle, seen from two
+/// sides, the kernel reaching past the radius): GTAO, which integrates the cosine-weighted
+/// visible arc of each slice exactly, matches ray-traced AO within 0.04 on average where the
+/// wall occludes; every other estimator's error is printed for the record.
+#[test]
+fn gtao_matches_ray_traced_ao_at_the_foot_of_a_wall() {
+    let mut scene = Scene::default();
+    scene.materials.push(scene::Material::default());
+    let f = 5.0;
+    let floor = [(-f, -f), (-f, f), (f, f), (f, -f)].map(|(x, z)| Vec3::new(x, 0.0, z));
+    let wall = [(0.0, -f), (f, -f), (f, f), (0.0, f)].map(|(y, z)| Vec3::new(0.0, y, z));
+    scene.meshes.push(quad(floor, Vec3::Y));
+    scene.meshes.push(quad(wall, Vec3::X));
+    let bvh = scene::Bvh::build(&scene);
+    let c = config(31, 0.3);
+    for eye in [Vec3::new(2.0, 1.5, 0.3), Vec3::new(1.5, 2.5, 2.0)] {
+        let camera = Camera {
+            eye,
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y: 60f32.to_radians(),
+            near: 0.01,
+            far: 50.0,
+        };
+        let (g, frame) = gbuffer(&scene, &camera);
+        let truth = reference::ray_traced(&bvh, &g, &frame, &c.ao, 512).expect("truth");
+        for estimator in estimators() {
+            let image = cpu::estimate(&g, &frame, &c, estimator).expect("A");
+            let errors: Vec<f32> = image
+                .pixels()
+                .iter()
+                .zip(truth.pixels())
+                .filter(|(_, t)| **t < 0.98)
+                .map(|(a, t)| a - t)
+                .collect();
+            let n = errors.len() as f32;
+            let bias = errors.iter().sum::<f32>() / n;
+            let mae = errors.iter().map(|e| e.abs()).sum::<f32>() / n;
+            println!(
+                "eye {eye}, {estimator}: {n} occluded pixels, bias {bias:+.4}, mean absolute error {mae:.4}"
+            );
+            if estimator
+                == (Estimator {
+                    method: Method::Gtao,
+                    separable: false,
+                })
+            {
+                assert!(mae <= 0.04, "GTAO at the foot of a wall: {mae}");
+            }
+        }
     }
 }
