@@ -1,14 +1,21 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
 // What the screen-space estimators share (`ssao::cpu`, function for function): parameters,
-// bindings and the G-buffer's surfaces.
+// bindings and the G-buffer's surfaces on the estimator's grid.
 
 struct Params {
+    // The estimator's grid: the image, or at half resolution the pixels (2x, 2y).
     width: u32,
     height: u32,
     // Kernel side k (odd).
     size: u32,
     radius: f32,
+    // The image.
+    image_width: u32,
+    image_height: u32,
+    // Grid point (x, y) is pixel (x, y) · scale (1, or 2 at half resolution).
+    scale: u32,
+    pad: u32,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;
@@ -17,14 +24,16 @@ struct Params {
 @group(0) @binding(3) var normal_tex: texture_2d<u32>;
 // The per-pixel frame directions u of the k × k interleaving tile (`cpu::frame_directions`).
 @group(0) @binding(4) var<storage, read> directions: array<vec2<f32>>;
-// Pass 1's line values, then their weights in pass 2 (separable: 2 × pixels), or unused.
+// Pass 1's line values, then their weights in pass 2 (separable: 2 × grid points), or unused.
 @group(0) @binding(5) var<storage, read_write> first: array<f32>;
 // The accessibility A per pixel.
 @group(0) @binding(6) var<storage, read_write> accessibility_out: array<f32>;
+// At half resolution: A per grid point, which `upsample` spreads to the pixels; else unused.
+@group(0) @binding(7) var<storage, read_write> coarse: array<f32>;
 
 // Workgroup tiles (a speed-up; the results are the untiled ones): a 16 × 16 workgroup first
-// loads the linear depth — and in pass 2 the normals and pass 1's values — of its pixels and
-// an apron of APRON pixels into workgroup memory, and the samples read them there. Every
+// loads the linear depth — and in pass 2 the normals and pass 1's values — of its grid points
+// and an apron of APRON points into workgroup memory, and the samples read them there. Every
 // sample of a kernel of side k ≤ 2·APRON + 1 lies in the apron; wider kernels read textures.
 override TILED: bool = false;
 // Pass 2 reads normals and pass 1's values from the tiles too.
@@ -36,20 +45,27 @@ const TILE_ENTRIES: u32 = 1296u;
 var<workgroup> depth_tile: array<f32, 1296>;
 var<workgroup> normal_tile: array<u32, 1296>;
 var<workgroup> first_tile: array<f32, 1296>;
-// The image pixel of the tile's entry 0.
+// The grid point of the tile's entry 0.
 var<private> tile_origin: vec2<i32>;
 
-// The linear depth of pixel (x, y) from the texture; 0 outside the image or where nothing was
-// drawn.
-fn texture_depth(x: i32, y: i32) -> f32 {
-    if !in_bounds(x, y) {
-        return 0.0;
-    }
-    return max(textureLoad(linear_depth_tex, vec2<u32>(u32(x), u32(y)), 0).r, 0.0);
+fn in_bounds(pixel: vec2<i32>) -> bool {
+    return all(pixel >= vec2<i32>(0)) && pixel.x < i32(params.image_width) && pixel.y < i32(params.image_height);
 }
 
-fn texture_normal(x: i32, y: i32) -> u32 {
-    return textureLoad(normal_tex, vec2<u32>(u32(x), u32(y)), 0).r;
+fn grid_pixel(x: i32, y: i32) -> vec2<i32> {
+    return vec2<i32>(x, y) * i32(params.scale);
+}
+
+// The linear depth at a pixel from the texture; 0 outside the image or where nothing was drawn.
+fn pixel_depth(pixel: vec2<i32>) -> f32 {
+    if !in_bounds(pixel) {
+        return 0.0;
+    }
+    return max(textureLoad(linear_depth_tex, vec2<u32>(pixel), 0).r, 0.0);
+}
+
+fn pixel_normal(pixel: vec2<i32>) -> vec3<f32> {
+    return decode_octahedral_snorm(unpack2x16snorm(textureLoad(normal_tex, vec2<u32>(pixel), 0).r));
 }
 
 fn tile_entry(x: i32, y: i32) -> u32 {
@@ -65,11 +81,12 @@ fn load_tiles(group: vec3<u32>, local_index: u32) {
     tile_origin = vec2<i32>(group.xy) * TILE - APRON;
     for (var i = local_index; i < TILE_ENTRIES; i += u32(TILE * TILE)) {
         let q = tile_origin + vec2<i32>(i32(i) % TILE_SIDE, i32(i) / TILE_SIDE);
-        let depth = texture_depth(q.x, q.y);
+        let pixel = grid_pixel(q.x, q.y);
+        let depth = pixel_depth(pixel);
         depth_tile[i] = depth;
         if TILED_SURFACES {
             if depth > 0.0 {
-                normal_tile[i] = texture_normal(q.x, q.y);
+                normal_tile[i] = textureLoad(normal_tex, vec2<u32>(pixel), 0).r;
                 first_tile[i] = first[u32(q.y) * params.width + u32(q.x)];
             }
         }
@@ -86,19 +103,15 @@ struct Surface {
     present: bool,
 };
 
-fn in_bounds(x: i32, y: i32) -> bool {
-    return x >= 0 && y >= 0 && x < i32(params.width) && y < i32(params.height);
-}
-
-// The linear depth of pixel (x, y); 0 outside the image or where nothing was drawn.
+// The linear depth at grid point (x, y); 0 outside the grid or where nothing was drawn.
 fn depth_at(x: i32, y: i32) -> f32 {
     if TILED {
         return depth_tile[tile_entry(x, y)];
     }
-    return texture_depth(x, y);
+    return pixel_depth(grid_pixel(x, y));
 }
 
-// Pass 1's value at pixel (x, y), which has a surface.
+// Pass 1's value at grid point (x, y), which has a surface.
 fn first_at(x: i32, y: i32) -> f32 {
     if TILED_SURFACES {
         return first_tile[tile_entry(x, y)];
@@ -107,10 +120,29 @@ fn first_at(x: i32, y: i32) -> f32 {
 }
 
 fn ray_at(x: i32, y: i32) -> vec3<f32> {
-    return view_ray(frame, vec2<u32>(u32(x), u32(y)));
+    return view_ray(frame, vec2<u32>(grid_pixel(x, y)));
 }
 
+// The surface at a pixel, from the textures.
+fn pixel_surface(pixel: vec2<i32>) -> Surface {
+    var s: Surface;
+    s.depth = pixel_depth(pixel);
+    s.present = s.depth > 0.0;
+    if s.present {
+        s.ray = view_ray(frame, vec2<u32>(pixel));
+        s.position = frame.eye.xyz + s.ray * s.depth;
+        s.normal = pixel_normal(pixel);
+    }
+    return s;
+}
+
+// The surface at grid point (x, y).
 fn surface_at(x: i32, y: i32) -> Surface {
+    if !TILED_SURFACES {
+        if !TILED {
+            return pixel_surface(grid_pixel(x, y));
+        }
+    }
     var s: Surface;
     s.depth = depth_at(x, y);
     s.present = s.depth > 0.0;
@@ -119,13 +151,11 @@ fn surface_at(x: i32, y: i32) -> Surface {
     }
     s.ray = ray_at(x, y);
     s.position = frame.eye.xyz + s.ray * s.depth;
-    var packed: u32;
     if TILED_SURFACES {
-        packed = normal_tile[tile_entry(x, y)];
+        s.normal = decode_octahedral_snorm(unpack2x16snorm(normal_tile[tile_entry(x, y)]));
     } else {
-        packed = texture_normal(x, y);
+        s.normal = pixel_normal(grid_pixel(x, y));
     }
-    s.normal = decode_octahedral_snorm(unpack2x16snorm(packed));
     return s;
 }
 
@@ -135,16 +165,25 @@ fn step_along(x: i32, y: i32, direction: vec2<f32>, t: i32) -> vec2<i32> {
     return vec2<i32>(x + i32(o.x), y + i32(o.y));
 }
 
-// Pixel (x, y)'s entry of the k × k interleaving tile.
+// Grid point (x, y)'s entry of the k × k interleaving tile.
 fn pattern_index(x: i32, y: i32) -> u32 {
     let k = i32(params.size);
     return u32(((x % k) + k) % k + k * (((y % k) + k) % k));
 }
 
-fn in_image(id: vec3<u32>) -> bool {
+fn in_grid(id: vec3<u32>) -> bool {
     return id.x < params.width && id.y < params.height;
 }
 
-fn pixel_index(id: vec3<u32>) -> u32 {
+fn grid_index(id: vec3<u32>) -> u32 {
     return id.y * params.width + id.x;
+}
+
+// Stores the A of grid point `id`: the pixel's, or at half resolution the grid point's.
+fn store(id: vec3<u32>, a: f32) {
+    if params.scale == 1u {
+        accessibility_out[grid_index(id)] = a;
+    } else {
+        coarse[grid_index(id)] = a;
+    }
 }

@@ -44,7 +44,7 @@ fn add_window_sample(p: Surface, q: vec2<i32>, m: i32, sums_in: Sums) -> Sums {
         return sums;
     }
     // Crytek and VO: q's view ray through the sphere around p (none outside the image).
-    if !in_bounds(q.x, q.y) {
+    if !in_bounds(grid_pixel(q.x, q.y)) {
         return sums;
     }
     let lateral = length(ray_at(q.x, q.y) - p.ray) * p.depth;
@@ -160,14 +160,14 @@ fn full(
     @builtin(local_invocation_index) local_index: u32,
 ) {
     load_tiles(group, local_index);
-    if !in_image(id) {
+    if !in_grid(id) {
         return;
     }
     let x = i32(id.x);
     let y = i32(id.y);
     let p = surface_at(x, y);
     if !p.present {
-        accessibility_out[pixel_index(id)] = 1.0;
+        store(id, 1.0);
         return;
     }
     let k = i32(params.size);
@@ -191,7 +191,7 @@ fn full(
         }
         value = window_value(sums);
     }
-    accessibility_out[pixel_index(id)] = clamp(value, 0.0, 1.0);
+    store(id, clamp(value, 0.0, 1.0));
 }
 
 // Pass 1: the line along the pixel's direction u.
@@ -202,7 +202,7 @@ fn pass_1(
     @builtin(local_invocation_index) local_index: u32,
 ) {
     load_tiles(group, local_index);
-    if !in_image(id) {
+    if !in_grid(id) {
         return;
     }
     let x = i32(id.x);
@@ -212,8 +212,8 @@ fn pass_1(
     if p.present {
         value = line_value(p, x, y, directions[pattern_index(x, y)]);
     }
-    first[pixel_index(id)] = value.x;
-    first[params.width * params.height + pixel_index(id)] = value.y;
+    first[grid_index(id)] = value.x;
+    first[params.width * params.height + grid_index(id)] = value.y;
 }
 
 // Whether q lies on p's surface (depth within 5 %, normals within 25°).
@@ -229,14 +229,14 @@ fn pass_2(
     @builtin(local_invocation_index) local_index: u32,
 ) {
     load_tiles(group, local_index);
-    if !in_image(id) {
+    if !in_grid(id) {
         return;
     }
     let x = i32(id.x);
     let y = i32(id.y);
     let p = surface_at(x, y);
     if !p.present {
-        accessibility_out[pixel_index(id)] = 1.0;
+        store(id, 1.0);
         return;
     }
     let d = directions[pattern_index(x, y)];
@@ -259,5 +259,48 @@ fn pass_2(
     if weights > 0.0 {
         a = clamp(sum / weights, 0.0, 1.0);
     }
-    accessibility_out[pixel_index(id)] = a;
+    store(id, a);
+}
+
+// At half resolution: pixel (x, y)'s A from the estimates of the (up to) four nearest grid
+// points on its surface, bilinearly weighted; with none on its surface, the nearest in depth;
+// 1 without a surface.
+@compute @workgroup_size(16, 16)
+fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= params.image_width || id.y >= params.image_height {
+        return;
+    }
+    let pixel = vec2<i32>(id.xy);
+    let out = id.y * params.image_width + id.x;
+    let p = pixel_surface(pixel);
+    if !p.present {
+        accessibility_out[out] = 1.0;
+        return;
+    }
+    let base = pixel / 2;
+    let f = vec2<f32>(pixel % 2) * 0.5;
+    var sum = 0.0;
+    var weights = 0.0;
+    var nearest_gap = 3.4e38;
+    var nearest = 1.0;
+    for (var j = 0; j < 2; j++) {
+        for (var i = 0; i < 2; i++) {
+            let weight = select(f.x, 1.0 - f.x, i == 0) * select(f.y, 1.0 - f.y, j == 0);
+            let g = base + vec2<i32>(i, j);
+            let q = pixel_surface(g * 2);
+            if weight > 0.0 && q.present {
+                let value = coarse[u32(g.y) * params.width + u32(g.x)];
+                if same_surface(p, q) {
+                    sum += weight * value;
+                    weights += weight;
+                }
+                let gap = abs(q.depth - p.depth);
+                if gap < nearest_gap {
+                    nearest_gap = gap;
+                    nearest = value;
+                }
+            }
+        }
+    }
+    accessibility_out[out] = select(nearest, sum / weights, weights > 0.0);
 }

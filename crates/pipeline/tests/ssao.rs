@@ -26,7 +26,7 @@ fn ssao_scales_the_ambient_light_and_not_the_direct_light() {
     // The paper's separable filter and the two horizon methods, whole and separable.
     let estimators = [Method::Filter, Method::Hbao, Method::Gtao]
         .into_iter()
-        .flat_map(|method| [false, true].map(|separable| Estimator { method, separable }));
+        .flat_map(|method| [false, true].map(|separable| Estimator::new(method, separable)));
     for estimator in estimators {
         // Ambient light only: every pixel's radiance is scaled by its accessibility.
         // (The ceiling light's emission is not ambient light: it is subtracted first.)

@@ -1,6 +1,7 @@
 //! `ssao-bench`: Table 7.1 of Holländer 2013 (annex 7.2) on the lent GPU — every estimator
 //! (eq. 7.1's filter, Crytek SSAO, volumetric obscurance, HBAO, and GTAO as the modern anchor),
-//! over the k × k kernel and separably, at kernels 5, 11 and 21, at 1024×768 (the paper's),
+//! over the k × k kernel and separably, at full and half resolution, at kernels 5, 11 and 21,
+//! at 1024×768 (the paper's),
 //! 1920×1080 and 3840×2160 on Sponza, timed with timestamp queries; the O(k) sweep of the filter
 //! (k = 3…21 at 1920×1080, a plot); and each estimator's error against ray-traced ambient
 //! occlusion (same radius, 64 rays a pixel: mean absolute error and FLIP) at 1024×768 on
@@ -67,11 +68,16 @@ struct Report {
     errors: Vec<Error>,
 }
 
-/// Every method, k × k then separable.
+/// Every method, k × k then separable, at full then half resolution.
 fn estimators() -> Vec<Estimator> {
     Method::ALL
         .into_iter()
-        .flat_map(|method| [false, true].map(|separable| Estimator { method, separable }))
+        .flat_map(|method| {
+            [false, true].into_iter().flat_map(move |separable| {
+                let e = Estimator::new(method, separable);
+                [e, e.at_half_resolution()]
+            })
+        })
         .collect()
 }
 
@@ -282,10 +288,7 @@ fn main() -> Result<()> {
                     ao: AoConfig { radius },
                 };
                 for separable in [false, true] {
-                    let estimator = Estimator {
-                        method: Method::Filter,
-                        separable,
-                    };
+                    let estimator = Estimator::new(Method::Filter, separable);
                     let time = target.time(&gpu, &kernels, &config, estimator, frames)?;
                     swept.push(Timing {
                         size: format!("{}x{}", size.0, size.1),
@@ -328,6 +331,9 @@ fn main() -> Result<()> {
             let config = KernelConfig { size: kernel, ao };
             let mut images = Vec::new();
             for estimator in estimators() {
+                if estimator.half_resolution && !estimator.separable {
+                    continue;
+                }
                 let a = target.run(&gpu, &kernels, &config, estimator)?;
                 let mae = a
                     .pixels()
@@ -348,7 +354,9 @@ fn main() -> Result<()> {
                     mae,
                     flip,
                 });
-                images.push((estimator, a));
+                if !estimator.half_resolution {
+                    images.push((estimator, a));
+                }
             }
             if kernel == KERNELS[KERNELS.len() - 1] {
                 sheet(&truth, &images).write_png(&out.join(format!("{stem}-{name}.png")))?;
@@ -390,21 +398,23 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
     for size in sizes {
         let _ = writeln!(
             md,
-            "### {size}\n\n| k | method | k×k ms | separable ms | separable / k×k |\n|---:|---|---:|---:|---:|"
+            "### {size}\n\n| k | method | k×k ms | separable ms | separable / k×k | k×k half ms | separable half ms |\n|---:|---|---:|---:|---:|---:|---:|"
         );
         for kernel in KERNELS {
             for method in Method::ALL {
-                let full = median(&r.timings, size, kernel, method.name());
-                let separable = median(
-                    &r.timings,
-                    size,
-                    kernel,
-                    &format!("{}-separable", method.name()),
-                );
-                if let (Some(full), Some(separable)) = (full, separable) {
+                let time = |suffix: &str| {
+                    let name = format!("{}{suffix}", method.name());
+                    median(&r.timings, size, kernel, &name)
+                };
+                if let (Some(full), Some(separable), Some(full_half), Some(separable_half)) = (
+                    time(""),
+                    time("-separable"),
+                    time("-half"),
+                    time("-separable-half"),
+                ) {
                     let _ = writeln!(
                         md,
-                        "| {kernel} | {} | {full:.3} | {separable:.3} | {:.2} |",
+                        "| {kernel} | {} | {full:.3} | {separable:.3} | {:.2} | {full_half:.3} | {separable_half:.3} |",
                         method.name(),
                         separable / full
                     );
@@ -415,7 +425,8 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
     }
     let _ = writeln!(
         md,
-        "### O(k): the filter at 1920×1080\n\n![time against k]({stem}.svg)\n\n| k | k×k ms | separable ms |\n|---:|---:|---:|"
+        "### O(k): the filter at {}\n\n![time against k]({stem}.svg)\n\n| k | k×k ms | separable ms |\n|---:|---:|---:|",
+        r.sweep.first().map_or("", |t| t.size.as_str())
     );
     for kernel in SWEEP {
         let size = r.sweep.first().map_or("", |t| t.size.as_str());
@@ -428,22 +439,24 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
     }
     let _ = writeln!(
         md,
-        "\n### Error against ray-traced AO ({REFERENCE_RAYS} rays a pixel), 1024×768\n\nMean absolute error over the surface pixels / mean FLIP of A shown as grey. Radius: the world size of 10 pixels at the scene's median depth.\n\n| scene | k | method | k×k | separable | separable / k×k (MAE) |\n|---|---:|---|---:|---:|---:|"
+        "\n### Error against ray-traced AO ({REFERENCE_RAYS} rays a pixel), 1024×768\n\nMean absolute error over the surface pixels / mean FLIP of A shown as grey. Radius: the world size of 10 pixels at the scene's median depth. Half resolution: the same k in steps of two pixels (twice the reach).\n\n| scene | k | method | k×k | separable | separable / k×k (MAE) | separable half |\n|---|---:|---|---:|---:|---:|---:|"
     );
-    for e in r
+    let plain = r
         .errors
         .iter()
-        .filter(|e| !e.estimator.ends_with("-separable"))
-    {
-        let separable = r.errors.iter().find(|s| {
-            s.scene == e.scene
-                && s.kernel == e.kernel
-                && s.estimator == format!("{}-separable", e.estimator)
-        });
-        if let Some(s) = separable {
+        .filter(|e| Method::ALL.iter().any(|m| m.name() == e.estimator));
+    for e in plain {
+        let find = |suffix: &str| {
+            r.errors.iter().find(|s| {
+                s.scene == e.scene
+                    && s.kernel == e.kernel
+                    && s.estimator == format!("{}{suffix}", e.estimator)
+            })
+        };
+        if let (Some(s), Some(h)) = (find("-separable"), find("-separable-half")) {
             let _ = writeln!(
                 md,
-                "| {} (r {:.3}) | {} | {} | {:.4} / {:.4} | {:.4} / {:.4} | {:.2} |",
+                "| {} (r {:.3}) | {} | {} | {:.4} / {:.4} | {:.4} / {:.4} | {:.2} | {:.4} / {:.4} |",
                 e.scene,
                 e.radius,
                 e.kernel,
@@ -452,7 +465,9 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
                 e.flip,
                 s.mae,
                 s.flip,
-                s.mae / e.mae
+                s.mae / e.mae,
+                h.mae,
+                h.flip
             );
         }
     }

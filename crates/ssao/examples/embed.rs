@@ -34,10 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         },
     };
     // The paper's estimator: eq. 7.1 in two 1D passes (`deferred --ssao filter-separable`).
-    let estimator = Estimator {
-        method: Method::Filter,
-        separable: true,
-    };
+    let estimator = Estimator::new(Method::Filter, true);
     let kernels = SsaoKernels::new(&device)?;
     let textures = [&uploaded.linear_depth, &uploaded.normal];
     let bound = kernels.bind(

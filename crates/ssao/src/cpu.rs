@@ -85,40 +85,65 @@ struct Surface {
     ray: Vec3,
 }
 
-/// The G-buffer's surfaces, read as the kernels read them.
+/// The G-buffer's surfaces on the estimator's grid, read as the kernels read them: grid point
+/// (x, y) is pixel (x·scale, y·scale) (scale 2 at half resolution).
 struct Surfaces<'a> {
     gbuffer: &'a GBuffer,
     frame: &'a Frame,
     radius: f32,
+    scale: i32,
 }
 
-impl Surfaces<'_> {
+impl<'a> Surfaces<'a> {
+    fn new(gbuffer: &'a GBuffer, frame: &'a Frame, config: &KernelConfig, scale: i32) -> Self {
+        Self {
+            gbuffer,
+            frame,
+            radius: config.ao.radius,
+            scale,
+        }
+    }
+
+    /// The grid's size: the image's, divided by the scale and rounded up.
     fn size(&self) -> (i32, i32) {
-        (
+        let (w, h) = (
             self.gbuffer.linear_depth.width() as i32,
             self.gbuffer.linear_depth.height() as i32,
+        );
+        (
+            (w + self.scale - 1) / self.scale,
+            (h + self.scale - 1) / self.scale,
         )
     }
 
-    /// The linear depth of pixel (x, y), `None` outside the image or where nothing was drawn.
+    /// The pixel of grid point (x, y).
+    fn pixel(&self, x: i32, y: i32) -> (u32, u32) {
+        ((x * self.scale) as u32, (y * self.scale) as u32)
+    }
+
+    /// The linear depth at grid point (x, y), `None` outside the grid or where nothing was
+    /// drawn.
     fn depth(&self, x: i32, y: i32) -> Option<f32> {
         let (w, h) = self.size();
         if x < 0 || y < 0 || x >= w || y >= h {
             return None;
         }
-        Some(self.gbuffer.linear_depth.get(x as u32, y as u32)).filter(|&d| d > 0.0)
+        let (px, py) = self.pixel(x, y);
+        Some(self.gbuffer.linear_depth.get(px, py)).filter(|&d| d > 0.0)
     }
 
     fn ray(&self, x: i32, y: i32) -> Vec3 {
-        gbuffer::position::view_ray(self.frame, x as u32, y as u32)
+        let (px, py) = self.pixel(x, y);
+        gbuffer::position::view_ray(self.frame, px, py)
     }
 
     fn at(&self, x: i32, y: i32) -> Option<Surface> {
         let depth = self.depth(x, y)?;
         let ray = self.ray(x, y);
+        let (px, py) = self.pixel(x, y);
         Some(Surface {
             position: self.frame.eye.truncate() + ray * depth,
-            normal: gbuffer::normal::unpack_octahedral(self.gbuffer.normal.get(x as u32, y as u32)),
+            normal: gbuffer::normal::unpack_octahedral(self.gbuffer.normal.get(px, py)),
             depth,
             ray,
         })
@@ -330,9 +355,9 @@ fn pattern_index(x: i32, y: i32, k: u32) -> usize {
     (x.rem_euclid(k) + k * y.rem_euclid(k)) as usize
 }
 
-/// Pass 1 of the separable approximation: `method` along the line through each pixel in
-/// screen direction `direction(x, y)` (k − 1 samples): the line's A (unclamped; 1 where there
-/// is no surface) and its weight in pass 2 (1, but GTAO's open arc).
+/// Pass 1 of the separable approximation at full resolution: `method` along the line through
+/// each pixel in screen direction `direction(x, y)` (k − 1 samples): the line's A (unclamped;
+/// 1 where there is no surface) and its weight in pass 2 (1, but GTAO's open arc).
 pub fn pass_1d(
     gbuffer: &GBuffer,
     frame: &Frame,
@@ -341,26 +366,33 @@ pub fn pass_1d(
     direction: impl Fn(i32, i32) -> Vec2 + Sync + Send,
 ) -> Result<Image<[f32; 2]>, SsaoError> {
     check(gbuffer, frame, config)?;
-    let s = surfaces(gbuffer, frame, config);
+    let s = Surfaces::new(gbuffer, frame, config, 1);
+    Ok(pass_1(&s, config, method, direction))
+}
+
+fn pass_1(
+    s: &Surfaces,
+    config: &KernelConfig,
+    method: Method,
+    direction: impl Fn(i32, i32) -> Vec2 + Sync + Send,
+) -> Image<[f32; 2]> {
     let half = (config.size / 2) as i32;
-    Ok(crate::per_pixel(gbuffer, |x, y, _| {
+    crate::per_pixel(grid(s), |x, y, _| {
         let (x, y) = (x as i32, y as i32);
         match s.at(x, y) {
-            Some(p) => line_value(method, &s, &p, (x, y), direction(x, y), half),
+            Some(p) => line_value(method, s, &p, (x, y), direction(x, y), half),
             None => [1.0, 1.0],
         }
-    }))
+    })
 }
 
-fn surfaces<'a>(gbuffer: &'a GBuffer, frame: &'a Frame, config: &KernelConfig) -> Surfaces<'a> {
-    Surfaces {
-        gbuffer,
-        frame,
-        radius: config.ao.radius,
-    }
+fn grid(s: &Surfaces) -> (u32, u32) {
+    let (w, h) = s.size();
+    (w as u32, h as u32)
 }
 
-/// Whether q lies on p's surface (the feature-preserving weight of pass 2).
+/// Whether q lies on p's surface (the feature-preserving weight of pass 2 and of the
+/// upsampling).
 fn same_surface(p: &Surface, q: &Surface) -> bool {
     (q.depth - p.depth).abs() <= 0.05 * p.depth && p.normal.dot(q.normal) >= 0.9
 }
@@ -373,13 +405,62 @@ pub fn estimate(
     estimator: Estimator,
 ) -> Result<Image<f32>, SsaoError> {
     check(gbuffer, frame, config)?;
+    if !estimator.half_resolution {
+        return Ok(estimate_grid(
+            &Surfaces::new(gbuffer, frame, config, 1),
+            config,
+            estimator,
+        ));
+    }
+    let coarse = Surfaces::new(gbuffer, frame, config, 2);
+    let a = estimate_grid(&coarse, config, estimator);
+    let fine = Surfaces::new(gbuffer, frame, config, 1);
+    Ok(crate::per_pixel(grid(&fine), |x, y, _| {
+        upsample(&fine, &coarse, &a, x as i32, y as i32)
+    }))
+}
+
+/// Pixel (x, y)'s A from the half-resolution estimates `a`: the bilinear weights of the (up
+/// to) four nearest grid points on its surface, normalised; with none on its surface, the
+/// nearest in depth; 1 without a surface.
+fn upsample(fine: &Surfaces, coarse: &Surfaces, a: &Image<f32>, x: i32, y: i32) -> f32 {
+    let Some(p) = fine.at(x, y) else {
+        return 1.0;
+    };
+    let (x0, y0) = (x.div_euclid(2), y.div_euclid(2));
+    let (fx, fy) = ((x % 2) as f32 * 0.5, (y % 2) as f32 * 0.5);
+    let (mut sum, mut weights) = (0.0, 0.0);
+    let mut nearest = (f32::INFINITY, 1.0);
+    for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        let weight = (if i == 0 { 1.0 - fx } else { fx }) * (if j == 0 { 1.0 - fy } else { fy });
+        let Some(q) = coarse.at(x0 + i, y0 + j).filter(|_| weight > 0.0) else {
+            continue;
+        };
+        let value = a.get((x0 + i) as u32, (y0 + j) as u32);
+        if same_surface(&p, &q) {
+            sum += weight * value;
+            weights += weight;
+        }
+        let gap = (q.depth - p.depth).abs();
+        if gap < nearest.0 {
+            nearest = (gap, value);
+        }
+    }
+    if weights > 0.0 {
+        sum / weights
+    } else {
+        nearest.1
+    }
+}
+
+/// A on `s`'s grid (see the module).
+fn estimate_grid(s: &Surfaces, config: &KernelConfig, estimator: Estimator) -> Image<f32> {
     let k = config.size;
     let half = (k / 2) as i32;
     let directions = frame_directions(k);
-    let s = surfaces(gbuffer, frame, config);
     let method = estimator.method;
     if !estimator.separable {
-        return Ok(crate::per_pixel(gbuffer, |x, y, _| {
+        return crate::per_pixel(grid(s), |x, y, _| {
             let (x, y) = (x as i32, y as i32);
             let Some(p) = s.at(x, y) else {
                 return 1.0;
@@ -390,7 +471,7 @@ pub fn estimate(
                 (0..k as usize)
                     .map(|i| {
                         let u = directions[(first + i * k as usize) % directions.len()];
-                        line_value(method, &s, &p, (x, y), u, half)[0]
+                        line_value(method, s, &p, (x, y), u, half)[0]
                     })
                     .sum::<f32>()
                     / k as f32
@@ -399,17 +480,17 @@ pub fn estimate(
                 for dy in -half..=half {
                     for dx in (-half..=half).filter(|&dx| (dx, dy) != (0, 0)) {
                         let m = dx + k as i32 * dy;
-                        add_window_sample(method, &s, &p, (x + dx, y + dy), m, &mut sums);
+                        add_window_sample(method, s, &p, (x + dx, y + dy), m, &mut sums);
                     }
                 }
                 window_value(method, sums)
             };
             value.clamp(0.0, 1.0)
-        }));
+        });
     }
     let u = |x: i32, y: i32| directions[pattern_index(x, y, k)];
-    let first = pass_1d(gbuffer, frame, config, method, u)?;
-    Ok(crate::per_pixel(gbuffer, |x, y, _| {
+    let first = pass_1(s, config, method, u);
+    crate::per_pixel(grid(s), |x, y, _| {
         let (x, y) = (x as i32, y as i32);
         let Some(p) = s.at(x, y) else {
             return 1.0;
@@ -430,5 +511,5 @@ pub fn estimate(
         } else {
             1.0
         }
-    }))
+    })
 }

@@ -1,7 +1,8 @@
 //! The estimators on the GPU (`shaders/ssao/estimators.wgsl`: `full`, `pass_1`, `pass_2`),
 //! twins of [`crate::cpu`], over the caller's G-buffer textures (linear depth, normals) and
 //! [`gbuffer::Frame`] uniform, writing the accessibility into the caller's buffer (one `f32` a
-//! pixel, row-major). [`SsaoKernels::new`] compiles the shader; [`SsaoKernels::bind`] binds
+//! pixel, row-major; at half resolution `upsample` writes it from the grid's estimates).
+//! [`SsaoKernels::new`] compiles the shader; [`SsaoKernels::bind`] binds
 //! one image, kernel and estimator (building its pipelines on first use: kernels up to 21
 //! pixels read their samples from workgroup tiles); [`SsaoKernels::encode`] records.
 
@@ -23,16 +24,21 @@ struct Params {
     height: u32,
     size: u32,
     radius: f32,
+    image_width: u32,
+    image_height: u32,
+    scale: u32,
+    pad: u32,
 }
 
 /// `common.wgsl`'s bindings: frame, params; linear depth, normals; frame directions, pass 1,
-/// accessibility.
-const BINDINGS: [Binding; 7] = [
+/// accessibility, the half-resolution estimates.
+const BINDINGS: [Binding; 8] = [
     Binding::Uniform,
     Binding::Uniform,
     Binding::TextureUnfilterable,
     Binding::TextureUint,
     Binding::StorageRead,
+    Binding::Storage,
     Binding::Storage,
     Binding::Storage,
 ];
@@ -45,6 +51,7 @@ struct MethodPipelines {
     full: wgpu::ComputePipeline,
     pass_1: wgpu::ComputePipeline,
     pass_2: wgpu::ComputePipeline,
+    upsample: wgpu::ComputePipeline,
 }
 
 /// The estimators' pipelines, built on first use of each method.
@@ -57,7 +64,9 @@ pub struct SsaoKernels {
 /// [`SsaoKernels`] bound to one image, kernel and estimator.
 pub struct BoundSsao {
     group: wgpu::BindGroup,
+    /// The image's size and the estimator grid's.
     size: (u32, u32),
+    grid: (u32, u32),
     estimator: Estimator,
     pipelines: Arc<MethodPipelines>,
 }
@@ -95,6 +104,7 @@ impl SsaoKernels {
                 full: make("full", 0.0),
                 pass_1: make("pass_1", 0.0),
                 pass_2: make("pass_2", tiled),
+                upsample: make("upsample", 0.0),
             })
         });
         entry.clone()
@@ -130,14 +140,21 @@ impl SsaoKernels {
             pixels * 4,
             wgpu::BufferUsages::STORAGE,
         )?;
+        let scale = if estimator.half_resolution { 2 } else { 1 };
+        let grid = (size.0.div_ceil(scale), size.1.div_ceil(scale));
+        let points = u64::from(grid.0) * u64::from(grid.1);
         let params = transfer::buffer_init(
             device,
             "ssao params",
             bytemuck::bytes_of(&Params {
-                width: size.0,
-                height: size.1,
+                width: grid.0,
+                height: grid.1,
                 size: config.size,
                 radius: config.ao.radius,
+                image_width: size.0,
+                image_height: size.1,
+                scale,
+                pad: 0,
             }),
             wgpu::BufferUsages::UNIFORM,
         )?;
@@ -147,13 +164,12 @@ impl SsaoKernels {
             bytemuck::cast_slice(&frame_directions(config.size)),
             wgpu::BufferUsages::STORAGE,
         )?;
-        let first_bytes = if estimator.separable { pixels * 8 } else { 4 };
-        let first = transfer::buffer(
-            device,
-            "ssao pass 1",
-            first_bytes,
-            wgpu::BufferUsages::STORAGE,
-        )?;
+        let scratch = |label: &str, used: bool, bytes: u64| {
+            let bytes = if used { bytes } else { 4 };
+            transfer::buffer(device, label, bytes, wgpu::BufferUsages::STORAGE)
+        };
+        let first = scratch("ssao pass 1", estimator.separable, points * 8)?;
+        let coarse = scratch("ssao half resolution", scale == 2, points * 4)?;
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (depth_view, normal_view) = (view(linear_depth), view(normal));
         let group = self.layout.bind(
@@ -166,17 +182,20 @@ impl SsaoKernels {
                 directions.as_entire_binding(),
                 first.as_entire_binding(),
                 output.as_entire_binding(),
+                coarse.as_entire_binding(),
             ],
         );
         Ok(BoundSsao {
             group,
             size,
+            grid,
             estimator,
             pipelines: self.pipelines(device, estimator.method, config.size <= TILED_KERNEL),
         })
     }
 
-    /// Records the estimator's passes (`ssao <estimator>`, or its `pass 1` and `pass 2`).
+    /// Records the estimator's passes (`ssao <estimator>`, or its `pass 1` and `pass 2`; then
+    /// at half resolution its `upsample`).
     pub fn encode(
         &self,
         bound: &BoundSsao,
@@ -185,16 +204,19 @@ impl SsaoKernels {
     ) {
         let pipelines = &bound.pipelines;
         let name = |pass: &str| format!("ssao {} {pass}", bound.estimator);
-        let passes = if bound.estimator.separable {
+        let mut passes = if bound.estimator.separable {
             vec![
-                (name("pass 1"), &pipelines.pass_1),
-                (name("pass 2"), &pipelines.pass_2),
+                (name("pass 1"), &pipelines.pass_1, bound.grid),
+                (name("pass 2"), &pipelines.pass_2, bound.grid),
             ]
         } else {
-            vec![(format!("ssao {}", bound.estimator), &pipelines.full)]
+            vec![(name("k×k"), &pipelines.full, bound.grid)]
         };
-        for (name, pipeline) in passes {
-            let workgroups = Workgroups::covering(bound.size.0, bound.size.1, 16);
+        if bound.estimator.half_resolution {
+            passes.push((name("upsample"), &pipelines.upsample, bound.size));
+        }
+        for (name, pipeline, (w, h)) in passes {
+            let workgroups = Workgroups::covering(w, h, 16);
             Passes::one(&name, pipeline, vec![bound.group.clone()], workgroups)
                 .encode(encoder, timer);
         }

@@ -45,7 +45,7 @@ pub enum SsaoError {
     InvalidSamples(u32),
     /// An estimator name that is not `METHOD` or `METHOD-separable`.
     #[error(
-        "unknown ambient-occlusion estimator {0:?}: give filter, crytek, vo, hbao or gtao, optionally followed by -separable"
+        "unknown ambient-occlusion estimator {0:?}: give filter, crytek, vo, hbao or gtao, optionally followed by -separable, then optionally by -half"
     )]
     UnknownEstimator(String),
     /// A GPU resource could not be made, bound or read.
@@ -110,35 +110,67 @@ impl Method {
 
 /// A method and how it is evaluated: over the whole kernel, or separably (§7.2.2: one line
 /// along the pixel's interleaved direction, then the feature-preserving pass along the
-/// perpendicular).
+/// perpendicular); at full or half resolution.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Estimator {
     /// What is estimated.
     pub method: Method,
     /// Two 1D passes (2k − 1 samples a pixel) instead of the k × k kernel.
     pub separable: bool,
+    /// Estimate at the pixels (2x, 2y) only — the kernel's k pixels are then steps of two, so
+    /// it reaches twice as far — and upsample to every pixel from the four nearest estimates on
+    /// its surface (the [`cpu`] module says how): a quarter of the samples.
+    pub half_resolution: bool,
+}
+
+impl Estimator {
+    /// `method`, separable or not, at full resolution.
+    pub fn new(method: Method, separable: bool) -> Self {
+        Self {
+            method,
+            separable,
+            half_resolution: false,
+        }
+    }
+
+    /// This estimator at half resolution.
+    pub fn at_half_resolution(self) -> Self {
+        Self {
+            half_resolution: true,
+            ..self
+        }
+    }
 }
 
 impl std::fmt::Display for Estimator {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let suffix = if self.separable { "-separable" } else { "" };
-        write!(f, "{}{suffix}", self.method.name())
+        let separable = if self.separable { "-separable" } else { "" };
+        let half = if self.half_resolution { "-half" } else { "" };
+        write!(f, "{}{separable}{half}", self.method.name())
     }
 }
 
 impl std::str::FromStr for Estimator {
     type Err = SsaoError;
 
-    /// `METHOD` or `METHOD-separable`, METHOD one of filter, crytek, vo, hbao, gtao.
+    /// `METHOD[-separable][-half]`, METHOD one of filter, crytek, vo, hbao, gtao.
     fn from_str(s: &str) -> Result<Self, SsaoError> {
-        let (name, separable) = match s.strip_suffix("-separable") {
-            Some(name) => (name, true),
+        let (rest, half_resolution) = match s.strip_suffix("-half") {
+            Some(rest) => (rest, true),
             None => (s, false),
+        };
+        let (name, separable) = match rest.strip_suffix("-separable") {
+            Some(name) => (name, true),
+            None => (rest, false),
         };
         Method::ALL
             .into_iter()
             .find(|m| m.name() == name)
-            .map(|method| Estimator { method, separable })
+            .map(|method| Estimator {
+                method,
+                separable,
+                half_resolution,
+            })
             .ok_or_else(|| SsaoError::UnknownEstimator(s.to_owned()))
     }
 }
@@ -161,13 +193,12 @@ impl AoConfig {
     }
 }
 
-/// The image of `f(x, y, pixel index)` over `gbuffer`'s pixels, in parallel.
+/// The `(w, h)` image of `f(x, y, pixel index)`, in parallel.
 pub(crate) fn per_pixel<T: Copy + Default + Send>(
-    gbuffer: &gbuffer::GBuffer,
+    (w, h): (u32, u32),
     f: impl Fn(u32, u32, u32) -> T + Sync + Send,
 ) -> gbuffer::Image<T> {
     use rayon::prelude::*;
-    let (w, h) = (gbuffer.linear_depth.width(), gbuffer.linear_depth.height());
     let values: Vec<T> = (0..w * h)
         .into_par_iter()
         .map(|i| f(i % w, i / w, i))

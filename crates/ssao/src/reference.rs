@@ -31,7 +31,8 @@ pub fn ray_traced(
         return Err(SsaoError::InvalidSamples(samples));
     }
     crate::check_size(gbuffer, frame)?;
-    Ok(crate::per_pixel(gbuffer, |x, y, i| {
+    let size = (gbuffer.linear_depth.width(), gbuffer.linear_depth.height());
+    Ok(crate::per_pixel(size, |x, y, i| {
         let depth = gbuffer.linear_depth.get(x, y);
         if depth <= 0.0 {
             return 1.0;

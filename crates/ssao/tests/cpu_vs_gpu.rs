@@ -27,29 +27,33 @@ fn gpu_estimators_match_their_cpu_twins() {
             };
             for method in Method::ALL {
                 for separable in [false, true] {
-                    let estimator = Estimator { method, separable };
-                    let expected = cpu::estimate(&g, &frame, &config, estimator).expect("cpu");
-                    let got = run(gpu, &g, &frame, &config, estimator).expect("gpu");
-                    let differences: Vec<f32> = got
-                        .pixels()
-                        .iter()
-                        .zip(expected.pixels())
-                        .map(|(a, b)| (a - b).abs())
-                        .collect();
-                    // GTAO's acos and cos are looser on GPUs (Vulkan lets acos err by 4096 ULP
-                    // of atan): 1e-3 there.
-                    let tolerance = if method == Method::Gtao { 1e-3 } else { 1e-4 };
-                    let off = differences.iter().filter(|&&d| d > tolerance).count();
-                    let worst = differences.iter().copied().fold(0.0f32, f32::max);
-                    println!(
-                        "{estimator} k {size}: {off} pixels off by more than {tolerance:e}, worst {worst:.2e}"
-                    );
-                    // Rounding may put a neighbour on the other side of the radius or a surface test:
-                    // at most 0.5 % of the pixels.
-                    assert!(
-                        off * 200 <= differences.len(),
-                        "{estimator} k {size}: {off} pixels off"
-                    );
+                    for estimator in [
+                        Estimator::new(method, separable),
+                        Estimator::new(method, separable).at_half_resolution(),
+                    ] {
+                        let expected = cpu::estimate(&g, &frame, &config, estimator).expect("cpu");
+                        let got = run(gpu, &g, &frame, &config, estimator).expect("gpu");
+                        let differences: Vec<f32> = got
+                            .pixels()
+                            .iter()
+                            .zip(expected.pixels())
+                            .map(|(a, b)| (a - b).abs())
+                            .collect();
+                        // GTAO's acos and cos are looser on GPUs (Vulkan lets acos err by 4096 ULP
+                        // of atan): 1e-3 there.
+                        let tolerance = if method == Method::Gtao { 1e-3 } else { 1e-4 };
+                        let off = differences.iter().filter(|&&d| d > tolerance).count();
+                        let worst = differences.iter().copied().fold(0.0f32, f32::max);
+                        println!(
+                            "{estimator} k {size}: {off} pixels off by more than {tolerance:e}, worst {worst:.2e}"
+                        );
+                        // Rounding may put a neighbour on the other side of the radius or a surface test:
+                        // at most 0.5 % of the pixels.
+                        assert!(
+                            off * 200 <= differences.len(),
+                            "{estimator} k {size}: {off} pixels off"
+                        );
+                    }
                 }
             }
         }
