@@ -33,20 +33,36 @@ struct Params {
 
 // Workgroup tiles (a speed-up; the results are the untiled ones): a 16 × 16 workgroup first
 // loads the linear depth — and in pass 2 the normals and pass 1's values — of its grid points
-// and an apron of APRON points into workgroup memory, and the samples read them there. Every
-// sample of a kernel of side k ≤ 2·APRON + 1 lies in the apron; wider kernels read textures.
+// and an apron of APRON = k/2 points into workgroup memory, and the samples read them there.
+// The arrays hold APRON up to 10 (k ≤ 21); wider kernels read textures.
 override TILED: bool = false;
 // Pass 2 reads normals and pass 1's values from the tiles too.
 override TILED_SURFACES: bool = false;
+override APRON: i32 = 10;
 const TILE: i32 = 16;
-const APRON: i32 = 10;
-const TILE_SIDE: i32 = 36;
-const TILE_ENTRIES: u32 = 1296u;
+override TILE_SIDE: i32 = TILE + 2 * APRON;
+override TILE_ENTRIES: u32 = u32(TILE_SIDE * TILE_SIDE);
 var<workgroup> depth_tile: array<f32, 1296>;
 var<workgroup> normal_tile: array<u32, 1296>;
 var<workgroup> first_tile: array<f32, 1296>;
 // The grid point of the tile's entry 0.
 var<private> tile_origin: vec2<i32>;
+// The view ray of pixel (x, y) is ray_origin + x·ray_dx + y·ray_dy (the frame's rays are
+// affine in the pixel; `cpu` computes them alike).
+var<private> ray_origin: vec3<f32>;
+var<private> ray_dx: vec3<f32>;
+var<private> ray_dy: vec3<f32>;
+
+fn init_rays() {
+    ray_origin = view_ray(frame, vec2<u32>(0u, 0u));
+    ray_dx = view_ray(frame, vec2<u32>(1u, 0u)) - ray_origin;
+    ray_dy = view_ray(frame, vec2<u32>(0u, 1u)) - ray_origin;
+}
+
+fn pixel_ray(pixel: vec2<i32>) -> vec3<f32> {
+    let p = vec2<f32>(pixel);
+    return ray_origin + p.x * ray_dx + p.y * ray_dy;
+}
 
 fn in_bounds(pixel: vec2<i32>) -> bool {
     return all(pixel >= vec2<i32>(0)) && pixel.x < i32(params.image_width) && pixel.y < i32(params.image_height);
@@ -73,8 +89,10 @@ fn tile_entry(x: i32, y: i32) -> u32 {
     return u32(o.y * TILE_SIDE + o.x);
 }
 
-// Fills the tiles of workgroup `group` (every invocation calls it, before any return).
+// Sets up the rays and fills the tiles of workgroup `group` (every invocation calls it, before
+// any return).
 fn load_tiles(group: vec3<u32>, local_index: u32) {
+    init_rays();
     if !TILED {
         return;
     }
@@ -120,7 +138,7 @@ fn first_at(x: i32, y: i32) -> f32 {
 }
 
 fn ray_at(x: i32, y: i32) -> vec3<f32> {
-    return view_ray(frame, vec2<u32>(grid_pixel(x, y)));
+    return pixel_ray(grid_pixel(x, y));
 }
 
 // The surface at a pixel, from the textures.
@@ -129,7 +147,7 @@ fn pixel_surface(pixel: vec2<i32>) -> Surface {
     s.depth = pixel_depth(pixel);
     s.present = s.depth > 0.0;
     if s.present {
-        s.ray = view_ray(frame, vec2<u32>(pixel));
+        s.ray = pixel_ray(pixel);
         s.position = frame.eye.xyz + s.ray * s.depth;
         s.normal = pixel_normal(pixel);
     }

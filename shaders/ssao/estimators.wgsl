@@ -24,11 +24,11 @@ fn crytek_offset(m: i32) -> f32 {
 // o(p, q): the cosine of the direction to q when it blocks it within the radius, else 0.
 fn occlusion(p: Surface, q: vec3<f32>) -> f32 {
     let v = q - p.position;
-    let d = length(v);
-    if d <= 0.0 || d >= params.radius {
+    let d2 = dot(v, v);
+    if d2 <= 0.0 || d2 >= params.radius * params.radius {
         return 0.0;
     }
-    return max(dot(p.normal, v) / d, 0.0);
+    return max(dot(p.normal, v) * inverseSqrt(d2), 0.0);
 }
 
 // Adds the sample at pixel q (window offset numbered m) to p's sums.
@@ -90,9 +90,9 @@ fn horizon(p: Surface, view: vec3<f32>, x: i32, y: i32, u: vec2<f32>, side: i32,
         let d = depth_at(q.x, q.y);
         if d > 0.0 {
             let delta = frame.eye.xyz + ray_at(q.x, q.y) * d - p.position;
-            let distance = length(delta);
-            if distance > 0.0 && distance < params.radius {
-                highest = max(highest, dot(delta, view) / distance);
+            let d2 = dot(delta, delta);
+            if d2 > 0.0 && d2 < params.radius * params.radius {
+                highest = max(highest, dot(delta, view) * inverseSqrt(d2));
             }
         }
     }
@@ -267,6 +267,7 @@ fn pass_2(
 // 1 without a surface.
 @compute @workgroup_size(16, 16)
 fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {
+    init_rays();
     if id.x >= params.image_width || id.y >= params.image_height {
         return;
     }

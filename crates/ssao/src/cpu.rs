@@ -92,15 +92,24 @@ struct Surfaces<'a> {
     frame: &'a Frame,
     radius: f32,
     scale: i32,
+    /// The view ray of pixel (x, y) is `rays[0] + x·rays[1] + y·rays[2]` (affine in the pixel,
+    /// as the kernels compute it).
+    rays: [Vec3; 3],
 }
 
 impl<'a> Surfaces<'a> {
     fn new(gbuffer: &'a GBuffer, frame: &'a Frame, config: &KernelConfig, scale: i32) -> Self {
+        let origin = gbuffer::position::view_ray(frame, 0, 0);
         Self {
             gbuffer,
             frame,
             radius: config.ao.radius,
             scale,
+            rays: [
+                origin,
+                gbuffer::position::view_ray(frame, 1, 0) - origin,
+                gbuffer::position::view_ray(frame, 0, 1) - origin,
+            ],
         }
     }
 
@@ -134,7 +143,7 @@ impl<'a> Surfaces<'a> {
 
     fn ray(&self, x: i32, y: i32) -> Vec3 {
         let (px, py) = self.pixel(x, y);
-        gbuffer::position::view_ray(self.frame, px, py)
+        self.rays[0] + px as f32 * self.rays[1] + py as f32 * self.rays[2]
     }
 
     fn at(&self, x: i32, y: i32) -> Option<Surface> {
@@ -259,9 +268,9 @@ fn horizon(
         let (qx, qy) = step(x, y, u, side * t);
         if let Some(q) = s.position(qx, qy) {
             let delta = q - p.position;
-            let d = delta.length();
-            if d > 0.0 && d < s.radius {
-                highest = highest.max(delta.dot(view) / d);
+            let d2 = delta.length_squared();
+            if d2 > 0.0 && d2 < s.radius * s.radius {
+                highest = highest.max(delta.dot(view) * d2.sqrt().recip());
             }
         }
     }
@@ -330,11 +339,11 @@ fn line_value(
 /// o(p, q): the cosine of the direction to `q` when it blocks it within `radius`, else 0.
 fn occlusion(p: &Surface, q: Vec3, radius: f32) -> f32 {
     let v = q - p.position;
-    let d = v.length();
-    if d <= 0.0 || d >= radius {
+    let d2 = v.length_squared();
+    if d2 <= 0.0 || d2 >= radius * radius {
         return 0.0;
     }
-    (p.normal.dot(v) / d).max(0.0)
+    (p.normal.dot(v) * d2.sqrt().recip()).max(0.0)
 }
 
 /// The frame directions u of a k × k interleaving tile: entry x + k·y at angle

@@ -54,11 +54,11 @@ struct MethodPipelines {
     upsample: wgpu::ComputePipeline,
 }
 
-/// The estimators' pipelines, built on first use of each method.
+/// The estimators' pipelines, built on first use of each method and kernel size.
 pub struct SsaoKernels {
     layout: Layout,
     module: wgpu::ShaderModule,
-    pipelines: Mutex<HashMap<(Method, bool), Arc<MethodPipelines>>>,
+    pipelines: Mutex<HashMap<(Method, u32), Arc<MethodPipelines>>>,
 }
 
 /// [`SsaoKernels`] bound to one image, kernel and estimator.
@@ -81,22 +81,18 @@ impl SsaoKernels {
         })
     }
 
-    /// The pipelines of `method`, workgroup-tiled or not.
-    fn pipelines(
-        &self,
-        device: &wgpu::Device,
-        method: Method,
-        tiled: bool,
-    ) -> Arc<MethodPipelines> {
+    /// The pipelines of `method` for kernels of side `k` (workgroup-tiled up to 21).
+    fn pipelines(&self, device: &wgpu::Device, method: Method, k: u32) -> Arc<MethodPipelines> {
         let mut built = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-        let entry = built.entry((method, tiled)).or_insert_with(|| {
+        let entry = built.entry((method, k)).or_insert_with(|| {
             let index = Method::ALL.iter().position(|&m| m == method).unwrap_or(0);
-            let tiled = f64::from(u8::from(tiled));
+            let tiled = f64::from(u8::from(k <= TILED_KERNEL));
             let make = |entry: &str, surfaces: f64| {
                 let constants = [
                     ("METHOD", index as f64),
                     ("TILED", tiled),
                     ("TILED_SURFACES", surfaces),
+                    ("APRON", f64::from(k.min(TILED_KERNEL) / 2)),
                 ];
                 kernel::pipeline(device, &self.module, entry, &[&self.layout], &constants)
             };
@@ -190,7 +186,7 @@ impl SsaoKernels {
             size,
             grid,
             estimator,
-            pipelines: self.pipelines(device, estimator.method, config.size <= TILED_KERNEL),
+            pipelines: self.pipelines(device, estimator.method, config.size),
         })
     }
 
