@@ -31,20 +31,19 @@ struct Params {
 // At half resolution: A per grid point, which `upsample` spreads to the pixels; else unused.
 @group(0) @binding(7) var<storage, read_write> coarse: array<f32>;
 
-// Workgroup tiles (a speed-up; the results are the untiled ones): a 16 × 16 workgroup first
-// loads the linear depth — and in pass 2 the normals and pass 1's values — of its grid points
-// and an apron of APRON = k/2 points into workgroup memory, and the samples read them there.
-// The arrays hold APRON up to 10 (k ≤ 21); wider kernels read textures.
+// Workgroup tiles for the k × k kernels (a speed-up; the results are the untiled ones): a
+// 16 × 16 workgroup first loads the linear depth of its grid points and an apron of
+// APRON = k/2 points into workgroup memory, and the samples read them there. The array holds
+// APRON up to 10 (k ≤ 21); wider kernels read textures. The separable passes read textures:
+// the H200 measured them faster without the array, which takes its room from the L1 cache
+// (`ssao::gpu` compiles them with TILE_CAPACITY = 1).
 override TILED: bool = false;
-// Pass 2 reads normals and pass 1's values from the tiles too.
-override TILED_SURFACES: bool = false;
 override APRON: i32 = 10;
 const TILE: i32 = 16;
 override TILE_SIDE: i32 = TILE + 2 * APRON;
 override TILE_ENTRIES: u32 = u32(TILE_SIDE * TILE_SIDE);
-var<workgroup> depth_tile: array<f32, 1296>;
-var<workgroup> normal_tile: array<u32, 1296>;
-var<workgroup> first_tile: array<f32, 1296>;
+const TILE_CAPACITY: u32 = 1296u;
+var<workgroup> depth_tile: array<f32, TILE_CAPACITY>;
 // The grid point of the tile's entry 0.
 var<private> tile_origin: vec2<i32>;
 // The view ray of pixel (x, y) is ray_origin + x·ray_dx + y·ray_dy (the frame's rays are
@@ -100,14 +99,7 @@ fn load_tiles(group: vec3<u32>, local_index: u32) {
     for (var i = local_index; i < TILE_ENTRIES; i += u32(TILE * TILE)) {
         let q = tile_origin + vec2<i32>(i32(i) % TILE_SIDE, i32(i) / TILE_SIDE);
         let pixel = grid_pixel(q.x, q.y);
-        let depth = pixel_depth(pixel);
-        depth_tile[i] = depth;
-        if TILED_SURFACES {
-            if depth > 0.0 {
-                normal_tile[i] = textureLoad(normal_tex, vec2<u32>(pixel), 0).r;
-                first_tile[i] = first[u32(q.y) * params.width + u32(q.x)];
-            }
-        }
+        depth_tile[i] = pixel_depth(pixel);
     }
     workgroupBarrier();
 }
@@ -129,13 +121,6 @@ fn depth_at(x: i32, y: i32) -> f32 {
     return pixel_depth(grid_pixel(x, y));
 }
 
-// Pass 1's value at grid point (x, y), which has a surface.
-fn first_at(x: i32, y: i32) -> f32 {
-    if TILED_SURFACES {
-        return first_tile[tile_entry(x, y)];
-    }
-    return first[u32(y) * params.width + u32(x)];
-}
 
 fn ray_at(x: i32, y: i32) -> vec3<f32> {
     return pixel_ray(grid_pixel(x, y));
@@ -156,10 +141,8 @@ fn pixel_surface(pixel: vec2<i32>) -> Surface {
 
 // The surface at grid point (x, y).
 fn surface_at(x: i32, y: i32) -> Surface {
-    if !TILED_SURFACES {
-        if !TILED {
-            return pixel_surface(grid_pixel(x, y));
-        }
+    if !TILED {
+        return pixel_surface(grid_pixel(x, y));
     }
     var s: Surface;
     s.depth = depth_at(x, y);
@@ -169,11 +152,7 @@ fn surface_at(x: i32, y: i32) -> Surface {
     }
     s.ray = ray_at(x, y);
     s.position = frame.eye.xyz + s.ray * s.depth;
-    if TILED_SURFACES {
-        s.normal = decode_octahedral_snorm(unpack2x16snorm(normal_tile[tile_entry(x, y)]));
-    } else {
-        s.normal = pixel_normal(grid_pixel(x, y));
-    }
+    s.normal = pixel_normal(grid_pixel(x, y));
     return s;
 }
 

@@ -247,7 +247,7 @@ fn pass_2(
     for (var t = -half; t <= half; t++) {
         let at = step_along(x, y, v, t);
         if same_surface(p, surface_at(at.x, at.y)) {
-            sum += first_at(at.x, at.y);
+            sum += first[u32(at.y) * params.width + u32(at.x)];
             if METHOD == GTAO {
                 weights += first[params.width * params.height + u32(at.y) * params.width + u32(at.x)];
             } else {

@@ -2,14 +2,15 @@
 //! twins of [`crate::cpu`], over the caller's G-buffer textures (linear depth, normals) and
 //! [`gbuffer::Frame`] uniform, writing the accessibility into the caller's buffer (one `f32` a
 //! pixel, row-major; at half resolution `upsample` writes it from the grid's estimates).
-//! [`SsaoKernels::new`] compiles the shader; [`SsaoKernels::bind`] binds
-//! one image, kernel and estimator (building its pipelines on first use: kernels up to 21
-//! pixels read their samples from workgroup tiles); [`SsaoKernels::encode`] records.
+//! [`SsaoKernels::new`] compiles the shader; [`SsaoKernels::bind`] binds one image, kernel and
+//! estimator (building its pipelines on first use: the k × k kernels up to 21 pixels read their
+//! samples from a workgroup tile); [`SsaoKernels::encode`] records.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
+use ::gpu::shader::Specialisation;
 use ::gpu::{PassTimer, transfer};
 use gbuffer::{Frame, GBuffer, Image};
 
@@ -57,7 +58,9 @@ struct MethodPipelines {
 /// The estimators' pipelines, built on first use of each method and kernel size.
 pub struct SsaoKernels {
     layout: Layout,
-    module: wgpu::ShaderModule,
+    /// The shader with the workgroup tile (for the k × k kernels) and without (the rest).
+    tiled: wgpu::ShaderModule,
+    plain: wgpu::ShaderModule,
     pipelines: Mutex<HashMap<(Method, u32), Arc<MethodPipelines>>>,
 }
 
@@ -76,7 +79,12 @@ impl SsaoKernels {
     pub fn new(device: &wgpu::Device) -> Result<Self, SsaoError> {
         Ok(Self {
             layout: Layout::compute(device, "ssao", &BINDINGS),
-            module: crate::SHADERS.module(device, "estimators.wgsl")?,
+            tiled: crate::SHADERS.module(device, "estimators.wgsl")?,
+            plain: crate::SHADERS.module_with(
+                device,
+                "estimators.wgsl",
+                &Specialisation::default().set("TILE_CAPACITY", "1u"),
+            )?,
             pipelines: Mutex::default(),
         })
     }
@@ -86,21 +94,20 @@ impl SsaoKernels {
         let mut built = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
         let entry = built.entry((method, k)).or_insert_with(|| {
             let index = Method::ALL.iter().position(|&m| m == method).unwrap_or(0);
-            let tiled = f64::from(u8::from(k <= TILED_KERNEL));
-            let make = |entry: &str, surfaces: f64| {
+            let make = |entry: &str, tiled: bool| {
+                let module = if tiled { &self.tiled } else { &self.plain };
                 let constants = [
                     ("METHOD", index as f64),
-                    ("TILED", tiled),
-                    ("TILED_SURFACES", surfaces),
+                    ("TILED", f64::from(u8::from(tiled))),
                     ("APRON", f64::from(k.min(TILED_KERNEL) / 2)),
                 ];
-                kernel::pipeline(device, &self.module, entry, &[&self.layout], &constants)
+                kernel::pipeline(device, module, entry, &[&self.layout], &constants)
             };
             Arc::new(MethodPipelines {
-                full: make("full", 0.0),
-                pass_1: make("pass_1", 0.0),
-                pass_2: make("pass_2", tiled),
-                upsample: make("upsample", 0.0),
+                full: make("full", k <= TILED_KERNEL),
+                pass_1: make("pass_1", false),
+                pass_2: make("pass_2", false),
+                upsample: make("upsample", false),
             })
         });
         entry.clone()
