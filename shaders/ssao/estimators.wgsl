@@ -194,23 +194,17 @@ fn full(
     store(id, clamp(value, 0.0, 1.0));
 }
 
-// Pass 1: the line along the pixel's direction u.
+// Pass 1 (untiled): the line along the pixel's direction u.
 @compute @workgroup_size(16, 16)
-fn pass_1(
-    @builtin(global_invocation_id) id: vec3<u32>,
-    @builtin(workgroup_id) group: vec3<u32>,
-    @builtin(local_invocation_index) local_index: u32,
-) {
-    load_tiles(group, local_index);
+fn pass_1(@builtin(global_invocation_id) id: vec3<u32>) {
+    init_rays();
     if !in_grid(id) {
         return;
     }
-    let x = i32(id.x);
-    let y = i32(id.y);
-    let p = surface_at(x, y);
+    let p = surface_at(i32(id.x), i32(id.y));
     var value = vec2<f32>(1.0);
     if p.present {
-        value = line_value(p, x, y, directions[pattern_index(x, y)]);
+        value = line_value(p, i32(id.x), i32(id.y), directions[pattern_index(i32(id.x), i32(id.y))]);
     }
     first[grid_index(id)] = value.x;
     first[params.width * params.height + grid_index(id)] = value.y;
@@ -221,14 +215,11 @@ fn same_surface(p: Surface, q: Surface) -> bool {
     return q.present && abs(q.depth - p.depth) <= 0.05 * p.depth && dot(p.normal, q.normal) >= 0.9;
 }
 
-// Pass 2: pass 1 averaged along v over p's surface (GTAO: weighted by the open arcs).
+// Pass 2 (untiled): pass 1 averaged along v over p's surface (GTAO: weighted by the open
+// arcs).
 @compute @workgroup_size(16, 16)
-fn pass_2(
-    @builtin(global_invocation_id) id: vec3<u32>,
-    @builtin(workgroup_id) group: vec3<u32>,
-    @builtin(local_invocation_index) local_index: u32,
-) {
-    load_tiles(group, local_index);
+fn pass_2(@builtin(global_invocation_id) id: vec3<u32>) {
+    init_rays();
     if !in_grid(id) {
         return;
     }

@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use gpu::Gpu;
 
+pub mod chart;
 pub mod timing;
 
 pub use timing::{

@@ -509,80 +509,36 @@ fn sweep_svg(r: &Report, (w, h): (u32, u32)) -> String {
         .iter()
         .filter(|s| (s.width, s.height) == (w, h))
         .collect();
-    let max = rows.iter().map(|s| s.split.median_ms).fold(0.0, f64::max) * 1.1;
-    let (pw, ph, left, top) = (520.0, 300.0, 60.0, 30.0);
-    let x_of = |side: f64| left + (side.log2() - 3.0) / 5.0 * pw;
-    let y_of = |ms: f64| top + ph - ms / max * ph;
-    let mut svg = format!(
-        "<svg xmlns='http://www.w3.org/2000/svg' width='700' height='380' font-family='sans-serif' font-size='12'>\n<rect width='700' height='380' fill='white'/>\n<text x='{left}' y='18'>Two-pass split, {w}×{h}, 16 B/pixel ({})</text>\n<line x1='{left}' y1='{}' x2='{}' y2='{}' stroke='black'/>\n<line x1='{left}' y1='{top}' x2='{left}' y2='{}' stroke='black'/>\n",
-        r.header.adapter,
-        top + ph,
-        left + pw,
-        top + ph,
-        top + ph
-    );
-    for side in BLOCK_SIDES {
-        let x = x_of(f64::from(side));
-        let _ = writeln!(
-            svg,
-            "<text x='{}' y='{}' text-anchor='middle'>{side}</text>",
-            x,
-            top + ph + 16.0
-        );
+    let series = PATTERNS
+        .into_iter()
+        .map(|(n, m)| {
+            let name = format!("{n}x{m}");
+            let points = rows
+                .iter()
+                .filter(|s| s.pattern == name)
+                .map(|s| {
+                    let side: f64 = s
+                        .block
+                        .split('x')
+                        .next()
+                        .and_then(|v| v.parse().ok())
+                        .unwrap_or(8.0);
+                    (side.log2(), s.split.median_ms)
+                })
+                .collect();
+            bench::chart::Series { name, points }
+        })
+        .collect();
+    bench::chart::LineChart {
+        title: format!("Two-pass split, {w}×{h}, 16 B/pixel ({})", r.header.adapter),
+        x_label: "block side (pixels, rounded up to the pattern)".into(),
+        y_label: "ms".into(),
+        x_ticks: BLOCK_SIDES
+            .map(|side| (f64::from(side).log2(), side.to_string()))
+            .to_vec(),
+        series,
     }
-    let _ = writeln!(
-        svg,
-        "<text x='{}' y='{}' text-anchor='middle'>block side (pixels, rounded up to the pattern)</text>",
-        left + pw / 2.0,
-        top + ph + 34.0
-    );
-    for k in 0..=4 {
-        let ms = max * f64::from(k) / 4.0;
-        let _ = writeln!(
-            svg,
-            "<text x='{}' y='{}' text-anchor='end'>{ms:.2}</text>",
-            left - 6.0,
-            y_of(ms) + 4.0
-        );
-    }
-    let _ = writeln!(
-        svg,
-        "<text x='14' y='{}' transform='rotate(-90 14 {})'>ms</text>",
-        top + ph / 2.0,
-        top + ph / 2.0
-    );
-    let colours = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
-    for (k, (n, m)) in PATTERNS.into_iter().enumerate() {
-        let p = format!("{n}x{m}");
-        let pts: Vec<String> = rows
-            .iter()
-            .filter(|s| s.pattern == p)
-            .map(|s| {
-                let side: f64 = s
-                    .block
-                    .split('x')
-                    .next()
-                    .and_then(|v| v.parse().ok())
-                    .unwrap_or(8.0);
-                format!("{:.1},{:.1}", x_of(side), y_of(s.split.median_ms))
-            })
-            .collect();
-        let _ = writeln!(
-            svg,
-            "<polyline fill='none' stroke='{}' stroke-width='2' points='{}'/>",
-            colours[k],
-            pts.join(" ")
-        );
-        let _ = writeln!(
-            svg,
-            "<text x='{}' y='{}' fill='{}'>{p}</text>",
-            left + pw + 12.0,
-            top + 16.0 * k as f64 + 10.0,
-            colours[k]
-        );
-    }
-    svg.push_str("</svg>\n");
-    svg
+    .svg()
 }
 
 fn write_report(dir: &std::path::Path, r: &Report) -> Result<()> {

@@ -483,68 +483,28 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
 
 /// Time against kernel size, k × k and separable: the paper's O(k²) against O(k).
 fn sweep_svg(r: &Report) -> String {
-    let max = r.sweep.iter().map(|t| t.time.median_ms).fold(0.0, f64::max) * 1.1;
-    let max = if max > 0.0 { max } else { 1.0 };
-    let (pw, ph, left, top) = (520.0, 300.0, 60.0, 30.0);
-    let k_max = f64::from(SWEEP[SWEEP.len() - 1]);
-    let x_of = |k: f64| left + k / k_max * pw;
-    let y_of = |ms: f64| top + ph - ms / max * ph;
-    let mut svg = format!(
-        "<svg xmlns='http://www.w3.org/2000/svg' width='700' height='380' font-family='sans-serif' font-size='12'>\n<rect width='700' height='380' fill='white'/>\n<text x='{left}' y='18'>Eq. 7.1's filter, {} ({}): time against kernel side k</text>\n<line x1='{left}' y1='{b}' x2='{r}' y2='{b}' stroke='black'/>\n<line x1='{left}' y1='{top}' x2='{left}' y2='{b}' stroke='black'/>\n",
-        r.sweep.first().map_or("", |t| t.size.as_str()),
-        r.header.adapter,
-        b = top + ph,
-        r = left + pw,
-    );
-    for k in SWEEP {
-        let _ = writeln!(
-            svg,
-            "<text x='{}' y='{}' text-anchor='middle'>{k}</text>",
-            x_of(f64::from(k)),
-            top + ph + 16.0
-        );
-    }
-    for step in 0..=4 {
-        let ms = max * f64::from(step) / 4.0;
-        let _ = writeln!(
-            svg,
-            "<text x='{}' y='{}' text-anchor='end'>{ms:.2}</text>",
-            left - 6.0,
-            y_of(ms) + 4.0
-        );
-    }
-    let _ = writeln!(
-        svg,
-        "<text x='14' y='{c}' transform='rotate(-90 14 {c})'>ms</text>\n<text x='{}' y='{}' text-anchor='middle'>k (pixels)</text>",
-        left + pw / 2.0,
-        top + ph + 34.0,
-        c = top + ph / 2.0,
-    );
-    for (i, (estimator, colour)) in [("filter", "#d62728"), ("filter-separable", "#1f77b4")]
+    let series = [("filter", "k×k"), ("filter-separable", "separable")]
         .into_iter()
-        .enumerate()
-    {
-        let points: Vec<String> = r
-            .sweep
-            .iter()
-            .filter(|t| t.estimator == estimator)
-            .map(|t| {
-                format!(
-                    "{:.1},{:.1}",
-                    x_of(f64::from(t.kernel)),
-                    y_of(t.time.median_ms)
-                )
-            })
-            .collect();
-        let _ = writeln!(
-            svg,
-            "<polyline fill='none' stroke='{colour}' stroke-width='2' points='{}'/>\n<text x='{}' y='{}' fill='{colour}'>{}</text>",
-            points.join(" "),
-            left + pw + 12.0,
-            top + 16.0 * i as f64 + 10.0,
-            if i == 0 { "k×k" } else { "separable" }
-        );
+        .map(|(estimator, name)| bench::chart::Series {
+            name: name.into(),
+            points: r
+                .sweep
+                .iter()
+                .filter(|t| t.estimator == estimator)
+                .map(|t| (f64::from(t.kernel), t.time.median_ms))
+                .collect(),
+        })
+        .collect();
+    bench::chart::LineChart {
+        title: format!(
+            "Eq. 7.1's filter, {} ({}): time against kernel side k",
+            r.sweep.first().map_or("", |t| t.size.as_str()),
+            r.header.adapter
+        ),
+        x_label: "k (pixels)".into(),
+        y_label: "ms".into(),
+        x_ticks: SWEEP.map(|k| (f64::from(k), k.to_string())).to_vec(),
+        series,
     }
-    svg.push_str("</svg>\n");
-    svg
+    .svg()
 }

@@ -251,21 +251,17 @@ fn step(x: i32, y: i32, direction: Vec2, t: i32) -> (i32, i32) {
     (x + o.x as i32, y + o.y as i32)
 }
 
-/// The highest sin(elevation) above the plane normal to `view` of the samples on one side of
-/// the line (t = side·1 … side·half), starting from `lowest`.
+/// The highest sin(elevation) above the plane normal to `view` of the samples at `pixels` (one
+/// side of a line), starting from `lowest`.
 fn horizon(
     s: &Surfaces,
     p: &Surface,
     view: Vec3,
-    (x, y): (i32, i32),
-    u: Vec2,
-    side: i32,
-    half: i32,
+    pixels: impl Iterator<Item = (i32, i32)>,
     lowest: f32,
 ) -> f32 {
     let mut highest = lowest;
-    for t in 1..=half {
-        let (qx, qy) = step(x, y, u, side * t);
+    for (qx, qy) in pixels {
         if let Some(q) = s.position(qx, qy) {
             let delta = q - p.position;
             let d2 = delta.length_squared();
@@ -297,6 +293,8 @@ fn line_value(
     }
     let view = (s.frame.eye.truncate() - p.position).normalize();
     let direction = s.screen_direction(u);
+    // The samples of each side, t = 1 … k/2 steps along ±u.
+    let side = |sign: i32| (1..=half).map(move |t| step(x, y, u, sign * t));
     // The slice: the plane of V and the direction; `ortho` lies in it, normal to V.
     let ortho = direction - view * direction.dot(view);
     let axis = ortho.cross(view).normalize_or_zero();
@@ -308,8 +306,8 @@ fn line_value(
         }
         let sin_t = tangent.normalize_or_zero().dot(view);
         // The other side's tangent is −tangent, at elevation −t.
-        let forward = horizon(s, p, view, (x, y), u, 1, half, sin_t);
-        let backward = horizon(s, p, view, (x, y), u, -1, half, -sin_t);
+        let forward = horizon(s, p, view, side(1), sin_t);
+        let backward = horizon(s, p, view, side(-1), -sin_t);
         return [1.0 - 0.5 * ((forward - sin_t) + (backward + sin_t)), 1.0];
     }
     // GTAO: the projected normal and its angle γ from V in the slice.
@@ -325,8 +323,8 @@ fn line_value(
         cos_n.acos()
     };
     let half_pi = std::f32::consts::FRAC_PI_2;
-    let forward = horizon(s, p, view, (x, y), u, 1, half, (gamma + half_pi).cos());
-    let backward = horizon(s, p, view, (x, y), u, -1, half, (gamma - half_pi).cos());
+    let forward = horizon(s, p, view, side(1), (gamma + half_pi).cos());
+    let backward = horizon(s, p, view, side(-1), (gamma - half_pi).cos());
     let clamp = |h: f32| gamma + (h - gamma).clamp(-half_pi, half_pi);
     let h_forward = clamp(forward.clamp(-1.0, 1.0).acos());
     let h_backward = clamp(-backward.clamp(-1.0, 1.0).acos());
