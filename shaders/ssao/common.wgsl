@@ -24,7 +24,8 @@ struct Params {
 @group(0) @binding(3) var normal_tex: texture_2d<u32>;
 // The per-pixel frame directions u of the k × k interleaving tile (`cpu::frame_directions`).
 @group(0) @binding(4) var<storage, read> directions: array<vec2<f32>>;
-// Pass 1's line values, then their weights in pass 2 (separable: 2 × grid points), or unused.
+// Separable: pass 1's line values (later the smoothing's x pass), their weights in pass 2, and
+// pass 2's values — 3 × grid points; else unused.
 @group(0) @binding(5) var<storage, read_write> first: array<f32>;
 // The accessibility A per pixel.
 @group(0) @binding(6) var<storage, read_write> accessibility_out: array<f32>;

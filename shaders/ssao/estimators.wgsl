@@ -227,7 +227,7 @@ fn pass_2(@builtin(global_invocation_id) id: vec3<u32>) {
     let y = i32(id.y);
     let p = surface_at(x, y);
     if !p.present {
-        store(id, 1.0);
+        first[2u * params.width * params.height + grid_index(id)] = 1.0;
         return;
     }
     let d = directions[pattern_index(x, y)];
@@ -250,7 +250,47 @@ fn pass_2(@builtin(global_invocation_id) id: vec3<u32>) {
     if weights > 0.0 {
         a = clamp(sum / weights, 0.0, 1.0);
     }
-    store(id, a);
+    first[2u * params.width * params.height + grid_index(id)] = a;
+}
+
+// The feature-preserving smoothing (`cpu::smooth`): the mean of `first[source + …]` over the k
+// grid points along `axis` on p's surface; 1 without a surface.
+fn smoothed(id: vec3<u32>, axis: vec2<i32>, source: u32) -> f32 {
+    let x = i32(id.x);
+    let y = i32(id.y);
+    let p = surface_at(x, y);
+    if !p.present {
+        return 1.0;
+    }
+    let half = i32(params.size / 2u);
+    var sum = 0.0;
+    var count = 0.0;
+    for (var t = -half; t <= half; t++) {
+        let q = vec2<i32>(x, y) + t * axis;
+        if same_surface(p, surface_at(q.x, q.y)) {
+            sum += first[source + u32(q.y) * params.width + u32(q.x)];
+            count += 1.0;
+        }
+    }
+    return sum / count;
+}
+
+// Smoothing along x: pass 2's values (first's last third) into first's first third.
+@compute @workgroup_size(16, 16)
+fn smooth_x(@builtin(global_invocation_id) id: vec3<u32>) {
+    init_rays();
+    if in_grid(id) {
+        first[grid_index(id)] = smoothed(id, vec2<i32>(1, 0), 2u * params.width * params.height);
+    }
+}
+
+// Smoothing along y: first's first third into A.
+@compute @workgroup_size(16, 16)
+fn smooth_y(@builtin(global_invocation_id) id: vec3<u32>) {
+    init_rays();
+    if in_grid(id) {
+        store(id, smoothed(id, vec2<i32>(0, 1), 0u));
+    }
 }
 
 // At half resolution: pixel (x, y)'s A from the estimates of the (up to) four nearest grid

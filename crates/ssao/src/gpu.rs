@@ -52,6 +52,8 @@ struct MethodPipelines {
     full: wgpu::ComputePipeline,
     pass_1: wgpu::ComputePipeline,
     pass_2: wgpu::ComputePipeline,
+    smooth_x: wgpu::ComputePipeline,
+    smooth_y: wgpu::ComputePipeline,
     upsample: wgpu::ComputePipeline,
 }
 
@@ -107,6 +109,8 @@ impl SsaoKernels {
                 full: make("full", k <= TILED_KERNEL),
                 pass_1: make("pass_1", false),
                 pass_2: make("pass_2", false),
+                smooth_x: make("smooth_x", false),
+                smooth_y: make("smooth_y", false),
                 upsample: make("upsample", false),
             })
         });
@@ -171,7 +175,7 @@ impl SsaoKernels {
             let bytes = if used { bytes } else { 4 };
             transfer::buffer(device, label, bytes, wgpu::BufferUsages::STORAGE)
         };
-        let first = scratch("ssao pass 1", estimator.separable, points * 8)?;
+        let first = scratch("ssao pass 1", estimator.separable, points * 12)?;
         let coarse = scratch("ssao half resolution", scale == 2, points * 4)?;
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
         let (depth_view, normal_view) = (view(linear_depth), view(normal));
@@ -211,6 +215,8 @@ impl SsaoKernels {
             vec![
                 (name("pass 1"), &pipelines.pass_1, bound.grid),
                 (name("pass 2"), &pipelines.pass_2, bound.grid),
+                (name("smooth x"), &pipelines.smooth_x, bound.grid),
+                (name("smooth y"), &pipelines.smooth_y, bound.grid),
             ]
         } else {
             vec![(name("k×k"), &pipelines.full, bound.grid)]

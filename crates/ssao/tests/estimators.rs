@@ -9,10 +9,18 @@ use ssao::{AoConfig, Estimator, Method, reference};
 const SIZE: (u32, u32) = (96, 72);
 
 fn gbuffer(scene: &Scene, camera: &Camera) -> (gbuffer::GBuffer, gbuffer::Frame) {
-    let g = gbuffer::cpu::rasterize(scene, camera, SIZE.0, SIZE.1)
+    gbuffer_sized(scene, camera, SIZE)
+}
+
+fn gbuffer_sized(
+    scene: &Scene,
+    camera: &Camera,
+    (w, h): (u32, u32),
+) -> (gbuffer::GBuffer, gbuffer::Frame) {
+    let g = gbuffer::cpu::rasterize(scene, camera, w, h)
         .expect("G-buffer")
         .gbuffer;
-    (g, gbuffer::Frame::new(camera, SIZE.0, SIZE.1))
+    (g, gbuffer::Frame::new(camera, w, h))
 }
 
 /// Every method, whole and separable, at full and half resolution.
@@ -134,7 +142,9 @@ fn pass_1d_along_x_is_the_row_of_the_2d_kernel() {
 fn the_separable_approximation_is_close_to_the_2d_kernel_against_ray_traced_ao() {
     let scene = scene::cornell_box();
     let camera = scene.camera_or_framed();
-    let (g, frame) = gbuffer(&scene, &camera);
+    // Twice the other tests' size: the smoothing's k × k box should not span a fifth of the
+    // image.
+    let (g, frame) = gbuffer_sized(&scene, &camera, (2 * SIZE.0, 2 * SIZE.1));
     let bvh = scene::Bvh::build(&scene);
     for (k, radius) in [(11, 0.15f32), (21, 0.25)] {
         let c = config(k, radius);
