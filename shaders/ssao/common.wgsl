@@ -15,7 +15,8 @@ struct Params {
     image_height: u32,
     // Grid point (x, y) is pixel (x, y) · scale (1, or 2 at half resolution).
     scale: u32,
-    pad: u32,
+    // 1: separable, with the smoothing after pass 2.
+    smoothing: u32,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;

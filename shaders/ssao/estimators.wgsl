@@ -227,7 +227,7 @@ fn pass_2(@builtin(global_invocation_id) id: vec3<u32>) {
     let y = i32(id.y);
     let p = surface_at(x, y);
     if !p.present {
-        first[2u * params.width * params.height + grid_index(id)] = 1.0;
+        combined(id, 1.0);
         return;
     }
     let d = directions[pattern_index(x, y)];
@@ -250,7 +250,16 @@ fn pass_2(@builtin(global_invocation_id) id: vec3<u32>) {
     if weights > 0.0 {
         a = clamp(sum / weights, 0.0, 1.0);
     }
-    first[2u * params.width * params.height + grid_index(id)] = a;
+    combined(id, a);
+}
+
+// Pass 2's value: A, or with the smoothing to follow, first's last third.
+fn combined(id: vec3<u32>, a: f32) {
+    if params.smoothing == 1u {
+        first[2u * params.width * params.height + grid_index(id)] = a;
+    } else {
+        store(id, a);
+    }
 }
 
 // The feature-preserving smoothing (`cpu::smooth`): the mean of `first[source + …]` over the k

@@ -68,15 +68,20 @@ struct Report {
     errors: Vec<Error>,
 }
 
-/// Every method, k × k then separable, at full then half resolution.
+/// Every method: k × k, separable and separable without the smoothing, at full then half
+/// resolution (the last one at full resolution only).
 fn estimators() -> Vec<Estimator> {
     Method::ALL
         .into_iter()
         .flat_map(|method| {
-            [false, true].into_iter().flat_map(move |separable| {
-                let e = Estimator::new(method, separable);
-                [e, e.at_half_resolution()]
-            })
+            let (full, separable) = (Estimator::new(method, false), Estimator::new(method, true));
+            [
+                full,
+                full.at_half_resolution(),
+                separable,
+                separable.at_half_resolution(),
+                separable.without_smoothing(),
+            ]
         })
         .collect()
 }
@@ -287,8 +292,13 @@ fn main() -> Result<()> {
                     size: kernel,
                     ao: AoConfig { radius },
                 };
-                for separable in [false, true] {
-                    let estimator = Estimator::new(Method::Filter, separable);
+                let separable = Estimator::new(Method::Filter, true);
+                let variants = [
+                    Estimator::new(Method::Filter, false),
+                    separable,
+                    separable.without_smoothing(),
+                ];
+                for estimator in variants {
                     let time = target.time(&gpu, &kernels, &config, estimator, frames)?;
                     swept.push(Timing {
                         size: format!("{}x{}", size.0, size.1),
@@ -398,7 +408,7 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
     for size in sizes {
         let _ = writeln!(
             md,
-            "### {size}\n\n| k | method | k×k ms | separable ms | separable / k×k | k×k half ms | separable half ms |\n|---:|---|---:|---:|---:|---:|---:|"
+            "### {size}\n\n| k | method | k×k ms | separable ms | separable / k×k | separable unsmoothed ms | k×k half ms | separable half ms |\n|---:|---|---:|---:|---:|---:|---:|---:|"
         );
         for kernel in KERNELS {
             for method in Method::ALL {
@@ -406,15 +416,25 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
                     let name = format!("{}{suffix}", method.name());
                     median(&r.timings, size, kernel, &name)
                 };
-                if let (Some(full), Some(separable), Some(full_half), Some(separable_half)) = (
-                    time(""),
-                    time("-separable"),
-                    time("-half"),
-                    time("-separable-half"),
-                ) {
+                let times = [
+                    "",
+                    "-separable",
+                    "-separable-unsmoothed",
+                    "-half",
+                    "-separable-half",
+                ]
+                .map(time);
+                if let [
+                    Some(full),
+                    Some(separable),
+                    Some(raw),
+                    Some(full_half),
+                    Some(half),
+                ] = times
+                {
                     let _ = writeln!(
                         md,
-                        "| {kernel} | {} | {full:.3} | {separable:.3} | {:.2} | {full_half:.3} | {separable_half:.3} |",
+                        "| {kernel} | {} | {full:.3} | {separable:.3} | {:.2} | {raw:.3} | {full_half:.3} | {half:.3} |",
                         method.name(),
                         separable / full
                     );
@@ -425,21 +445,20 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
     }
     let _ = writeln!(
         md,
-        "### O(k): the filter at {}\n\n![time against k]({stem}.svg)\n\n| k | k×k ms | separable ms |\n|---:|---:|---:|",
+        "### O(k): the filter at {}\n\n![time against k]({stem}.svg)\n\n| k | k×k ms | separable ms | separable unsmoothed ms |\n|---:|---:|---:|---:|",
         r.sweep.first().map_or("", |t| t.size.as_str())
     );
     for kernel in SWEEP {
         let size = r.sweep.first().map_or("", |t| t.size.as_str());
-        if let (Some(full), Some(separable)) = (
-            median(&r.sweep, size, kernel, "filter"),
-            median(&r.sweep, size, kernel, "filter-separable"),
-        ) {
-            let _ = writeln!(md, "| {kernel} | {full:.3} | {separable:.3} |");
+        let times = ["filter", "filter-separable", "filter-separable-unsmoothed"]
+            .map(|e| median(&r.sweep, size, kernel, e));
+        if let [Some(full), Some(separable), Some(raw)] = times {
+            let _ = writeln!(md, "| {kernel} | {full:.3} | {separable:.3} | {raw:.3} |");
         }
     }
     let _ = writeln!(
         md,
-        "\n### Error against ray-traced AO ({REFERENCE_RAYS} rays a pixel), 1024×768\n\nMean absolute error over the surface pixels / mean FLIP of A shown as grey. Radius: the world size of 10 pixels at the scene's median depth. Half resolution: the same k in steps of two pixels (twice the reach).\n\n| scene | k | method | k×k | separable | separable / k×k (MAE) | separable half |\n|---|---:|---|---:|---:|---:|---:|"
+        "\n### Error against ray-traced AO ({REFERENCE_RAYS} rays a pixel), 1024×768\n\nMean absolute error over the surface pixels / mean FLIP of A shown as grey. Radius: the world size of 10 pixels at the scene's median depth. Half resolution: the same k in steps of two pixels (twice the reach).\n\n| scene | k | method | k×k | separable | separable / k×k (MAE) | separable unsmoothed | separable half |\n|---|---:|---|---:|---:|---:|---:|---:|"
     );
     let plain = r
         .errors
@@ -453,10 +472,15 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
                     && s.estimator == format!("{}{suffix}", e.estimator)
             })
         };
-        if let (Some(s), Some(h)) = (find("-separable"), find("-separable-half")) {
+        let found = [
+            find("-separable"),
+            find("-separable-unsmoothed"),
+            find("-separable-half"),
+        ];
+        if let [Some(s), Some(u), Some(h)] = found {
             let _ = writeln!(
                 md,
-                "| {} (r {:.3}) | {} | {} | {:.4} / {:.4} | {:.4} / {:.4} | {:.2} | {:.4} / {:.4} |",
+                "| {} (r {:.3}) | {} | {} | {:.4} / {:.4} | {:.4} / {:.4} | {:.2} | {:.4} / {:.4} | {:.4} / {:.4} |",
                 e.scene,
                 e.radius,
                 e.kernel,
@@ -466,6 +490,8 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
                 s.mae,
                 s.flip,
                 s.mae / e.mae,
+                u.mae,
+                u.flip,
                 h.mae,
                 h.flip
             );
@@ -483,18 +509,22 @@ fn markdown(r: &Report, stem: &str, frames: u32) -> String {
 
 /// Time against kernel size, k × k and separable: the paper's O(k²) against O(k).
 fn sweep_svg(r: &Report) -> String {
-    let series = [("filter", "k×k"), ("filter-separable", "separable")]
-        .into_iter()
-        .map(|(estimator, name)| bench::chart::Series {
-            name: name.into(),
-            points: r
-                .sweep
-                .iter()
-                .filter(|t| t.estimator == estimator)
-                .map(|t| (f64::from(t.kernel), t.time.median_ms))
-                .collect(),
-        })
-        .collect();
+    let series = [
+        ("filter", "k×k"),
+        ("filter-separable", "separable"),
+        ("filter-separable-unsmoothed", "unsmoothed"),
+    ]
+    .into_iter()
+    .map(|(estimator, name)| bench::chart::Series {
+        name: name.into(),
+        points: r
+            .sweep
+            .iter()
+            .filter(|t| t.estimator == estimator)
+            .map(|t| (f64::from(t.kernel), t.time.median_ms))
+            .collect(),
+    })
+    .collect();
     bench::chart::LineChart {
         title: format!(
             "Eq. 7.1's filter, {} ({}): time against kernel side k",

@@ -38,9 +38,9 @@
 //! interleaved sampling with the pattern size equal to the kernel size (§7.2.2): the pixel at
 //! (x mod k, y mod k) of each k × k tile takes angle π·(x mod k + k·(y mod k) + ½)/k², so the
 //! lines of neighbouring pixels cover all directions of the half circle and pass 2 combines
-//! them. Finally the feature-preserving smoothing (after Bavoil et al. 2008): the mean over
-//! the k pixels along x, then along y, that lie on p's surface — a k × k cross-bilateral box
-//! that evens out the tile's pattern. Cost: 2k − 1 occlusion samples and 2k smoothing reads a
+//! them. Finally (unless left out) the feature-preserving smoothing (after Bavoil et al.
+//! 2008): the mean over the k pixels along x, then along y, that lie on p's surface — a k × k
+//! cross-bilateral box that evens out the tile's pattern. Cost: 2k − 1 occlusion samples and 2k smoothing reads a
 //! pixel instead of k² − 1 samples. Every estimate is clamped to [0, 1] before smoothing.
 //!
 //! **GTAO in pass 2** divides the sum of the slices' visible arcs by the sum of their open
@@ -521,6 +521,9 @@ fn estimate_grid(s: &Surfaces, config: &KernelConfig, estimator: Estimator) -> I
             1.0
         }
     });
+    if !estimator.smoothing {
+        return combined;
+    }
     let across = smooth(s, &combined, half, (1, 0));
     smooth(s, &across, half, (0, 1))
 }

@@ -28,7 +28,7 @@ struct Params {
     image_width: u32,
     image_height: u32,
     scale: u32,
-    pad: u32,
+    smoothing: u32,
 }
 
 /// `common.wgsl`'s bindings: frame, params; linear depth, normals; frame directions, pass 1,
@@ -161,7 +161,7 @@ impl SsaoKernels {
                 image_width: size.0,
                 image_height: size.1,
                 scale,
-                pad: 0,
+                smoothing: u32::from(estimator.separable && estimator.smoothing),
             }),
             wgpu::BufferUsages::UNIFORM,
         )?;
@@ -218,6 +218,9 @@ impl SsaoKernels {
                 (name("smooth x"), &pipelines.smooth_x, bound.grid),
                 (name("smooth y"), &pipelines.smooth_y, bound.grid),
             ]
+            .into_iter()
+            .take(if bound.estimator.smoothing { 4 } else { 2 })
+            .collect()
         } else {
             vec![(name("k×k"), &pipelines.full, bound.grid)]
         };

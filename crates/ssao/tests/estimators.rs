@@ -23,13 +23,17 @@ fn gbuffer_sized(
     (g, gbuffer::Frame::new(camera, w, h))
 }
 
-/// Every method, whole and separable, at full and half resolution.
+/// Every method, whole, separable and separable without the smoothing, at full and half
+/// resolution.
 fn estimators() -> impl Iterator<Item = Estimator> {
     Method::ALL.into_iter().flat_map(|method| {
-        [false, true].into_iter().flat_map(move |separable| {
-            let e = Estimator::new(method, separable);
-            [e, e.at_half_resolution()]
-        })
+        [
+            Estimator::new(method, false),
+            Estimator::new(method, true),
+            Estimator::new(method, true).without_smoothing(),
+        ]
+        .into_iter()
+        .flat_map(|e| [e, e.at_half_resolution()])
     })
 }
 
@@ -310,5 +314,17 @@ fn a_moving_camera_changes_a_no_more_than_the_geometry_does() {
             moving <= 2.0 * truth_change + 0.002,
             "{e}: {moving} vs {truth_change}"
         );
+    }
+}
+
+/// Estimator names round-trip, and a name that is not `METHOD[-separable[-unsmoothed]][-half]`
+/// is refused.
+#[test]
+fn estimator_names_round_trip() {
+    for e in estimators() {
+        assert_eq!(e.to_string().parse::<Estimator>().expect("name"), e);
+    }
+    for bad in ["filter-unsmoothed", "separable", "gtao-half-separable", ""] {
+        assert!(bad.parse::<Estimator>().is_err(), "{bad}");
     }
 }
