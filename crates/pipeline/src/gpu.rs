@@ -17,7 +17,7 @@ use wgpu::util::DeviceExt;
 
 use crate::skinning::{BoundSkinning, Skinning};
 use crate::subdivision::{SubdivisionPlan, SubdivisionStage};
-use crate::supersampling::Supersampling;
+use crate::supersampling::{Supersampling, SupersamplingKernels};
 use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
 use instant_radiosity::{
     IndirectConfig,
@@ -394,8 +394,10 @@ impl GpuRenderer {
             bound.set_camera(queue, camera);
         }
         self.shading_bound = bound;
-        if let Some(config) = self.supersampling.take().map(|s| *s.config()) {
-            self.supersampling = Some(self.new_supersampling(device, queue, &config)?);
+        if let Some(s) = self.supersampling.take() {
+            let config = *s.config();
+            let kernels = Some(s.into_kernels());
+            self.supersampling = Some(self.new_supersampling(device, queue, &config, kernels)?);
         }
         if let Some(s) = self.ssao.take() {
             let kernels = Some(s.kernels);
@@ -485,17 +487,24 @@ impl GpuRenderer {
         }
     }
 
-    /// The supersampling stage for `config` at the frame size, bound to the current lights,
-    /// camera (cascades set with it) and shadows by the caller.
+    /// The supersampling stage for `config` at the frame size, with `kernels` (compiled here if
+    /// `None`), bound to the current lights, camera (cascades set with it) and shadows by the
+    /// caller.
     fn new_supersampling(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         config: &SsaaConfig,
+        kernels: Option<SupersamplingKernels>,
     ) -> Result<Supersampling, RenderError> {
+        let kernels = match kernels {
+            Some(k) => k,
+            None => SupersamplingKernels::new(device)?,
+        };
         let mut s = Supersampling::new(
             device,
             queue,
+            kernels,
             &self.gbuffer_pass,
             &self.shading,
             config,
@@ -525,7 +534,7 @@ impl GpuRenderer {
         config: Option<&SsaaConfig>,
     ) -> Result<(), RenderError> {
         self.supersampling = match config {
-            Some(config) => Some(self.new_supersampling(device, queue, config)?),
+            Some(config) => Some(self.new_supersampling(device, queue, config, None)?),
             None => None,
         };
         self.bind_shadow_lookup(device)?;

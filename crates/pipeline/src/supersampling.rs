@@ -98,13 +98,36 @@ const STORE_FIRST_BINDINGS: [(u32, Binding); 3] = [
     (15, Binding::TextureUnfilterable),
 ];
 
-/// The entry points of `supersampling.wgsl`.
-struct Pipelines {
+/// The entry points of `supersampling.wgsl` and their layouts: compiled once per renderer
+/// (a resize or new lights rebuild the stage's resources, not these).
+pub(crate) struct SupersamplingKernels {
+    layout: Layout,
+    store_layout: Layout,
     store_first: wgpu::ComputePipeline,
     mask_rest: wgpu::ComputePipeline,
     mask_full: wgpu::ComputePipeline,
     resolve_adaptive: wgpu::ComputePipeline,
     resolve_full: wgpu::ComputePipeline,
+}
+
+impl SupersamplingKernels {
+    /// Compiles the entry points.
+    pub(crate) fn new(device: &wgpu::Device) -> Result<Self, RenderError> {
+        let module = crate::SHADERS.module(device, "supersampling.wgsl")?;
+        let layout = Layout::compute_numbered(device, "supersampling", &BINDINGS);
+        let store_layout =
+            Layout::compute_numbered(device, "supersampling S", &STORE_FIRST_BINDINGS);
+        let make = |entry: &str| kernel::pipeline(device, &module, entry, &[&layout], &[]);
+        Ok(Self {
+            store_first: kernel::pipeline(device, &module, "store_first", &[&store_layout], &[]),
+            mask_rest: make("mask_rest"),
+            mask_full: make("mask_full"),
+            resolve_adaptive: make("resolve_adaptive"),
+            resolve_full: make("resolve_full"),
+            layout,
+            store_layout,
+        })
+    }
 }
 
 /// The supersampling stage of one frame size: the supersampled G-buffer and its frame, the
@@ -120,18 +143,18 @@ pub(crate) struct Supersampling {
     shading: BoundShading,
     evaluation: Ssaa,
     params: wgpu::Buffer,
-    layout: Layout,
-    store_layout: Layout,
-    pipelines: Pipelines,
+    kernels: SupersamplingKernels,
     groups: Option<[wgpu::BindGroup; 2]>,
 }
 
 impl Supersampling {
-    /// Builds the stage for `config` at `size` pixels, the light accumulation `shading`
-    /// bound to the samples for `lights` (the caller then binds the shadow lookup).
+    /// Builds the stage for `config` at `size` pixels with `kernels`, the light accumulation
+    /// `shading` bound to the samples for `lights` (the caller then binds the shadow lookup).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
+        kernels: SupersamplingKernels,
         gbuffer_pass: &GBufferPass,
         shading: &LightShading,
         config: &SsaaConfig,
@@ -190,18 +213,6 @@ impl Supersampling {
             bytemuck::bytes_of(&Params::new(m, size)),
             wgpu::BufferUsages::UNIFORM,
         )?;
-        let module = crate::SHADERS.module(device, "supersampling.wgsl")?;
-        let layout = Layout::compute_numbered(device, "supersampling", &BINDINGS);
-        let store_layout =
-            Layout::compute_numbered(device, "supersampling S", &STORE_FIRST_BINDINGS);
-        let make = |entry: &str| kernel::pipeline(device, &module, entry, &[&layout], &[]);
-        let pipelines = Pipelines {
-            store_first: kernel::pipeline(device, &module, "store_first", &[&store_layout], &[]),
-            mask_rest: make("mask_rest"),
-            mask_full: make("mask_full"),
-            resolve_adaptive: make("resolve_adaptive"),
-            resolve_full: make("resolve_full"),
-        };
         Ok(Self {
             config: *config,
             size,
@@ -212,9 +223,7 @@ impl Supersampling {
             shading: bound,
             evaluation,
             params,
-            layout,
-            store_layout,
-            pipelines,
+            kernels,
             groups: None,
         })
     }
@@ -222,6 +231,11 @@ impl Supersampling {
     /// The configuration.
     pub(crate) fn config(&self) -> &SsaaConfig {
         &self.config
+    }
+
+    /// The compiled kernels, for the stage that replaces this one.
+    pub(crate) fn into_kernels(self) -> SupersamplingKernels {
+        self.kernels
     }
 
     /// Full supersampling: every pixel takes `m²` samples (`min_samples` = `m²`).
@@ -283,8 +297,8 @@ impl Supersampling {
         let radiance = view(radiance);
         resources.push(wgpu::BindingResource::TextureView(&radiance));
         resources.push(accessibility.as_entire_binding());
-        let group = self.layout.bind(device, &resources);
-        let store = self.store_layout.bind(
+        let group = self.kernels.layout.bind(device, &resources);
+        let store = self.kernels.store_layout.bind(
             device,
             &[
                 self.params.as_entire_binding(),
@@ -338,7 +352,7 @@ impl Supersampling {
         let Some(groups) = &self.groups else {
             return;
         };
-        let store = std::ptr::eq(pipeline, &self.pipelines.store_first);
+        let store = std::ptr::eq(pipeline, &self.kernels.store_first);
         let group = &groups[usize::from(store)];
         Passes::one(
             name,
@@ -358,7 +372,7 @@ impl Supersampling {
         shading: &LightShading,
         timer: &PassTimer,
     ) {
-        let p = &self.pipelines;
+        let p = &self.kernels;
         self.dispatch(
             encoder,
             &p.store_first,

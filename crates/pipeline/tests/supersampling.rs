@@ -261,3 +261,32 @@ fn supersampling_approaches_the_path_traced_pixel_integral() {
     );
     assert!(adaptive.rms < 0.8 * one.rms, "{adaptive:?} vs {one:?}");
 }
+
+/// A resize rebuilds the supersampling stage's targets around its compiled kernels: the
+/// resized renderer's frame equals a new renderer's at that size, adaptive sample counts too.
+#[test]
+fn a_resized_renderer_supersamples_as_a_new_one() {
+    let Some(gpu) = gpu::test_device(&pipeline::device_needs()) else {
+        return;
+    };
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let scene = scenes::cesium_room();
+    let textures = gbuffer::TextureOptions { max_anisotropy: 1 };
+    let camera = scene.camera_or_framed();
+    let config = adaptive(2);
+    let make = |size: (u32, u32)| {
+        let mut r =
+            GpuRenderer::new_with(d, q, &scene, &lights(), size, &textures).expect("renderer");
+        r.set_ssaa(d, q, Some(&config)).expect("ssaa");
+        r
+    };
+    let mut resized = make((32, 24));
+    resized.render(d, q, &camera, Vec3::splat(0.1)).expect("frame");
+    resized.resize(d, q, SIZE.0, SIZE.1).expect("resize");
+    let got = resized.render(d, q, &camera, Vec3::splat(0.1)).expect("frame");
+    let mut fresh = make(SIZE);
+    let expected = fresh.render(d, q, &camera, Vec3::splat(0.1)).expect("frame");
+    assert_eq!(got.image.pixels(), expected.image.pixels());
+    let counts = |r: &GpuRenderer| r.ssaa_counts(d, q).expect("counts").expect("adaptive");
+    assert_eq!(counts(&resized).pixels(), counts(&fresh).pixels());
+}

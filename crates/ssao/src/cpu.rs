@@ -34,14 +34,19 @@
 //! **The separable approximation.** Pass 1 evaluates the method along one line through p —
 //! the pixel's direction u(p) — into the line's A₁(p). Pass 2 averages A₁ over the k pixels
 //! p + t·v along the perpendicular v(p) that lie on p's surface (depth within 5 % and normals
-//! within 25°: the feature-preserving smoothing). The frame (u, v) turns per pixel by
-//! interleaved sampling with the pattern size equal to the kernel size (§7.2.2): the pixel at
+//! within 25°: the same-surface test). The frame (u, v) turns per pixel by interleaved
+//! sampling with the pattern size equal to the kernel size (§7.2.2): the pixel at
 //! (x mod k, y mod k) of each k × k tile takes angle π·(x mod k + k·(y mod k) + ½)/k², so the
 //! lines of neighbouring pixels cover all directions of the half circle and pass 2 combines
 //! them. Finally (unless left out) the feature-preserving smoothing (after Bavoil et al.
-//! 2008): the mean over the k pixels along x, then along y, that lie on p's surface — a k × k
-//! cross-bilateral box that evens out the tile's pattern. Cost: 2k − 1 occlusion samples and 2k smoothing reads a
-//! pixel instead of k² − 1 samples. Every estimate is clamped to [0, 1] before smoothing.
+//! 2008): the mean over the k pixels along x, then along y, that pass the same-surface test —
+//! a k × k cross-bilateral box that evens out the tile's pattern. Cost: 2k − 1 occlusion
+//! samples and 2k smoothing reads a pixel instead of k² − 1 samples. Every estimate is clamped
+//! to [0, 1] before smoothing.
+//!
+//! **Half resolution** runs all of this on the grid of pixels (2x, 2y) — k grid points are 2k
+//! pixels — and gives each pixel the bilinear mean of the four nearest grid estimates that pass
+//! the same-surface test (the nearest in depth if none does).
 //!
 //! **GTAO in pass 2** divides the sum of the slices' visible arcs by the sum of their open
 //! arcs (|projected normal|·(cos γ + γ·sin γ)): a single slice of an open surface seen at an
@@ -400,7 +405,7 @@ fn grid(s: &Surfaces) -> (u32, u32) {
     (w as u32, h as u32)
 }
 
-/// Whether q lies on p's surface (the feature-preserving weight of pass 2 and of the
+/// Whether q lies on p's surface (the same-surface test of pass 2, the smoothing and the
 /// upsampling).
 fn same_surface(p: &Surface, q: &Surface) -> bool {
     (q.depth - p.depth).abs() <= 0.05 * p.depth && p.normal.dot(q.normal) >= 0.9

@@ -109,8 +109,9 @@ impl Method {
 }
 
 /// A method and how it is evaluated: over the whole kernel, or separably (§7.2.2: one line
-/// along the pixel's interleaved direction, then the feature-preserving pass along the
-/// perpendicular, then — unless left out — the smoothing); at full or half resolution.
+/// along the pixel's interleaved direction, then the same-surface average along the
+/// perpendicular, then — unless left out — the feature-preserving smoothing); at full or half
+/// resolution.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Estimator {
     /// What is estimated.
