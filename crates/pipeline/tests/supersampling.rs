@@ -281,11 +281,17 @@ fn a_resized_renderer_supersamples_as_a_new_one() {
         r
     };
     let mut resized = make((32, 24));
-    resized.render(d, q, &camera, Vec3::splat(0.1)).expect("frame");
+    resized
+        .render(d, q, &camera, Vec3::splat(0.1))
+        .expect("frame");
     resized.resize(d, q, SIZE.0, SIZE.1).expect("resize");
-    let got = resized.render(d, q, &camera, Vec3::splat(0.1)).expect("frame");
+    let got = resized
+        .render(d, q, &camera, Vec3::splat(0.1))
+        .expect("frame");
     let mut fresh = make(SIZE);
-    let expected = fresh.render(d, q, &camera, Vec3::splat(0.1)).expect("frame");
+    let expected = fresh
+        .render(d, q, &camera, Vec3::splat(0.1))
+        .expect("frame");
     assert_eq!(got.image.pixels(), expected.image.pixels());
     let counts = |r: &GpuRenderer| r.ssaa_counts(d, q).expect("counts").expect("adaptive");
     assert_eq!(counts(&resized).pixels(), counts(&fresh).pixels());
