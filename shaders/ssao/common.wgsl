@@ -123,39 +123,31 @@ fn depth_at(x: i32, y: i32) -> f32 {
     return pixel_depth(grid_pixel(x, y));
 }
 
-
 fn ray_at(x: i32, y: i32) -> vec3<f32> {
     return pixel_ray(grid_pixel(x, y));
 }
 
-// The surface at a pixel, from the textures.
-fn pixel_surface(pixel: vec2<i32>) -> Surface {
+// The surface at a pixel whose linear depth is `depth` (0: none).
+fn surface_of(pixel: vec2<i32>, depth: f32) -> Surface {
     var s: Surface;
-    s.depth = pixel_depth(pixel);
-    s.present = s.depth > 0.0;
+    s.depth = depth;
+    s.present = depth > 0.0;
     if s.present {
         s.ray = pixel_ray(pixel);
-        s.position = frame.eye.xyz + s.ray * s.depth;
+        s.position = frame.eye.xyz + s.ray * depth;
         s.normal = pixel_normal(pixel);
     }
     return s;
 }
 
-// The surface at grid point (x, y).
+// The surface at a pixel, from the textures.
+fn pixel_surface(pixel: vec2<i32>) -> Surface {
+    return surface_of(pixel, pixel_depth(pixel));
+}
+
+// The surface at grid point (x, y) (its depth from the tile when tiled).
 fn surface_at(x: i32, y: i32) -> Surface {
-    if !TILED {
-        return pixel_surface(grid_pixel(x, y));
-    }
-    var s: Surface;
-    s.depth = depth_at(x, y);
-    s.present = s.depth > 0.0;
-    if !s.present {
-        return s;
-    }
-    s.ray = ray_at(x, y);
-    s.position = frame.eye.xyz + s.ray * s.depth;
-    s.normal = pixel_normal(grid_pixel(x, y));
-    return s;
+    return surface_of(grid_pixel(x, y), depth_at(x, y));
 }
 
 // The pixel t steps along `direction` from (x, y), rounded half up.
