@@ -1,7 +1,8 @@
 //! Project tasks.
 //!
 //! - `cargo xtask test [ARGS]`: makes sure a Vulkan driver exists (installs Mesa's software
-//!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found), then runs the
+//!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found) and Xvfb (for
+//!   the viewer's tests, with the X libraries winit loads), then runs the
 //!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`), runs every
 //!   benchmark once (`cargo test --bench "*"`: the GPU benches' run-once mode at reduced sizes on
 //!   any adapter, criterion's test mode), builds every example, and runs every `*-embed`
@@ -76,6 +77,43 @@ fn ensure_vulkan() -> Result<()> {
     eprintln!(
         "xtask: no Vulkan driver found; installing Mesa's software Vulkan (mesa-vulkan-drivers) with apt"
     );
+    apt_install(&["mesa-vulkan-drivers", "libvulkan1"])?;
+    if !vulkan_driver_present() {
+        bail!("mesa-vulkan-drivers installed but no Vulkan ICD manifest found");
+    }
+    Ok(())
+}
+
+/// Whether `program` is on the PATH.
+fn on_path(program: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
+}
+
+/// The virtual X display the viewer's tests start (`Xvfb`) and the X client libraries winit
+/// loads at run time.
+fn ensure_xvfb() -> Result<()> {
+    if on_path("Xvfb") {
+        return Ok(());
+    }
+    eprintln!("xtask: no Xvfb found; installing it and the X libraries winit loads with apt");
+    apt_install(&[
+        "xvfb",
+        "libx11-6",
+        "libx11-xcb1",
+        "libxcursor1",
+        "libxrandr2",
+        "libxi6",
+        "libxkbcommon-x11-0",
+    ])?;
+    if !on_path("Xvfb") {
+        bail!("xvfb installed but no Xvfb on the PATH");
+    }
+    Ok(())
+}
+
+/// `apt-get install` of `packages` (through sudo when not root).
+fn apt_install(packages: &[&str]) -> Result<()> {
     let root = Command::new("id")
         .arg("-u")
         .output()
@@ -93,18 +131,7 @@ fn ensure_vulkan() -> Result<()> {
         c
     };
     run(&mut apt(&["update", "-qq"]))?;
-    run(&mut apt(&[
-        "install",
-        "-y",
-        "-qq",
-        "--no-install-recommends",
-        "mesa-vulkan-drivers",
-        "libvulkan1",
-    ]))?;
-    if !vulkan_driver_present() {
-        bail!("mesa-vulkan-drivers installed but no Vulkan ICD manifest found");
-    }
-    Ok(())
+    run(apt(&["install", "-y", "-qq", "--no-install-recommends"]).args(packages))
 }
 
 fn cargo() -> Command {
@@ -120,6 +147,7 @@ fn main() -> Result<()> {
     match task.as_str() {
         "test" => {
             ensure_vulkan()?;
+            ensure_xvfb()?;
             run(cargo()
                 .args(["test", "--workspace", "--release"])
                 .args(&rest))?;

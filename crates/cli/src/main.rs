@@ -18,6 +18,8 @@ use interleave::{Block, Blur, BlurVariant, Pattern, SplitVariant};
 use pipeline::{DEFAULT_AMBIENT, PassTiming, Rendered, sequence};
 use scene::{Light, Scene};
 
+mod view;
+
 /// Deferred shading of point, spot, hemispherical and directional lights, with optional
 /// instant-radiosity indirect light shaded by interleaved sampling.
 ///
@@ -982,7 +984,12 @@ fn main() -> Result<()> {
 
 fn run() -> Result<()> {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let args = Args::parse_from(with_recipe(std::env::args_os().collect())?);
+    let mut argv: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    if argv.get(1).is_some_and(|a| a == "view") {
+        argv.remove(1);
+        return view::run(argv);
+    }
+    let args = Args::parse_from(with_recipe(argv)?);
     if let Some(Command::Subdivide {
         input,
         level,
@@ -993,203 +1000,18 @@ fn run() -> Result<()> {
     {
         return subdivide_command(input, *level, *limit, *cpu, output);
     }
-    let mut scene = load_scene(&args)?;
-    if args.procedural_materials {
-        scene::dress_procedurally(&mut scene);
+    let setup = prepare(&args)?;
+    if let Some(spp) = args.reference {
+        let drawn = drawn(setup.plan.as_ref(), &setup.scene);
+        return render_reference(&args, &drawn, setup.camera, &setup.reference_lights, spp);
     }
     let (width, height) = args.size;
-
-    let mut camera = match (&scene.camera, &args.scene) {
-        (None, Some(path)) => {
-            scene::preset_view(path, &scene).unwrap_or_else(|| scene.camera_or_framed())
-        }
-        _ => scene.camera_or_framed(),
-    };
-    if let Some(eye) = args.eye {
-        camera.eye = eye;
-    }
-    if let Some(target) = args.target {
-        camera.target = target;
-    }
-    if let Some(fov) = args.fov {
-        camera.fov_y = fov.to_radians();
-    }
-    if args.eye.is_some() || args.target.is_some() {
-        camera.fit_planes(scene.bounds());
-        // Looking straight up or down: the default +Y up is along the view, so take −Z.
-        let view = (camera.target - camera.eye).normalize_or_zero();
-        if view.cross(camera.up.normalize_or_zero()).length() < 1e-3 {
-            camera.up = Vec3::NEG_Z;
-        }
-    }
-    let camera_source = if args.eye.is_some() || args.target.is_some() || args.fov.is_some() {
-        "the camera of --eye/--target/--fov"
-    } else if scene.camera.is_some() {
-        "the scene file's camera"
-    } else {
-        "the camera framing the scene"
-    };
-    gbuffer::validate_camera(&camera).context(camera_source)?;
-    // Smooth subdivision (uniform or adaptive) runs every frame from the (animated) control
-    // meshes; flat or level-coloured subdivision is evaluated once at load.
-    let per_frame = !args.subdiv_flat && !args.subdiv_show_levels;
-    let tessellation = match args.subdiv_pixels {
-        Some(target_pixels) => pipeline::subdivision::Tessellation::Adaptive { target_pixels },
-        None => pipeline::subdivision::Tessellation::Uniform,
-    };
-    let plan = match args.subdiv {
-        Some(level) if per_frame => {
-            let meshes: Vec<usize> = match &scene.rig {
-                Some(rig) => {
-                    let mut moved: Vec<usize> =
-                        rig.deformers.iter().map(|d| d.mesh as usize).collect();
-                    moved.sort_unstable();
-                    moved.dedup();
-                    moved
-                }
-                None => (0..scene.meshes.len()).collect(),
-            };
-            let (prepared, plan) = pipeline::subdivision::prepare(
-                &scene,
-                &meshes,
-                (level, tessellation),
-                bft_tables()?,
-            )
-            .with_context(|| format!("--subdiv {level}"))?;
-            scene = prepared;
-            Some(plan)
-        }
-        Some(level) => {
-            if scene.rig.take().is_some() {
-                eprintln!(
-                    "note: --subdiv-flat and --subdiv-show-levels are evaluated once at load: the scene's animation is dropped"
-                );
-            }
-            subdivide_scene(&mut scene, &args, level, &camera)?;
-            None
-        }
-        None => None,
-    };
-    let clip = animation_clip(&args, &scene)?;
-    // The scene at the single frame's time, or at the sequence's start: what the structures
-    // built on the CPU (VPLs, BVHs, surfels) see.
-    if let Some(rig) = &scene.rig {
-        let t = clip.map_or(0.0, |c| sequence::looped(args.time, rig.clips[c].duration));
-        rig.apply(&rig.pose(clip, t), &mut scene.meshes);
-    }
-    if let Some(plan) = &plan {
-        plan.refine_cpu(&mut scene, &camera, args.size)?;
-    }
-    let scene = scene;
-    // What is drawn of it (without the subdivided control meshes), and what the CPU traces VPLs
-    // and samples surfels on (with the control meshes instead of their subdivision surfaces).
-    let drawn_scene = drawn(plan.as_ref(), &scene);
-    let proxy_scene = proxy(plan.as_ref(), &scene);
-    let own_lights = args.lights.is_none() && !scene.lights.is_empty();
-    let (mut lights, emissive_photons, lit_by) = match args.lights {
-        Some(n) => (
-            scene::scatter_point_lights(scene.bounds(), n, 1),
-            false,
-            "scattered point lights",
-        ),
-        None => vpl::primary_lights_sampled(&scene, args.area_samples),
-    };
-    let mut photon_lights = vpl::photon_lights(&lights, emissive_photons).to_vec();
-    photon_lights.extend(args.extra_lights.iter().copied());
-    lights.extend(args.extra_lights.iter().copied());
-    let shading = pipeline::ShadingConfig {
-        method: args.shading,
-        tile_size: args.tile,
-    };
-    shading.validate()?;
-    let indirect = match args.vpls {
-        Some(count) => {
-            let config = indirect_config(&args, &scene)?;
-            let subsets = config.subsets();
-            let vpls = vpl::VplConfig {
-                count: vpl::per_subset(count, subsets) as usize * subsets as usize,
-                subsets,
-                seed: args.seed,
-                emissive: emissive_photons,
-                bounces: args.vpl_bounces,
-            };
-            let set = vpl::generate(
-                &proxy_scene,
-                &scene::Bvh::build(&proxy_scene),
-                &photon_lights,
-                &vpls,
-            )?;
-            Some((config, set, vpls))
-        }
-        None => None,
-    };
-    let default_ambient = if indirect.is_some() {
-        Vec3::ZERO
-    } else {
-        DEFAULT_AMBIENT
-    };
-    let mut ambient = args.ambient.unwrap_or(default_ambient);
-    let direct_lights = if args.indirect_only {
-        if indirect.is_none() {
-            bail!("--indirect-only needs --vpls N");
-        }
-        ambient = Vec3::ZERO;
-        Vec::new()
-    } else {
-        lights.clone()
-    };
-    let all_direct = direct_lights.len();
-    let direct_lights: Vec<Light> = if args.frustum_cull {
-        let aspect = width as f32 / height as f32;
-        let kept = tiled_shading::frustum_cull(
-            &camera,
-            aspect,
-            &pipeline::validate_lights(&direct_lights)?,
-        );
-        kept.iter().map(|&i| direct_lights[i as usize]).collect()
-    } else {
-        direct_lights
-    };
-
-    if let Some(spp) = args.reference {
-        // The true emitters, not the hemispherical stand-ins the rasteriser lights with.
-        let mut reference_lights = if emissive_photons {
-            scene.lights.clone()
-        } else {
-            lights.clone()
-        };
-        if emissive_photons {
-            reference_lights.extend(args.extra_lights.iter().copied());
-        }
-        return render_reference(&args, &drawn_scene, camera, &reference_lights, spp);
-    }
     if args.ssao.is_some() && args.cpu {
         bail!("--ssao runs on the GPU only (the CPU frame has no ambient occlusion; drop --cpu)");
     }
     if args.ssaa.is_some() && args.cpu {
         bail!("--ssaa runs on the GPU only (the CPU frame has no supersampling; drop --cpu)");
     }
-    let vpl_shadows = match (args.vpl_shadows, args.cpu) {
-        (ShadowMode::Auto, false) => Some(VplShadows::ManyLod),
-        (ShadowMode::Auto, true) => {
-            if indirect.is_some() {
-                eprintln!("note: the CPU path has no VPL visibility: VPLs light through walls");
-            }
-            None
-        }
-        (ShadowMode::None, _) => None,
-        (mode, cpu) => {
-            if cpu || indirect.is_none() {
-                bail!("--vpl-shadows needs --vpls N and runs on the GPU only (no --cpu)");
-            }
-            Some(match mode {
-                ShadowMode::Ism => VplShadows::Ism,
-                ShadowMode::Ssm => VplShadows::Rasterised,
-                ShadowMode::Rays => VplShadows::Rays,
-                _ => VplShadows::ManyLod,
-            })
-        }
-    };
     if args.manylod_shadows.is_some() && args.cpu {
         bail!("--manylod-shadows runs on the GPU only (no --cpu)");
     }
@@ -1199,12 +1021,6 @@ fn run() -> Result<()> {
     if args.near_field && args.cpu {
         bail!("--near-field runs on the GPU only (no --cpu)");
     }
-    let shadow_config = args
-        .shadows
-        .map(|resolution| tiled_shading::shadows::ShadowMapConfig {
-            resolution,
-            ..Default::default()
-        });
     let gpu = if args.cpu {
         None
     } else {
@@ -1215,26 +1031,6 @@ fn run() -> Result<()> {
                 None
             }
         }
-    };
-    let setup = Setup {
-        scene: &scene,
-        plan: plan.as_ref(),
-        camera,
-        lights: direct_lights,
-        photon_lights,
-        all_direct,
-        lit_by,
-        shading,
-        indirect,
-        ambient,
-        output: output_transform(&args)?,
-        shadow_config,
-        vpl_shadows,
-        clip,
-        own_lights: (
-            own_lights && !args.frustum_cull && !args.indirect_only,
-            own_lights && !emissive_photons,
-        ),
     };
     let frozen = setup.indirect.is_some()
         && setup
@@ -1328,11 +1124,22 @@ fn run() -> Result<()> {
                 print_setup(&args, &setup, device);
                 return cpu_sequence(&args, &setup, seq);
             }
-            let (rendered, stages) =
-                cpu_frame(&args, &setup, (&scene, &setup.lights), &setup.camera, None)?;
+            let (rendered, stages) = cpu_frame(
+                &args,
+                &setup,
+                (&setup.scene, &setup.lights),
+                &setup.camera,
+                None,
+            )?;
             if args.heatmap {
                 let camera = &setup.camera;
-                let gb = gbuffer::cpu::rasterize(&drawn_scene, camera, width, height)?.gbuffer;
+                let gb = gbuffer::cpu::rasterize(
+                    &drawn(setup.plan.as_ref(), &setup.scene),
+                    camera,
+                    width,
+                    height,
+                )?
+                .gbuffer;
                 let frame = gbuffer::Frame::new(camera, width, height);
                 let lights = pipeline::validate_lights(&setup.lights)?;
                 let shaded =
@@ -1341,7 +1148,14 @@ fn run() -> Result<()> {
             }
             let gbuffer = args
                 .dump_stages
-                .then(|| gbuffer::cpu::rasterize(&drawn_scene, &setup.camera, width, height))
+                .then(|| {
+                    gbuffer::cpu::rasterize(
+                        &drawn(setup.plan.as_ref(), &setup.scene),
+                        &setup.camera,
+                        width,
+                        height,
+                    )
+                })
                 .transpose()?
                 .map(|r| r.gbuffer);
             let display = setup.output.apply(&rendered.image);
@@ -1367,14 +1181,251 @@ fn run() -> Result<()> {
     Ok(())
 }
 
+/// `camera` moved to `eye`, looking at `target`, with a vertical field of view of `fov`
+/// degrees, where given (`--eye`, `--target`, `--fov`): its depth range fitted to `bounds`
+/// when it moved.
+fn aimed(
+    mut camera: scene::Camera,
+    eye: Option<Vec3>,
+    target: Option<Vec3>,
+    fov: Option<f32>,
+    bounds: scene::Aabb,
+) -> scene::Camera {
+    if let Some(eye) = eye {
+        camera.eye = eye;
+    }
+    if let Some(target) = target {
+        camera.target = target;
+    }
+    if let Some(fov) = fov {
+        camera.fov_y = fov.to_radians();
+    }
+    if eye.is_some() || target.is_some() {
+        camera.fit_planes(bounds);
+        // Looking straight up or down: the default +Y up is along the view, so take −Z.
+        let view = (camera.target - camera.eye).normalize_or_zero();
+        if view.cross(camera.up.normalize_or_zero()).length() < 1e-3 {
+            camera.up = Vec3::NEG_Z;
+        }
+    }
+    camera
+}
+
+/// Everything a render needs that is not the device: the scene loaded and posed at the first
+/// frame, the camera, lights, VPLs, shading and shadow settings of `args` (checked).
+fn prepare(args: &Args) -> Result<Setup> {
+    let mut scene = load_scene(args)?;
+    if args.procedural_materials {
+        scene::dress_procedurally(&mut scene);
+    }
+    let (width, height) = args.size;
+
+    let mut camera = match (&scene.camera, &args.scene) {
+        (None, Some(path)) => {
+            scene::preset_view(path, &scene).unwrap_or_else(|| scene.camera_or_framed())
+        }
+        _ => scene.camera_or_framed(),
+    };
+    camera = aimed(camera, args.eye, args.target, args.fov, scene.bounds());
+    let camera_source = if args.eye.is_some() || args.target.is_some() || args.fov.is_some() {
+        "the camera of --eye/--target/--fov"
+    } else if scene.camera.is_some() {
+        "the scene file's camera"
+    } else {
+        "the camera framing the scene"
+    };
+    gbuffer::validate_camera(&camera).context(camera_source)?;
+    // Smooth subdivision (uniform or adaptive) runs every frame from the (animated) control
+    // meshes; flat or level-coloured subdivision is evaluated once at load.
+    let per_frame = !args.subdiv_flat && !args.subdiv_show_levels;
+    let tessellation = match args.subdiv_pixels {
+        Some(target_pixels) => pipeline::subdivision::Tessellation::Adaptive { target_pixels },
+        None => pipeline::subdivision::Tessellation::Uniform,
+    };
+    let plan = match args.subdiv {
+        Some(level) if per_frame => {
+            let meshes: Vec<usize> = match &scene.rig {
+                Some(rig) => {
+                    let mut moved: Vec<usize> =
+                        rig.deformers.iter().map(|d| d.mesh as usize).collect();
+                    moved.sort_unstable();
+                    moved.dedup();
+                    moved
+                }
+                None => (0..scene.meshes.len()).collect(),
+            };
+            let (prepared, plan) = pipeline::subdivision::prepare(
+                &scene,
+                &meshes,
+                (level, tessellation),
+                bft_tables()?,
+            )
+            .with_context(|| format!("--subdiv {level}"))?;
+            scene = prepared;
+            Some(plan)
+        }
+        Some(level) => {
+            if scene.rig.take().is_some() {
+                eprintln!(
+                    "note: --subdiv-flat and --subdiv-show-levels are evaluated once at load: the scene's animation is dropped"
+                );
+            }
+            subdivide_scene(&mut scene, args, level, &camera)?;
+            None
+        }
+        None => None,
+    };
+    let clip = animation_clip(args, &scene)?;
+    // The scene at the single frame's time, or at the sequence's start: what the structures
+    // built on the CPU (VPLs, BVHs, surfels) see.
+    if let Some(rig) = &scene.rig {
+        let t = clip.map_or(0.0, |c| sequence::looped(args.time, rig.clips[c].duration));
+        rig.apply(&rig.pose(clip, t), &mut scene.meshes);
+    }
+    if let Some(plan) = &plan {
+        plan.refine_cpu(&mut scene, &camera, args.size)?;
+    }
+    let scene = scene;
+    // What is drawn of it (without the subdivided control meshes), and what the CPU traces VPLs
+    // and samples surfels on (with the control meshes instead of their subdivision surfaces).
+    let proxy_scene = proxy(plan.as_ref(), &scene);
+    let own_lights = args.lights.is_none() && !scene.lights.is_empty();
+    let (mut lights, emissive_photons, lit_by) = match args.lights {
+        Some(n) => (
+            scene::scatter_point_lights(scene.bounds(), n, 1),
+            false,
+            "scattered point lights",
+        ),
+        None => vpl::primary_lights_sampled(&scene, args.area_samples),
+    };
+    let mut photon_lights = vpl::photon_lights(&lights, emissive_photons).to_vec();
+    photon_lights.extend(args.extra_lights.iter().copied());
+    lights.extend(args.extra_lights.iter().copied());
+    let shading = pipeline::ShadingConfig {
+        method: args.shading,
+        tile_size: args.tile,
+    };
+    shading.validate()?;
+    let indirect = match args.vpls {
+        Some(count) => {
+            let config = indirect_config(args, &scene)?;
+            let subsets = config.subsets();
+            let vpls = vpl::VplConfig {
+                count: vpl::per_subset(count, subsets) as usize * subsets as usize,
+                subsets,
+                seed: args.seed,
+                emissive: emissive_photons,
+                bounces: args.vpl_bounces,
+            };
+            let set = vpl::generate(
+                &proxy_scene,
+                &scene::Bvh::build(&proxy_scene),
+                &photon_lights,
+                &vpls,
+            )?;
+            Some((config, set, vpls))
+        }
+        None => None,
+    };
+    let default_ambient = if indirect.is_some() {
+        Vec3::ZERO
+    } else {
+        DEFAULT_AMBIENT
+    };
+    let mut ambient = args.ambient.unwrap_or(default_ambient);
+    let direct_lights = if args.indirect_only {
+        if indirect.is_none() {
+            bail!("--indirect-only needs --vpls N");
+        }
+        ambient = Vec3::ZERO;
+        Vec::new()
+    } else {
+        lights.clone()
+    };
+    let all_direct = direct_lights.len();
+    let direct_lights: Vec<Light> = if args.frustum_cull {
+        let aspect = width as f32 / height as f32;
+        let kept = tiled_shading::frustum_cull(
+            &camera,
+            aspect,
+            &pipeline::validate_lights(&direct_lights)?,
+        );
+        kept.iter().map(|&i| direct_lights[i as usize]).collect()
+    } else {
+        direct_lights
+    };
+
+    // The true emitters, not the hemispherical stand-ins the rasteriser lights with (for
+    // --reference).
+    let mut reference_lights = if emissive_photons {
+        scene.lights.clone()
+    } else {
+        lights.clone()
+    };
+    if emissive_photons {
+        reference_lights.extend(args.extra_lights.iter().copied());
+    }
+    let vpl_shadows = match (args.vpl_shadows, args.cpu) {
+        (ShadowMode::Auto, false) => Some(VplShadows::ManyLod),
+        (ShadowMode::Auto, true) => {
+            if indirect.is_some() {
+                eprintln!("note: the CPU path has no VPL visibility: VPLs light through walls");
+            }
+            None
+        }
+        (ShadowMode::None, _) => None,
+        (mode, cpu) => {
+            if cpu || indirect.is_none() {
+                bail!("--vpl-shadows needs --vpls N and runs on the GPU only (no --cpu)");
+            }
+            Some(match mode {
+                ShadowMode::Ism => VplShadows::Ism,
+                ShadowMode::Ssm => VplShadows::Rasterised,
+                ShadowMode::Rays => VplShadows::Rays,
+                _ => VplShadows::ManyLod,
+            })
+        }
+    };
+    let shadow_config = args
+        .shadows
+        .map(|resolution| tiled_shading::shadows::ShadowMapConfig {
+            resolution,
+            ..Default::default()
+        });
+    Ok(Setup {
+        reference_lights,
+        scene,
+        plan,
+        camera,
+        lights: direct_lights,
+        photon_lights,
+        all_direct,
+        lit_by,
+        shading,
+        indirect,
+        ambient,
+        output: output_transform(args)?,
+        shadow_config,
+        vpl_shadows,
+        clip,
+        own_lights: (
+            own_lights && !args.frustum_cull && !args.indirect_only,
+            own_lights && !emissive_photons,
+        ),
+    })
+}
+
 /// What a render is made of, after the arguments were read: the scene (at the first frame's
 /// pose), camera, direct lights, indirect light, output transform and shadows.
-struct Setup<'a> {
+struct Setup {
     /// The scene the GPU draws: with --subdiv, the control meshes and their refined meshes
     /// ([`pipeline::subdivision::prepare`]).
-    scene: &'a Scene,
+    scene: Scene,
     /// The per-frame subdivision of --subdiv, if any.
-    plan: Option<&'a pipeline::subdivision::SubdivisionPlan>,
+    plan: Option<pipeline::subdivision::SubdivisionPlan>,
+    /// What --reference lights the scene with: the true emitters, not the hemispherical
+    /// stand-ins the rasteriser lights with.
+    reference_lights: Vec<Light>,
     camera: scene::Camera,
     /// The direct lights the frame shades (after --indirect-only and --frustum-cull).
     lights: Vec<Light>,
@@ -1428,19 +1479,19 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
     let mut renderer = pipeline::gpu::GpuRenderer::new_with(
         d,
         q,
-        setup.scene,
+        &setup.scene,
         &setup.lights,
         args.size,
         &texture_options(args),
     )?;
-    if let Some(plan) = setup.plan {
+    if let Some(plan) = &setup.plan {
         renderer.set_subdivision(d, q, plan)?;
     }
     // The structures built on the CPU: those built once see what is drawn, those that follow
     // the moving meshes (surfels) the control meshes (without the rig, so say whether they
     // must follow).
-    let drawn = drawn(setup.plan, setup.scene);
-    let proxy = proxy(setup.plan, setup.scene);
+    let drawn = drawn(setup.plan.as_ref(), &setup.scene);
+    let proxy = proxy(setup.plan.as_ref(), &setup.scene);
     let (scene, surfels) = (&*drawn, &*proxy);
     let moves = setup.scene.rig.is_some();
     renderer.set_output(d, Some(setup.output))?;
@@ -1479,7 +1530,7 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
         }
     }
     renderer.set_ssaa(d, q, ssaa_config(args)?.as_ref())?;
-    if let Some((config, estimator)) = ssao_setting(args, setup.scene)? {
+    if let Some((config, estimator)) = ssao_setting(args, &setup.scene)? {
         renderer.set_ssao(d, q, Some((&config, estimator)))?;
     }
     renderer.set_ambient(q, setup.ambient);
@@ -1559,9 +1610,8 @@ fn write_ssaa_samples(
 /// The scene as a sequence poses it on the CPU, and the BVH its VPLs are traced through: built
 /// when VPLs are first traced and again only after meshes moved (lights alone moving reuse it;
 /// without indirect light none is built).
-struct Posed<'a> {
+struct Posed {
     scene: Scene,
-    plan: Option<&'a pipeline::subdivision::SubdivisionPlan>,
     /// Whether the subdivision surfaces are evaluated on the CPU too (the CPU frame draws them).
     refine: bool,
     /// The scene the VPLs and surfels follow (the control meshes of subdivided ones) and its
@@ -1569,26 +1619,26 @@ struct Posed<'a> {
     proxy: Option<(Scene, Option<scene::Bvh>)>,
 }
 
-impl<'a> Posed<'a> {
-    fn new(setup: &Setup<'a>, refine: bool) -> Self {
+impl Posed {
+    fn new(setup: &Setup, refine: bool) -> Self {
         Self {
             scene: setup.scene.clone(),
-            plan: setup.plan,
             refine,
             proxy: None,
         }
     }
 
     /// The meshes at `pose` of `rig`, if given, and, when refining, their subdivision surfaces
-    /// (CPU; adaptive surfaces for `camera` over a `size` frame, whether the meshes moved or
-    /// not). Whether the meshes moved.
+    /// by `plan` (CPU; adaptive surfaces for `camera` over a `size` frame, whether the meshes
+    /// moved or not). Whether the meshes moved.
     fn pose(
         &mut self,
+        plan: Option<&pipeline::subdivision::SubdivisionPlan>,
         posed: Option<(&scene::animation::Rig, &scene::animation::Pose)>,
         camera: &scene::Camera,
         size: (u32, u32),
     ) -> Result<bool> {
-        let adaptive = self.plan.is_some_and(|p| {
+        let adaptive = plan.is_some_and(|p| {
             matches!(
                 p.tessellation(),
                 pipeline::subdivision::Tessellation::Adaptive { .. }
@@ -1598,18 +1648,15 @@ impl<'a> Posed<'a> {
             rig.apply(pose, &mut self.scene.meshes);
             self.proxy = None;
         }
-        if let Some(plan) = self
-            .plan
-            .filter(|_| self.refine && (posed.is_some() || adaptive))
-        {
+        if let Some(plan) = plan.filter(|_| self.refine && (posed.is_some() || adaptive)) {
             plan.refine_cpu(&mut self.scene, camera, size)?;
         }
         Ok(posed.is_some())
     }
 
-    /// What the VPLs and surfels follow of the posed scene.
-    fn proxy(&mut self) -> &Scene {
-        let (scene, plan) = (&self.scene, self.plan);
+    /// What the VPLs and surfels follow of the posed scene subdivided by `plan`.
+    fn proxy(&mut self, plan: Option<&pipeline::subdivision::SubdivisionPlan>) -> &Scene {
+        let scene = &self.scene;
         &self
             .proxy
             .get_or_insert_with(|| (proxy(plan, scene).into_owned(), None))
@@ -1621,7 +1668,7 @@ impl<'a> Posed<'a> {
         let Some((_, _, config)) = &setup.indirect else {
             return Ok(None);
         };
-        self.proxy();
+        self.proxy(setup.plan.as_ref());
         let Some((scene, bvh)) = &mut self.proxy else {
             return Ok(None);
         };
@@ -1707,7 +1754,7 @@ fn cpu_frame(
     camera: &scene::Camera,
     vpls: Option<&vpl::VplSet>,
 ) -> Result<(Rendered, Option<IndirectStages>)> {
-    let scene = &*drawn(setup.plan, scene);
+    let scene = &*drawn(setup.plan.as_ref(), scene);
     let mut inputs =
         pipeline::cpu::FrameInputs::new(scene, camera, lights, args.size, setup.ambient)
             .with_textures(texture_options(args));
@@ -1922,6 +1969,51 @@ fn camera_path(args: &Args, base: &scene::Camera) -> Result<sequence::CameraPath
     Ok(sequence::CameraPath::Keyframes(keys))
 }
 
+/// Poses the GPU frame at `t` seconds of the clip: skinning pose, moving lights, the surfels
+/// and VPLs the CPU builds from moving meshes. Returns the camera `camera` picks for the pose
+/// (the adaptive tessellation follows it).
+fn pose_frame(
+    args: &Args,
+    gpu: &gpu::Gpu,
+    renderer: &mut pipeline::gpu::GpuRenderer,
+    setup: &Setup,
+    posed: &mut Posed,
+    t: f32,
+    camera: impl FnOnce(Option<&scene::animation::Pose>) -> scene::Camera,
+) -> Result<scene::Camera> {
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let pose = Sequence::pose(setup, t);
+    let lights = moved_lights(args, setup, t, pose.as_ref());
+    if let Some(pose) = &pose {
+        renderer.set_pose(q, pose)?;
+    }
+    if let Some((direct, _)) = &lights {
+        renderer.set_lights(d, q, direct)?;
+    }
+    let camera = camera(pose.as_ref());
+    // The CPU follows the meshes where it builds from them (surfels, VPLs); an adaptive
+    // tessellation changes with the camera, a refit needs the same triangles, so the
+    // surfels follow only moving meshes.
+    let surfels = setup.indirect.is_some() || args.manylod_shadows.is_some();
+    let moved = match (&pose, &setup.scene.rig, surfels) {
+        (Some(pose), Some(rig), true) => {
+            posed.pose(setup.plan.as_ref(), Some((rig, pose)), &camera, args.size)?;
+            let (positions, _) =
+                instant_radiosity::shadows::scene_mesh(posed.proxy(setup.plan.as_ref()));
+            renderer.set_scene_positions(q, &positions)?;
+            true
+        }
+        _ => false,
+    };
+    if setup.indirect.is_some() && (moved || lights.is_some()) {
+        let photons = lights.as_ref().map_or(&setup.photon_lights, |(_, p)| p);
+        if let Some(set) = posed.vpls(setup, photons)? {
+            renderer.set_vpls(q, &set)?;
+        }
+    }
+    Ok(camera)
+}
+
 /// `--frames N` on the GPU: the renderer skins the animated meshes every frame; the VPLs are
 /// traced again on the CPU for the posed scene when it moves.
 fn gpu_sequence(
@@ -1938,34 +2030,9 @@ fn gpu_sequence(
     let mut warmed = 0;
     for k in (0..args.warm_up).map(|_| 0).chain(0..frames) {
         let t = seq.clock.time(k);
-        let pose = Sequence::pose(setup, t);
-        let lights = moved_lights(args, setup, t, pose.as_ref());
-        if let Some(pose) = &pose {
-            renderer.set_pose(q, pose)?;
-        }
-        if let Some((direct, _)) = &lights {
-            renderer.set_lights(d, q, direct)?;
-        }
-        let camera = seq.camera(args, setup, t, pose.as_ref());
-        // The CPU follows the meshes where it builds from them (surfels, VPLs); an adaptive
-        // tessellation changes with the camera, a refit needs the same triangles, so the
-        // surfels follow only moving meshes.
-        let surfels = setup.indirect.is_some() || args.manylod_shadows.is_some();
-        let moved = match (&pose, &setup.scene.rig, surfels) {
-            (Some(pose), Some(rig), true) => {
-                posed.pose(Some((rig, pose)), &camera, args.size)?;
-                let (positions, _) = instant_radiosity::shadows::scene_mesh(posed.proxy());
-                renderer.set_scene_positions(q, &positions)?;
-                true
-            }
-            _ => false,
-        };
-        if setup.indirect.is_some() && (moved || lights.is_some()) {
-            let photons = lights.as_ref().map_or(&setup.photon_lights, |(_, p)| p);
-            if let Some(set) = posed.vpls(setup, photons)? {
-                renderer.set_vpls(q, &set)?;
-            }
-        }
+        let camera = pose_frame(args, gpu, renderer, setup, &mut posed, t, |pose| {
+            seq.camera(args, setup, t, pose)
+        })?;
         renderer.set_camera(q, &camera)?;
         let submitted_us = seq.start.elapsed().as_secs_f64() * 1e6;
         let mut encoder = d.create_command_encoder(&Default::default());
@@ -2009,7 +2076,7 @@ fn cpu_sequence(args: &Args, setup: &Setup, mut seq: Sequence) -> Result<()> {
             .as_ref()
             .zip(setup.scene.rig.as_ref())
             .map(|(p, r)| (r, p));
-        let moved = posed.pose(rigged, &camera, args.size)?;
+        let moved = posed.pose(setup.plan.as_ref(), rigged, &camera, args.size)?;
         let (direct, photons) = match &lights {
             Some((direct, photons)) => (&direct[..], &photons[..]),
             None => (&setup.lights[..], &setup.photon_lights[..]),
@@ -2052,17 +2119,17 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
     println!("device:  {device}");
     println!(
         "scene:   {} triangles, {} direct lights ({}), {width}x{height}",
-        drawn(setup.plan, setup.scene).triangle_count(),
+        drawn(setup.plan.as_ref(), &setup.scene).triangle_count(),
         setup.all_direct,
         setup.lit_by,
     );
-    if let Ok(Some((config, estimator))) = ssao_setting(args, setup.scene) {
+    if let Ok(Some((config, estimator))) = ssao_setting(args, &setup.scene) {
         println!(
             "ssao:    {estimator:?}, kernel {}, radius {}",
             config.size, config.ao.radius
         );
     }
-    if let Some(plan) = setup.plan {
+    if let Some(plan) = &setup.plan {
         println!(
             "subdiv:  Loop level {} of {} control meshes, every frame from their posed vertices",
             plan.level(),
@@ -2202,6 +2269,66 @@ fn print_table(timings: &[PassTiming], fragments: f64) {
     }
 }
 
+/// A G-buffer channel as an image ([`gbuffer_channel`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum GBufferChannel {
+    /// View-space depth, near white to far black (empty pixels black).
+    Depth,
+    /// Octahedral normals as RGB = (n + 1) / 2.
+    Normal,
+    /// Base colour.
+    Albedo,
+    /// Roughness in red, metallic in green.
+    Material,
+}
+
+/// `channel` of `gb` as a linear image to show or write.
+fn gbuffer_channel(gb: &gbuffer::GBuffer, channel: GBufferChannel) -> gbuffer::Image<[f32; 4]> {
+    match channel {
+        GBufferChannel::Depth => {
+            let max_depth = gb
+                .linear_depth
+                .pixels()
+                .iter()
+                .copied()
+                .fold(0.0f32, f32::max);
+            gb.linear_depth.map(|d| {
+                let v = if d > 0.0 {
+                    1.0 - d / max_depth.max(1e-6)
+                } else {
+                    0.0
+                };
+                [v, v, v, 1.0]
+            })
+        }
+        GBufferChannel::Normal => normal_image(&gb.normal),
+        GBufferChannel::Albedo => gb
+            .albedo
+            .map(|a| [0, 1, 2, 3].map(|c| gbuffer::srgb_to_linear(f32::from(a[c]) / 255.0))),
+        GBufferChannel::Material => gb.material.map(|w| {
+            let (r, m, _) = gbuffer::unpack_material(w);
+            if w == gbuffer::NO_MATERIAL {
+                [0.0; 4]
+            } else {
+                [r, m, 0.0, 1.0]
+            }
+        }),
+    }
+}
+
+/// Octahedral normal words as RGB = (n + 1) / 2.
+fn normal_image(img: &gbuffer::Image<u32>) -> gbuffer::Image<[f32; 4]> {
+    img.map(|w| {
+        let n = gbuffer::normal::unpack_octahedral(w);
+        [n.x * 0.5 + 0.5, n.y * 0.5 + 0.5, n.z * 0.5 + 0.5, 1.0]
+    })
+}
+
+/// The discontinuity buffer's bytes as an image.
+fn discontinuity_image(db: &gbuffer::Image<[u8; 4]>) -> gbuffer::Image<[f32; 4]> {
+    db.map(|p| [0, 1, 2, 3].map(|c| f32::from(p[c]) / 255.0))
+}
+
 /// Writes the G-buffer channels and every indirect stage as PNGs (irradiance also as EXR).
 fn dump_stages(
     out: &std::path::Path,
@@ -2211,41 +2338,14 @@ fn dump_stages(
     use gbuffer::Image;
     let dir = out.join("stages");
     make_dir(&dir)?;
-    let normals = |img: &Image<u32>| {
-        img.map(|w| {
-            let n = gbuffer::normal::unpack_octahedral(w);
-            [n.x * 0.5 + 0.5, n.y * 0.5 + 0.5, n.z * 0.5 + 0.5, 1.0]
-        })
-    };
-    let max_depth = gb
-        .linear_depth
-        .pixels()
-        .iter()
-        .copied()
-        .fold(0.0f32, f32::max);
-    let depth = gb.linear_depth.map(|d| {
-        let v = if d > 0.0 {
-            1.0 - d / max_depth.max(1e-6)
-        } else {
-            0.0
-        };
-        [v, v, v, 1.0]
-    });
-    let albedo = gb
-        .albedo
-        .map(|a| [0, 1, 2, 3].map(|c| gbuffer::srgb_to_linear(f32::from(a[c]) / 255.0)));
-    let material = gb.material.map(|w| {
-        let (r, m, _) = gbuffer::unpack_material(w);
-        if w == gbuffer::NO_MATERIAL {
-            [0.0; 4]
-        } else {
-            [r, m, 0.0, 1.0]
-        }
-    });
-    save_png(&depth, &dir.join("gbuffer-depth.png"))?;
-    save_png(&normals(&gb.normal), &dir.join("gbuffer-normal.png"))?;
-    save_png(&albedo, &dir.join("gbuffer-albedo.png"))?;
-    save_png(&material, &dir.join("gbuffer-roughness-metallic.png"))?;
+    for (channel, name) in [
+        (GBufferChannel::Depth, "gbuffer-depth.png"),
+        (GBufferChannel::Normal, "gbuffer-normal.png"),
+        (GBufferChannel::Albedo, "gbuffer-albedo.png"),
+        (GBufferChannel::Material, "gbuffer-roughness-metallic.png"),
+    ] {
+        save_png(&gbuffer_channel(gb, channel), &dir.join(name))?;
+    }
     let Some(s) = stages else {
         return Ok(());
     };
@@ -2256,14 +2356,13 @@ fn dump_stages(
         Ok(())
     };
     if let Some(split) = &s.split_normal {
-        save_png(&normals(split), &dir.join("split-normal.png"))?;
+        save_png(&normal_image(split), &dir.join("split-normal.png"))?;
         irradiance("split-indirect-diffuse", &s.shaded_diffuse)?;
     }
     irradiance("indirect-diffuse", &s.diffuse)?;
     irradiance("indirect-specular", &s.specular)?;
     if let Some(db) = &s.discontinuities {
-        let db = db.map(|p| [0, 1, 2, 3].map(|c| f32::from(p[c]) / 255.0));
-        save_png(&db, &dir.join("discontinuities.png"))?;
+        save_png(&discontinuity_image(db), &dir.join("discontinuities.png"))?;
     }
     if let Some([d, sp]) = &s.blurred {
         irradiance("indirect-diffuse-blurred", d)?;
@@ -2295,6 +2394,19 @@ fn write_shadow_atlas(
     gpu: &gpu::Gpu,
     shadows: &instant_radiosity::shadows::VplShadowMaps,
 ) -> Result<()> {
+    let atlas = atlas_image(gpu, shadows)?;
+    make_dir(&args.out)?;
+    let path = args.out.join("vpl-shadow-atlas.png");
+    save_png(&atlas, &path)?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+/// The VPL shadow-map atlas as a grey image (near = dark, empty = white).
+fn atlas_image(
+    gpu: &gpu::Gpu,
+    shadows: &instant_radiosity::shadows::VplShadowMaps,
+) -> Result<gbuffer::Image<[f32; 4]>> {
     let (w, h) = shadows.layout().size();
     let atlas = shadows.read_atlas(&gpu.device, &gpu.queue)?;
     let pixels: Vec<[f32; 4]> = atlas
@@ -2304,9 +2416,5 @@ fn write_shadow_atlas(
             [d, d, d, 1.0]
         })
         .collect();
-    make_dir(&args.out)?;
-    let path = args.out.join("vpl-shadow-atlas.png");
-    save_png(&gbuffer::Image::from_vec(w, h, pixels)?, &path)?;
-    println!("wrote {}", path.display());
-    Ok(())
+    Ok(gbuffer::Image::from_vec(w, h, pixels)?)
 }

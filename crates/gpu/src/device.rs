@@ -118,13 +118,38 @@ impl Gpu {
     async fn from_env_async(needs: Option<&DeviceNeeds>) -> Result<Self, GpuError> {
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        Self::from_instance(instance, needs, None).await
+    }
+
+    /// Like [`Gpu::from_env`] on `instance` (made by a windowing program with its display
+    /// handle), with an adapter that can present to `surface`: what an interactive viewer
+    /// needs. `WGPU_ADAPTER_NAME` picks among the adapters that can.
+    pub fn for_surface(
+        instance: wgpu::Instance,
+        surface: &wgpu::Surface<'_>,
+    ) -> Result<Self, GpuError> {
+        pollster::block_on(Self::from_instance(instance, None, Some(surface)))
+    }
+
+    async fn from_instance(
+        instance: wgpu::Instance,
+        needs: Option<&DeviceNeeds>,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<Self, GpuError> {
         let adapter = match std::env::var("WGPU_ADAPTER_NAME") {
             Ok(wanted) if !wanted.is_empty() => {
                 let adapters = instance.enumerate_adapters(wgpu::Backends::all()).await;
+                let presents =
+                    |a: &wgpu::Adapter| surface.is_none_or(|s| a.is_surface_supported(s));
                 let needle = wanted.to_lowercase();
-                let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
+                let names: Vec<String> = adapters
+                    .iter()
+                    .filter(|a| presents(a))
+                    .map(|a| a.get_info().name)
+                    .collect();
                 adapters
                     .into_iter()
+                    .filter(presents)
                     .find(|a| a.get_info().name.to_lowercase().contains(&needle))
                     .ok_or_else(|| GpuError::AdapterNotFound {
                         wanted,
@@ -139,6 +164,7 @@ impl Gpu {
                 .request_adapter(&wgpu::RequestAdapterOptions {
                     power_preference: wgpu::PowerPreference::from_env()
                         .unwrap_or(wgpu::PowerPreference::HighPerformance),
+                    compatible_surface: surface,
                     ..Default::default()
                 })
                 .await
