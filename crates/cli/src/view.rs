@@ -79,7 +79,20 @@ pub(crate) fn run(mut argv: Vec<OsString>) -> Result<()> {
         None => None,
     };
     let argv = crate::with_recipe(argv)?;
-    let recipe = Recipe::from_argv(&argv)?;
+    let mut recipe = Recipe::from_argv(&argv)?;
+    let sequence: Vec<&str> = SEQUENCE_KEYS
+        .into_iter()
+        .filter(|k| recipe.has(k))
+        .collect();
+    if !sequence.is_empty() {
+        eprintln!(
+            "note: the viewer plays the animation live; it leaves out the sequence's flags {}",
+            sequence.join(", ")
+        );
+        for k in sequence {
+            recipe.set(k, None);
+        }
+    }
     let args = recipe.args()?;
     if args.command.is_some() {
         bail!("deferred view: `subdivide` is not a view; run it as `deferred subdivide`");
@@ -87,7 +100,6 @@ pub(crate) fn run(mut argv: Vec<OsString>) -> Result<()> {
     for (set, flag) in [
         (args.cpu, "--cpu"),
         (args.reference.is_some(), "--reference"),
-        (args.frames.is_some(), "--frames"),
     ] {
         if set {
             bail!("deferred view: {flag} renders to files; drop it to view (or run `deferred`)");
@@ -121,6 +133,19 @@ pub(crate) fn run(mut argv: Vec<OsString>) -> Result<()> {
 /// switch), in the order of `deferred --help`.
 #[derive(Clone, Debug, Default, PartialEq)]
 struct Recipe(BTreeMap<String, Vec<String>>);
+
+/// The flags of a frame sequence (`--frames` and those that need it): the viewer's clock and
+/// camera replace them.
+const SEQUENCE_KEYS: [&str; 8] = [
+    "frames",
+    "fps",
+    "orbit",
+    "light-orbit",
+    "camera-key",
+    "frame-exr",
+    "frame-every",
+    "warm-up",
+];
 
 /// Keys the renderer changes in place ([`Viewer::apply_live`]); any other key rebuilds.
 const LIVE_KEYS: [&str; 13] = [
@@ -532,7 +557,7 @@ struct Live {
     setup: Setup,
     renderer: pipeline::gpu::GpuRenderer,
     posed: crate::Posed,
-    /// Whether frames pose the scene (animation or --light-orbit).
+    /// Whether frames pose the scene (it has an animation).
     animated: bool,
 }
 
@@ -540,8 +565,8 @@ impl Live {
     fn build(args: Args, gpu: &gpu::Gpu) -> Result<Self> {
         let setup = crate::prepare(&args)?;
         let mut renderer = crate::gpu_renderer(&args, gpu, &setup)?;
-        let animated = setup.scene.rig.is_some() || args.light_orbit.is_some();
-        if setup.scene.rig.is_some() {
+        let animated = setup.scene.rig.is_some();
+        if animated {
             renderer.set_animation(&gpu.device, &gpu.queue, setup.scene.rig.as_ref())?;
         }
         let posed = crate::Posed::new(&setup, false);

@@ -1,7 +1,8 @@
 //! `deferred view` driven by scripts on a virtual display (Xvfb, started here when no DISPLAY
 //! is set; `cargo xtask test` installs it): scripted flight and a panel click, each screenshot
 //! against the offline renderer's image of the recipe the viewer saved with it, the window's
-//! pixels against the screenshot, and the errors without a display or with a bad script.
+//! pixels against the screenshot and a debug view against `--dump-stages`, and the errors
+//! without a display or with a bad script.
 
 mod common;
 
@@ -148,6 +149,10 @@ capture-window window
 click exact ray shadows
 wait 2
 screenshot toggled
+# a debug view: the G-buffer's normals
+view normal
+wait 1
+capture-window window-normal
 quit
 ";
     let run = view(&display, script, &["--size", "256x192"], &out);
@@ -157,7 +162,10 @@ quit
     for name in ["start", "flown", "toggled"] {
         let recipe = out.join(format!("{name}.toml"));
         let offline = out.join(format!("offline-{name}"));
-        let rendered = common::deferred(&["--recipe", recipe.to_str().expect("utf-8")], &offline);
+        let rendered = common::deferred(
+            &["--recipe", recipe.to_str().expect("utf-8"), "--dump-stages"],
+            &offline,
+        );
         assert!(rendered.status.success(), "{}", output_text(&rendered));
         let (max, mean) = difference(
             &rgb(&out.join(format!("{name}.png"))),
@@ -215,6 +223,12 @@ quit
     assert!(
         contains(&window, &before),
         "the window capture does not contain the frame"
+    );
+    // The normal view shows what --dump-stages writes of the same G-buffer.
+    let normals = rgb(&out.join("offline-toggled/stages/gbuffer-normal.png"));
+    assert!(
+        contains(&rgb(&out.join("window-normal.png")), &normals),
+        "the window's normal view is not the G-buffer's normals"
     );
 }
 
