@@ -800,7 +800,7 @@ const FIRST_IMPRESSION: [&str; 9] = [
 const RECIPE_LIMIT: u64 = 1 << 20;
 
 /// `argv` with the keys of its `--recipe FILE` (if any) put before its own flags, as flags:
-/// `key = "v"` → `--key v`, numbers likewise, `key = true` → `--key`, arrays → the flag
+/// `key = "v"` → `--key=v`, numbers likewise, `key = true` → `--key`, arrays → the flag
 /// repeated. Relative paths of `scene`, `add-model` and `out` are taken from the recipe's
 /// folder; `fixtures:` paths stay as they are.
 fn with_recipe(argv: Vec<std::ffi::OsString>) -> Result<Vec<std::ffi::OsString>> {
@@ -877,16 +877,13 @@ fn with_recipe(argv: Vec<std::ffi::OsString>) -> Result<Vec<std::ffi::OsString>>
         match value {
             toml::Value::Boolean(true) => flags.push(format!("--{flag}").into()),
             toml::Value::Boolean(false) => {}
+            // `--flag=value`: a value starting with `-` (`eye = "-8,2,0"`) is not a flag.
             toml::Value::Array(items) => {
                 for item in items {
-                    flags.push(format!("--{flag}").into());
-                    flags.push(text(item)?.into());
+                    flags.push(format!("--{flag}={}", text(item)?).into());
                 }
             }
-            v => {
-                flags.push(format!("--{flag}").into());
-                flags.push(text(v)?.into());
-            }
+            v => flags.push(format!("--{flag}={}", text(v)?).into()),
         }
     }
     let mut out = vec![argv[0].clone()];

@@ -58,7 +58,8 @@ after the frames before it:
   screenshot NAME         like F12, to OUT/NAME.png, .exr and .toml
   capture-window NAME     the window's pixels, panel included, to OUT/NAME.png
   quit                    close the viewer (exit status 0)
-Scripted frames advance the clocks by 1/30 s each, so a script replays identically.
+Commands run before the next frame up to a wait, hold, click, screenshot or capture-window;
+scripted frames advance the clocks by 1/30 s each, so a script replays identically.
 ";
 
 /// `deferred view ARGS` (`argv` without the word `view`).
@@ -209,9 +210,9 @@ impl Recipe {
             if values.is_empty() {
                 argv.push(format!("--{key}").into());
             }
+            // `--key=value`: a value starting with `-` (an eye at x < 0) is not a flag.
             for v in values {
-                argv.push(format!("--{key}").into());
-                argv.push(v.into());
+                argv.push(format!("--{key}={v}").into());
             }
         }
         argv
@@ -1199,8 +1200,15 @@ impl Viewer {
                         self.pending.push(Action::Edit(vec![(key, value)]));
                     }
                     Step::View(view) => self.view = view,
-                    Step::Screenshot(name) => self.pending.push(Action::Screenshot(Some(name))),
-                    Step::CaptureWindow(name) => self.pending.push(Action::CaptureWindow(name)),
+                    // Pictures end the frame's commands: they show this frame as set so far.
+                    Step::Screenshot(name) => {
+                        self.pending.push(Action::Screenshot(Some(name)));
+                        break;
+                    }
+                    Step::CaptureWindow(name) => {
+                        self.pending.push(Action::CaptureWindow(name));
+                        break;
+                    }
                     Step::Quit => self.pending.push(Action::Quit),
                 }
             }
@@ -1780,6 +1788,11 @@ impl Panel<'_> {
             }
         });
 
+        egui::CollapsingHeader::new("GPU passes")
+            .default_open(true)
+            .show(ui, |ui| {
+                timing_graph(ui, self.timings);
+            });
         egui::CollapsingHeader::new("Camera")
             .default_open(true)
             .show(ui, |ui| {
@@ -2040,11 +2053,6 @@ impl Panel<'_> {
                             ui.selectable_value(self.view, v, v.name());
                         }
                     });
-            });
-        egui::CollapsingHeader::new("GPU passes")
-            .default_open(true)
-            .show(ui, |ui| {
-                timing_graph(ui, self.timings);
             });
     }
 }

@@ -81,3 +81,26 @@ fn a_bad_recipe_is_refused_with_the_file_and_key() {
         );
     }
 }
+
+#[test]
+fn a_recipe_value_starting_with_a_minus_is_a_value() {
+    // A camera at x < 0 (what the viewer saves often): `--eye -1,…` would read as a flag.
+    let dir = out_folder("negative");
+    std::fs::create_dir_all(&dir).expect("folder");
+    let file = dir.join("camera.toml");
+    std::fs::write(
+        &file,
+        "size = \"32x24\"\neye = \"-0.2,0.3,-0.5\"\ntarget = \"0.3,0.27,0.3\"\nexposure = -0.5\n",
+    )
+    .expect("recipe");
+    let run = deferred(
+        &["--cpu", "--recipe", &file.to_string_lossy()],
+        &dir.join("out"),
+    );
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(dir.join("out/render.png").is_file());
+}
