@@ -68,13 +68,20 @@ pub(crate) fn run(mut argv: Vec<OsString>) -> Result<()> {
         print!("{HELP}");
         return Ok(());
     }
-    let script = match argv.iter().position(|a| a == "--script") {
+    let at = argv
+        .iter()
+        .position(|a| a == "--script" || a.to_string_lossy().starts_with("--script="));
+    let script = match at {
         Some(at) => {
-            let path = argv
-                .get(at + 1)
-                .map(PathBuf::from)
-                .context("--script needs a FILE")?;
-            argv.drain(at..=at + 1);
+            let path = match argv[at].to_string_lossy().strip_prefix("--script=") {
+                Some(p) => PathBuf::from(p),
+                None => argv
+                    .get(at + 1)
+                    .map(PathBuf::from)
+                    .context("--script needs a FILE")?,
+            };
+            let end = if argv[at] == "--script" { at + 1 } else { at };
+            argv.drain(at..=end);
             Some(Script::read(&path)?)
         }
         None => None,
@@ -1351,6 +1358,10 @@ impl Viewer {
             playing: &mut self.playing,
             animated: self.live.setup.scene.rig.is_some(),
             view: &mut self.view,
+            ssao_radius: crate::ssao_setting(&self.live.args, &self.live.setup.scene)
+                .ok()
+                .flatten()
+                .map(|(c, _)| c.ao.radius),
             timings: &self.timings,
             message: self.message.as_deref(),
             actions: Vec::new(),
@@ -1612,12 +1623,17 @@ impl Viewer {
             for (key, value) in self.camera.keys() {
                 with_camera.set(key, Some(vec![value]));
             }
+            let new_scene = edits
+                .iter()
+                .any(|(k, _)| matches!(k.as_str(), "scene" | "builtin" | "add-model"));
             with_camera
                 .args()
                 .and_then(|args| Live::build(args, &self.gpu))
                 .map(|live| {
                     self.live = live;
-                    self.cameras = cameras(&self.live);
+                    if new_scene {
+                        self.cameras = cameras(&self.live);
+                    }
                 })
         };
         match result {
@@ -1680,6 +1696,8 @@ struct Panel<'a> {
     playing: &'a mut bool,
     animated: bool,
     view: &'a mut DebugView,
+    /// The SSAO radius in use (the default follows the scene's size).
+    ssao_radius: Option<f32>,
     timings: &'a VecDeque<Vec<gpu::PassTime>>,
     message: Option<&'a str>,
     actions: Vec<Action>,
@@ -1747,7 +1765,11 @@ impl Panel<'_> {
         let response = ui.add(
             egui::DragValue::new(&mut v)
                 .range(range)
-                .speed(if integer { 1.0 } else { 0.05 })
+                .speed(if integer {
+                    1.0
+                } else {
+                    value.abs().max(1e-3) * 0.01
+                })
                 .max_decimals(if integer { 0 } else { 3 })
                 .prefix(format!("{label}: ")),
         );
@@ -1860,6 +1882,15 @@ impl Panel<'_> {
                     &["8", "16", "32"],
                     &args.tile.to_string(),
                     false,
+                );
+                let lights = self.recipe.get("lights").unwrap_or("off");
+                self.choice(
+                    ui,
+                    "lights",
+                    "scattered point lights",
+                    &["16", "256", "4096", "65536"],
+                    lights,
+                    true,
                 );
                 let shadows = args.shadows.map_or("off".to_owned(), |r| r.to_string());
                 self.choice(
@@ -1991,6 +2022,16 @@ impl Panel<'_> {
                         3.0..=63.0,
                         true,
                     );
+                    if let Some(radius) = self.ssao_radius {
+                        self.number(
+                            ui,
+                            "ssao-radius",
+                            "radius",
+                            f64::from(radius),
+                            1e-4..=1e4,
+                            false,
+                        );
+                    }
                 }
             });
         egui::CollapsingHeader::new("Subdivision")
