@@ -31,6 +31,7 @@
 pub mod cpu;
 pub mod gpu;
 pub mod near_field;
+pub mod pbgi;
 pub mod rays;
 pub mod shadows;
 pub mod ssm;
@@ -92,6 +93,9 @@ pub enum IndirectError {
     /// A VPL set that does not fit the near field it replaces.
     #[error("the VPLs' near field: {0}")]
     NearField(String),
+    /// Point-based GI settings that cannot be used.
+    #[error("{0}")]
+    Config(String),
     /// Rasterised VPL shadow maps that the device or the views cannot hold.
     #[error("rasterised VPL shadow maps: {0}")]
     Ssm(String),

@@ -106,7 +106,7 @@ fn pack4x8unorm(v: [f32; 4]) -> u32 {
 }
 
 /// WGSL `unpack4x8unorm`, RGB.
-fn unpack_rgb(word: u32) -> Vec3 {
+pub(crate) fn unpack_rgb(word: u32) -> Vec3 {
     Vec3::from_array([0, 1, 2].map(|i| ((word >> (8 * i)) & 0xff) as f32 / 255.0))
 }
 
@@ -134,23 +134,8 @@ fn cosine_direction(n: Vec3, u1: f32, u2: f32) -> Vec3 {
 /// `first` by rays, × `vpls / samples` (`irradiance_at`).
 fn irradiance_at(inputs: &NearFieldInputs<'_>, y: Vec3, n: Vec3, first: u32) -> Vec3 {
     let params = &inputs.params;
-    let origin = y + n * ray_lift(y);
-    let mut e = Vec3::ZERO;
-    for light in &inputs.lights[..params.lights as usize] {
-        let (l, attenuation) = light_incidence(light, y);
-        let cos_y = n.dot(l);
-        if attenuation <= 0.0 || cos_y <= 0.0 {
-            continue;
-        }
-        let to = if light.kind == LIGHT_DIRECTIONAL {
-            -Vec3::from(light.direction) * params.reach
-        } else {
-            Vec3::from(light.position) - origin
-        };
-        if !inputs.bvh.occluded(origin, to) {
-            e += Vec3::from(light.color) * (attenuation * cos_y);
-        }
-    }
+    let lights = &inputs.lights[..params.lights as usize];
+    let e = direct_irradiance(inputs.bvh, lights, params.reach, (y, n));
     let mut indirect = Vec3::ZERO;
     for i in 0..params.samples {
         let vpl = &inputs.vpls[((first + i) % params.vpls) as usize];
@@ -163,6 +148,35 @@ fn irradiance_at(inputs: &NearFieldInputs<'_>, y: Vec3, n: Vec3, first: u32) -> 
         indirect += intensity * (cos_y * crate::rays::visibility(inputs.bvh, (y, n), q, 1.0));
     }
     (e + indirect * (params.vpls as f32 / params.samples as f32)) * FRAC_1_PI
+}
+
+/// Irradiance at `y` (unit normal `n`) from `lights`, each seen by a shadow ray through `bvh`
+/// (leaving `y` lifted by [`ray_lift`]; a directional light's ray is `reach` long): what the
+/// near field's hit and point-based GI's surfels (`crate::pbgi`) receive.
+pub fn direct_irradiance(
+    bvh: &RayBvh,
+    lights: &[GpuLight],
+    reach: f32,
+    (y, n): (Vec3, Vec3),
+) -> Vec3 {
+    let origin = y + n * ray_lift(y);
+    let mut e = Vec3::ZERO;
+    for light in lights {
+        let (l, attenuation) = light_incidence(light, y);
+        let cos_y = n.dot(l);
+        if attenuation <= 0.0 || cos_y <= 0.0 {
+            continue;
+        }
+        let to = if light.kind == LIGHT_DIRECTIONAL {
+            -Vec3::from(light.direction) * reach
+        } else {
+            Vec3::from(light.position) - origin
+        };
+        if !bvh.occluded(origin, to) {
+            e += Vec3::from(light.color) * (attenuation * cos_y);
+        }
+    }
+    e
 }
 
 /// `E_lost/π` at `p` (unit normal `n`): pixel `(x, y)`'s sample of the frame's seed

@@ -126,23 +126,10 @@ pub fn splat(
         .zip(views)
         .map(|(indices, view)| {
             let mut t = vec![CLEAR; tile * tile];
-            for node in indices.iter().map(|&n| &nodes[n as usize]) {
-                let Some(s) = view.splat(node, layout.far) else {
-                    continue;
-                };
-                let word = pack_depth(s.depth, 0);
-                let (lo_x, hi_x) = pixel_span(s.center.x, s.radius, tile);
-                let (lo_y, hi_y) = pixel_span(s.center.y, s.radius, tile);
-                for y in lo_y..hi_y {
-                    for x in lo_x..hi_x {
-                        let dx = x as f32 + 0.5 - s.center.x;
-                        let dy = y as f32 + 0.5 - s.center.y;
-                        if dx * dx + dy * dy <= s.radius * s.radius {
-                            let p = &mut t[y * tile + x];
-                            *p = (*p).min(word);
-                        }
-                    }
-                }
+            for &n in indices {
+                cover(view, &nodes[n as usize], layout, |pixel, word| {
+                    t[pixel] = t[pixel].min(word);
+                });
             }
             t
         })
@@ -162,6 +149,45 @@ pub fn splat(
     }
     Ok(atlas)
 }
+
+/// Calls `f(pixel, word)` for every pixel of `view`'s tile (row-major index) whose centre lies
+/// in `node`'s disc ([`View::splat`]), with the disc's packed depth.
+fn cover(view: &View, node: &Node, layout: &AtlasLayout, mut f: impl FnMut(usize, u32)) {
+    let tile = layout.tile as usize;
+    let Some(s) = view.splat(node, layout.far) else {
+        return;
+    };
+    let word = pack_depth(s.depth, 0);
+    let (lo_x, hi_x) = pixel_span(s.center.x, s.radius, tile);
+    let (lo_y, hi_y) = pixel_span(s.center.y, s.radius, tile);
+    for y in lo_y..hi_y {
+        for x in lo_x..hi_x {
+            let dx = x as f32 + 0.5 - s.center.x;
+            let dy = y as f32 + 0.5 - s.center.y;
+            if dx * dx + dy * dy <= s.radius * s.radius {
+                f(y * tile + x, word);
+            }
+        }
+    }
+}
+
+/// The nearest node of `drawn` at each pixel of `view`'s tile ([`NO_NODE`] where none
+/// covers it): the splat of [`splat`] keeping which node won the depth test (the smaller
+/// index among equal packed depths), for applications that look up what a node carries —
+/// point-based GI's radiance (§3.6.1).
+pub fn nearest_nodes(nodes: &[Node], view: &View, drawn: &[u32], layout: &AtlasLayout) -> Vec<u32> {
+    let tile = layout.tile as usize;
+    let mut best = vec![(CLEAR, NO_NODE); tile * tile];
+    for &n in drawn {
+        cover(view, &nodes[n as usize], layout, |pixel, word| {
+            best[pixel] = best[pixel].min((word, n));
+        });
+    }
+    best.into_iter().map(|(_, n)| n).collect()
+}
+
+/// [`nearest_nodes`]' value of a pixel no node covers.
+pub const NO_NODE: u32 = u32::MAX;
 
 /// Pixels `lo..hi` (clipped to `0..tile`) whose centres may lie within `radius` of `c`.
 fn pixel_span(c: f32, radius: f32, tile: usize) -> (usize, usize) {
