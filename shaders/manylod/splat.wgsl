@@ -31,25 +31,54 @@ fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
 }
 
+// Node n's disc in view v's tile: its packed depth, the pixels that may lie in it, and where
+// the tile starts in the atlas.
+struct Disc {
+    ok: bool,
+    word: u32,
+    center: vec2<f32>,
+    radius: f32,
+    lo: vec2<i32>,
+    hi: vec2<i32>,
+    origin: vec2<i32>,
+}
+
+fn disc_of(v: u32, n: Node) -> Disc {
+    let s = splat_of(views[v], n, atlas_.far);
+    let tile = i32(atlas_.tile);
+    let slot = atlas_.first_view + v;
+    return Disc(
+        s.ok,
+        pack_depth(s.depth, 0u),
+        s.center,
+        s.radius,
+        max(vec2<i32>(ceil(s.center - s.radius - 0.5)), vec2<i32>(0)),
+        min(vec2<i32>(floor(s.center + s.radius - 0.5)) + 1, vec2<i32>(tile)),
+        vec2<i32>(i32(slot % atlas_.columns), i32(slot / atlas_.columns)) * tile,
+    );
+}
+
+// The atlas index of tile pixel (x, y) when its centre lies in the disc, else -1.
+fn covered(d: Disc, x: i32, y: i32) -> i32 {
+    let o = vec2<f32>(f32(x), f32(y)) + 0.5 - d.center;
+    if dot(o, o) > d.radius * d.radius {
+        return -1;
+    }
+    let p = d.origin + vec2<i32>(x, y);
+    return p.y * i32(atlas_.width) + p.x;
+}
+
 // Rasterises node n's disc into view v's tile (pixel centres inside the disc).
 fn splat_disc(v: u32, n: Node) {
-    let view = views[v];
-    let s = splat_of(view, n, atlas_.far);
-    if !s.ok {
+    let d = disc_of(v, n);
+    if !d.ok {
         return;
     }
-    let word = pack_depth(s.depth, 0u);
-    let tile = i32(atlas_.tile);
-    let lo = max(vec2<i32>(ceil(s.center - s.radius - 0.5)), vec2<i32>(0));
-    let hi = min(vec2<i32>(floor(s.center + s.radius - 0.5)) + 1, vec2<i32>(tile));
-    let slot = atlas_.first_view + v;
-    let origin = vec2<i32>(i32(slot % atlas_.columns), i32(slot / atlas_.columns)) * tile;
-    for (var y = lo.y; y < hi.y; y++) {
-        for (var x = lo.x; x < hi.x; x++) {
-            let d = vec2<f32>(f32(x), f32(y)) + 0.5 - s.center;
-            if dot(d, d) <= s.radius * s.radius {
-                let p = origin + vec2<i32>(x, y);
-                atomicMin(&atlas[u32(p.y) * atlas_.width + u32(p.x)], word);
+    for (var y = d.lo.y; y < d.hi.y; y++) {
+        for (var x = d.lo.x; x < d.hi.x; x++) {
+            let i = covered(d, x, y);
+            if i >= 0 {
+                atomicMin(&atlas[i], d.word);
             }
         }
     }

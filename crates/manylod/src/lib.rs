@@ -36,6 +36,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "inplace_atomic.wgsl",
         "inplace_ballot.wgsl",
         "lookup.wgsl",
+        "nearest.wgsl",
         "refit.wgsl",
         "splat.wgsl",
     ],

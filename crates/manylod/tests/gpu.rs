@@ -240,6 +240,77 @@ fn atlas_matches_the_cpu() {
     }
 }
 
+/// The nearest node per pixel (point-based GI's lookup): where the GPU and CPU atlases hold
+/// the same packed depth, the same node won the pixel (the smallest index among equal
+/// depths, on both sides).
+#[test]
+fn nearest_nodes_match_the_cpu() {
+    let (bsh, _, _) = tree(1 << 14);
+    let Some((gpu, mut m)) = setup(&bsh, 0.3, 1 << 19) else {
+        return;
+    };
+    m.enable_nearest_nodes(&gpu.device).expect("nearest pass");
+    let v = views_in_tiles(0.3, Some(TILE));
+    let layout = m.layout();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    m.encode_cut(&mut encoder, CutKind::Basic, None);
+    m.encode_splat(&mut encoder, None);
+    gpu.queue.submit([encoder.finish()]);
+    let atlas = m.read_atlas(&gpu.device, &gpu.queue).expect("atlas");
+    let ids = m
+        .read_nearest_nodes(&gpu.device, &gpu.queue)
+        .expect("ids")
+        .expect("enabled");
+    let cut = m.read_cut(&gpu.device, &gpu.queue).expect("cut");
+    let problem = CutProblem {
+        bsh: &bsh,
+        views: &v,
+        epsilon: EPSILON,
+    };
+    let want_depth = splat::splat(
+        &bsh.nodes,
+        &v,
+        &problem.flag_culled(&cut.node_views),
+        &layout,
+    )
+    .expect("cpu splat");
+    let (width, _) = layout.size();
+    let tile = TILE as usize;
+    let (mut compared, mut same) = (0, 0);
+    for (view_index, view) in v.iter().enumerate() {
+        let drawn: Vec<u32> = cut
+            .node_views
+            .iter()
+            .filter(|nv| nv.view as usize == view_index && problem.is_drawn(**nv))
+            .map(|nv| nv.node)
+            .collect();
+        let want = splat::nearest_nodes(&bsh.nodes, view, &drawn, &layout);
+        let slot = view_index as u32;
+        let (ox, oy) = (
+            (slot % layout.columns) as usize * tile,
+            (slot / layout.columns) as usize * tile,
+        );
+        for (i, &w) in want.iter().enumerate() {
+            let p = (oy + i / tile) * width as usize + ox + i % tile;
+            if atlas[p] == want_depth[p] {
+                compared += 1;
+                same += usize::from(ids[p] == w);
+            }
+            if atlas[p] == CLEAR {
+                assert_eq!(ids[p], splat::NO_NODE, "an empty pixel has no node");
+            }
+        }
+    }
+    assert!(
+        compared > v.len() * tile * tile / 2,
+        "{compared} pixels compared"
+    );
+    assert!(
+        same * 1000 >= compared * 999,
+        "{same} of {compared} pixels of equal depth have the same nearest node"
+    );
+}
+
 /// The ISM baseline: GPU atlas == CPU atlas of the same random points.
 #[test]
 fn ism_atlas_matches_the_cpu() {

@@ -184,6 +184,20 @@ pub struct GpuManyLod {
     /// Cut list of the last frame (0 or 1) and the list slot its leftovers are in.
     current: usize,
     leftover: u32,
+    /// The atlas parameters of `splat.wgsl` for each cut list.
+    splat_params: [wgpu::Buffer; 2],
+    /// The nearest-node pass, once [`GpuManyLod::enable_nearest_nodes`] made it.
+    nearest: Option<NearestNodes>,
+}
+
+/// The nearest node per atlas pixel (`nearest.wgsl` after `splat`): its kernels,
+/// buffer and bind groups.
+struct NearestNodes {
+    clear: Kernel,
+    resolve: Kernel,
+    clear_bind: wgpu::BindGroup,
+    binds: [wgpu::BindGroup; 2],
+    ids: wgpu::Buffer,
 }
 
 impl GpuManyLod {
@@ -417,6 +431,8 @@ impl GpuManyLod {
             leftover: l0,
             dispatch,
             cuts,
+            splat_params,
+            nearest: None,
         })
     }
 }
@@ -479,21 +495,98 @@ impl GpuManyLod {
         self.leftover = LIST_SLOTS[p];
     }
 
-    /// Records the splat of the last cut into the cleared atlas (one pass, timed as `splat`).
+    /// Records the splat of the last cut into the cleared atlas (one pass, timed as `splat`),
+    /// then, where enabled, the nearest nodes ([`Self::enable_nearest_nodes`]).
     pub fn encode_splat(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
         let c = self.current;
-        let dispatches: Vec<Dispatch> = self
+        let (x, y) = groups(self.atlas_pixels);
+        let first = self.layout.first_view == 0;
+        let mut dispatches: Vec<Dispatch> = self
             .clear_dispatch()
             .into_iter()
+            .chain(self.nearest.as_ref().filter(|_| first).map(|n| {
+                n.clear
+                    .dispatch(&n.clear_bind, Workgroups::Direct([x, y, 1]))
+            }))
             .chain([
                 self.prepare
                     .dispatch(&self.count[c], Workgroups::Direct([1, 1, 1])),
                 self.splat.dispatch(&self.splats[c], self.indirect()),
             ])
             .collect();
+        if let Some(n) = &self.nearest {
+            dispatches.push(n.resolve.dispatch(&n.binds[c], self.indirect()));
+        }
         Passes::new()
             .pass("splat", dispatches)
             .encode(encoder, timer);
+    }
+
+    /// From now on every [`GpuManyLod::encode_splat`] also finds the nearest node of each
+    /// atlas pixel (`u32` node index, [`crate::splat::NO_NODE`] where none; among discs of the
+    /// same packed depth the smallest index, as [`crate::splat::nearest_nodes`]): a second
+    /// pass over the cut that looks up what the winning node carries — point-based GI's
+    /// radiance, a reflection map's colour (§3.6.1). Read it with
+    /// [`GpuManyLod::nearest_nodes`] or [`GpuManyLod::read_nearest_nodes`].
+    pub fn enable_nearest_nodes(&mut self, device: &wgpu::Device) -> Result<(), ManyLodError> {
+        if self.nearest.is_some() {
+            return Ok(());
+        }
+        let module = crate::SHADERS.module(device, "nearest.wgsl")?;
+        use Binding::{Storage as Rw, StorageRead as R, Uniform as U};
+        let clear = Kernel::numbered(device, &module, "clear_ids", &[(7, Rw)]);
+        let resolve = Kernel::numbered(
+            device,
+            &module,
+            "nearest",
+            &[(0, R), (1, R), (2, U), (3, Rw), (4, R), (5, Rw), (7, Rw)],
+        );
+        let ids = transfer::buffer(
+            device,
+            "manylod nearest nodes",
+            u64::from(self.atlas_pixels) * 4,
+            STORAGE,
+        )?;
+        let binds = [0, 1].map(|c| {
+            resolve.bind_buffers(
+                device,
+                &[
+                    &self.nodes,
+                    &self.views,
+                    &self.splat_params[c],
+                    &self.counters,
+                    &self.cuts[c],
+                    &self.atlas,
+                    &ids,
+                ],
+            )
+        });
+        self.nearest = Some(NearestNodes {
+            clear_bind: clear.bind_buffers(device, &[&ids]),
+            clear,
+            resolve,
+            binds,
+            ids,
+        });
+        Ok(())
+    }
+
+    /// The nearest node of every atlas pixel, row-major `u32` (`STORAGE`), once enabled.
+    pub fn nearest_nodes(&self) -> Option<&wgpu::Buffer> {
+        self.nearest.as_ref().map(|n| &n.ids)
+    }
+
+    /// Reads the nearest nodes back, after [`Self::check_lists`] (`None` when not enabled).
+    pub fn read_nearest_nodes(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<Vec<u32>>, ManyLodError> {
+        self.check_lists(device, queue)?;
+        match &self.nearest {
+            Some(n) => Ok(Some(transfer::read_pod(device, queue, &n.ids)?)),
+            None => Ok(None),
+        }
     }
 
     /// The in-place variant's compactions this device runs: [`Compaction::Atomic`], and
