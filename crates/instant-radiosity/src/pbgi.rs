@@ -15,10 +15,16 @@
 //!    `r` spans `dω = 4 dA / (1 + r²)²` and `cos θ = (1 − r²) / (1 + r²)` (both integrate
 //!    exactly over the disc: 2π and π). The diffuse indirect radiance is `ρ/π · E`.
 //!
-//! This is the CPU reference, the specification the GPU kernels follow; it is tested against
-//! the path tracer's one-bounce light (`tests/pbgi.rs`).
+//! [`LitPoints::gather`] is the CPU reference, tested against the path tracer's one-bounce
+//! light and the brute-force gather over the same surfels; [`GpuGather`] runs steps 2–4 on the
+//! GPU (the ManyLoD cut, `manylod/nearest.wgsl`, `pbgi.wgsl`) and is tested against it
+//! (`tests/pbgi.rs`). Not yet on the GPU: the surfels' direct light (uploaded from the CPU),
+//! receivers from the G-buffer, the edge-aware upsampling to the frame.
 
+use ::gpu::kernel::{Binding, Kernel, Passes, Workgroups};
+use ::gpu::{PassTimer, transfer, wgpu};
 use glam::Vec3;
+use manylod::gpu::{CutKind, GpuManyLod};
 use manylod::{AtlasLayout, Bsh, CutProblem, View, splat::NO_NODE};
 use rayon::prelude::*;
 use scene::Scene;
@@ -134,18 +140,16 @@ impl LitPoints {
         }
     }
 
+    /// The settings.
+    pub fn config(&self) -> &PbgiConfig {
+        &self.config
+    }
+
     /// The irradiance at each receiver `(position, unit normal)`: its paraboloid view's texels
     /// (nearest drawn node each) weighted by [`texel_weight`].
     pub fn gather(&self, receivers: &[(Vec3, Vec3)]) -> Result<Vec<Vec3>, IndirectError> {
         let tile = self.config.tile;
-        let views: Vec<View> = receivers
-            .iter()
-            .map(|&(p, n)| View::Paraboloid {
-                position: p + n * crate::rays::ray_lift(p),
-                normal: n,
-                size: tile,
-            })
-            .collect();
+        let views = gather_views(receivers, tile);
         let problem = CutProblem {
             bsh: &self.bsh,
             views: &views,
@@ -177,6 +181,164 @@ impl LitPoints {
             .collect())
     }
 }
+
+/// The indirect-lighting view of each receiver `(position, unit normal)`: a paraboloid of
+/// `tile` texels over its hemisphere, lifted off the surface by [`crate::rays::ray_lift`].
+pub fn gather_views(receivers: &[(Vec3, Vec3)], tile: u32) -> Vec<View> {
+    receivers
+        .iter()
+        .map(|&(p, n)| View::Paraboloid {
+            position: p + n * crate::rays::ray_lift(p),
+            normal: n,
+            size: tile,
+        })
+        .collect()
+}
+
+/// `Gather` of `pbgi.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GatherParams {
+    width: u32,
+    tile: u32,
+    columns: u32,
+    views: u32,
+}
+
+/// The GPU gather ([`LitPoints::gather`]'s twin): the many-view cut of every receiver's view
+/// and its nearest-node splat (`manylod::gpu::GpuManyLod`), then the convolution (`pbgi.wgsl`,
+/// one workgroup per view) into one irradiance (`vec4<f32>`, RGB) per receiver.
+pub struct GpuGather {
+    manylod: GpuManyLod,
+    convolve: Kernel,
+    bind: wgpu::BindGroup,
+    irradiance: wgpu::Buffer,
+    views: u32,
+    tile: u32,
+}
+
+impl GpuGather {
+    /// Uploads `lit`'s hierarchy and radiance and the views of `receivers`, with room for
+    /// `capacity` node-views in each cut list (a cut that does not fit is an error on read:
+    /// raise it).
+    pub fn new(
+        device: &wgpu::Device,
+        lit: &LitPoints,
+        receivers: &[(Vec3, Vec3)],
+        capacity: usize,
+    ) -> Result<Self, IndirectError> {
+        let tile = lit.config.tile;
+        let views = gather_views(receivers, tile);
+        let layout = AtlasLayout::new(views.len(), tile, lit.far);
+        let mut manylod = GpuManyLod::new(
+            device,
+            &lit.bsh,
+            &views,
+            lit.config.epsilon,
+            layout,
+            capacity,
+            None,
+        )?;
+        manylod.enable_nearest_nodes(device)?;
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let radiance: Vec<[f32; 4]> = lit
+            .radiance
+            .iter()
+            .map(|r| r.extend(0.0).to_array())
+            .collect();
+        let radiance = transfer::buffer_init(
+            device,
+            "pbgi radiance",
+            bytemuck::cast_slice(&radiance),
+            storage,
+        )?;
+        let irradiance =
+            transfer::buffer(device, "pbgi irradiance", views.len() as u64 * 16, storage)?;
+        let params = GatherParams {
+            width: layout.size().0,
+            tile,
+            columns: layout.columns,
+            views: views.len() as u32,
+        };
+        let params = transfer::buffer_init(
+            device,
+            "pbgi gather",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let module = crate::SHADERS.module(device, "pbgi.wgsl")?;
+        let convolve = Kernel::new(
+            device,
+            &module,
+            "convolve",
+            &[
+                Binding::Uniform,
+                Binding::StorageRead,
+                Binding::StorageRead,
+                Binding::Storage,
+            ],
+            &[],
+        );
+        let ids = manylod
+            .nearest_nodes()
+            .ok_or_else(|| IndirectError::Config("the nearest-node pass is not enabled".into()))?;
+        let bind = convolve.bind_buffers(device, &[&params, ids, &radiance, &irradiance]);
+        Ok(Self {
+            manylod,
+            convolve,
+            bind,
+            irradiance,
+            views: views.len() as u32,
+            tile,
+        })
+    }
+
+    /// Moves the receivers (the same count).
+    pub fn set_receivers(
+        &self,
+        queue: &wgpu::Queue,
+        receivers: &[(Vec3, Vec3)],
+    ) -> Result<(), IndirectError> {
+        Ok(self
+            .manylod
+            .set_views(queue, &gather_views(receivers, self.tile))?)
+    }
+
+    /// Records the cut (timed `cut`), the splat with nearest nodes (`splat`) and the
+    /// convolution (`pbgi convolve`).
+    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
+        self.manylod.encode_cut(encoder, CutKind::Basic, timer);
+        self.manylod.encode_splat(encoder, timer);
+        let x = self.views.min(MAX_GROUPS_X);
+        let y = self.views.div_ceil(MAX_GROUPS_X);
+        Passes::one(
+            "pbgi convolve",
+            &self.convolve.pipeline,
+            vec![self.bind.clone()],
+            Workgroups::Direct([x, y, 1]),
+        )
+        .encode(encoder, timer);
+    }
+
+    /// The irradiance of every receiver (`vec4<f32>`, RGB), after [`Self::encode`].
+    pub fn irradiance(&self) -> &wgpu::Buffer {
+        &self.irradiance
+    }
+
+    /// Reads the irradiance back (after checking the cut lists held the cut).
+    pub fn read_irradiance(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<Vec3>, IndirectError> {
+        self.manylod.check_lists(device, queue)?;
+        let words: Vec<[f32; 4]> = transfer::read_pod(device, queue, &self.irradiance)?;
+        Ok(words.iter().map(|w| Vec3::new(w[0], w[1], w[2])).collect())
+    }
+}
+
+/// Most workgroups along x in one dispatch dimension.
+const MAX_GROUPS_X: u32 = 32_768;
 
 /// `cos θ · dω` of texel `(x, y)` of a `tile`-texel paraboloid view (0 outside the disc):
 /// `(1 − r²)/(1 + r²) · 4/(1 + r²)² · (2/tile)²` at the texel centre's radius `r`. The weights
