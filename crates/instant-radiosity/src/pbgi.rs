@@ -140,6 +140,22 @@ impl LitPoints {
         }
     }
 
+    /// The same lit points gathered with `config`'s tile and ε (its point count must be
+    /// theirs).
+    pub fn reconfigured(&self, config: PbgiConfig) -> Result<Self, IndirectError> {
+        config.validate()?;
+        if config.points_log2 != self.config.points_log2 {
+            return Err(IndirectError::Config(format!(
+                "2^{} points configured for 2^{} lit points",
+                config.points_log2, self.config.points_log2
+            )));
+        }
+        Ok(Self {
+            config,
+            ..self.clone()
+        })
+    }
+
     /// The settings.
     pub fn config(&self) -> &PbgiConfig {
         &self.config
