@@ -211,6 +211,90 @@ pub fn gather_views(receivers: &[(Vec3, Vec3)], tile: u32) -> Vec<View> {
         .collect()
 }
 
+/// Receivers on a grid over a frame: the centre pixel of every `stride × stride` cell
+/// (clamped to the frame), row by row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ReceiverGrid {
+    /// Cell side in pixels.
+    pub stride: u32,
+    /// Cells across.
+    pub columns: u32,
+    /// Cells down.
+    pub rows: u32,
+    /// The frame's size.
+    pub size: (u32, u32),
+}
+
+impl ReceiverGrid {
+    /// The grid of `stride`-pixel cells over a `size` frame.
+    pub fn new(size: (u32, u32), stride: u32) -> Result<Self, IndirectError> {
+        if stride == 0 || size.0 == 0 || size.1 == 0 {
+            return Err(IndirectError::Config(format!(
+                "a receiver grid of {stride}-pixel cells over {}×{} pixels",
+                size.0, size.1
+            )));
+        }
+        Ok(Self {
+            stride,
+            columns: size.0.div_ceil(stride),
+            rows: size.1.div_ceil(stride),
+            size,
+        })
+    }
+
+    /// Number of receivers.
+    pub fn len(&self) -> usize {
+        (self.columns * self.rows) as usize
+    }
+
+    /// Whether the grid has no receivers (never, for a valid grid).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The pixel of receiver `i`.
+    pub fn pixel(&self, i: usize) -> (u32, u32) {
+        let (cx, cy) = (i as u32 % self.columns, i as u32 / self.columns);
+        (
+            (cx * self.stride + self.stride / 2).min(self.size.0 - 1),
+            (cy * self.stride + self.stride / 2).min(self.size.1 - 1),
+        )
+    }
+}
+
+/// The receivers of `grid` in a CPU G-buffer (`pbgi_receivers.wgsl`'s twin): each cell's pixel
+/// position and normal, or where it shows no surface the eye and +Y (unused irradiance).
+pub fn grid_receivers(
+    gb: &gbuffer::GBuffer,
+    frame: &gbuffer::Frame,
+    grid: &ReceiverGrid,
+) -> Vec<(Vec3, Vec3)> {
+    (0..grid.len())
+        .map(|i| {
+            let (x, y) = grid.pixel(i);
+            let depth = gb.linear_depth.get(x, y);
+            if depth > 0.0 {
+                (
+                    gbuffer::position::from_view_ray(frame, x, y, depth),
+                    gbuffer::normal::unpack_octahedral(gb.normal.get(x, y)),
+                )
+            } else {
+                (frame.eye.truncate(), Vec3::Y)
+            }
+        })
+        .collect()
+}
+
+/// `Grid` of `pbgi_receivers.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GridParams {
+    stride: u32,
+    columns: u32,
+    rows: u32,
+    tile: u32,
+}
+
 /// `Gather` of `pbgi.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
@@ -231,6 +315,8 @@ pub struct GpuGather {
     irradiance: wgpu::Buffer,
     views: u32,
     tile: u32,
+    /// The receivers kernel bound to a G-buffer ([`GpuGather::bind_receivers`]).
+    receivers: Option<(Kernel, wgpu::BindGroup)>,
 }
 
 impl GpuGather {
@@ -306,7 +392,88 @@ impl GpuGather {
             irradiance,
             views: views.len() as u32,
             tile,
+            receivers: None,
         })
+    }
+
+    /// From now on each [`GpuGather::encode`] first makes the views of `grid`'s receivers from
+    /// the G-buffer (`frame` the `gbuffer/frame.wgsl` uniform, `textures` its view depth and
+    /// normals): no receiver crosses to the CPU. The gather must have been made for
+    /// `grid.len()` receivers.
+    pub fn bind_receivers(
+        &mut self,
+        device: &wgpu::Device,
+        grid: &ReceiverGrid,
+        frame: &wgpu::Buffer,
+        textures: gbuffer::gpu::GBufferTextures<'_>,
+    ) -> Result<(), IndirectError> {
+        if grid.len() != self.views as usize {
+            return Err(IndirectError::Config(format!(
+                "a grid of {} receivers for a gather of {}",
+                grid.len(),
+                self.views
+            )));
+        }
+        let (w, h) = grid.size;
+        ::gpu::kernel::check_texture(
+            "the view depth",
+            textures.linear_depth,
+            (w, h),
+            gbuffer::LINEAR_DEPTH_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        )?;
+        ::gpu::kernel::check_texture(
+            "the normals",
+            textures.normal,
+            (w, h),
+            gbuffer::NORMAL_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        )?;
+        let module = crate::SHADERS.module(device, "pbgi_receivers.wgsl")?;
+        let kernel = Kernel::new(
+            device,
+            &module,
+            "receivers",
+            &[
+                Binding::Uniform,
+                Binding::Uniform,
+                Binding::TextureUnfilterable,
+                Binding::TextureUint,
+                Binding::Storage,
+            ],
+            &[],
+        );
+        let params = GridParams {
+            stride: grid.stride,
+            columns: grid.columns,
+            rows: grid.rows,
+            tile: self.tile,
+        };
+        let params = transfer::buffer_init(
+            device,
+            "pbgi grid",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let (depth, normal) = (view(textures.linear_depth), view(textures.normal));
+        let bind = kernel.bind(
+            device,
+            &[
+                frame.as_entire_binding(),
+                params.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&depth),
+                wgpu::BindingResource::TextureView(&normal),
+                self.manylod.views_buffer().as_entire_binding(),
+            ],
+        );
+        self.receivers = Some((kernel, bind));
+        Ok(())
+    }
+
+    /// The views of the receivers (`manylod`'s `View` layout), e.g. to read back.
+    pub fn views_buffer(&self) -> &wgpu::Buffer {
+        self.manylod.views_buffer()
     }
 
     /// Moves the receivers (the same count).
@@ -320,9 +487,18 @@ impl GpuGather {
             .set_views(queue, &gather_views(receivers, self.tile))?)
     }
 
-    /// Records the cut (timed `cut`), the splat with nearest nodes (`splat`) and the
-    /// convolution (`pbgi convolve`).
+    /// Records the receivers' views where bound (timed `pbgi receivers`), the cut (`cut`), the
+    /// splat with nearest nodes (`splat`) and the convolution (`pbgi convolve`).
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
+        if let Some((kernel, bind)) = &self.receivers {
+            Passes::one(
+                "pbgi receivers",
+                &kernel.pipeline,
+                vec![bind.clone()],
+                Workgroups::Direct([self.views.div_ceil(64), 1, 1]),
+            )
+            .encode(encoder, timer);
+        }
         self.manylod.encode_cut(encoder, CutKind::Basic, timer);
         self.manylod.encode_splat(encoder, timer);
         let x = self.views.min(MAX_GROUPS_X);

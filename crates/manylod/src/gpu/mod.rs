@@ -571,6 +571,12 @@ impl GpuManyLod {
         Ok(())
     }
 
+    /// The views (`common.wgsl`'s `View`, [`View::gpu`]; `STORAGE`): a kernel that makes
+    /// views on the GPU writes them here (the count stays the set-up's).
+    pub fn views_buffer(&self) -> &wgpu::Buffer {
+        &self.views
+    }
+
     /// The nearest node of every atlas pixel, row-major `u32` (`STORAGE`), once enabled.
     pub fn nearest_nodes(&self) -> Option<&wgpu::Buffer> {
         self.nearest.as_ref().map(|n| &n.ids)
