@@ -285,6 +285,88 @@ pub fn grid_receivers(
         .collect()
 }
 
+/// The edge-aware upsampling's "same surface": normals whose dot product exceeds this (~25°).
+pub const SAME_NORMAL: f32 = 0.9;
+/// … and a receiver within this fraction of the pixel's view depth of its tangent plane.
+pub const SAME_PLANE: f32 = 0.02;
+
+/// The frame's indirect diffuse `E/π` from the receivers' irradiance (`pbgi_upsample.wgsl`'s
+/// twin): each pixel's bilinear mean of its four nearest receivers over those on its own
+/// surface ([`SAME_NORMAL`], [`SAME_PLANE`]), else over those on any surface; 0 where the
+/// pixel shows none.
+pub fn upsample(
+    gb: &gbuffer::GBuffer,
+    frame: &gbuffer::Frame,
+    grid: &ReceiverGrid,
+    irradiance: &[Vec3],
+) -> Result<gbuffer::Image<[f32; 4]>, IndirectError> {
+    let (w, h) = grid.size;
+    if irradiance.len() != grid.len()
+        || gb.linear_depth.width() != w
+        || gb.linear_depth.height() != h
+    {
+        return Err(IndirectError::Config(format!(
+            "{} irradiances and a {}×{} G-buffer for a grid of {} receivers over {w}×{h}",
+            irradiance.len(),
+            gb.linear_depth.width(),
+            gb.linear_depth.height(),
+            grid.len()
+        )));
+    }
+    let at = |x: u32, y: u32| {
+        let depth = gb.linear_depth.get(x, y);
+        (
+            depth,
+            gbuffer::position::from_view_ray(frame, x, y, depth),
+            gbuffer::normal::unpack_octahedral(gb.normal.get(x, y)),
+        )
+    };
+    let pixels: Vec<[f32; 4]> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let (depth, p, n) = at(x, y);
+            if depth <= 0.0 {
+                return [0.0, 0.0, 0.0, 1.0];
+            }
+            let half = (grid.stride / 2) as f32;
+            let g = (glam::Vec2::new(x as f32, y as f32) - half) / grid.stride as f32;
+            let c0 = g.floor();
+            let f = g - c0;
+            let (mut same, mut any) = ((Vec3::ZERO, 0.0f32), (Vec3::ZERO, 0.0f32));
+            for k in 0..4u32 {
+                let o = glam::Vec2::new((k & 1) as f32, (k >> 1) as f32);
+                let cell = (c0 + o).clamp(
+                    glam::Vec2::ZERO,
+                    glam::Vec2::new((grid.columns - 1) as f32, (grid.rows - 1) as f32),
+                );
+                let (cx, cy) = (cell.x as u32, cell.y as u32);
+                let weight =
+                    (1.0 - f.x + o.x * (2.0 * f.x - 1.0)) * (1.0 - f.y + o.y * (2.0 * f.y - 1.0));
+                let (rx, ry) = grid.pixel((cy * grid.columns + cx) as usize);
+                let (rd, q, m) = at(rx, ry);
+                if rd <= 0.0 {
+                    continue;
+                }
+                let e = irradiance[(cy * grid.columns + cx) as usize];
+                any = (any.0 + e * weight, any.1 + weight);
+                if n.dot(m) > SAME_NORMAL && n.dot(q - p).abs() < SAME_PLANE * depth {
+                    same = (same.0 + e * weight, same.1 + weight);
+                }
+            }
+            let e = if same.1 > 1e-6 {
+                same.0 / same.1
+            } else if any.1 > 1e-6 {
+                any.0 / any.1
+            } else {
+                Vec3::ZERO
+            };
+            (e * std::f32::consts::FRAC_1_PI).extend(1.0).to_array()
+        })
+        .collect();
+    gbuffer::Image::from_vec(w, h, pixels).map_err(|e| IndirectError::Config(e.to_string()))
+}
+
 /// `Grid` of `pbgi_receivers.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
@@ -315,8 +397,15 @@ pub struct GpuGather {
     irradiance: wgpu::Buffer,
     views: u32,
     tile: u32,
-    /// The receivers kernel bound to a G-buffer ([`GpuGather::bind_receivers`]).
-    receivers: Option<(Kernel, wgpu::BindGroup)>,
+    /// The receivers and upsampling kernels bound to a frame ([`GpuGather::bind_frame`]).
+    frame: Option<BoundFrame>,
+}
+
+/// [`GpuGather`]'s kernels bound to a frame's G-buffer and output.
+struct BoundFrame {
+    receivers: (Kernel, wgpu::BindGroup),
+    upsample: (Kernel, wgpu::BindGroup),
+    size: (u32, u32),
 }
 
 impl GpuGather {
@@ -392,20 +481,23 @@ impl GpuGather {
             irradiance,
             views: views.len() as u32,
             tile,
-            receivers: None,
+            frame: None,
         })
     }
 
-    /// From now on each [`GpuGather::encode`] first makes the views of `grid`'s receivers from
-    /// the G-buffer (`frame` the `gbuffer/frame.wgsl` uniform, `textures` its view depth and
-    /// normals): no receiver crosses to the CPU. The gather must have been made for
-    /// `grid.len()` receivers.
-    pub fn bind_receivers(
+    /// From now on each [`GpuGather::encode`] makes the views of `grid`'s receivers from the
+    /// G-buffer first (`frame` the `gbuffer/frame.wgsl` uniform, `textures` its view depth and
+    /// normals: no receiver crosses to the CPU), and after the convolution upsamples the
+    /// irradiance into `output` (the frame's size, `interleave::gpu::IRRADIANCE_FORMAT`,
+    /// `STORAGE_BINDING`): the indirect diffuse `E/π` ([`upsample`]'s twin). The gather must
+    /// have been made for `grid.len()` receivers.
+    pub fn bind_frame(
         &mut self,
         device: &wgpu::Device,
         grid: &ReceiverGrid,
         frame: &wgpu::Buffer,
         textures: gbuffer::gpu::GBufferTextures<'_>,
+        output: &wgpu::Texture,
     ) -> Result<(), IndirectError> {
         if grid.len() != self.views as usize {
             return Err(IndirectError::Config(format!(
@@ -429,20 +521,13 @@ impl GpuGather {
             gbuffer::NORMAL_FORMAT,
             wgpu::TextureUsages::TEXTURE_BINDING,
         )?;
-        let module = crate::SHADERS.module(device, "pbgi_receivers.wgsl")?;
-        let kernel = Kernel::new(
-            device,
-            &module,
-            "receivers",
-            &[
-                Binding::Uniform,
-                Binding::Uniform,
-                Binding::TextureUnfilterable,
-                Binding::TextureUint,
-                Binding::Storage,
-            ],
-            &[],
-        );
+        ::gpu::kernel::check_texture(
+            "the PBGI output",
+            output,
+            (w, h),
+            interleave::gpu::IRRADIANCE_FORMAT,
+            wgpu::TextureUsages::STORAGE_BINDING,
+        )?;
         let params = GridParams {
             stride: grid.stride,
             columns: grid.columns,
@@ -456,18 +541,61 @@ impl GpuGather {
             wgpu::BufferUsages::UNIFORM,
         )?;
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let (depth, normal) = (view(textures.linear_depth), view(textures.normal));
-        let bind = kernel.bind(
+        let (depth, normal, out) = (
+            view(textures.linear_depth),
+            view(textures.normal),
+            view(output),
+        );
+        let gbuffer_bindings = [
+            Binding::Uniform,
+            Binding::Uniform,
+            Binding::TextureUnfilterable,
+            Binding::TextureUint,
+        ];
+        let kernel = |file: &str, entry: &str, last: &[Binding]| -> Result<Kernel, IndirectError> {
+            let module = crate::SHADERS.module(device, file)?;
+            let bindings: Vec<Binding> = gbuffer_bindings.iter().chain(last).copied().collect();
+            Ok(Kernel::new(device, &module, entry, &bindings, &[]))
+        };
+        let common = [
+            frame.as_entire_binding(),
+            params.as_entire_binding(),
+            wgpu::BindingResource::TextureView(&depth),
+            wgpu::BindingResource::TextureView(&normal),
+        ];
+        let receivers = kernel("pbgi_receivers.wgsl", "receivers", &[Binding::Storage])?;
+        let receivers_bind = receivers.bind(
             device,
             &[
-                frame.as_entire_binding(),
-                params.as_entire_binding(),
-                wgpu::BindingResource::TextureView(&depth),
-                wgpu::BindingResource::TextureView(&normal),
-                self.manylod.views_buffer().as_entire_binding(),
-            ],
+                &common[..],
+                &[self.manylod.views_buffer().as_entire_binding()],
+            ]
+            .concat(),
         );
-        self.receivers = Some((kernel, bind));
+        let upsample = kernel(
+            "pbgi_upsample.wgsl",
+            "upsample",
+            &[
+                Binding::StorageRead,
+                Binding::StorageTexture(interleave::gpu::IRRADIANCE_FORMAT),
+            ],
+        )?;
+        let upsample_bind = upsample.bind(
+            device,
+            &[
+                &common[..],
+                &[
+                    self.irradiance.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&out),
+                ],
+            ]
+            .concat(),
+        );
+        self.frame = Some(BoundFrame {
+            receivers: (receivers, receivers_bind),
+            upsample: (upsample, upsample_bind),
+            size: (w, h),
+        });
         Ok(())
     }
 
@@ -487,10 +615,12 @@ impl GpuGather {
             .set_views(queue, &gather_views(receivers, self.tile))?)
     }
 
-    /// Records the receivers' views where bound (timed `pbgi receivers`), the cut (`cut`), the
-    /// splat with nearest nodes (`splat`) and the convolution (`pbgi convolve`).
+    /// Records the receivers' views where a frame is bound (timed `pbgi receivers`), the cut
+    /// (`cut`), the splat with nearest nodes (`splat`), the convolution (`pbgi convolve`) and
+    /// the upsampling into the frame's output (`pbgi upsample`).
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        if let Some((kernel, bind)) = &self.receivers {
+        if let Some(f) = &self.frame {
+            let (kernel, bind) = &f.receivers;
             Passes::one(
                 "pbgi receivers",
                 &kernel.pipeline,
@@ -510,6 +640,16 @@ impl GpuGather {
             Workgroups::Direct([x, y, 1]),
         )
         .encode(encoder, timer);
+        if let Some(f) = &self.frame {
+            let (kernel, bind) = &f.upsample;
+            Passes::one(
+                "pbgi upsample",
+                &kernel.pipeline,
+                vec![bind.clone()],
+                Workgroups::covering(f.size.0, f.size.1, 8),
+            )
+            .encode(encoder, timer);
+        }
     }
 
     /// The irradiance of every receiver (`vec4<f32>`, RGB), after [`Self::encode`].

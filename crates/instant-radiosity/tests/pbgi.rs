@@ -6,6 +6,7 @@
 use glam::Vec3;
 use instant_radiosity::pbgi::{
     GpuGather, LitPoints, PbgiConfig, ReceiverGrid, gather_views, grid_receivers, texel_weight,
+    upsample,
 };
 use instant_radiosity::vpl;
 use manylod::Bsh;
@@ -106,13 +107,12 @@ fn lamp(scene: &scene::Scene) -> Vec<GpuLight> {
     lights.iter().map(GpuLight::from).collect()
 }
 
+/// A pixel, its linear albedo and its receiver (position, normal).
+type Pixel = ((u32, u32), Vec3, (Vec3, Vec3));
+
 /// Every pixel of a `w × h` G-buffer of `scene` that shows a surface: `(x, y)`, its linear
 /// albedo, and the receiver (position, normal).
-fn receivers(
-    scene: &scene::Scene,
-    camera: &scene::Camera,
-    (w, h): (u32, u32),
-) -> Vec<((u32, u32), Vec3, (Vec3, Vec3))> {
+fn receivers(scene: &scene::Scene, camera: &scene::Camera, (w, h): (u32, u32)) -> Vec<Pixel> {
     let gb = gbuffer::cpu::rasterize(scene, camera, w, h)
         .expect("G-buffer")
         .gbuffer;
@@ -136,8 +136,9 @@ fn receivers(
 }
 
 /// The original Cornell box at 48×48, lit by its lamp as 16 hemispherical lights: PBGI's
-/// one-bounce radiance `ρ/π · E` at every pixel against the path tracer's one-bounce light
-/// alone (`min_bounces = max_bounces = 1`, pixel centres, Lambert lobe, 512 spp). Both see the
+/// one-bounce radiance `ρ/π · E` at every pixel, and gathered at every 4th pixel and
+/// upsampled, against the path tracer's one-bounce light alone (`min_bounces = max_bounces =
+/// 1`, pixel centres, Lambert lobe, 512 spp). Both see the
 /// same lamp up to its stand-ins; the bounds (the mean within 20 %, 8×8 blocks within 25 %
 /// relative RMS) leave room for the splat's discretisation (the next test) and catch a wrong
 /// solid angle or cosine weight, which is off by 30 % or more.
@@ -169,37 +170,68 @@ fn cornell_one_bounce_matches_the_path_tracer() {
     for (&((x, y), albedo, _), e) in pixels.iter().zip(&irradiance) {
         estimate[(y * w + x) as usize] = albedo * *e * std::f32::consts::FRAC_1_PI;
     }
+    let (mean_error, block_error) = errors(&estimate, &truth, w);
+    println!(
+        "PBGI at every pixel against the path tracer: mean error {mean_error:.3}, 8×8 blocks relative RMS {block_error:.3}"
+    );
+    assert!(mean_error <= 0.20, "mean error {mean_error}");
+    assert!(block_error <= 0.25, "block error {block_error}");
+
+    // Every 4th pixel gathered, the frame upsampled edge-aware: the same bounds (its
+    // interpolation blurs the light within surfaces only).
+    let gb = gbuffer::cpu::rasterize(&scene, &camera, w, h)
+        .expect("G-buffer")
+        .gbuffer;
+    let frame = gbuffer::Frame::new(&camera, w, h);
+    let grid = ReceiverGrid::new((w, h), 4).expect("grid");
+    let sparse = lit
+        .gather(&grid_receivers(&gb, &frame, &grid))
+        .expect("gather");
+    let indirect = upsample(&gb, &frame, &grid, &sparse).expect("upsample");
+    let mut upsampled = vec![Vec3::ZERO; (w * h) as usize];
+    for &((x, y), albedo, _) in &pixels {
+        let p = indirect.get(x, y);
+        upsampled[(y * w + x) as usize] = albedo * Vec3::new(p[0], p[1], p[2]);
+    }
+    let (mean_error, block_error) = errors(&upsampled, &truth, w);
+    println!(
+        "PBGI every 4th pixel, upsampled, against the path tracer: mean error {mean_error:.3}, 8×8 blocks relative RMS {block_error:.3}"
+    );
+    assert!(mean_error <= 0.20, "upsampled mean error {mean_error}");
+    assert!(block_error <= 0.25, "upsampled block error {block_error}");
+}
+
+/// The relative error of `estimate`'s mean luminance against `truth`'s, and the relative RMS
+/// over 8×8 blocks (of `width`-pixel rows) that the truth lights.
+fn errors(estimate: &[Vec3], truth: &[Vec3], width: u32) -> (f64, f64) {
     let luminance = |c: Vec3| f64::from(c.dot(Vec3::new(0.2126, 0.7152, 0.0722)));
     let mean = |img: &[Vec3]| img.iter().map(|&c| luminance(c)).sum::<f64>() / img.len() as f64;
-    let (m_est, m_truth) = (mean(&estimate), mean(&truth));
-    let mean_error = (m_est - m_truth).abs() / m_truth;
-
+    let (m_est, m_truth) = (mean(estimate), mean(truth));
+    let height = truth.len() as u32 / width;
     let block = 8;
     let mut squared = 0.0;
     let mut blocks = 0;
-    for by in 0..h / block {
-        for bx in 0..w / block {
+    for by in 0..height / block {
+        for bx in 0..width / block {
             let sum = |img: &[Vec3]| -> f64 {
                 (0..block * block)
                     .map(|i| {
                         let (x, y) = (bx * block + i % block, by * block + i / block);
-                        luminance(img[(y * w + x) as usize])
+                        luminance(img[(y * width + x) as usize])
                     })
                     .sum()
             };
-            let (e, t) = (sum(&estimate), sum(&truth));
+            let (e, t) = (sum(estimate), sum(truth));
             if t > 0.0 {
                 squared += ((e - t) / t).powi(2);
                 blocks += 1;
             }
         }
     }
-    let block_error = (squared / f64::from(blocks)).sqrt();
-    println!(
-        "PBGI against the path tracer: mean {m_est:.5} vs {m_truth:.5} (error {mean_error:.3}), 8×8 blocks relative RMS {block_error:.3} over {blocks}"
-    );
-    assert!(mean_error <= 0.20, "mean error {mean_error}");
-    assert!(block_error <= 0.25, "block error {block_error}");
+    (
+        (m_est - m_truth).abs() / m_truth,
+        (squared / f64::from(blocks)).sqrt(),
+    )
 }
 
 /// The splat against what it approximates: the brute-force gather over the same lit surfels —
@@ -335,9 +367,10 @@ fn gpu_gather_matches_the_cpu() {
 }
 
 /// Receivers made on the GPU from an uploaded G-buffer (every 8th pixel of the Cornell box at
-/// 64×48): the same views as the CPU twin's, and the same irradiance as the CPU gather of them.
+/// 64×48): the same views as the CPU twin's, the same irradiance as the CPU gather of them, and
+/// the same upsampled frame.
 #[test]
-fn gpu_receivers_from_the_gbuffer_match_the_cpu() {
+fn gpu_receivers_and_upsampling_match_the_cpu() {
     let Some((scene, camera)) = cornell() else {
         return;
     };
@@ -365,8 +398,16 @@ fn gpu_receivers_from_the_gbuffer_match_the_cpu() {
     // Made for the grid's count with placeholder receivers: the kernel writes the views.
     let placeholder = vec![(Vec3::ZERO, Vec3::Y); grid.len()];
     let mut gather = GpuGather::new(d, &lit, &placeholder, 1 << 21).expect("gather");
+    let output = gpu::transfer::texture_2d(
+        d,
+        "pbgi output",
+        size.0,
+        size.1,
+        interleave::gpu::IRRADIANCE_FORMAT,
+        gpu::transfer::STORAGE_ANY,
+    );
     gather
-        .bind_receivers(d, &grid, &uploaded.frame, uploaded.textures())
+        .bind_frame(d, &grid, &uploaded.frame, uploaded.textures(), &output)
         .expect("receivers");
     let mut encoder = d.create_command_encoder(&Default::default());
     gather.encode(&mut encoder, None);
@@ -397,4 +438,47 @@ fn gpu_receivers_from_the_gbuffer_match_the_cpu() {
         .map(|(g, w)| (*g - *w).abs().max_element() / w.max_element().max(1e-3))
         .fold(0.0f32, f32::max);
     assert!(worst <= 0.02, "worst relative difference {worst}");
+
+    // The upsampled frame: the CPU twin of the GPU's irradiance, up to f16 and that 2 %.
+    let upsampled = interleave::gpu::download_image::<[half::f16; 4]>(d, q, &output)
+        .expect("output")
+        .map(|p| p.map(half::f16::to_f32));
+    let twin = upsample(&gb, &frame, &grid, &got).expect("CPU upsample");
+    let far = upsampled
+        .pixels()
+        .iter()
+        .zip(twin.pixels())
+        .filter(|(g, w)| (0..3).any(|c| (g[c] - w[c]).abs() > 2e-3 * w[c].abs().max(1e-2)))
+        .count();
+    assert_eq!(far, 0, "{far} pixels differ beyond f16 rounding");
+}
+
+/// The upsampling is a partition of unity: a field of one irradiance everywhere upsamples to
+/// that irradiance / π on every surface pixel (0 on the background), whichever receivers
+/// count as the pixel's surface.
+#[test]
+fn upsampling_keeps_a_constant_field() {
+    let Some((scene, camera)) = cornell() else {
+        return;
+    };
+    let size = (64, 48);
+    let gb = gbuffer::cpu::rasterize(&scene, &camera, size.0, size.1)
+        .expect("G-buffer")
+        .gbuffer;
+    let frame = gbuffer::Frame::new(&camera, size.0, size.1);
+    let grid = ReceiverGrid::new(size, 8).expect("grid");
+    let e = Vec3::new(1.0, 2.0, 3.0);
+    let image = upsample(&gb, &frame, &grid, &vec![e; grid.len()]).expect("upsample");
+    for (i, p) in image.pixels().iter().enumerate() {
+        let (x, y) = (i as u32 % size.0, i as u32 / size.0);
+        let want = if gb.linear_depth.get(x, y) > 0.0 {
+            e * std::f32::consts::FRAC_1_PI
+        } else {
+            Vec3::ZERO
+        };
+        assert!(
+            (Vec3::new(p[0], p[1], p[2]) - want).abs().max_element() < 1e-5,
+            "pixel ({x}, {y}): {p:?}, want {want}"
+        );
+    }
 }
