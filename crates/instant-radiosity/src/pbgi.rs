@@ -657,6 +657,11 @@ impl GpuGather {
         &self.irradiance
     }
 
+    /// Whether the last cut fitted its lists (an error naming the capacity when not).
+    pub fn check(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), IndirectError> {
+        Ok(self.manylod.check_lists(device, queue)?)
+    }
+
     /// Reads the irradiance back (after checking the cut lists held the cut).
     pub fn read_irradiance(
         &self,

@@ -134,6 +134,7 @@ pub struct GpuRenderer {
     light_atlas: Option<LightAtlas>,
     ray_shadows: Option<GpuRays>,
     near_field: Option<NearFieldStage>,
+    pbgi: Option<PbgiStage>,
     output: Option<OutputStage>,
     animation: Option<Animation>,
     supersampling: Option<Supersampling>,
@@ -204,6 +205,20 @@ struct Indirect {
     config: IndirectConfig,
     set: VplSet,
 }
+
+/// Point-based GI as the renderer holds it ([`GpuRenderer::set_pbgi`]): the gather bound to the
+/// current targets, the indirect diffuse it writes, and what it was made from (to rebuild it
+/// on a resize).
+struct PbgiStage {
+    gather: instant_radiosity::pbgi::GpuGather,
+    output: wgpu::Texture,
+    lit: instant_radiosity::pbgi::LitPoints,
+    stride: u32,
+}
+
+/// Node-views a point-based GI view's cut may hold per texel (measured: about 5 at ε = 1
+/// texel on the Cornell box; fewer at larger ε).
+const PBGI_NODE_VIEWS_PER_TEXEL: usize = 8;
 
 /// The VPLs' near field as the renderer holds it ([`GpuRenderer::set_near_field`]): the kernel
 /// for the scene, its binding to the current targets, lights and VPLs, and its output.
@@ -347,6 +362,7 @@ impl GpuRenderer {
             light_atlas: None,
             ray_shadows: None,
             near_field: None,
+            pbgi: None,
             output: None,
             animation: None,
             supersampling: None,
@@ -459,9 +475,10 @@ impl GpuRenderer {
             .as_ref()
             .and_then(|n| n.bound.as_ref())
             .map_or(no_diffuse, |(_, output)| output);
-        let indirect = match &self.indirect {
-            Some(i) => [&i.outputs[0], &i.outputs[1], near_field],
-            None => [no_diffuse, no_specular, no_diffuse],
+        let indirect = match (&self.indirect, &self.pbgi) {
+            (Some(i), _) => [&i.outputs[0], &i.outputs[1], near_field],
+            (None, Some(p)) => [&p.output, no_specular, no_diffuse],
+            (None, None) => [no_diffuse, no_specular, no_diffuse],
         };
         let accessibility = self
             .ssao
@@ -1063,6 +1080,9 @@ impl GpuRenderer {
         if let Some(Indirect { config, set, .. }) = self.indirect.take() {
             self.set_indirect(device, &config, &set)?;
         }
+        if let Some(PbgiStage { lit, stride, .. }) = self.pbgi.take() {
+            self.set_pbgi(device, Some((&lit, stride)))?;
+        }
         self.rebind(device, queue)?;
         if let Some(camera) = self.camera {
             self.set_camera(queue, &camera)?;
@@ -1120,8 +1140,78 @@ impl GpuRenderer {
             config: *config,
             set: set.clone(),
         });
+        self.pbgi = None;
         self.bind_near_field(device)?;
         self.bind_composition(device);
+        Ok(())
+    }
+
+    /// Lights the frame's indirect diffuse light by point-based GI (`Some((lit, stride))`,
+    /// Holländer 2013 §3.6.1, [`instant_radiosity::pbgi`]): a receiver every `stride` pixels of
+    /// the G-buffer gathers `lit`'s surfels through a many-view cut, and the irradiance is
+    /// upsampled edge-aware to the frame — instead of the VPLs' indirect stage, which this
+    /// removes (with its near field); or removes it (`None`). The cut lists hold
+    /// [`PBGI_NODE_VIEWS_PER_TEXEL`] node-views per texel of every view (at most the device's
+    /// largest binding): check them with [`GpuRenderer::check_pbgi`].
+    pub fn set_pbgi(
+        &mut self,
+        device: &wgpu::Device,
+        setting: Option<(&instant_radiosity::pbgi::LitPoints, u32)>,
+    ) -> Result<(), RenderError> {
+        let Some((lit, stride)) = setting else {
+            self.pbgi = None;
+            self.bind_composition(device);
+            return Ok(());
+        };
+        use instant_radiosity::pbgi::{GpuGather, ReceiverGrid};
+        let grid = ReceiverGrid::new(self.size(), stride)?;
+        let limits = device.limits();
+        let largest = (limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+            / 8) as usize;
+        let tile = lit.config().tile as usize;
+        let capacity = (grid.len() * tile * tile * PBGI_NODE_VIEWS_PER_TEXEL).min(largest);
+        let placeholder = vec![(Vec3::ZERO, Vec3::Y); grid.len()];
+        let mut gather = GpuGather::new(device, lit, &placeholder, capacity)?;
+        let (w, h) = self.size();
+        let output = transfer::texture_2d(
+            device,
+            "pbgi indirect diffuse",
+            w,
+            h,
+            interleave::gpu::IRRADIANCE_FORMAT,
+            transfer::STORAGE_OUTPUT,
+        );
+        gather.bind_frame(
+            device,
+            &grid,
+            self.gbuffer_pass.frame_buffer(),
+            (&self.sized.targets).into(),
+            &output,
+        )?;
+        self.indirect = None;
+        self.near_field = None;
+        self.pbgi = Some(PbgiStage {
+            gather,
+            output,
+            lit: lit.clone(),
+            stride,
+        });
+        self.bind_composition(device);
+        Ok(())
+    }
+
+    /// Whether the last frame's point-based GI cuts fit their lists (an error naming the
+    /// capacity when not; `Ok` without PBGI). Reads back a few counters.
+    pub fn check_pbgi(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<(), RenderError> {
+        if let Some(p) = &self.pbgi {
+            p.gather.check(device, queue)?;
+        }
         Ok(())
     }
 
@@ -1308,6 +1398,9 @@ impl GpuRenderer {
             .encode(&self.shading_bound, encoder, Some(&self.timer));
         if let Some(i) = &self.indirect {
             i.stage.encode(&i.bound, encoder, Some(&self.timer));
+        }
+        if let Some(p) = &mut self.pbgi {
+            p.gather.encode(encoder, Some(&self.timer));
         }
         if let Some((bound, _)) = self.near_field.as_ref().and_then(|n| n.bound.as_ref()) {
             bound.encode(encoder, Some(&self.timer));

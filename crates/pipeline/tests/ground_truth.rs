@@ -172,3 +172,52 @@ fn ray_shadows_give_the_path_tracers_direct_light() {
     );
     assert!(rays.rms < maps.rms, "rays {rays:?}, maps {maps:?}");
 }
+
+/// Direct light (16 shadowed samples of the lamp) plus point-based GI's one bounce (every 4th
+/// pixel's receiver gathering 2^16 lit surfels through 16² paraboloid texels at ε = 2,
+/// upsampled) against the path-traced one-bounce image: PBGI sees the boxes (its views are
+/// rasterised cuts), so it must stay within the bounds the VPLs with visibility meet, and
+/// without it the frame lacks the bounce (much darker).
+#[test]
+fn pbgi_adds_the_bounce_the_path_tracer_sees() {
+    let Some((gpu, scene, camera)) = cornell() else {
+        return;
+    };
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let (w, h) = (64, 64);
+    let truth = common::truth(&scene, camera, (w, h), (1, true), 1024);
+    let (lights, _, _) = vpl::primary_lights_sampled(&scene, 16);
+    let gpu_lights: Vec<tiled_shading::GpuLight> =
+        lights.iter().map(tiled_shading::GpuLight::from).collect();
+    let config = instant_radiosity::pbgi::PbgiConfig {
+        tile: 16,
+        epsilon: 2.0,
+        points_log2: 16,
+    };
+    let lit =
+        instant_radiosity::pbgi::LitPoints::new(&scene, &gpu_lights, &config).expect("surfels");
+    let frame = |pbgi: bool| {
+        let mut r = GpuRenderer::new(d, q, &scene, &lights, w, h).expect("renderer");
+        r.set_shadows(d, q, Some(&ShadowMapConfig::default()))
+            .expect("shadows");
+        if pbgi {
+            r.set_pbgi(d, Some((&lit, 4))).expect("pbgi");
+        }
+        let image = r
+            .render(d, q, &camera, glam::Vec3::ZERO)
+            .expect("frame")
+            .image;
+        r.check_pbgi(d, q).expect("the cuts fit their lists");
+        accuracy(&truth, &image, 10.0)
+    };
+    let (direct, with_pbgi) = (frame(false), frame(true));
+    println!("against the path tracer: direct only {direct:?}, with PBGI {with_pbgi:?}");
+    assert!(
+        direct.bias < -0.1,
+        "the bounce is missing without it: {direct:?}"
+    );
+    assert!(
+        with_pbgi.error <= 0.12 && with_pbgi.bias.abs() <= 0.08,
+        "{with_pbgi:?}"
+    );
+}
