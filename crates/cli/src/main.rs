@@ -193,6 +193,21 @@ struct Args {
     /// With --ssaa --adaptive: the geometric metric, MM, NC, DV, NV or ND.
     #[arg(long, default_value = "ND", requires = "adaptive")]
     ssaa_metric: adaptive_ssaa::GeometricMetric,
+    /// One-bounce indirect light by point-based GI instead of VPLs (GPU; Holländer 2013
+    /// §3.6.1): a receiver every STRIDE pixels gathers the scene's lit surfels through a
+    /// many-view cut of paraboloid views, upsampled edge-aware to the frame. The surfels are
+    /// lit once at load (shadow rays from the direct lights).
+    #[arg(long, value_name = "STRIDE", conflicts_with = "vpls", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pbgi: Option<u32>,
+    /// With --pbgi: each receiver's paraboloid view in T×T texels.
+    #[arg(long, value_name = "T", default_value_t = 16, requires = "pbgi", value_parser = clap::value_parser!(u32).range(4..=256))]
+    pbgi_tile: u32,
+    /// With --pbgi: the cut threshold ε in texels.
+    #[arg(long, value_name = "E", default_value_t = 2.0, requires = "pbgi")]
+    pbgi_epsilon: f32,
+    /// With --pbgi: 2^LOG2 surfels sampled on the scene.
+    #[arg(long, value_name = "LOG2", default_value_t = 20, requires = "pbgi", value_parser = clap::value_parser!(u32).range(4..=24))]
+    pbgi_points: u32,
     /// Screen-space ambient occlusion of the ambient and indirect light (GPU): `filter` (eq. 7.1),
     /// `crytek`, `vo` (volumetric obscurance), `hbao` or `gtao`, over the k×k kernel, or with
     /// `-separable` (e.g. `filter-separable`, Holländer 2013 annex 7.2: two 1D passes).
@@ -1324,15 +1339,32 @@ fn prepare(args: &Args) -> Result<Setup> {
         }
         None => None,
     };
-    let default_ambient = if indirect.is_some() {
+    let pbgi = match args.pbgi {
+        Some(stride) => {
+            if args.cpu {
+                bail!("--pbgi runs on the GPU only (no --cpu)");
+            }
+            let config = instant_radiosity::pbgi::PbgiConfig {
+                tile: args.pbgi_tile,
+                epsilon: args.pbgi_epsilon,
+                points_log2: args.pbgi_points,
+            };
+            let gpu_lights = pipeline::validate_lights(&lights)?;
+            let lit = instant_radiosity::pbgi::LitPoints::new(&proxy_scene, &gpu_lights, &config)
+                .context("--pbgi")?;
+            Some((lit, stride))
+        }
+        None => None,
+    };
+    let default_ambient = if indirect.is_some() || pbgi.is_some() {
         Vec3::ZERO
     } else {
         DEFAULT_AMBIENT
     };
     let mut ambient = args.ambient.unwrap_or(default_ambient);
     let direct_lights = if args.indirect_only {
-        if indirect.is_none() {
-            bail!("--indirect-only needs --vpls N");
+        if indirect.is_none() && pbgi.is_none() {
+            bail!("--indirect-only needs --vpls N or --pbgi STRIDE");
         }
         ambient = Vec3::ZERO;
         Vec::new()
@@ -1390,6 +1422,7 @@ fn prepare(args: &Args) -> Result<Setup> {
             ..Default::default()
         });
     Ok(Setup {
+        pbgi,
         reference_lights,
         scene,
         plan,
@@ -1423,6 +1456,8 @@ struct Setup {
     /// What --reference lights the scene with: the true emitters, not the hemispherical
     /// stand-ins the rasteriser lights with.
     reference_lights: Vec<Light>,
+    /// --pbgi's lit surfels and receiver stride.
+    pbgi: Option<(instant_radiosity::pbgi::LitPoints, u32)>,
     camera: scene::Camera,
     /// The direct lights the frame shades (after --indirect-only and --frustum-cull).
     lights: Vec<Light>,
@@ -1525,6 +1560,9 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
         if args.near_field {
             renderer.set_near_field(d, Some(scene))?;
         }
+    }
+    if let Some((lit, stride)) = &setup.pbgi {
+        renderer.set_pbgi(d, Some((lit, *stride)))?;
     }
     renderer.set_ssaa(d, q, ssaa_config(args)?.as_ref())?;
     if let Some((config, estimator)) = ssao_setting(args, &setup.scene)? {
@@ -2210,6 +2248,13 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
                 Some(VplShadows::Rays) => "rays (exact)".into(),
                 None => "none: VPLs light through walls".into(),
             }
+        );
+    }
+    if let Some((lit, stride)) = &setup.pbgi {
+        let c = lit.config();
+        println!(
+            "indirect: point-based GI, a receiver every {stride} px, {0}x{0} texels, ε {1}, 2^{2} surfels",
+            c.tile, c.epsilon, c.points_log2
         );
     }
     let o = &setup.output;

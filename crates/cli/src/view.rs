@@ -173,10 +173,37 @@ const LIVE_KEYS: [&str; 13] = [
 ];
 
 /// Keys that turn others off when set (`deferred` refuses them together).
-const EXCLUSIVE: [(&str, &[&str]); 3] = [
+const EXCLUSIVE: [(&str, &[&str]); 5] = [
     ("ray-shadows", &["shadows", "manylod-shadows"]),
     ("shadows", &["ray-shadows"]),
     ("manylod-shadows", &["ray-shadows"]),
+    ("vpls", &["pbgi"]),
+    ("pbgi", &["vpls"]),
+];
+
+/// Keys that only mean something with another (`requires` in `deferred`'s flags): turning
+/// that one off removes them too.
+const DEPENDENTS: [(&str, &[&str]); 6] = [
+    (
+        "vpls",
+        &[
+            "pattern",
+            "blur",
+            "plain-blur",
+            "interleaving",
+            "no-interleave",
+            "vpl-clamp",
+            "near-field",
+        ],
+    ),
+    ("ssaa", &["adaptive"]),
+    ("adaptive", &["ssaa-metric"]),
+    ("pbgi", &["pbgi-tile", "pbgi-epsilon", "pbgi-points"]),
+    ("ssao", &["ssao-kernel", "ssao-radius"]),
+    (
+        "subdiv",
+        &["subdiv-pixels", "subdiv-flat", "subdiv-show-levels"],
+    ),
 ];
 
 impl Recipe {
@@ -1599,6 +1626,21 @@ impl Viewer {
             .map(|k| ((*k).to_owned(), None))
             .collect();
         edits.extend(excluded);
+        // … and one turned off takes its dependents with it (transitively).
+        let mut i = 0;
+        while i < edits.len() {
+            if edits[i].1.is_none() {
+                let key = edits[i].0.clone();
+                for (_, dependents) in DEPENDENTS.iter().filter(|(k, _)| *k == key) {
+                    for d in dependents.iter() {
+                        if self.recipe.has(d) && !edits.iter().any(|(k, _)| k == d) {
+                            edits.push(((*d).to_owned(), None));
+                        }
+                    }
+                }
+            }
+            i += 1;
+        }
         let mut recipe = self.recipe.clone();
         for (key, value) in &edits {
             recipe.set(key, value.clone());
@@ -1914,9 +1956,36 @@ impl Panel<'_> {
                     true,
                 );
             });
-        egui::CollapsingHeader::new("Indirect light (VPLs)")
+        egui::CollapsingHeader::new("Indirect light")
             .default_open(true)
             .show(ui, |ui| {
+                let pbgi = args.pbgi.map_or("off".to_owned(), |n| n.to_string());
+                self.choice(
+                    ui,
+                    "pbgi",
+                    "point-based GI, receiver every … px",
+                    &["2", "4", "8", "16"],
+                    &pbgi,
+                    true,
+                );
+                if args.pbgi.is_some() {
+                    self.choice(
+                        ui,
+                        "pbgi-tile",
+                        "PBGI texels",
+                        &["8", "16", "32", "64"],
+                        &args.pbgi_tile.to_string(),
+                        false,
+                    );
+                    self.number(
+                        ui,
+                        "pbgi-epsilon",
+                        "PBGI ε texels",
+                        f64::from(args.pbgi_epsilon),
+                        0.25..=16.0,
+                        false,
+                    );
+                }
                 let vpls = args.vpls.map_or("off".to_owned(), |n| n.to_string());
                 self.choice(
                     ui,
