@@ -4,22 +4,10 @@
 // `tile`² texels over the normal's hemisphere, lifted by `ray_lift` (`manylod::View::gpu`).
 // A cell whose pixel shows no surface gets a view at the eye looking up (its irradiance is not
 // used). Mirrors `instant_radiosity::pbgi::grid_receivers` and `gather_views`.
-// #import gbuffer/frame.wgsl
-// #import gbuffer/normal_encoding.wgsl
+// #import instant-radiosity/pbgi_grid.wgsl
 // #import tiled-shading/rays.wgsl
 // #import manylod/common.wgsl
 
-struct Grid {
-    stride: u32,
-    columns: u32,
-    rows: u32,
-    tile: u32,
-}
-
-@group(0) @binding(0) var<uniform> frame: Frame;
-@group(0) @binding(1) var<uniform> grid: Grid;
-@group(0) @binding(2) var linear_depth: texture_2d<f32>;
-@group(0) @binding(3) var normals: texture_2d<u32>;
 @group(0) @binding(4) var<storage, read_write> views: array<View>;
 
 // `manylod::view::paraboloid_frame`: tangent and bitangent of a unit normal.
@@ -36,14 +24,13 @@ fn receivers(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let size = vec2<u32>(frame.viewport.xy);
-    let cell = vec2<u32>(i % grid.columns, i / grid.columns);
-    let pixel = min(cell * grid.stride + grid.stride / 2u, size - 1u);
+    let pixel = receiver_pixel(vec2<u32>(i % grid.columns, i / grid.columns), size);
     let depth = textureLoad(linear_depth, pixel, 0).x;
     var p = frame.eye.xyz;
     var n = vec3<f32>(0.0, 1.0, 0.0);
     if depth > 0.0 {
         p = position_from_view_ray(frame, pixel, depth);
-        n = decode_octahedral_snorm(unpack2x16snorm(textureLoad(normals, pixel, 0).x));
+        n = normal_at(pixel);
     }
     let eye = p + n * ray_lift(p);
     let tb = paraboloid_frame(n);

@@ -4,35 +4,14 @@
 // receiver within 2 % of the pixel's depth of its tangent plane — or, where none is, over those
 // that show any surface. Writes E/π, the indirect diffuse the composition multiplies by the
 // albedo. Mirrors `instant_radiosity::pbgi::upsample`.
-// #import gbuffer/frame.wgsl
-// #import gbuffer/normal_encoding.wgsl
+// #import instant-radiosity/pbgi_grid.wgsl
 
-struct Grid {
-    stride: u32,
-    columns: u32,
-    rows: u32,
-    tile: u32,
-}
-
-@group(0) @binding(0) var<uniform> frame: Frame;
-@group(0) @binding(1) var<uniform> grid: Grid;
-@group(0) @binding(2) var linear_depth: texture_2d<f32>;
-@group(0) @binding(3) var normals: texture_2d<u32>;
 @group(0) @binding(4) var<storage, read> irradiance: array<vec4<f32>>;
 @group(0) @binding(5) var indirect_out: texture_storage_2d<rgba16float, write>;
 
 // `pbgi::SAME_NORMAL` and `pbgi::SAME_PLANE`.
 const SAME_NORMAL: f32 = 0.9;
 const SAME_PLANE: f32 = 0.02;
-
-fn normal_at(pixel: vec2<u32>) -> vec3<f32> {
-    return decode_octahedral_snorm(unpack2x16snorm(textureLoad(normals, pixel, 0).x));
-}
-
-// The pixel of receiver cell `c` (`ReceiverGrid::pixel`).
-fn receiver_pixel(c: vec2<u32>, size: vec2<u32>) -> vec2<u32> {
-    return min(c * grid.stride + grid.stride / 2u, size - 1u);
-}
 
 @compute @workgroup_size(8, 8)
 fn upsample(@builtin(global_invocation_id) id: vec3<u32>) {

@@ -19,11 +19,7 @@ fn clear_ids(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
 
 @compute @workgroup_size(256)
 fn nearest(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = gid.x + gid.y * groups.x * 256u;
-    if i >= min(atomicLoad(&counters[atlas_.cut_slot]), arrayLength(&cut)) {
-        return;
-    }
-    let nv = cut[i];
+    let nv = cut_entry(gid.x + gid.y * groups.x * 256u);
     if (nv.x & CULLED) != 0u {
         return;
     }

@@ -86,13 +86,17 @@ fn splat_disc(v: u32, n: Node) {
 
 @compute @workgroup_size(256)
 fn splat(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = gid.x + gid.y * groups.x * 256u;
-    if i >= min(atomicLoad(&counters[atlas_.cut_slot]), arrayLength(&cut)) {
-        return;
-    }
-    let nv = cut[i];
+    let nv = cut_entry(gid.x + gid.y * groups.x * 256u);
     if (nv.x & CULLED) != 0u {
         return;
     }
     splat_disc(nv.y, nodes[nv.x]);
+}
+
+// Node-view `i` of the cut (node, view), flagged CULLED past the cut's end.
+fn cut_entry(i: u32) -> vec2<u32> {
+    if i >= min(atomicLoad(&counters[atlas_.cut_slot]), arrayLength(&cut)) {
+        return vec2<u32>(CULLED, 0u);
+    }
+    return cut[i];
 }

@@ -255,13 +255,7 @@ fn the_splat_converges_to_the_brute_force_gather() {
     let count = 1usize << log2;
     let surfels = manylod::surfels::sample(&positions, &indices, count, 1).expect("surfels");
     let (centres, normals) = manylod::surfels::evaluate(&surfels, &positions, &indices);
-    let area: f32 = indices
-        .chunks_exact(3)
-        .map(|t| {
-            let [a, b, c] = [t[0], t[1], t[2]].map(|i| positions[i as usize]);
-            0.5 * (b - a).cross(c - a).length()
-        })
-        .sum();
+    let area = manylod::surfels::mesh_area(&positions, &indices);
     let reach = 2.0 * scene.bounds().diagonal();
     let radiance: Vec<Vec3> = surfels
         .iter()

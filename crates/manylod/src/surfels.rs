@@ -107,12 +107,16 @@ pub fn evaluate(surfels: &[Surfel], positions: &[Vec3], indices: &[u32]) -> (Vec
 
 /// Radius of a disc with a `1 / count` share of the area: the leaves' bounding spheres.
 pub fn disc_radius(positions: &[Vec3], indices: &[u32], count: usize) -> f32 {
-    let area: f32 = indices
+    (mesh_area(positions, indices) / (count as f32 * std::f32::consts::PI)).sqrt()
+}
+
+/// The total area of a triangle mesh.
+pub fn mesh_area(positions: &[Vec3], indices: &[u32]) -> f32 {
+    indices
         .chunks_exact(3)
         .map(|t| {
             let [a, b, c] = [t[0], t[1], t[2]].map(|i| positions[i as usize]);
             0.5 * (b - a).cross(c - a).length()
         })
-        .sum();
-    (area / (count as f32 * std::f32::consts::PI)).sqrt()
+        .sum()
 }
