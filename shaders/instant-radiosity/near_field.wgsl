@@ -2,6 +2,7 @@
 // #import gbuffer/normal_encoding.wgsl
 // #import tiled-shading/lighting.wgsl
 // #import tiled-shading/rays.wgsl
+// #import instant-radiosity/direct.wgsl
 // #import instant-radiosity/vpl.wgsl
 // The VPLs' near field (Kollig & Keller 2004's bias compensation; `instant_radiosity::near_field`
 // is the CPU twin, function for function). The VPL estimator bounds 1/d² at the clamp distance
@@ -29,7 +30,7 @@ struct NearFieldParams {
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<uniform> params: NearFieldParams;
 @group(0) @binding(2) var<storage, read> vpls: array<Vpl>;
-@group(0) @binding(3) var<storage, read> lights: array<Light>;
+// 3: the lights (`direct.wgsl`).
 @group(0) @binding(4) var<storage, read> albedos: array<u32>;
 @group(0) @binding(5) var linear_depth: texture_2d<f32>;
 @group(0) @binding(6) var normals: texture_2d<u32>;
@@ -64,22 +65,7 @@ fn cosine_direction(n: vec3<f32>, u1: f32, u2: f32) -> vec3<f32> {
 // Irradiance / π at y (normal n): the lights by shadow rays, `samples` VPLs from `first` by rays.
 fn irradiance_at(y: vec3<f32>, n: vec3<f32>, first: u32) -> vec3<f32> {
     let origin = y + n * ray_lift(y);
-    var e = vec3<f32>(0.0);
-    for (var i = 0u; i < params.lights; i++) {
-        let light = lights[i];
-        let inc = light_incidence(light, y);
-        let cos_y = dot(n, inc.xyz);
-        if inc.w <= 0.0 || cos_y <= 0.0 {
-            continue;
-        }
-        var to = light.position - origin;
-        if light.kind == LIGHT_DIRECTIONAL {
-            to = -light.direction * params.reach;
-        }
-        if !occluded(origin, to) {
-            e += light.color * (inc.w * cos_y);
-        }
-    }
+    let e = direct_irradiance(y, n, params.lights, params.reach);
     var indirect = vec3<f32>(0.0);
     for (var i = 0u; i < params.samples; i++) {
         let vpl = vpls[(first + i) % params.vpls];

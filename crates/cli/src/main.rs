@@ -194,9 +194,9 @@ struct Args {
     #[arg(long, default_value = "ND", requires = "adaptive")]
     ssaa_metric: adaptive_ssaa::GeometricMetric,
     /// One-bounce indirect light by point-based GI instead of VPLs (GPU; Holländer 2013
-    /// §3.6.1): a receiver every STRIDE pixels gathers the scene's lit surfels through a
-    /// many-view cut of paraboloid views, upsampled edge-aware to the frame. The surfels are
-    /// lit once at load (shadow rays from the direct lights).
+    /// §3.6.1): every frame the scene's surfels are lit by the direct lights (shadow rays) and a
+    /// receiver every STRIDE pixels gathers them through a many-view cut of paraboloid views,
+    /// upsampled edge-aware to the frame. The surfels stay where they were sampled at load.
     #[arg(long, value_name = "STRIDE", conflicts_with = "vpls", value_parser = clap::value_parser!(u32).range(1..=64))]
     pbgi: Option<u32>,
     /// With --pbgi: each receiver's paraboloid view in T×T texels.
@@ -1562,7 +1562,7 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
         }
     }
     if let Some((lit, stride)) = &setup.pbgi {
-        renderer.set_pbgi(d, Some((lit, *stride)))?;
+        renderer.set_pbgi(d, Some((lit, *stride, scene)))?;
     }
     renderer.set_ssaa(d, q, ssaa_config(args)?.as_ref())?;
     if let Some((config, estimator)) = ssao_setting(args, &setup.scene)? {

@@ -46,7 +46,18 @@ use scene::Aabb;
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     "instant-radiosity",
     imports: [gbuffer::SHADERS, tiled_shading::SHADERS, manylod::SHADERS, interleave::SHADERS],
-    files: ["vpl.wgsl", "vpl_shading.wgsl", "near_field.wgsl", "ssm.wgsl", "pbgi.wgsl", "pbgi_grid.wgsl", "pbgi_receivers.wgsl", "pbgi_upsample.wgsl"],
+    files: [
+        "vpl.wgsl",
+        "vpl_shading.wgsl",
+        "direct.wgsl",
+        "near_field.wgsl",
+        "ssm.wgsl",
+        "pbgi.wgsl",
+        "pbgi_grid.wgsl",
+        "pbgi_lighting.wgsl",
+        "pbgi_receivers.wgsl",
+        "pbgi_upsample.wgsl",
+    ],
 );
 
 /// What this crate's kernels need of a device: the interleaving passes' and the VPL

@@ -83,6 +83,9 @@ pub struct LitPoints {
     pub radiance: Vec<Vec3>,
     /// Distance mapped to depth 1 in the views (the scene's diagonal).
     pub far: f32,
+    /// Packed linear albedo (`pack4x8unorm`) of each leaf slot's surfel, for lighting them
+    /// again on the GPU ([`GpuGather::light_on_gpu`]); empty for [`LitPoints::from_hierarchy`].
+    pub leaf_albedos: Vec<u32>,
     config: PbgiConfig,
 }
 
@@ -112,12 +115,15 @@ impl LitPoints {
             .collect();
         let leaf_radius = manylod::surfels::disc_radius(&positions, &indices, count);
         let bsh = Bsh::build(&points, &normals, leaf_radius)?;
-        Ok(Self::from_hierarchy(
-            bsh,
-            &radiance,
-            scene.bounds().diagonal(),
-            *config,
-        ))
+        let leaf_albedos = bsh
+            .order
+            .iter()
+            .map(|&i| albedos[surfels[i as usize].triangle as usize])
+            .collect();
+        Ok(Self {
+            leaf_albedos,
+            ..Self::from_hierarchy(bsh, &radiance, scene.bounds().diagonal(), *config)
+        })
     }
 
     /// The hierarchy `bsh` over points whose exit radiance is `leaf_radiance` (in the points'
@@ -136,6 +142,7 @@ impl LitPoints {
             bsh,
             radiance,
             far: far.max(1e-6),
+            leaf_albedos: Vec::new(),
             config,
         }
     }
@@ -399,6 +406,33 @@ pub struct GpuGather {
     tile: u32,
     /// The receivers and upsampling kernels bound to a frame ([`GpuGather::bind_frame`]).
     frame: Option<BoundFrame>,
+    /// Every node's exit radiance (`vec4<f32>`, RGB), uploaded or lit on the GPU.
+    radiance: wgpu::Buffer,
+    /// The surfels' lighting on the GPU ([`GpuGather::light_on_gpu`]).
+    lighting: Option<GpuLighting>,
+}
+
+/// The surfels' direct light on the GPU (`pbgi_lighting.wgsl`): the scene's BVH, the lights,
+/// the leaves' kernel and one averaging dispatch per level of the hierarchy.
+struct GpuLighting {
+    /// Bound in `leaves`; kept alive here.
+    _rays: tiled_shading::gpu::shadows::GpuRays,
+    lights: wgpu::Buffer,
+    light_capacity: usize,
+    /// `Lighting` of every dispatch: the leaves', then each level's from the deepest up.
+    params: Vec<(wgpu::Buffer, LightingParams)>,
+    leaves: (Kernel, wgpu::BindGroup),
+    average: (Kernel, Vec<wgpu::BindGroup>),
+}
+
+/// `Lighting` of `pbgi_lighting.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct LightingParams {
+    first: u32,
+    count: u32,
+    lights: u32,
+    reach: f32,
 }
 
 /// [`GpuGather`]'s kernels bound to a frame's G-buffer and output.
@@ -482,7 +516,166 @@ impl GpuGather {
             views: views.len() as u32,
             tile,
             frame: None,
+            radiance,
+            lighting: None,
         })
+    }
+
+    /// From now on each [`GpuGather::encode`] lights the surfels on the GPU first (the
+    /// radiance of `lit` was for the lights at set-up): every leaf's direct light from
+    /// `lights` by shadow rays through `scene`'s triangles, then the nodes' means, level by
+    /// level (`pbgi_lighting.wgsl`, [`LitPoints::new`]'s twin). Move the lights with
+    /// [`GpuGather::set_lights`].
+    pub fn light_on_gpu(
+        &mut self,
+        device: &wgpu::Device,
+        scene: &Scene,
+        lit: &LitPoints,
+        lights: &[GpuLight],
+    ) -> Result<(), IndirectError> {
+        let n = lit.bsh.leaf_count();
+        if lit.leaf_albedos.len() != n {
+            return Err(IndirectError::Config(
+                "lighting on the GPU needs the surfels' albedos (points from LitPoints::new)"
+                    .into(),
+            ));
+        }
+        let (positions, indices) = scene_mesh(scene);
+        let rays = tiled_shading::gpu::shadows::GpuRays::new(
+            device,
+            &RayBvh::new((&positions, &indices))?,
+            tiled_shading::rays::RayParams::default(),
+        )?;
+        let light_capacity = lights.len().max(1);
+        let lights_buffer = transfer::buffer_init(
+            device,
+            "pbgi lights",
+            bytemuck::cast_slice(&pad_lights(lights, light_capacity)),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        )?;
+        let albedos = transfer::buffer_init(
+            device,
+            "pbgi leaf albedos",
+            bytemuck::cast_slice(&lit.leaf_albedos),
+            wgpu::BufferUsages::STORAGE,
+        )?;
+        let reach = 2.0 * scene.bounds().diagonal().max(1e-6);
+        // The leaves, then levels depth − 1 .. 0 (level l: nodes 2^l − 1 .. 2^(l+1) − 1).
+        let ranges: Vec<(u32, u32)> = std::iter::once((n as u32 - 1, n as u32))
+            .chain(
+                (0..lit.bsh.depth)
+                    .rev()
+                    .map(|l| ((1u32 << l) - 1, 1u32 << l)),
+            )
+            .collect();
+        let params = ranges
+            .iter()
+            .map(|&(first, count)| {
+                let p = LightingParams {
+                    first,
+                    count,
+                    lights: lights.len() as u32,
+                    reach,
+                };
+                let buffer = transfer::buffer_init(
+                    device,
+                    "pbgi lighting",
+                    bytemuck::bytes_of(&p),
+                    wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                )?;
+                Ok((buffer, p))
+            })
+            .collect::<Result<Vec<_>, IndirectError>>()?;
+        let specialisation = ::gpu::shader::Specialisation::default()
+            .set("RAY_GROUP", "0u")
+            .set("RAY_NODES", "5u")
+            .set("RAY_TRIANGLES", "6u");
+        let module = crate::SHADERS.module_with(device, "pbgi_lighting.wgsl", &specialisation)?;
+        let leaves = Kernel::new(
+            device,
+            &module,
+            "light_leaves",
+            &[
+                Binding::Uniform,
+                Binding::StorageRead,
+                Binding::StorageRead,
+                Binding::StorageRead,
+                Binding::Storage,
+                Binding::StorageRead,
+                Binding::StorageRead,
+            ],
+            &[],
+        );
+        let leaves_bind = leaves.bind_buffers(
+            device,
+            &[
+                &params[0].0,
+                &self.manylod.nodes,
+                &albedos,
+                &lights_buffer,
+                &self.radiance,
+                &rays.nodes,
+                &rays.triangles,
+            ],
+        );
+        let average = Kernel::numbered(
+            device,
+            &module,
+            "average",
+            &[(0, Binding::Uniform), (4, Binding::Storage)],
+        );
+        let average_binds = params[1..]
+            .iter()
+            .map(|(buffer, _)| average.bind_buffers(device, &[buffer, &self.radiance]))
+            .collect();
+        self.lighting = Some(GpuLighting {
+            _rays: rays,
+            lights: lights_buffer,
+            light_capacity,
+            params,
+            leaves: (leaves, leaves_bind),
+            average: (average, average_binds),
+        });
+        Ok(())
+    }
+
+    /// Replaces the lights the surfels are lit by on the GPU (at most as many as at
+    /// [`GpuGather::light_on_gpu`]).
+    pub fn set_lights(
+        &self,
+        queue: &wgpu::Queue,
+        lights: &[GpuLight],
+    ) -> Result<(), IndirectError> {
+        let Some(l) = &self.lighting else {
+            return Err(IndirectError::Config(
+                "the surfels are not lit on the GPU (light_on_gpu)".into(),
+            ));
+        };
+        if lights.len() > l.light_capacity {
+            return Err(IndirectError::Config(format!(
+                "{} lights for surfels lit by at most {}",
+                lights.len(),
+                l.light_capacity
+            )));
+        }
+        queue.write_buffer(
+            &l.lights,
+            0,
+            bytemuck::cast_slice(&pad_lights(lights, l.light_capacity)),
+        );
+        for (buffer, p) in &l.params {
+            let p = LightingParams {
+                lights: lights.len() as u32,
+                ..*p
+            };
+            queue.write_buffer(buffer, 0, bytemuck::bytes_of(&p));
+        }
+        Ok(())
+    }
+
+    /// Every node's exit radiance (`vec4<f32>`, RGB; heap order), e.g. to read back.
+    pub fn radiance(&self) -> &wgpu::Buffer {
+        &self.radiance
     }
 
     /// From now on each [`GpuGather::encode`] makes the views of `grid`'s receivers from the
@@ -615,10 +808,28 @@ impl GpuGather {
             .set_views(queue, &gather_views(receivers, self.tile))?)
     }
 
-    /// Records the receivers' views where a frame is bound (timed `pbgi receivers`), the cut
+    /// Records the surfels' lighting where it runs on the GPU (timed `pbgi lighting`), the
+    /// receivers' views where a frame is bound (`pbgi receivers`), the cut
     /// (`cut`), the splat with nearest nodes (`splat`), the convolution (`pbgi convolve`) and
     /// the upsampling into the frame's output (`pbgi upsample`).
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
+        if let Some(l) = &self.lighting {
+            let groups = |count: u32| {
+                let g = count.div_ceil(64);
+                Workgroups::Direct([g.min(MAX_GROUPS_X), g.div_ceil(MAX_GROUPS_X), 1])
+            };
+            let mut dispatches = vec![
+                l.leaves
+                    .0
+                    .dispatch(&l.leaves.1, groups(l.params[0].1.count)),
+            ];
+            for (bind, (_, p)) in l.average.1.iter().zip(&l.params[1..]) {
+                dispatches.push(l.average.0.dispatch(bind, groups(p.count)));
+            }
+            Passes::new()
+                .pass("pbgi lighting", dispatches)
+                .encode(encoder, timer);
+        }
         if let Some(f) = &self.frame {
             let (kernel, bind) = &f.receivers;
             Passes::one(
@@ -672,6 +883,13 @@ impl GpuGather {
         let words: Vec<[f32; 4]> = transfer::read_pod(device, queue, &self.irradiance)?;
         Ok(words.iter().map(|w| Vec3::new(w[0], w[1], w[2])).collect())
     }
+}
+
+/// `lights` followed by zeroed lights up to `capacity` (a binding is never empty).
+fn pad_lights(lights: &[GpuLight], capacity: usize) -> Vec<GpuLight> {
+    let mut padded = lights.to_vec();
+    padded.resize(capacity, bytemuck::Zeroable::zeroed());
+    padded
 }
 
 /// Most workgroups along x in one dispatch dimension.

@@ -476,3 +476,71 @@ fn upsampling_keeps_a_constant_field() {
         );
     }
 }
+
+/// The surfels lit on the GPU (leaves by shadow rays, nodes by level means) against
+/// `LitPoints::new` with the same lights: set up with all 16 lamp samples, then relit on the
+/// GPU with the first 8 (`set_lights`), the radiance of every node equals the CPU's for those
+/// 8, up to the odd shadow ray that grazes an edge the other way.
+#[test]
+fn gpu_lighting_matches_the_cpu() {
+    let Some((scene, camera)) = cornell() else {
+        return;
+    };
+    let Some(gpu) = gpu::test_device(&instant_radiosity::device_needs()) else {
+        return;
+    };
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let config = PbgiConfig {
+        points_log2: 12,
+        ..PbgiConfig::default()
+    };
+    let lights = lamp(&scene);
+    let lit = LitPoints::new(&scene, &lights, &config).expect("surfels");
+    let half = LitPoints::new(&scene, &lights[..8], &config).expect("surfels");
+    let points: Vec<(Vec3, Vec3)> = receivers(&scene, &camera, (8, 8))
+        .iter()
+        .map(|p| p.2)
+        .collect();
+    let mut gather = GpuGather::new(d, &lit, &points, 1 << 20).expect("gather");
+    gather
+        .light_on_gpu(d, &scene, &lit, &lights)
+        .expect("lighting");
+    gather.set_lights(q, &lights[..8]).expect("lights");
+    assert!(
+        gather.set_lights(q, &lamp(&scene).repeat(2)).is_err(),
+        "more lights than set up"
+    );
+    let mut encoder = d.create_command_encoder(&Default::default());
+    gather.encode(&mut encoder, None);
+    q.submit([encoder.finish()]);
+    let got: Vec<[f32; 4]> = gpu::transfer::read_pod(d, q, gather.radiance()).expect("radiance");
+    assert_eq!(got.len(), half.radiance.len());
+    let close = got
+        .iter()
+        .zip(&half.radiance)
+        .filter(|(g, w)| {
+            (Vec3::new(g[0], g[1], g[2]) - **w).abs().max_element()
+                <= 1e-3 * w.max_element().max(1e-3)
+        })
+        .count();
+    println!(
+        "GPU vs CPU surfel lighting: {close} of {} nodes within 1e-3",
+        got.len()
+    );
+    assert!(close * 100 >= got.len() * 99, "{close} of {}", got.len());
+    let sum = |v: &mut dyn Iterator<Item = f32>| v.sum::<f32>();
+    let (g, w) = (
+        sum(&mut got.iter().map(|g| g[1])),
+        sum(&mut half.radiance.iter().map(|w| w.y)),
+    );
+    assert!((g - w).abs() <= 1e-3 * w, "total {g} vs {w}");
+    // The root is the mean of all leaves.
+    let leaves = &half.radiance[half.radiance.len() / 2..];
+    let mean = leaves.iter().copied().sum::<Vec3>() / leaves.len() as f32;
+    assert!(
+        (Vec3::new(got[0][0], got[0][1], got[0][2]) - mean)
+            .abs()
+            .max_element()
+            <= 1e-3 * mean.max_element()
+    );
+}

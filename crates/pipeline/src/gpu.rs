@@ -214,6 +214,8 @@ struct PbgiStage {
     output: wgpu::Texture,
     lit: instant_radiosity::pbgi::LitPoints,
     stride: u32,
+    /// The scene the surfels' shadow rays are traced through.
+    scene: Scene,
 }
 
 /// Node-views a point-based GI view's cut may hold per texel (measured: about 5 at ε = 1
@@ -619,6 +621,15 @@ impl GpuRenderer {
         {
             self.bind_near_field(device)?;
             self.bind_composition(device);
+        }
+        if let Some(p) = &self.pbgi
+            && p.gather.set_lights(queue, &self.lights).is_err()
+        {
+            // More lights than the surfels were set up for: light them anew.
+            let PbgiStage {
+                lit, stride, scene, ..
+            } = self.pbgi.take().expect("checked");
+            self.set_pbgi(device, Some((&lit, stride, &scene)))?;
         }
         self.plan_shadows(device, queue)
     }
@@ -1080,8 +1091,11 @@ impl GpuRenderer {
         if let Some(Indirect { config, set, .. }) = self.indirect.take() {
             self.set_indirect(device, &config, &set)?;
         }
-        if let Some(PbgiStage { lit, stride, .. }) = self.pbgi.take() {
-            self.set_pbgi(device, Some((&lit, stride)))?;
+        if let Some(PbgiStage {
+            lit, stride, scene, ..
+        }) = self.pbgi.take()
+        {
+            self.set_pbgi(device, Some((&lit, stride, &scene)))?;
         }
         self.rebind(device, queue)?;
         if let Some(camera) = self.camera {
@@ -1146,19 +1160,21 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Lights the frame's indirect diffuse light by point-based GI (`Some((lit, stride))`,
-    /// Holländer 2013 §3.6.1, [`instant_radiosity::pbgi`]): a receiver every `stride` pixels of
-    /// the G-buffer gathers `lit`'s surfels through a many-view cut, and the irradiance is
-    /// upsampled edge-aware to the frame — instead of the VPLs' indirect stage, which this
-    /// removes (with its near field); or removes it (`None`). The cut lists hold
+    /// Lights the frame's indirect diffuse light by point-based GI (`Some((lit, stride,
+    /// scene))`, Holländer 2013 §3.6.1, [`instant_radiosity::pbgi`]): every frame the surfels
+    /// of `lit` are lit by the renderer's lights with shadow rays through `scene`'s triangles,
+    /// a receiver every `stride` pixels of the G-buffer gathers them through a many-view cut,
+    /// and the irradiance is upsampled edge-aware to the frame — instead of the VPLs' indirect
+    /// stage, which this removes (with its near field); or removes it (`None`). The surfels stay
+    /// where `lit` sampled them (meshes that move later are not followed). The cut lists hold
     /// [`PBGI_NODE_VIEWS_PER_TEXEL`] node-views per texel of every view (at most the device's
     /// largest binding): check them with [`GpuRenderer::check_pbgi`].
     pub fn set_pbgi(
         &mut self,
         device: &wgpu::Device,
-        setting: Option<(&instant_radiosity::pbgi::LitPoints, u32)>,
+        setting: Option<(&instant_radiosity::pbgi::LitPoints, u32, &Scene)>,
     ) -> Result<(), RenderError> {
-        let Some((lit, stride)) = setting else {
+        let Some((lit, stride, scene)) = setting else {
             self.pbgi = None;
             self.bind_composition(device);
             return Ok(());
@@ -1174,6 +1190,7 @@ impl GpuRenderer {
         let capacity = (grid.len() * tile * tile * PBGI_NODE_VIEWS_PER_TEXEL).min(largest);
         let placeholder = vec![(Vec3::ZERO, Vec3::Y); grid.len()];
         let mut gather = GpuGather::new(device, lit, &placeholder, capacity)?;
+        gather.light_on_gpu(device, scene, lit, &self.lights)?;
         let (w, h) = self.size();
         let output = transfer::texture_2d(
             device,
@@ -1197,6 +1214,7 @@ impl GpuRenderer {
             output,
             lit: lit.clone(),
             stride,
+            scene: scene.clone(),
         });
         self.bind_composition(device);
         Ok(())

@@ -201,7 +201,7 @@ fn pbgi_adds_the_bounce_the_path_tracer_sees() {
         r.set_shadows(d, q, Some(&ShadowMapConfig::default()))
             .expect("shadows");
         if pbgi {
-            r.set_pbgi(d, Some((&lit, 4))).expect("pbgi");
+            r.set_pbgi(d, Some((&lit, 4, &scene))).expect("pbgi");
         }
         let image = r
             .render(d, q, &camera, glam::Vec3::ZERO)
