@@ -6,7 +6,8 @@
 //! (truth: no bounce), then shadowed direct light plus `--vpls` VPLs without visibility, with
 //! ISM, with ManyLoD, with exact rasterised (SSM) visibility and with rays (truth: one
 //! bounce), multi-bounce VPLs (photons
-//! continue by Russian roulette; truth: 8 bounces), and the progressive mode's mean after
+//! continue by Russian roulette; truth: 8 bounces), point-based GI in place of the VPLs (a
+//! receiver every 2, 4 or 8 pixels; truth: one bounce), and the progressive mode's mean after
 //! `--progressive-frames` frames (`pipeline::progressive`; a quarter of the VPLs per frame on
 //! Sponza). Accuracy does not depend on the adapter (the GPU only
 //! renders the frame), so the report of any adapter is valid; writes
@@ -88,6 +89,9 @@ struct Row {
     rms: f64,
     pixels: usize,
     quality: Quality,
+    /// GPU milliseconds of the frame (all passes; the median of 10 frames after a warm-up),
+    /// for equal-time comparisons on a hardware adapter.
+    frame_ms: f64,
 }
 
 #[derive(Serialize)]
@@ -121,8 +125,13 @@ fn truth(
     bench::path_traced(scene, lights, camera, size, config, spp)
 }
 
-/// The row of configuration `name`'s `image` against `truth` (named).
-fn row(name: &str, (truth_name, truth): (&str, &Image<[f32; 4]>), image: &Image<[f32; 4]>) -> Row {
+/// The row of configuration `name`'s `image` (its frame took `frame_ms`) against `truth`
+/// (named).
+fn row(
+    name: &str,
+    (truth_name, truth): (&str, &Image<[f32; 4]>),
+    (image, frame_ms): (&Image<[f32; 4]>, f64),
+) -> Row {
     let Accuracy {
         error,
         bias,
@@ -131,7 +140,7 @@ fn row(name: &str, (truth_name, truth): (&str, &Image<[f32; 4]>), image: &Image<
     } = gbuffer::accuracy(truth, image, 10.0);
     let quality = bench::quality(truth, image);
     println!(
-        "{name:<48} vs {truth_name:<12}: error {error:.3}, bias {:+.1} %, FLIP {:.4}, PSNR {:.1} dB",
+        "{name:<48} vs {truth_name:<12}: error {error:.3}, bias {:+.1} %, FLIP {:.4}, PSNR {:.1} dB, {frame_ms:.3} ms",
         100.0 * bias,
         quality.flip_mean,
         quality.psnr
@@ -144,6 +153,7 @@ fn row(name: &str, (truth_name, truth): (&str, &Image<[f32; 4]>), image: &Image<
         rms,
         pixels,
         quality,
+        frame_ms,
     }
 }
 
@@ -166,6 +176,24 @@ enum Direct {
     /// A ray per pixel and light (`GpuRenderer::set_ray_shadows`).
     Rays,
 }
+
+/// The one-bounce light a measured frame adds.
+#[derive(Clone, Copy)]
+enum Bounce {
+    /// None: direct light only.
+    None,
+    /// VPLs with a visibility (mode, map tile), or none.
+    Vpls(Option<(VplShadows, u32)>),
+    /// Point-based GI: a receiver every `stride` pixels, `tile`² texels, ε.
+    Pbgi {
+        stride: u32,
+        tile: u32,
+        epsilon: f32,
+    },
+}
+
+/// Surfels of point-based GI's rows (fewer in run-once mode).
+const PBGI_POINTS_LOG2: u32 = 18;
 
 /// A scene's rows and the pictures of [`PICTURE`].
 type Measured = (Vec<Row>, Vec<Image<[f32; 4]>>);
@@ -208,85 +236,134 @@ fn measure_scene(setup: &Setup<'_>, scene: &Scene, camera: Camera) -> Result<Mea
     // `shadowed`: the lights with shadow maps (`Direct::Maps`) or rays, an emitter as that
     // many hemispherical samples (else unshadowed, an emitter one point at its centroid).
     // `bounces`: the VPLs' bounces (the truth's), with `visibility` (`None`: no VPLs).
-    let mut measure = |name: &str,
-                       shadowed: Option<(u32, Direct)>,
-                       visibility: Option<Option<(VplShadows, u32)>>,
-                       bounces: u32|
-     -> Result<()> {
-        let set = if bounces > 1 { &many_set } else { &set };
-        let mut r = match shadowed {
-            Some((samples, direct)) => {
-                let (sampled, _, _) = vpl::primary_lights_sampled(scene, samples);
-                let mut r = GpuRenderer::new(d, q, scene, &sampled, w, h)?;
-                match direct {
-                    Direct::Maps => r.set_shadows(d, q, Some(&ShadowMapConfig::default()))?,
-                    Direct::Rays => r.set_ray_shadows(d, q, Some(scene))?,
-                }
-                r
-            }
-            None => GpuRenderer::new(d, q, scene, &lights, w, h)?,
-        };
-        match visibility {
-            None => {}
-            Some(None) => r.set_indirect(d, &config, set)?,
-            Some(Some((mode, tile))) => {
-                let maps = ShadowConfig {
-                    tile,
-                    ..ShadowConfig::for_mode(mode)
-                };
-                r.set_vpl_shadows(d, scene, mode, &maps, &config, set)?
-            }
-        }
-        let image = r.render(d, q, &camera, Vec3::ZERO)?.image;
-        let truth_name = match (visibility, bounces) {
-            (None, _) => "direct light",
-            (Some(_), 1) => "one bounce",
-            (Some(_), _) => "8 bounces",
-        };
-        let truth = match truth_name {
-            "direct light" => &direct_truth,
-            "one bounce" => &bounce_truth,
-            _ => &many_truth,
-        };
-        rows.push(row(name, (truth_name, truth), &image));
-        if PICTURE.contains(&name) {
-            pictures.push(image);
-        }
-        Ok(())
+    let points_log2 = if bench::run_once() {
+        12
+    } else {
+        PBGI_POINTS_LOG2
     };
-    measure("direct light (no shadows)", None, None, 0)?;
+    let mut measure =
+        |name: &str, shadowed: Option<(u32, Direct)>, bounce: Bounce, bounces: u32| -> Result<()> {
+            let set = if bounces > 1 { &many_set } else { &set };
+            let (frame_lights, mut r) = match shadowed {
+                Some((samples, direct)) => {
+                    let (sampled, _, _) = vpl::primary_lights_sampled(scene, samples);
+                    let mut r = GpuRenderer::new(d, q, scene, &sampled, w, h)?;
+                    match direct {
+                        Direct::Maps => r.set_shadows(d, q, Some(&ShadowMapConfig::default()))?,
+                        Direct::Rays => r.set_ray_shadows(d, q, Some(scene))?,
+                    }
+                    (sampled, r)
+                }
+                None => (
+                    lights.clone(),
+                    GpuRenderer::new(d, q, scene, &lights, w, h)?,
+                ),
+            };
+            match bounce {
+                Bounce::None => {}
+                Bounce::Vpls(None) => r.set_indirect(d, &config, set)?,
+                Bounce::Vpls(Some((mode, tile))) => {
+                    let maps = ShadowConfig {
+                        tile,
+                        ..ShadowConfig::for_mode(mode)
+                    };
+                    r.set_vpl_shadows(d, scene, mode, &maps, &config, set)?
+                }
+                Bounce::Pbgi {
+                    stride,
+                    tile,
+                    epsilon,
+                } => {
+                    let config = instant_radiosity::pbgi::PbgiConfig {
+                        tile,
+                        epsilon,
+                        points_log2,
+                    };
+                    let gpu_lights = pipeline::validate_lights(&frame_lights)?;
+                    let lit = instant_radiosity::pbgi::LitPoints::new(scene, &gpu_lights, &config)?;
+                    r.set_pbgi(d, Some((&lit, stride, scene)))?;
+                }
+            }
+            // The frame's GPU time: the median of 10 frames after the clock has risen.
+            let frames = bench::warm_then_time(10, || r.time_frame(d, q, &camera, Vec3::ZERO))?;
+            let totals: Vec<f64> = frames
+                .iter()
+                .map(|passes| passes.iter().map(|t| t.ms).sum())
+                .collect();
+            let frame_ms = bench::Stat::of(totals).median_ms;
+            let image = r.render(d, q, &camera, Vec3::ZERO)?.image;
+            r.check_pbgi(d, q)?;
+            let truth_name = match (bounce, bounces) {
+                (Bounce::None, _) => "direct light",
+                (_, 1) => "one bounce",
+                (_, _) => "8 bounces",
+            };
+            let truth = match truth_name {
+                "direct light" => &direct_truth,
+                "one bounce" => &bounce_truth,
+                _ => &many_truth,
+            };
+            rows.push(row(name, (truth_name, truth), (&image, frame_ms)));
+            if PICTURE.contains(&name) {
+                pictures.push(image);
+            }
+            Ok(())
+        };
+    measure("direct light (no shadows)", None, Bounce::None, 0)?;
     measure(
         "direct light (shadow maps)",
         Some((1, Direct::Maps)),
-        None,
+        Bounce::None,
         0,
     )?;
     // Emitters as area lights: 16 shadowed samples each (punctual lights are one sample).
     let samples = if emissive { 16 } else { 1 };
     if emissive {
-        measure(PICTURE[0], Some((samples, Direct::Maps)), None, 0)?;
+        measure(PICTURE[0], Some((samples, Direct::Maps)), Bounce::None, 0)?;
     }
     let rays = Some((samples, Direct::Rays));
-    measure("direct light (shadows by rays)", rays, None, 0)?;
+    measure("direct light (shadows by rays)", rays, Bounce::None, 0)?;
     let samples = Some((samples, Direct::Maps));
     let (ism, manylod) = (VplShadows::Ism, VplShadows::ManyLod);
     let bounce = |visibility: &str| format!("shadowed direct light + VPLs, {visibility}");
-    measure(&bounce("no visibility"), samples, Some(None), 1)?;
-    measure(&bounce("ISM"), samples, Some(Some((ism, 32))), 1)?;
-    measure(&bounce("ManyLoD"), samples, Some(Some((manylod, 32))), 1)?;
-    let maps64 = Some(Some((manylod, 64)));
+    measure(&bounce("no visibility"), samples, Bounce::Vpls(None), 1)?;
+    measure(&bounce("ISM"), samples, Bounce::Vpls(Some((ism, 32))), 1)?;
+    measure(
+        &bounce("ManyLoD"),
+        samples,
+        Bounce::Vpls(Some((manylod, 32))),
+        1,
+    )?;
+    let maps64 = Bounce::Vpls(Some((manylod, 64)));
     measure(&bounce("ManyLoD 64×64 maps"), samples, maps64, 1)?;
     let many = |visibility: &str| format!("shadowed direct light + 8-bounce VPLs, {visibility}");
-    measure(&many("no visibility"), samples, Some(None), MANY_BOUNCES)?;
+    measure(
+        &many("no visibility"),
+        samples,
+        Bounce::Vpls(None),
+        MANY_BOUNCES,
+    )?;
     measure(&many("ManyLoD 64×64 maps"), samples, maps64, MANY_BOUNCES)?;
-    let ssm = Some(Some((VplShadows::Rasterised, 64)));
+    let ssm = Bounce::Vpls(Some((VplShadows::Rasterised, 64)));
     measure(&bounce("exact SSM 64×64 maps"), samples, ssm, 1)?;
     measure(&many("exact SSM 64×64 maps"), samples, ssm, MANY_BOUNCES)?;
-    let vpl_rays = Some(Some((VplShadows::Rays, 0)));
+    let vpl_rays = Bounce::Vpls(Some((VplShadows::Rays, 0)));
     measure(&bounce("rays"), samples, vpl_rays, 1)?;
     measure(&many("rays"), samples, vpl_rays, MANY_BOUNCES)?;
     let all_rays = |v: &str| format!("direct light by rays + 8-bounce VPLs, {v}");
     measure(&all_rays("rays"), rays, vpl_rays, MANY_BOUNCES)?;
+    // Point-based GI (Holländer 2013 §3.6.1) in place of the VPLs: receiver stride, texels, ε.
+    for (stride, tile, epsilon) in [(8, 16, 2.0), (4, 16, 2.0), (2, 16, 2.0), (4, 32, 1.0)] {
+        let name = format!(
+            "shadowed direct light + PBGI, a receiver every {stride} px, {tile}² texels, ε {epsilon}"
+        );
+        let pbgi = Bounce::Pbgi {
+            stride,
+            tile,
+            epsilon,
+        };
+        measure(&name, samples, pbgi, 1)?;
+    }
     // The progressive mode: its own lights, VPLs and maps every frame, averaged.
     let mut config = ProgressiveConfig::new(scene);
     config.vpls = setup.progressive_vpls;
@@ -301,7 +378,7 @@ fn measure_scene(setup: &Setup<'_>, scene: &Scene, camera: Camera) -> Result<Mea
             config.vpls, setup.progressive_frames
         ),
         ("8 bounces", &many_truth),
-        &image,
+        (&image, f64::NAN),
     ));
     if pictures.len() == PICTURE.len() {
         pictures.splice(0..0, [direct_truth.clone()]);
@@ -388,8 +465,10 @@ fn markdown(r: &Report) -> String {
          (an emitter as 16 shadowed samples, a punctual light as itself). Error: relative mean \
          absolute luminance error over the pixels the truth lights, emitters (luminance > 10) \
          and their neighbours excluded; bias: mean luminance ratio − 1; RMS: relative \
-         root-mean-square luminance error. The timing line above \
-         does not apply: nothing here is timed.\n",
+         root-mean-square luminance error. Frame ms: the GPU time of the frame's passes (the \
+         median of 10 frames after a warm-up; the progressive row is not timed), for \
+         equal-time comparisons; the timing line above applies to it only. PBGI: 2^18 surfels \
+         lit on the GPU, receivers on a grid of the frame.\n",
         r.size.0, r.size.1, r.spp, r.vpls
     );
     for scene in &r.scenes {
@@ -401,6 +480,7 @@ fn markdown(r: &Report) -> String {
             "RMS",
             "FLIP",
             "PSNR dB",
+            "frame ms",
         ]);
         for row in &scene.rows {
             table.row([
@@ -411,6 +491,11 @@ fn markdown(r: &Report) -> String {
                 format!("{:.3}", row.rms),
                 format!("{:.4}", row.quality.flip_mean),
                 format!("{:.1}", row.quality.psnr),
+                if row.frame_ms.is_finite() {
+                    format!("{:.3}", row.frame_ms)
+                } else {
+                    "–".into()
+                },
             ]);
         }
         let _ = write!(s, "## {}\n\n{table}", scene.scene);
