@@ -218,9 +218,9 @@ struct PbgiStage {
     scene: Scene,
 }
 
-/// Node-views a point-based GI view's cut may hold per texel (measured: about 5 at ε = 1
-/// texel on the Cornell box; fewer at larger ε).
-const PBGI_NODE_VIEWS_PER_TEXEL: usize = 8;
+/// Node-views a point-based GI view's cut may hold per `(tile / ε)²` (its drawn nodes are
+/// about ε texels wide; measured: up to 12 on the Cornell box at 32² texels and ε = 1).
+const PBGI_NODE_VIEWS_PER_CELL: f32 = 16.0;
 
 /// The VPLs' near field as the renderer holds it ([`GpuRenderer::set_near_field`]): the kernel
 /// for the scene, its binding to the current targets, lights and VPLs, and its output.
@@ -1167,8 +1167,8 @@ impl GpuRenderer {
     /// and the irradiance is upsampled edge-aware to the frame — instead of the VPLs' indirect
     /// stage, which this removes (with its near field); or removes it (`None`). The surfels stay
     /// where `lit` sampled them (meshes that move later are not followed). The cut lists hold
-    /// [`PBGI_NODE_VIEWS_PER_TEXEL`] node-views per texel of every view (at most the device's
-    /// largest binding): check them with [`GpuRenderer::check_pbgi`].
+    /// [`PBGI_NODE_VIEWS_PER_CELL`] node-views per `(tile / ε)²` of every view (at most the
+    /// device's largest binding): check them with [`GpuRenderer::check_pbgi`].
     pub fn set_pbgi(
         &mut self,
         device: &wgpu::Device,
@@ -1186,8 +1186,9 @@ impl GpuRenderer {
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size)
             / 8) as usize;
-        let tile = lit.config().tile as usize;
-        let capacity = (grid.len() * tile * tile * PBGI_NODE_VIEWS_PER_TEXEL).min(largest);
+        let cells = (lit.config().tile as f32 / lit.config().epsilon.max(0.25)).powi(2);
+        let capacity = ((grid.len() as f32 * cells * PBGI_NODE_VIEWS_PER_CELL) as usize)
+            .clamp(grid.len().max(2), largest);
         let placeholder = vec![(Vec3::ZERO, Vec3::Y); grid.len()];
         let mut gather = GpuGather::new(device, lit, &placeholder, capacity)?;
         gather.light_on_gpu(device, scene, lit, &self.lights)?;
