@@ -1068,6 +1068,9 @@ fn run() -> Result<()> {
             }
             let (camera, ambient) = (setup.camera, setup.ambient);
             renderer.render(d, q, &camera, ambient)?; // warm-up: first use of pipelines and caches
+            if renderer.check_pbgi(d, q)? {
+                eprintln!("note: point-based GI's cut lists grew to hold the cut");
+            }
             let rendered = renderer.render(d, q, &camera, ambient)?;
             let display = pipeline::gpu::read_display(
                 d,
@@ -2074,6 +2077,9 @@ fn gpu_sequence(
         renderer.encode(&mut encoder);
         q.submit([encoder.finish()]);
         let passes = renderer.pass_times(d, q)?;
+        if renderer.check_pbgi(d, q)? {
+            eprintln!("note: point-based GI's cut lists grew to hold frame {k}'s cut");
+        }
         if warmed < args.warm_up {
             warmed += 1;
             continue;

@@ -1330,6 +1330,9 @@ impl Viewer {
         self.present.encode(&mut encoder);
         q.submit([encoder.finish()]);
         let passes = live.renderer.pass_times(d, q)?;
+        if live.renderer.check_pbgi(d, q)? {
+            self.message = Some("point-based GI's cut lists grew to hold the cut".into());
+        }
         if self.timings.len() == TIMING_HISTORY {
             self.timings.pop_front();
         }

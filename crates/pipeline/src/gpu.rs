@@ -216,6 +216,8 @@ struct PbgiStage {
     stride: u32,
     /// The scene the surfels' shadow rays are traced through.
     scene: Scene,
+    /// Node-views each cut list holds.
+    capacity: usize,
 }
 
 /// Node-views a point-based GI view's cut may hold per `(tile / ε)²` (its drawn nodes are
@@ -1168,11 +1170,23 @@ impl GpuRenderer {
     /// stage, which this removes (with its near field); or removes it (`None`). The surfels stay
     /// where `lit` sampled them (meshes that move later are not followed). The cut lists hold
     /// [`PBGI_NODE_VIEWS_PER_CELL`] node-views per `(tile / ε)²` of every view (at most the
-    /// device's largest binding): check them with [`GpuRenderer::check_pbgi`].
+    /// device's largest binding); [`GpuRenderer::check_pbgi`] grows them when a frame's cut
+    /// did not fit.
     pub fn set_pbgi(
         &mut self,
         device: &wgpu::Device,
         setting: Option<(&instant_radiosity::pbgi::LitPoints, u32, &Scene)>,
+    ) -> Result<(), RenderError> {
+        self.set_pbgi_with(device, setting, None)
+    }
+
+    /// [`GpuRenderer::set_pbgi`] with cut lists of `capacity` node-views (default: the
+    /// estimate), at most the device's largest binding.
+    fn set_pbgi_with(
+        &mut self,
+        device: &wgpu::Device,
+        setting: Option<(&instant_radiosity::pbgi::LitPoints, u32, &Scene)>,
+        capacity: Option<usize>,
     ) -> Result<(), RenderError> {
         let Some((lit, stride, scene)) = setting else {
             self.pbgi = None;
@@ -1187,7 +1201,9 @@ impl GpuRenderer {
             .min(limits.max_buffer_size)
             / 8) as usize;
         let cells = (lit.config().tile as f32 / lit.config().epsilon.max(0.25)).powi(2);
-        let capacity = ((grid.len() as f32 * cells * PBGI_NODE_VIEWS_PER_CELL) as usize)
+        let estimate = (grid.len() as f32 * cells * PBGI_NODE_VIEWS_PER_CELL) as usize;
+        let capacity = capacity
+            .unwrap_or(estimate)
             .clamp(grid.len().max(2), largest);
         let placeholder = vec![(Vec3::ZERO, Vec3::Y); grid.len()];
         let mut gather = GpuGather::new(device, lit, &placeholder, capacity)?;
@@ -1216,22 +1232,52 @@ impl GpuRenderer {
             lit: lit.clone(),
             stride,
             scene: scene.clone(),
+            capacity,
         });
         self.bind_composition(device);
         Ok(())
     }
 
-    /// Whether the last frame's point-based GI cuts fit their lists (an error naming the
-    /// capacity when not; `Ok` without PBGI). Reads back a few counters.
+    /// Checks that the last frame's point-based GI cuts fit their lists (reads back a few
+    /// counters). When they did not, the lists grow to twice what the cut needed (at most the
+    /// device's largest binding) and the answer is `true`: render the frame again. An error
+    /// when even the largest lists are too small; `false` without PBGI.
     pub fn check_pbgi(
-        &self,
+        &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-    ) -> Result<(), RenderError> {
-        if let Some(p) = &self.pbgi {
-            p.gather.check(device, queue)?;
+    ) -> Result<bool, RenderError> {
+        let Some(p) = &self.pbgi else {
+            return Ok(false);
+        };
+        match p.gather.check(device, queue) {
+            Ok(()) => Ok(false),
+            Err(instant_radiosity::IndirectError::ManyLod(manylod::ManyLodError::Capacity {
+                needed,
+                ..
+            })) => {
+                let limits = device.limits();
+                let largest = (limits
+                    .max_storage_buffer_binding_size
+                    .min(limits.max_buffer_size)
+                    / 8) as usize;
+                if p.capacity >= largest {
+                    return Err(instant_radiosity::IndirectError::Config(format!(
+                        "point-based GI's cuts need {needed} node-views per list, more than this \
+                         device's largest binding holds ({largest}): raise ε or the stride, or \
+                         lower the texels"
+                    ))
+                    .into());
+                }
+                let PbgiStage {
+                    lit, stride, scene, ..
+                } = self.pbgi.take().expect("checked");
+                let grown = (2 * needed as usize).min(largest);
+                self.set_pbgi_with(device, Some((&lit, stride, &scene)), Some(grown))?;
+                Ok(true)
+            }
+            Err(e) => Err(e.into()),
         }
-        Ok(())
     }
 
     /// Adds the VPLs' near field (`Some(scene)`: Kollig & Keller 2004's compensation of the
