@@ -459,7 +459,7 @@ fn markdown(r: &Report) -> String {
     use std::fmt::Write;
     let mut s = r
         .header
-        .markdown("Accuracy against the path-traced ground truth", 1);
+        .markdown("Accuracy against the path-traced ground truth", 10);
     let _ = writeln!(
         s,
         "{}×{}; truth: `scene::reference` at {} spp (direct light only, one bounce, or 8), emitters \
