@@ -1352,8 +1352,8 @@ fn prepare(args: &Args) -> Result<Setup> {
                 epsilon: args.pbgi_epsilon,
                 points_log2: args.pbgi_points,
             };
-            let gpu_lights = pipeline::validate_lights(&lights)?;
-            let lit = instant_radiosity::pbgi::LitPoints::new(&proxy_scene, &gpu_lights, &config)
+            // Sampled here, lit by the renderer's lights on the GPU every frame.
+            let lit = instant_radiosity::pbgi::LitPoints::sampled(&proxy_scene, &config)
                 .context("--pbgi")?;
             Some((lit, stride))
         }

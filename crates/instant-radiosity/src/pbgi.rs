@@ -84,35 +84,34 @@ pub struct LitPoints {
     /// Distance mapped to depth 1 in the views (the scene's diagonal).
     pub far: f32,
     /// Packed linear albedo (`pack4x8unorm`) of each leaf slot's surfel, for lighting them
-    /// again on the GPU ([`GpuGather::light_on_gpu`]); empty for [`LitPoints::from_hierarchy`].
+    /// ([`LitPoints::light`], [`GpuGather::light_on_gpu`]); empty for
+    /// [`LitPoints::from_hierarchy`].
     pub leaf_albedos: Vec<u32>,
     config: PbgiConfig,
 }
 
 impl LitPoints {
-    /// Surfels of `scene` lit by `lights` (shadow rays through the scene's triangles).
+    /// Surfels of `scene` lit by `lights` (shadow rays through the scene's triangles):
+    /// [`LitPoints::sampled`], then [`LitPoints::light`].
     pub fn new(
         scene: &Scene,
         lights: &[GpuLight],
         config: &PbgiConfig,
     ) -> Result<Self, IndirectError> {
+        let mut lit = Self::sampled(scene, config)?;
+        lit.light(scene, lights)?;
+        Ok(lit)
+    }
+
+    /// `2^points_log2` surfels of `scene` (uniform by area) and their hierarchy, not lit yet
+    /// (zero radiance): what [`GpuGather::light_on_gpu`] lights every frame.
+    pub fn sampled(scene: &Scene, config: &PbgiConfig) -> Result<Self, IndirectError> {
         config.validate()?;
         let (positions, indices) = scene_mesh(scene);
         let count = 1usize << config.points_log2;
         let surfels = manylod::surfels::sample(&positions, &indices, count, 1)?;
         let (points, normals) = manylod::surfels::evaluate(&surfels, &positions, &indices);
-        let bvh = RayBvh::new((&positions, &indices))?;
         let albedos = crate::near_field::triangle_albedos(scene);
-        let reach = 2.0 * scene.bounds().diagonal().max(1e-6);
-        let radiance: Vec<Vec3> = surfels
-            .par_iter()
-            .zip(points.par_iter().zip(&normals))
-            .map(|(s, (&p, &n))| {
-                let rho = crate::near_field::unpack_rgb(albedos[s.triangle as usize]);
-                let e = crate::near_field::direct_irradiance(&bvh, lights, reach, (p, n));
-                rho * e * std::f32::consts::FRAC_1_PI
-            })
-            .collect();
         let leaf_radius = manylod::surfels::disc_radius(&positions, &indices, count);
         let bsh = Bsh::build(&points, &normals, leaf_radius)?;
         let leaf_albedos = bsh
@@ -120,10 +119,42 @@ impl LitPoints {
             .iter()
             .map(|&i| albedos[surfels[i as usize].triangle as usize])
             .collect();
+        let unlit = vec![Vec3::ZERO; count];
         Ok(Self {
             leaf_albedos,
-            ..Self::from_hierarchy(bsh, &radiance, scene.bounds().diagonal(), *config)
+            ..Self::from_hierarchy(bsh, &unlit, scene.bounds().diagonal(), *config)
         })
+    }
+
+    /// Lights the surfels by `lights`: every leaf leaves `ρ/π · E`, its direct irradiance by
+    /// shadow rays through `scene`'s triangles, every node the mean of its children
+    /// (`pbgi_lighting.wgsl`'s twin).
+    pub fn light(&mut self, scene: &Scene, lights: &[GpuLight]) -> Result<(), IndirectError> {
+        let n = self.bsh.leaf_count();
+        if self.leaf_albedos.len() != n {
+            return Err(IndirectError::Config(
+                "lighting needs the surfels' albedos (points from LitPoints::sampled)".into(),
+            ));
+        }
+        let (positions, indices) = scene_mesh(scene);
+        let bvh = RayBvh::new((&positions, &indices))?;
+        let reach = 2.0 * scene.bounds().diagonal().max(1e-6);
+        let leaves = &self.bsh.nodes[n - 1..];
+        self.radiance[n - 1..]
+            .par_iter_mut()
+            .zip(leaves.par_iter().zip(&self.leaf_albedos))
+            .for_each(|(radiance, (leaf, &albedo))| {
+                let rho = crate::near_field::unpack_rgb(albedo);
+                let e = crate::near_field::direct_irradiance(
+                    &bvh,
+                    lights,
+                    reach,
+                    (leaf.center, leaf.axis),
+                );
+                *radiance = rho * e * std::f32::consts::FRAC_1_PI;
+            });
+        average_nodes(&mut self.radiance, n);
+        Ok(())
     }
 
     /// The hierarchy `bsh` over points whose exit radiance is `leaf_radiance` (in the points'
@@ -134,10 +165,7 @@ impl LitPoints {
         for (slot, &i) in bsh.order.iter().enumerate() {
             radiance[n - 1 + slot] = leaf_radiance[i as usize];
         }
-        for i in (0..n - 1).rev() {
-            let c = manylod::bsh::first_child(i as u32) as usize;
-            radiance[i] = (radiance[c] + radiance[c + 1]) * 0.5;
-        }
+        average_nodes(&mut radiance, n);
         Self {
             bsh,
             radiance,
@@ -202,6 +230,15 @@ impl LitPoints {
                     .sum()
             })
             .collect())
+    }
+}
+
+/// Every inner node's radiance the mean of its two children's, from the deepest level up
+/// (`n` leaves at the heap's end).
+fn average_nodes(radiance: &mut [Vec3], n: usize) {
+    for i in (0..n - 1).rev() {
+        let c = manylod::bsh::first_child(i as u32) as usize;
+        radiance[i] = (radiance[c] + radiance[c + 1]) * 0.5;
     }
 }
 

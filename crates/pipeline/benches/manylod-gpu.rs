@@ -158,11 +158,7 @@ fn gpu_manylod(
     epsilon: f32,
     diagonal: f32,
 ) -> Result<GpuManyLod> {
-    let limits = gpu.device.limits();
-    let largest = (limits
-        .max_storage_buffer_binding_size
-        .min(limits.max_buffer_size)
-        / 8) as usize;
+    let largest = manylod::gpu::largest_capacity(&gpu.device);
     let mut capacity = views[0].len() * (TILE * TILE) as usize * 4;
     loop {
         let layout = vpl_atlas(views[0].len(), TILE, diagonal);

@@ -81,11 +81,7 @@ fn gather(
     lit: &LitPoints,
     points: &[(Vec3, Vec3)],
 ) -> Result<(GpuGather, usize)> {
-    let limits = gpu.device.limits();
-    let largest = (limits
-        .max_storage_buffer_binding_size
-        .min(limits.max_buffer_size)
-        / 8) as usize;
+    let largest = manylod::gpu::largest_capacity(&gpu.device);
     let tile = lit.config().tile as usize;
     let mut capacity = (points.len() * tile * tile).min(largest);
     loop {

@@ -1195,11 +1195,7 @@ impl GpuRenderer {
         };
         use instant_radiosity::pbgi::{GpuGather, ReceiverGrid};
         let grid = ReceiverGrid::new(self.size(), stride)?;
-        let limits = device.limits();
-        let largest = (limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size)
-            / 8) as usize;
+        let largest = manylod::gpu::largest_capacity(device);
         let cells = (lit.config().tile as f32 / lit.config().epsilon.max(0.25)).powi(2);
         let estimate = (grid.len() as f32 * cells * PBGI_NODE_VIEWS_PER_CELL) as usize;
         let capacity = capacity
@@ -1256,11 +1252,7 @@ impl GpuRenderer {
                 needed,
                 ..
             })) => {
-                let limits = device.limits();
-                let largest = (limits
-                    .max_storage_buffer_binding_size
-                    .min(limits.max_buffer_size)
-                    / 8) as usize;
+                let largest = manylod::gpu::largest_capacity(device);
                 if p.capacity >= largest {
                     return Err(instant_radiosity::IndirectError::Config(format!(
                         "point-based GI's cuts need {needed} node-views per list, more than this \

@@ -152,6 +152,16 @@ fn uniform(device: &wgpu::Device, label: &str, bytes: &[u8]) -> Result<wgpu::Buf
     )?)
 }
 
+/// The most node-views one list can hold on `device` (its largest storage binding of 8-byte
+/// node-views).
+pub fn largest_capacity(device: &wgpu::Device) -> usize {
+    let limits = device.limits();
+    (limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size)
+        / NODE_VIEW) as usize
+}
+
 /// The GPU side of one hierarchy and one set of views: nodes, views, active and cut lists,
 /// the atlas, and the pipelines.
 pub struct GpuManyLod {
