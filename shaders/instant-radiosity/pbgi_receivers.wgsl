@@ -48,5 +48,6 @@ fn receivers(@builtin(global_invocation_id) gid: vec3<u32>) {
     v.kind = PARABOLOID;
     v.size = vec2<f32>(f32(grid.tile));
     v.pixels_per_radian = f32(grid.tile) * 0.5;
+    v.rim = HALF_PI;
     views[i] = v;
 }

@@ -16,7 +16,8 @@ struct View {
     kind: u32,
     size: vec2<f32>,
     pixels_per_radian: f32,
-    pad: f32,
+    // The largest angle from the axis the view sees (`View::rim`).
+    rim: f32,
 }
 
 // The cut's threshold and sizes (`manylod::gpu`).
@@ -40,8 +41,19 @@ fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
     return atan2(length(cross(a, b)), dot(a, b));
 }
 
-// c(N, V): projected diameter in pixels, 0 when culled (outside a plane or back-facing);
-// a paraboloid measures it at its scale where the sphere reaches furthest from the axis.
+// The projection's scale where a sphere seen in direction `dir` under angular radius `beta`
+// reaches furthest from the view's axis (`View::scale`): the paraboloid's 1 / (1 + cos γ)
+// (its axis is planes[0]'s normal), a pinhole's radial stretch 1 / cos² γ (planes[4]'s).
+fn scale_at(v: View, dir: vec3<f32>, beta: f32) -> f32 {
+    if v.kind == PARABOLOID {
+        return 1.0 / (1.0 + cos(min(angle_between(dir, v.planes[0].xyz) + beta, v.rim)));
+    }
+    let c = cos(min(angle_between(dir, v.planes[4].xyz) + beta, v.rim));
+    return 1.0 / (c * c);
+}
+
+// c(N, V): projected diameter in pixels, 0 when culled (outside a plane or back-facing),
+// measured at the scale where the sphere reaches furthest from the axis.
 fn criterion(v: View, n: Node) -> f32 {
     let to = n.center - v.eye;
     let dist = length(to);
@@ -58,13 +70,7 @@ fn criterion(v: View, n: Node) -> f32 {
     if !visible || back_facing {
         return 0.0;
     }
-    var scale = 1.0;
-    if v.kind == PARABOLOID {
-        // The paraboloid's scale where the sphere reaches furthest from the axis (planes[0] is
-        // the base plane, its normal the axis).
-        scale = 1.0 / (1.0 + cos(min(angle_between(to / dist, v.planes[0].xyz) + beta, HALF_PI)));
-    }
-    return 2.0 * beta * v.pixels_per_radian * scale;
+    return 2.0 * beta * v.pixels_per_radian * scale_at(v, to / dist, beta);
 }
 
 struct Splat {
@@ -98,7 +104,8 @@ fn splat_of(v: View, n: Node, far: f32) -> Splat {
         }
         let ndc = clip.xyz / clip.w;
         s.center = vec2<f32>((ndc.x * 0.5 + 0.5) * v.size.x, (0.5 - ndc.y * 0.5) * v.size.y);
-        radius = asin(n.radius / dist) * v.pixels_per_radian;
+        let beta = asin(n.radius / dist);
+        radius = beta * v.pixels_per_radian * scale_at(v, (n.center - v.eye) / dist, beta);
         s.depth = ndc.z;
     }
     s.radius = clamp(radius, MIN_SPLAT_RADIUS, MAX_SPLAT_RADIUS);

@@ -31,8 +31,8 @@ fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     }
 }
 
-// Node n's disc in view v's tile: its packed depth, the pixels that may lie in it, and where
-// the tile starts in the atlas.
+// Node n's disc in view v's tile: its packed depth, the pixels of the view (its size, at most
+// the tile's) that may lie in it, and where the tile starts in the atlas.
 struct Disc {
     ok: bool,
     word: u32,
@@ -44,7 +44,8 @@ struct Disc {
 }
 
 fn disc_of(v: u32, n: Node) -> Disc {
-    let s = splat_of(views[v], n, atlas_.far);
+    let view = views[v];
+    let s = splat_of(view, n, atlas_.far);
     let tile = i32(atlas_.tile);
     let slot = atlas_.first_view + v;
     return Disc(
@@ -53,7 +54,7 @@ fn disc_of(v: u32, n: Node) -> Disc {
         s.center,
         s.radius,
         max(vec2<i32>(ceil(s.center - s.radius - 0.5)), vec2<i32>(0)),
-        min(vec2<i32>(floor(s.center + s.radius - 0.5)) + 1, vec2<i32>(tile)),
+        min(vec2<i32>(floor(s.center + s.radius - 0.5)) + 1, vec2<i32>(view.size)),
         vec2<i32>(i32(slot % atlas_.columns), i32(slot / atlas_.columns)) * tile,
     );
 }

@@ -240,20 +240,33 @@ pub fn read_buffer(
     queue: &wgpu::Queue,
     buffer: &wgpu::Buffer,
 ) -> Result<Vec<u8>, GpuError> {
-    check_buffer_size(
-        device,
-        "readback",
-        buffer.size(),
-        wgpu::BufferUsages::MAP_READ,
-    )?;
+    let encoder = device.create_command_encoder(&Default::default());
+    read_after(device, queue, encoder, buffer, 0..buffer.size())
+}
+
+/// Submits `encoder` with a copy of `range` of `buffer` (which needs `COPY_SRC`; offset and
+/// length multiples of 4) appended, and returns those bytes: work recorded on the GPU and
+/// its result read back in one round trip.
+pub fn read_after(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    mut encoder: wgpu::CommandEncoder,
+    buffer: &wgpu::Buffer,
+    range: std::ops::Range<u64>,
+) -> Result<Vec<u8>, GpuError> {
+    let size = range.end.saturating_sub(range.start);
+    check_buffer_size(device, "readback", size, wgpu::BufferUsages::MAP_READ)?;
+    if size == 0 {
+        queue.submit([encoder.finish()]);
+        return Ok(Vec::new());
+    }
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
-        size: buffer.size(),
+        size,
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
         mapped_at_creation: false,
     });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    encoder.copy_buffer_to_buffer(buffer, range.start, &staging, 0, size);
     queue.submit([encoder.finish()]);
     map_and_copy(device, &staging)
 }

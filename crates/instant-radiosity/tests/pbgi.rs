@@ -420,7 +420,8 @@ fn gpu_receivers_and_upsampling_match_the_cpu() {
                 && close(g.planes.as_flattened(), w.planes.as_flattened())
                 && g.kind == w.kind
                 && g.size == w.size
-                && g.pixels_per_radian == w.pixels_per_radian,
+                && g.pixels_per_radian == w.pixels_per_radian
+                && g.rim == w.rim,
             "receiver {i}: GPU view {g:?} vs CPU {w:?}"
         );
     }

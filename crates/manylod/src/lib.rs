@@ -14,6 +14,7 @@
 pub mod bsh;
 pub mod cut;
 pub mod gpu;
+pub mod hybrid;
 pub mod lookup;
 pub mod splat;
 pub mod surfels;
@@ -32,6 +33,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     files: [
         "common.wgsl",
         "cut.wgsl",
+        "hybrid.wgsl",
         "inplace.wgsl",
         "inplace_atomic.wgsl",
         "inplace_ballot.wgsl",

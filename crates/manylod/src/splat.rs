@@ -27,7 +27,9 @@ pub fn unpack_depth(word: u32) -> f32 {
 }
 
 /// Where views' tiles lie in the atlas: `tile × tile` pixels each, `columns` per row, view `v`
-/// in slot `s = first_view + v`, at column `s % columns`, row `s / columns`.
+/// in slot `s = first_view + v`, at column `s % columns`, row `s / columns`. A view smaller
+/// than the tile (a 1920×1080 camera in a one-view atlas of 1920² pixels: single-view point
+/// rendering, §3.6.1) fills the tile's top-left corner; nothing is splatted past its size.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AtlasLayout {
     /// Tile side in pixels.
@@ -66,7 +68,7 @@ impl AtlasLayout {
         (self.columns * self.tile, self.rows * self.tile)
     }
 
-    /// Checks that every view is a `tile × tile` view with a slot, and `far` is positive.
+    /// Checks that every view fits a tile and has a slot, and `far` is positive.
     pub fn check(&self, views: &[View]) -> Result<(), ManyLodError> {
         let slots = (self.columns as usize) * (self.rows as usize);
         if self.tile == 0 || slots < self.first_view as usize + views.len() {
@@ -84,10 +86,14 @@ impl AtlasLayout {
         }
         for (index, v) in views.iter().enumerate() {
             v.check(index)?;
-            if v.size() != (self.tile, self.tile) {
+            let (w, h) = v.size();
+            if w > self.tile || h > self.tile {
                 return Err(ManyLodError::View {
                     index,
-                    problem: format!("size {:?} in an atlas of {} px tiles", v.size(), self.tile),
+                    problem: format!(
+                        "size {w}×{h} does not fit an atlas of {} px tiles",
+                        self.tile
+                    ),
                 });
             }
         }
@@ -150,16 +156,17 @@ pub fn splat(
     Ok(atlas)
 }
 
-/// Calls `f(pixel, word)` for every pixel of `view`'s tile (row-major index) whose centre lies
-/// in `node`'s disc ([`View::splat`]), with the disc's packed depth.
+/// Calls `f(pixel, word)` for every pixel of `view`'s tile (row-major index) within the view
+/// whose centre lies in `node`'s disc ([`View::splat`]), with the disc's packed depth.
 fn cover(view: &View, node: &Node, layout: &AtlasLayout, mut f: impl FnMut(usize, u32)) {
     let tile = layout.tile as usize;
     let Some(s) = view.splat(node, layout.far) else {
         return;
     };
     let word = pack_depth(s.depth, 0);
-    let (lo_x, hi_x) = pixel_span(s.center.x, s.radius, tile);
-    let (lo_y, hi_y) = pixel_span(s.center.y, s.radius, tile);
+    let (w, h) = view.size();
+    let (lo_x, hi_x) = pixel_span(s.center.x, s.radius, w as usize);
+    let (lo_y, hi_y) = pixel_span(s.center.y, s.radius, h as usize);
     for y in lo_y..hi_y {
         for x in lo_x..hi_x {
             let dx = x as f32 + 0.5 - s.center.x;
@@ -189,11 +196,11 @@ pub fn nearest_nodes(nodes: &[Node], view: &View, drawn: &[u32], layout: &AtlasL
 /// [`nearest_nodes`]' value of a pixel no node covers.
 pub const NO_NODE: u32 = u32::MAX;
 
-/// Pixels `lo..hi` (clipped to `0..tile`) whose centres may lie within `radius` of `c`.
-fn pixel_span(c: f32, radius: f32, tile: usize) -> (usize, usize) {
+/// Pixels `lo..hi` (clipped to `0..size`) whose centres may lie within `radius` of `c`.
+fn pixel_span(c: f32, radius: f32, size: usize) -> (usize, usize) {
     let lo = (c - radius - 0.5).ceil().max(0.0);
     let hi = (c + radius - 0.5).floor() + 1.0;
-    (lo as usize, (hi.max(0.0) as usize).min(tile))
+    (lo as usize, (hi.max(0.0) as usize).min(size))
 }
 
 /// The imperfect-shadow-map baseline (Ritschel et al. 2008, the comparison of Table 3.1): every

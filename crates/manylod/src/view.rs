@@ -98,7 +98,7 @@ impl View {
     }
 
     /// Pixels per radian the criterion scales angular sizes by: a perspective view's at its
-    /// centre; a paraboloid's at its rim, its largest (see [`View::criterion`]).
+    /// centre, its smallest; a paraboloid's at its rim, its largest (see [`View::criterion`]).
     pub fn pixels_per_radian(&self) -> f32 {
         match *self {
             // The paraboloid maps the hemisphere (π/2 from the axis) to the tile's half side,
@@ -111,11 +111,12 @@ impl View {
     /// `c(N, V)`: projected diameter in pixels, 0 when culled, [`INSIDE`] when the eye is in
     /// the sphere. Mirrored by the GPU kernels.
     ///
-    /// The paraboloid is conformal with scale `1 / (1 + cos γ)` at angle γ from its axis, which
-    /// grows towards the rim; the sphere is measured at the largest scale it reaches,
-    /// γ + β (β its angular radius, γ + β capped at the rim). A child's sphere lies inside its
-    /// parent's, so it reaches no further from the axis and `c` still decreases down the tree,
-    /// while spheres near the axis are measured at down to half the rim's scale.
+    /// Neither projection has one scale: the paraboloid is conformal with scale
+    /// `1 / (1 + cos γ)` at angle γ from its axis, growing towards the rim; a pinhole image
+    /// stretches radially by `1 / cos² γ` (1.6× in the corners of a 1080p frame at 60°
+    /// vertical field of view). The sphere is measured at the largest scale it reaches, at
+    /// γ + β (β its angular radius) capped at [`View::rim`]. A child's sphere lies inside its
+    /// parent's, so it reaches no further from the axis and `c` still decreases down the tree.
     pub fn criterion(&self, node: &Node) -> f32 {
         let to = node.center - self.eye();
         let dist = to.length();
@@ -135,14 +136,38 @@ impl View {
         if !visible || back_facing {
             return 0.0;
         }
-        let scale = match *self {
-            View::Paraboloid { normal, .. } => {
-                let reach = (angle_between(dir, normal) + beta).min(std::f32::consts::FRAC_PI_2);
-                1.0 / (1.0 + reach.cos())
+        2.0 * beta * self.pixels_per_radian() * self.scale(dir, beta)
+    }
+
+    /// The projection's scale (relative to [`View::pixels_per_radian`]) where a sphere seen in
+    /// direction `dir` under angular radius `beta` reaches furthest from the axis.
+    fn scale(&self, dir: Vec3, beta: f32) -> f32 {
+        let reach = (angle_between(dir, self.axis()) + beta).min(self.rim());
+        match *self {
+            View::Paraboloid { .. } => 1.0 / (1.0 + reach.cos()),
+            View::Perspective { .. } => 1.0 / (reach.cos() * reach.cos()),
+        }
+    }
+
+    /// The view's axis: the paraboloid's normal, the pinhole's forward direction (its near
+    /// plane's normal).
+    pub fn axis(&self) -> Vec3 {
+        match *self {
+            View::Paraboloid { normal, .. } => normal,
+            View::Perspective { .. } => self.planes()[4].truncate(),
+        }
+    }
+
+    /// The largest angle from [`View::axis`] the view sees: π/2 for the paraboloid, the
+    /// frustum's corner for a pinhole (whose `view_proj` has the aspect of its size).
+    pub fn rim(&self) -> f32 {
+        match *self {
+            View::Paraboloid { .. } => std::f32::consts::FRAC_PI_2,
+            View::Perspective { fov_y, size, .. } => {
+                let aspect = size.0 as f32 / size.1 as f32;
+                ((fov_y * 0.5).tan() * (1.0 + aspect * aspect).sqrt()).atan()
             }
-            View::Perspective { .. } => 1.0,
-        };
-        2.0 * beta * self.pixels_per_radian() * scale
+        }
     }
 }
 
@@ -221,14 +246,16 @@ impl View {
             },
             size: [w as f32, h as f32],
             pixels_per_radian: self.pixels_per_radian(),
-            _pad: 0.0,
+            rim: self.rim(),
         }
     }
 
     /// Where a node's disc lands in the view's tile: centre in pixels, radius in pixels (at
     /// least [`MIN_SPLAT_RADIUS`], at most [`MAX_SPLAT_RADIUS`]) and depth in `[0, 1]`
-    /// (paraboloid: distance / `far`; perspective: NDC depth). `None` when the centre is not
-    /// in front of the view or the eye is inside the sphere. Mirrored by `splat.wgsl`.
+    /// (paraboloid: distance / `far`; perspective: NDC depth). A perspective disc's radius is
+    /// half the criterion's size, at the scale the sphere reaches ([`View::criterion`]), so
+    /// it covers the sphere's stretched image off the axis. `None` when the centre is not in
+    /// front of the view or the eye is inside the sphere. Mirrored by `splat.wgsl`.
     pub fn splat(&self, node: &Node, far: f32) -> Option<Splat> {
         let (w, h) = self.size();
         let (center, radius, depth) = match *self {
@@ -254,12 +281,14 @@ impl View {
                     return None;
                 }
                 let ndc = clip.truncate() / clip.w;
+                let beta = (node.radius / dist).asin();
+                let dir = (node.center - self.eye()) / dist;
                 (
                     Vec2::new(
                         (ndc.x * 0.5 + 0.5) * w as f32,
                         (0.5 - ndc.y * 0.5) * h as f32,
                     ),
-                    (node.radius / dist).asin() * self.pixels_per_radian(),
+                    beta * self.pixels_per_radian() * self.scale(dir, beta),
                     ndc.z,
                 )
             }
@@ -321,5 +350,6 @@ pub struct GpuView {
     pub size: [f32; 2],
     /// [`View::pixels_per_radian`].
     pub pixels_per_radian: f32,
-    _pad: f32,
+    /// [`View::rim`].
+    pub rim: f32,
 }

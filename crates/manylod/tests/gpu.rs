@@ -353,8 +353,12 @@ fn overflow_and_bad_input_are_errors() {
     ));
     let v = views_in_tiles(0.0, Some(TILE));
     let layout = AtlasLayout::new(v.len(), TILE, 12.0);
-    let wrong_tiles = views_in_tiles(0.0, Some(16));
-    assert!(GpuManyLod::new(&gpu.device, &bsh, &wrong_tiles, 1.0, layout, 1 << 16, None).is_err());
+    // Views larger than the tile are refused (smaller ones fill its corner).
+    let wrong_tiles = views_in_tiles(0.0, Some(2 * TILE));
+    assert!(matches!(
+        GpuManyLod::new(&gpu.device, &bsh, &wrong_tiles, 1.0, layout, 1 << 16, None),
+        Err(ManyLodError::View { index: 0, .. })
+    ));
     assert!(GpuManyLod::new(&gpu.device, &bsh, &v, f32::NAN, layout, 1 << 16, None).is_err());
     assert!(m.set_views(&gpu.queue, &v[1..]).is_err(), "view count");
 }
@@ -411,4 +415,265 @@ fn caller_owned_atlas_is_checked_and_written() {
             "{e}"
         );
     }
+}
+
+/// Single-view point rendering (§3.6.1, Fig. 3.20): one 96×54 camera in a one-view atlas of
+/// 96² px, cut at ε = 1 px. GPU = CPU (cut, depths, nearest nodes); nothing lands below the
+/// view's 54 rows; and against the mesh itself, rasterised here by brute force at the same
+/// pixel centres (the ground truth), the points cover the same pixels except on the mesh's
+/// silhouettes and lie on its surface.
+#[test]
+fn single_view_points_cover_the_mesh() {
+    let Some(gpu) = gpu::test_device(&manylod::device_needs()) else {
+        return;
+    };
+    // The shared scene with its ground quad cut into 32×32 squares (R₃ sampling of two
+    // 8×8 triangles lines the points up in rows farther apart than a pixel here) and its
+    // sphere wound outwards (back-facing nodes are culled).
+    let (mut p, mut idx) = scene();
+    let g = p.len() as u32 - 4;
+    p.truncate(g as usize);
+    idx.truncate(idx.len() - 6);
+    for t in idx.chunks_exact_mut(3) {
+        t.swap(1, 2);
+    }
+    for j in 0..=32u32 {
+        for i in 0..=32u32 {
+            p.push(Vec3::new(i as f32 / 4.0 - 4.0, 0.0, j as f32 / 4.0 - 4.0));
+        }
+    }
+    for j in 0..32 {
+        for i in 0..32 {
+            let a = g + j * 33 + i;
+            idx.extend([a, a + 33, a + 1, a + 1, a + 33, a + 34]);
+        }
+    }
+    let count = 1 << 16;
+    let sampled = surfels::sample(&p, &idx, count, 7).expect("surfels");
+    let (points, normals) = surfels::evaluate(&sampled, &p, &idx);
+    let bsh = Bsh::build(&points, &normals, surfels::disc_radius(&p, &idx, count)).expect("tree");
+    let (w, h) = (96u32, 54u32);
+    let (eye, fov_y, near, far) = (Vec3::new(0.5, 6.0, 6.0), 0.9f32, 0.1f32, 50.0f32);
+    let proj = glam::camera::rh::proj::directx::perspective(fov_y, w as f32 / h as f32, near, far);
+    let view_proj =
+        proj * glam::camera::rh::view::look_at_mat4(eye, Vec3::new(0.0, 0.5, 0.0), Vec3::Y);
+    let v = [manylod::View::Perspective {
+        eye,
+        view_proj,
+        fov_y,
+        size: (w, h),
+    }];
+    let layout = AtlasLayout::new(1, w, 12.0);
+    let mut m = GpuManyLod::new(&gpu.device, &bsh, &v, 1.0, layout, 1 << 18, None).expect("set-up");
+    m.enable_nearest_nodes(&gpu.device).expect("nearest pass");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    m.encode_cut(&mut encoder, CutKind::Basic, None);
+    m.encode_splat(&mut encoder, None);
+    gpu.queue.submit([encoder.finish()]);
+    let atlas = m.read_atlas(&gpu.device, &gpu.queue).expect("atlas");
+    let ids = m
+        .read_nearest_nodes(&gpu.device, &gpu.queue)
+        .expect("ids")
+        .expect("enabled");
+    let cut = m.read_cut(&gpu.device, &gpu.queue).expect("cut");
+
+    let problem = CutProblem {
+        bsh: &bsh,
+        views: &v,
+        epsilon: 1.0,
+    };
+    let want = basic(&problem).expect("cpu cut");
+    let differ = symmetric_difference(
+        &sorted(cut.node_views.clone()),
+        &sorted(want.node_views.clone()),
+    );
+    let allowed = if gpu.is_software() {
+        0
+    } else {
+        want.node_views.len() / 1000
+    };
+    assert!(differ <= allowed, "{differ} node-views differ");
+    let flagged = problem.flag_culled(&cut.node_views);
+    let want_depth = splat::splat(&bsh.nodes, &v, &flagged, &layout).expect("cpu splat");
+    let (coverage, depth) = differences(&atlas, &want_depth);
+    assert_eq!((coverage, depth), (0, 0), "GPU vs CPU atlas");
+    let drawn: Vec<u32> = cut
+        .node_views
+        .iter()
+        .filter(|nv| problem.is_drawn(**nv))
+        .map(|nv| nv.node)
+        .collect();
+    let want_ids = splat::nearest_nodes(&bsh.nodes, &v[0], &drawn, &layout);
+    let same = ids.iter().zip(&want_ids).filter(|(a, b)| a == b).count();
+    assert!(
+        same * 1000 >= ids.len() * 999,
+        "{same} of {} nearest nodes",
+        ids.len()
+    );
+    let tile = w as usize;
+    assert!(
+        atlas[h as usize * tile..].iter().all(|&d| d == CLEAR),
+        "nothing is splatted past the view's rows"
+    );
+
+    // The mesh's nearest depth at every pixel centre (NDC depth; ∞ where no triangle).
+    let screen: Vec<Vec3> = p
+        .iter()
+        .map(|&q| {
+            let c = view_proj * q.extend(1.0);
+            let n = c.truncate() / c.w;
+            Vec3::new(
+                (n.x * 0.5 + 0.5) * w as f32,
+                (0.5 - n.y * 0.5) * h as f32,
+                n.z,
+            )
+        })
+        .collect();
+    let mut mesh = vec![f32::INFINITY; (w * h) as usize];
+    for t in idx.chunks_exact(3) {
+        let [a, b, c] = [0, 1, 2].map(|k| screen[t[k] as usize]);
+        let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+        if area == 0.0 {
+            continue;
+        }
+        for y in 0..h {
+            for x in 0..w {
+                let q = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                let edge = |u: Vec3, v: Vec3| {
+                    ((v.x - u.x) * (q.y - u.y) - (v.y - u.y) * (q.x - u.x)) / area
+                };
+                let (l0, l1, l2) = (edge(b, c), edge(c, a), edge(a, b));
+                if l0 >= 0.0 && l1 >= 0.0 && l2 >= 0.0 {
+                    let d = &mut mesh[(y * w + x) as usize];
+                    *d = d.min(l0 * a.z + l1 * b.z + l2 * c.z);
+                }
+            }
+        }
+    }
+    let covered = |x: u32, y: u32| mesh[(y * w + x) as usize].is_finite();
+    let linear = |d: f32| near * far / (far - d * (far - near));
+    let (mut silhouette, mut missed, mut errors) = (0, 0, Vec::new());
+    for y in 0..h {
+        for x in 0..w {
+            let edge = [(-1i32, 0i32), (1, 0), (0, -1), (0, 1)]
+                .iter()
+                .any(|&(dx, dy)| {
+                    let (nx, ny) = (x as i32 + dx, y as i32 + dy);
+                    nx >= 0
+                        && ny >= 0
+                        && (nx as u32) < w
+                        && (ny as u32) < h
+                        && covered(nx as u32, ny as u32) != covered(x, y)
+                });
+            silhouette += usize::from(edge);
+            let word = atlas[(y * w) as usize + x as usize];
+            let points = word != CLEAR;
+            if points != covered(x, y) {
+                missed += 1;
+                if !edge {
+                    eprintln!(
+                        "pixel ({x}, {y}) differs: points {points}, mesh depth {}",
+                        mesh[(y * w + x) as usize]
+                    );
+                }
+            } else if points && !edge {
+                // A drawn node is < 1 px wide, so its disc's depth (its centre's) is the
+                // surface's somewhere within about a pixel: within the range of the mesh's
+                // depths over the 3×3 pixels around, plus one pixel footprint.
+                let truth = linear(mesh[(y * w + x) as usize]);
+                let footprint = truth * 2.0 * (fov_y * 0.5).tan() / h as f32;
+                let (mut lo, mut hi) = (truth, truth);
+                for (nx, ny) in (x.saturating_sub(1)..(x + 2).min(w))
+                    .flat_map(|nx| (y.saturating_sub(1)..(y + 2).min(h)).map(move |ny| (nx, ny)))
+                {
+                    let d = mesh[(ny * w + nx) as usize];
+                    if d.is_finite() {
+                        (lo, hi) = (lo.min(linear(d)), hi.max(linear(d)));
+                    }
+                }
+                let got = linear(splat::unpack_depth(word));
+                errors.push((got - truth).abs() / (hi - lo + footprint));
+            }
+        }
+    }
+    errors.sort_by(f32::total_cmp);
+    let (median, p99) = (errors[errors.len() / 2], errors[errors.len() * 99 / 100]);
+    eprintln!(
+        "single view: {} node-views drawn, {missed} coverage differences on {silhouette} \
+         silhouette pixels; depth error / allowed: median {median:.3}, 99th percentile {p99:.3}",
+        drawn.len()
+    );
+    assert!(
+        missed * 2 <= silhouette,
+        "{missed} of {silhouette} silhouette pixels differ"
+    );
+    assert!(p99 <= 1.0, "depth error / allowed: 99th percentile {p99}");
+}
+
+/// The hybrid CPU/GPU cut (§3.7.3): every split of events and compaction between rayon and
+/// the GPU finds the basic cut — the same node-views, iterations and work — and a list that
+/// outgrows the capacity is an error.
+#[test]
+fn hybrid_splits_find_the_basic_cut() {
+    use manylod::hybrid::{GpuHybridCut, Split, Unit};
+    let Some(gpu) = gpu::test_device(&manylod::device_needs()) else {
+        return;
+    };
+    let (bsh, _, _) = tree(1 << 12);
+    let v = views_in_tiles(0.3, Some(TILE));
+    let problem = CutProblem {
+        bsh: &bsh,
+        views: &v,
+        epsilon: EPSILON,
+    };
+    let want = basic(&problem).expect("basic");
+    let hybrid = GpuHybridCut::new(&gpu.device, &bsh, &v, EPSILON, 1 << 16).expect("set-up");
+    for gpu_events in [0.0, 0.5, 1.0] {
+        for compaction in [Unit::Cpu, Unit::Gpu] {
+            let split = Split {
+                gpu_events,
+                compaction,
+            };
+            let (got, timing) = hybrid
+                .cut(&gpu.device, &gpu.queue, &problem, split)
+                .expect("hybrid cut");
+            let differ = symmetric_difference(
+                &sorted(got.node_views.clone()),
+                &sorted(want.node_views.clone()),
+            );
+            let allowed = if gpu.is_software() || gpu_events == 0.0 {
+                0
+            } else {
+                want.node_views.len() / 1000
+            };
+            assert!(
+                differ <= allowed,
+                "{}: {differ} node-views differ",
+                split.name()
+            );
+            if differ == 0 {
+                assert_eq!(
+                    (got.iterations, got.processed, got.culled),
+                    (want.iterations, want.processed, want.culled),
+                    "{}",
+                    split.name()
+                );
+            }
+            assert!(timing.total_ms > 0.0);
+        }
+    }
+    let small = GpuHybridCut::new(&gpu.device, &bsh, &v, EPSILON, 256).expect("set-up");
+    let split = Split {
+        gpu_events: 1.0,
+        compaction: Unit::Gpu,
+    };
+    assert!(matches!(
+        small.cut(&gpu.device, &gpu.queue, &problem, split),
+        Err(ManyLodError::Capacity { .. })
+    ));
+    let bad = Split {
+        gpu_events: 1.5,
+        compaction: Unit::Cpu,
+    };
+    assert!(hybrid.cut(&gpu.device, &gpu.queue, &problem, bad).is_err());
 }
