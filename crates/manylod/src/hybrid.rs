@@ -149,6 +149,8 @@ pub struct HybridTiming {
     pub cpu_events_ms: f64,
     /// The compaction (CPU scan + scatter, or GPU kernel + readback of the next list).
     pub compaction_ms: f64,
+    /// Writing each iteration's active list into the GPU's (where a GPU kernel reads it).
+    pub upload_ms: f64,
 }
 
 /// The GPU half of a hybrid cut: the tree, the views, the lists and `hybrid.wgsl`'s kernels.
@@ -303,7 +305,9 @@ impl GpuHybridCut {
             // The GPU's share of the events, recorded before the CPU classifies the rest.
             let needs_list = k > 0 || on_gpu;
             if needs_list {
+                let upload = Instant::now();
                 queue.write_buffer(&self.list, 0, bytemuck::cast_slice(&as_pairs(&active)));
+                timing.upload_ms += ms(upload);
             }
             if k > 0 {
                 let mut encoder = device.create_command_encoder(&Default::default());
