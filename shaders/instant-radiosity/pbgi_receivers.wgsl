@@ -10,13 +10,6 @@
 
 @group(0) @binding(4) var<storage, read_write> views: array<View>;
 
-// `manylod::view::paraboloid_frame`: tangent and bitangent of a unit normal.
-fn paraboloid_frame(n: vec3<f32>) -> mat2x3<f32> {
-    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), abs(n.z) < 0.9);
-    let t = normalize(cross(helper, n));
-    return mat2x3<f32>(t, cross(n, t));
-}
-
 @compute @workgroup_size(64)
 fn receivers(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x;

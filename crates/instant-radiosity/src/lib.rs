@@ -33,6 +33,7 @@ pub mod gpu;
 pub mod near_field;
 pub mod pbgi;
 pub mod rays;
+pub mod reflections;
 pub mod shadows;
 pub mod ssm;
 pub mod vpl;
@@ -57,6 +58,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "pbgi_lighting.wgsl",
         "pbgi_receivers.wgsl",
         "pbgi_upsample.wgsl",
+        "reflections.wgsl",
     ],
 );
 

@@ -201,6 +201,34 @@ pub fn cornell_box() -> Scene {
     b.scene
 }
 
+/// The Cornell box without its blocks, holding `n` (1..=4096) mirror spheres on a lattice
+/// that fills the middle of the room, in four metals (roughness 0.05), each sphere its own
+/// mesh: the set-up of Holländer 2013 Fig. 3.19 (hundreds of reflecting objects, each with its
+/// own reflection map).
+pub fn mirror_spheres(n: u32) -> Scene {
+    let n = n.clamp(1, 4096);
+    let mut scene = cornell_box();
+    scene.meshes.retain(|m| m.name != "blocks");
+    let mut b = Builder { scene };
+    let metals = [
+        ("silver", Vec3::new(0.97, 0.96, 0.91)),
+        ("gold", Vec3::new(1.0, 0.78, 0.34)),
+        ("copper", Vec3::new(0.96, 0.64, 0.54)),
+        ("chrome", Vec3::new(0.55, 0.56, 0.55)),
+    ]
+    .map(|(name, rgb)| b.material(name, rgb, 0.05, 1.0));
+    let k = (n as f32).cbrt().ceil() as u32;
+    let (lo, hi) = (Vec3::new(0.1, 0.06, 0.12), Vec3::new(0.456, 0.44, 0.48));
+    let spacing = (hi - lo) / k as f32;
+    let radius = 0.3 * spacing.min_element();
+    for i in 0..n {
+        let cell = Vec3::new((i % k) as f32, ((i / k) % k) as f32, (i / (k * k)) as f32);
+        let mesh = b.mesh(&format!("mirror {i}"), metals[i as usize % 4]);
+        Builder::sphere(mesh, lo + (cell + 0.5) * spacing, radius, 24, 12);
+    }
+    b.scene
+}
+
 /// An `n × n` grid of spheres (radius 0.4, spacing 1) on a ground plane, with materials that
 /// vary in colour, roughness and metalness, and `n` scattered point lights.
 pub fn spheres_on_plane(n: u32) -> Scene {

@@ -27,8 +27,8 @@ use std::path::{Path, PathBuf};
 
 pub use builtin::{
     THESIS_HIDDEN_LIGHTS, THESIS_LIGHT_RADIUS, THESIS_VISIBLE_LIGHTS, checker_texture,
-    checkerboard, cornell_box, dress_procedurally, material_gallery, spheres_on_plane,
-    thesis_walls, wall,
+    checkerboard, cornell_box, dress_procedurally, material_gallery, mirror_spheres,
+    spheres_on_plane, thesis_walls, wall,
 };
 pub use bvh::{Bvh, Hit};
 pub use camera::Camera;
