@@ -37,11 +37,12 @@ const HALF_PI: f32 = 1.5707963267948966;
 const MIN_SPLAT_RADIUS: f32 = 0.70710677;
 const MAX_SPLAT_RADIUS: f32 = 16.0;
 
-// `manylod::view::paraboloid_frame`: tangent and bitangent of a paraboloid view's unit normal.
-fn paraboloid_frame(n: vec3<f32>) -> mat2x3<f32> {
-    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), abs(n.z) < 0.9);
-    let t = normalize(cross(helper, n));
-    return mat2x3<f32>(t, cross(n, t));
+// The paraboloid frame around unit `normal` (`manylod::view::paraboloid_frame`): columns t, b,
+// normal, so `d * paraboloid_frame(normal)` is d in that frame.
+fn paraboloid_frame(normal: vec3<f32>) -> mat3x3<f32> {
+    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), abs(normal.z) < 0.9);
+    let t = normalize(cross(helper, normal));
+    return mat3x3<f32>(t, cross(normal, t), normal);
 }
 
 fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {

@@ -29,14 +29,6 @@ struct AtlasTexel {
 
 const NO_TEXEL: u32 = 0xffffffffu;
 
-// The paraboloid frame around unit `normal` (`manylod::view::paraboloid_frame`): columns t, b,
-// normal, so `d * paraboloid_frame(normal)` is d in that frame.
-fn paraboloid_frame(normal: vec3<f32>) -> mat3x3<f32> {
-    let helper = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 0.0, 1.0), abs(normal.z) < 0.9);
-    let t = normalize(cross(helper, normal));
-    return mat3x3<f32>(t, cross(normal, t), normal);
-}
-
 // The texel of `receiver` (unit normal `n`) in paraboloid view `k`, whose origin is `origin`
 // with unit `normal`; the receiver first moves off its surface by the normal offset. Receivers
 // in front of the view's surface but behind its lifted base plane are looked up on the rim.

@@ -13,8 +13,8 @@ pub mod chart;
 pub mod timing;
 
 pub use timing::{
-    WARM_UP_RULE, orbiting_spot, per_frame_sum, scene_labels, time_encoded, time_named,
-    warm_then_time, write_report,
+    WARM_UP_RULE, orbiting_spot, pass_stat, per_frame_sum, scene_labels, time_encoded, time_named,
+    time_recorded, warm_then_time, write_report,
 };
 
 /// Median and minimum of a set of timings.

@@ -65,6 +65,35 @@ pub fn time_named<E>(
     Ok(by_name)
 }
 
+/// [`time_named`] of the passes `record` encodes with `timer`, one command buffer per frame:
+/// per pass name, the per-frame GPU milliseconds.
+pub fn time_recorded(
+    gpu: &Gpu,
+    timer: &gpu::PassTimer,
+    frames: u32,
+    mut record: impl FnMut(&mut wgpu::CommandEncoder, &gpu::PassTimer),
+) -> Result<Vec<(String, Vec<f64>)>, gpu::GpuError> {
+    time_named(frames, || {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        record(&mut encoder, timer);
+        timer.resolve(&mut encoder);
+        gpu.queue.submit([encoder.finish()]);
+        Ok(timer
+            .read(&gpu.device, &gpu.queue)?
+            .into_iter()
+            .map(|t| (t.name, t.ms))
+            .collect())
+    })
+}
+
+/// The statistics of the pass `name` of [`time_named`]'s result, if it ran.
+pub fn pass_stat(by_name: &[(String, Vec<f64>)], name: &str) -> Option<crate::Stat> {
+    by_name
+        .iter()
+        .find(|(n, _)| n == name)
+        .map(|(_, v)| crate::Stat::of(v.clone()))
+}
+
 /// Per-frame GPU ms of the passes `record` encodes (summed over the frame's passes; with
 /// `span`, from the first pass's begin to the last one's end, which also counts commands
 /// recorded between passes such as buffer clears), after [`warm_then_time`]'s warm-up.

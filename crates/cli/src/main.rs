@@ -38,8 +38,9 @@ struct Args {
     #[arg(long)]
     scene: Option<PathBuf>,
     /// Built-in scene when no --scene is given: cornell, spheres, checkerboard, gallery (the
-    /// glTF material's parts, one sphere each), or the light-culling scenes of Ishmukhametov
-    /// 2013 §4.2: walls-test1 .. walls-test4.
+    /// glTF material's parts, one sphere each), mirrors (64 mirror spheres in the Cornell box,
+    /// for --reflections), or the light-culling scenes of Ishmukhametov 2013 §4.2:
+    /// walls-test1 .. walls-test4.
     #[arg(long, default_value = "cornell")]
     builtin: String,
     /// Image size as WIDTHxHEIGHT.
@@ -208,6 +209,24 @@ struct Args {
     /// With --pbgi: 2^LOG2 surfels sampled on the scene.
     #[arg(long, value_name = "LOG2", default_value_t = 20, requires = "pbgi", value_parser = clap::value_parser!(u32).range(4..=24))]
     pbgi_points: u32,
+    /// Mirror materials (metallic ≥ 0.9, roughness ≤ 0.2) reflect the scene through reflection
+    /// maps (GPU; Holländer 2013 §3.6.1, Fig. 3.19): every mirror mesh gets a dual-paraboloid
+    /// map of T×T texels per half, made every frame from the scene's surfels (lit on the CPU by
+    /// the direct lights) through a many-view cut; each mirror pixel adds Fresnel × its map in
+    /// the mirrored view direction. Try `--builtin mirrors`.
+    #[arg(long, value_name = "T", conflicts_with = "vpls", value_parser = clap::value_parser!(u32).range(4..=256))]
+    reflections: Option<u32>,
+    /// With --reflections: the cut threshold ε in texels.
+    #[arg(
+        long,
+        value_name = "E",
+        default_value_t = 1.0,
+        requires = "reflections"
+    )]
+    reflection_epsilon: f32,
+    /// With --reflections: 2^LOG2 surfels sampled on the scene.
+    #[arg(long, value_name = "LOG2", default_value_t = 18, requires = "reflections", value_parser = clap::value_parser!(u32).range(4..=24))]
+    reflection_points: u32,
     /// Screen-space ambient occlusion of the ambient and indirect light (GPU): `filter` (eq. 7.1),
     /// `crytek`, `vo` (volumetric obscurance), `hbao` or `gtao`, over the k×k kernel, or with
     /// `-separable` (e.g. `filter-separable`, Holländer 2013 annex 7.2: two 1D passes).
@@ -771,12 +790,13 @@ fn load_base_scene(args: &Args) -> Result<Scene> {
             "spheres" => scene::spheres_on_plane(8),
             "checkerboard" => scene::checkerboard(),
             "gallery" => scene::material_gallery(),
+            "mirrors" => scene::mirror_spheres(64),
             "walls-test1" => scene::thesis_walls(0),
             "walls-test2" => scene::thesis_walls(100),
             "walls-test3" => scene::thesis_walls(500),
             "walls-test4" => scene::thesis_walls(1000),
             other => bail!(
-                "unknown built-in scene {other:?} (cornell, spheres, checkerboard, gallery, walls-test1 .. walls-test4)"
+                "unknown built-in scene {other:?} (cornell, spheres, checkerboard, gallery, mirrors, walls-test1 .. walls-test4)"
             ),
         });
     };
@@ -1071,6 +1091,9 @@ fn run() -> Result<()> {
             if renderer.check_pbgi(d, q)? {
                 eprintln!("note: point-based GI's cut lists grew to hold the cut");
             }
+            if renderer.check_reflections(d, q)? {
+                eprintln!("note: the reflection maps' cut lists grew to hold the cut");
+            }
             let rendered = renderer.render(d, q, &camera, ambient)?;
             let display = pipeline::gpu::read_display(
                 d,
@@ -1359,6 +1382,23 @@ fn prepare(args: &Args) -> Result<Setup> {
         }
         None => None,
     };
+    let reflections = match args.reflections {
+        Some(tile) => {
+            if args.cpu {
+                bail!("--reflections runs on the GPU only (no --cpu)");
+            }
+            let config = instant_radiosity::pbgi::PbgiConfig {
+                tile,
+                epsilon: args.reflection_epsilon,
+                points_log2: args.reflection_points,
+            };
+            // Sampled here, lit by the renderer's lights on the CPU.
+            let lit = instant_radiosity::pbgi::LitPoints::sampled(&proxy_scene, &config)
+                .context("--reflections")?;
+            Some((lit, tile))
+        }
+        None => None,
+    };
     let default_ambient = if indirect.is_some() || pbgi.is_some() {
         Vec3::ZERO
     } else {
@@ -1426,6 +1466,7 @@ fn prepare(args: &Args) -> Result<Setup> {
         });
     Ok(Setup {
         pbgi,
+        reflections,
         reference_lights,
         scene,
         plan,
@@ -1461,6 +1502,8 @@ struct Setup {
     reference_lights: Vec<Light>,
     /// --pbgi's lit surfels and receiver stride.
     pbgi: Option<(instant_radiosity::pbgi::LitPoints, u32)>,
+    /// --reflections' surfels and texels.
+    reflections: Option<(instant_radiosity::pbgi::LitPoints, u32)>,
     camera: scene::Camera,
     /// The direct lights the frame shades (after --indirect-only and --frustum-cull).
     lights: Vec<Light>,
@@ -1566,6 +1609,11 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
     }
     if let Some((lit, stride)) = &setup.pbgi {
         renderer.set_pbgi(d, Some((lit, *stride, scene)))?;
+    }
+    if let Some((lit, tile)) = &setup.reflections {
+        renderer
+            .set_reflections(d, Some((lit, *tile, scene)))
+            .context("--reflections")?;
     }
     renderer.set_ssaa(d, q, ssaa_config(args)?.as_ref())?;
     if let Some((config, estimator)) = ssao_setting(args, &setup.scene)? {
@@ -2080,6 +2128,9 @@ fn gpu_sequence(
         if renderer.check_pbgi(d, q)? {
             eprintln!("note: point-based GI's cut lists grew to hold frame {k}'s cut");
         }
+        if renderer.check_reflections(d, q)? {
+            eprintln!("note: the reflection maps' cut lists grew to hold frame {k}'s cut");
+        }
         if warmed < args.warm_up {
             warmed += 1;
             continue;
@@ -2261,6 +2312,18 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
         println!(
             "indirect: point-based GI, a receiver every {stride} px, {0}x{0} texels, ε {1}, 2^{2} surfels",
             c.tile, c.epsilon, c.points_log2
+        );
+    }
+    if let Some((lit, _)) = &setup.reflections {
+        let c = lit.config();
+        let probes = instant_radiosity::reflections::Probes::of_scene(&setup.scene);
+        println!(
+            "reflect: {} mirror meshes, maps of 2 × {}x{} texels, ε {}, 2^{} surfels",
+            probes.len(),
+            c.tile,
+            c.tile,
+            c.epsilon,
+            c.points_log2
         );
     }
     let o = &setup.output;

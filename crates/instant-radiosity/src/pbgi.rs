@@ -917,9 +917,18 @@ impl GpuGather {
         queue: &wgpu::Queue,
     ) -> Result<Vec<Vec3>, IndirectError> {
         self.manylod.check_lists(device, queue)?;
-        let words: Vec<[f32; 4]> = transfer::read_pod(device, queue, &self.irradiance)?;
-        Ok(words.iter().map(|w| Vec3::new(w[0], w[1], w[2])).collect())
+        read_rgb(device, queue, &self.irradiance)
     }
+}
+
+/// The RGB of a buffer of `vec4<f32>`, read back.
+pub(crate) fn read_rgb(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+) -> Result<Vec<Vec3>, IndirectError> {
+    let words: Vec<[f32; 4]> = transfer::read_pod(device, queue, buffer)?;
+    Ok(words.iter().map(|w| Vec3::new(w[0], w[1], w[2])).collect())
 }
 
 /// `lights` followed by zeroed lights up to `capacity` (a binding is never empty).

@@ -473,8 +473,7 @@ impl GpuReflections {
         queue: &wgpu::Queue,
     ) -> Result<Vec<Vec3>, IndirectError> {
         self.check(device, queue)?;
-        let words: Vec<[f32; 4]> = transfer::read_pod(device, queue, &self.maps)?;
-        Ok(words.iter().map(|w| Vec3::new(w[0], w[1], w[2])).collect())
+        crate::pbgi::read_rgb(device, queue, &self.maps)
     }
 }
 

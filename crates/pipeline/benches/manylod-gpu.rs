@@ -141,13 +141,6 @@ fn time_animation(
     })
 }
 
-fn stat(by_name: &[(String, Vec<f64>)], name: &str) -> Option<Stat> {
-    by_name
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|(_, v)| Stat::of(v.clone()))
-}
-
 /// A GPU set-up whose lists hold the largest cuts of the run: starts at 4 node-views per
 /// micro-view pixel and doubles (up to the device's largest list) while a basic cut or the
 /// incremental cuts of the next frames overflow.
@@ -268,8 +261,8 @@ fn variant_row(
         views: views[0].len(),
         epsilon,
         variant: name.into(),
-        cut: stat(&by_name, "cut"),
-        splat: stat(&by_name, "splat"),
+        cut: bench::pass_stat(&by_name, "cut"),
+        splat: bench::pass_stat(&by_name, "splat"),
         total,
         cut_size,
         culled,
@@ -332,7 +325,7 @@ fn main() -> Result<()> {
                         ism.encode(e, m, Some(t));
                         Ok(())
                     })?;
-                let total = stat(&by_name, "ism").unwrap_or(Stat::of(Vec::new()));
+                let total = bench::pass_stat(&by_name, "ism").unwrap_or(Stat::of(Vec::new()));
                 println!(
                     "{points} points: ISM 8 k points/view {:.3} ms",
                     total.median_ms

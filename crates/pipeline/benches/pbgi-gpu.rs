@@ -102,13 +102,6 @@ fn gather(
     }
 }
 
-fn stat(by_name: &[(String, Vec<f64>)], name: &str) -> Option<Stat> {
-    by_name
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|(_, v)| Stat::of(v.clone()))
-}
-
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
     let gpu = args.common.options.gpu()?;
@@ -149,17 +142,7 @@ fn main() -> Result<()> {
             };
             let lit = lit.reconfigured(config)?;
             let (mut g, capacity) = gather(&gpu, (&scene, &lights), &lit, &points_of_views)?;
-            let by_name = bench::time_named(frames, || -> Result<Vec<(String, f64)>> {
-                let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                g.encode(&mut encoder, Some(&timer));
-                timer.resolve(&mut encoder);
-                gpu.queue.submit([encoder.finish()]);
-                Ok(timer
-                    .read(&gpu.device, &gpu.queue)?
-                    .into_iter()
-                    .map(|t| (t.name, t.ms))
-                    .collect())
-            })?;
+            let by_name = bench::time_recorded(&gpu, &timer, frames, |e, t| g.encode(e, Some(t)))?;
             let total = Stat::of(bench::per_frame_sum(
                 &by_name,
                 &["pbgi lighting", "cut", "splat", "pbgi convolve"],
@@ -174,10 +157,10 @@ fn main() -> Result<()> {
                 views: points_of_views.len(),
                 tile,
                 epsilon,
-                lighting: stat(&by_name, "pbgi lighting"),
-                cut: stat(&by_name, "cut"),
-                splat: stat(&by_name, "splat"),
-                convolve: stat(&by_name, "pbgi convolve"),
+                lighting: bench::pass_stat(&by_name, "pbgi lighting"),
+                cut: bench::pass_stat(&by_name, "cut"),
+                splat: bench::pass_stat(&by_name, "splat"),
+                convolve: bench::pass_stat(&by_name, "pbgi convolve"),
                 total,
                 capacity,
             });

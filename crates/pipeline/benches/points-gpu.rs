@@ -272,17 +272,9 @@ fn main() -> Result<()> {
             let build_cpu_ms = start.elapsed().as_secs_f64() * 1e3;
             let mut m = points_setup(&gpu, &bsh, frame_view(&camera), camera.far)?;
             let time = |kind: CutKind, m: &mut GpuManyLod| {
-                bench::time_named(frames, || -> Result<Vec<(String, f64)>> {
-                    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                    m.encode_cut(&mut encoder, kind, Some(&timer));
-                    m.encode_splat(&mut encoder, Some(&timer));
-                    timer.resolve(&mut encoder);
-                    gpu.queue.submit([encoder.finish()]);
-                    Ok(timer
-                        .read(&gpu.device, &gpu.queue)?
-                        .into_iter()
-                        .map(|t| (t.name, t.ms))
-                        .collect())
+                bench::time_recorded(&gpu, &timer, frames, |e, t| {
+                    m.encode_cut(e, kind, Some(t));
+                    m.encode_splat(e, Some(t));
                 })
             };
             // Each measured twice, the faster median kept: single configurations of this
@@ -293,11 +285,7 @@ fn main() -> Result<()> {
             let (incremental, incremental_repeat_ms) =
                 faster(incremental, time(CutKind::Incremental, &mut m)?);
             let stat = |by_name: &[(String, Vec<f64>)], pass: &str| {
-                by_name
-                    .iter()
-                    .find(|(n, _)| n == pass)
-                    .map(|(_, v)| Stat::of(v.clone()))
-                    .context("a pass without timings")
+                bench::pass_stat(by_name, pass).context("a pass without timings")
             };
             let total = |by_name: &[(String, Vec<f64>)]| {
                 Stat::of(bench::per_frame_sum(by_name, &["cut", "splat"]))

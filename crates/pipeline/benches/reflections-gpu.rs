@@ -137,12 +137,9 @@ fn raster_cube_maps(gpu: &Gpu, scene: &Scene, probes: &[(Vec3, f32)], frames: u3
     })?)
 }
 
+/// The statistics of pass `name`, which must have run.
 fn stat(by_name: &[(String, Vec<f64>)], name: &str) -> Result<Stat> {
-    by_name
-        .iter()
-        .find(|(n, _)| n == name)
-        .map(|(_, v)| Stat::of(v.clone()))
-        .ok_or_else(|| anyhow::anyhow!("no timings of {name}"))
+    bench::pass_stat(by_name, name).ok_or_else(|| anyhow::anyhow!("no timings of {name}"))
 }
 
 fn main() -> Result<()> {
@@ -189,17 +186,7 @@ fn main() -> Result<()> {
             points_log2,
         })?;
         let (mut r, capacity) = reflections(&gpu, &lit, &radiance, &probes, tile)?;
-        let by_name = bench::time_named(frames, || -> Result<Vec<(String, f64)>> {
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            r.encode(&mut encoder, Some(&timer));
-            timer.resolve(&mut encoder);
-            gpu.queue.submit([encoder.finish()]);
-            Ok(timer
-                .read(&gpu.device, &gpu.queue)?
-                .into_iter()
-                .map(|t| (t.name, t.ms))
-                .collect())
-        })?;
+        let by_name = bench::time_recorded(&gpu, &timer, frames, |e, t| r.encode(e, Some(t)))?;
         let total = Stat::of(bench::per_frame_sum(
             &by_name,
             &["cut", "splat", "reflection maps"],

@@ -34,6 +34,14 @@ use tiled_shading::gpu::{ACCUMULATION_FORMAT, BoundShading, LightShading};
 use tiled_shading::rays::RayShadows;
 use tiled_shading::shadows::{self, ShadowMapConfig};
 
+/// The nodes' exit radiance of `lit` as `vec4<f32>` words.
+fn radiance_words(lit: &instant_radiosity::pbgi::LitPoints) -> Vec<[f32; 4]> {
+    lit.radiance
+        .iter()
+        .map(|r| r.extend(0.0).to_array())
+        .collect()
+}
+
 fn view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&Default::default())
 }
@@ -135,6 +143,7 @@ pub struct GpuRenderer {
     ray_shadows: Option<GpuRays>,
     near_field: Option<NearFieldStage>,
     pbgi: Option<PbgiStage>,
+    reflections: Option<ReflectionStage>,
     output: Option<OutputStage>,
     animation: Option<Animation>,
     supersampling: Option<Supersampling>,
@@ -217,6 +226,19 @@ struct PbgiStage {
     /// The scene the surfels' shadow rays are traced through.
     scene: Scene,
     /// Node-views each cut list holds.
+    capacity: usize,
+}
+
+/// Reflection maps as the renderer holds them ([`GpuRenderer::set_reflections`]): the maps
+/// bound to the current targets, the reflections they write, the surfels' radiance (lit on the
+/// CPU) and what they were made from.
+struct ReflectionStage {
+    maps: instant_radiosity::reflections::GpuReflections,
+    output: wgpu::Texture,
+    radiance: wgpu::Buffer,
+    lit: instant_radiosity::pbgi::LitPoints,
+    tile: u32,
+    scene: Scene,
     capacity: usize,
 }
 
@@ -367,6 +389,7 @@ impl GpuRenderer {
             ray_shadows: None,
             near_field: None,
             pbgi: None,
+            reflections: None,
             output: None,
             animation: None,
             supersampling: None,
@@ -479,10 +502,13 @@ impl GpuRenderer {
             .as_ref()
             .and_then(|n| n.bound.as_ref())
             .map_or(no_diffuse, |(_, output)| output);
+        // Reflections take the indirect specular slot, which only the VPLs' stage fills
+        // otherwise (the two are exclusive).
+        let specular = self.reflections.as_ref().map_or(no_specular, |r| &r.output);
         let indirect = match (&self.indirect, &self.pbgi) {
             (Some(i), _) => [&i.outputs[0], &i.outputs[1], near_field],
-            (None, Some(p)) => [&p.output, no_specular, no_diffuse],
-            (None, None) => [no_diffuse, no_specular, no_diffuse],
+            (None, Some(p)) => [&p.output, specular, no_diffuse],
+            (None, None) => [no_diffuse, specular, no_diffuse],
         };
         let accessibility = self
             .ssao
@@ -623,6 +649,16 @@ impl GpuRenderer {
         {
             self.bind_near_field(device)?;
             self.bind_composition(device);
+        }
+        if let Some(r) = &mut self.reflections {
+            r.lit
+                .light(&r.scene, &self.lights)
+                .map_err(RenderError::from)?;
+            queue.write_buffer(
+                &r.radiance,
+                0,
+                bytemuck::cast_slice(&radiance_words(&r.lit)),
+            );
         }
         if let Some(p) = &self.pbgi
             && p.gather.set_lights(queue, &self.lights).is_err()
@@ -1099,6 +1135,12 @@ impl GpuRenderer {
         {
             self.set_pbgi(device, Some((&lit, stride, &scene)))?;
         }
+        if let Some(ReflectionStage {
+            lit, tile, scene, ..
+        }) = self.reflections.take()
+        {
+            self.set_reflections(device, Some((&lit, tile, &scene)))?;
+        }
         self.rebind(device, queue)?;
         if let Some(camera) = self.camera {
             self.set_camera(queue, &camera)?;
@@ -1139,6 +1181,14 @@ impl GpuRenderer {
         config: &IndirectConfig,
         set: &VplSet,
     ) -> Result<(), RenderError> {
+        if self.reflections.is_some() {
+            return Err(instant_radiosity::IndirectError::Config(
+                "the VPLs' indirect light and reflection maps both fill the indirect specular \
+                 light: remove the reflections first (point-based GI combines with them)"
+                    .into(),
+            )
+            .into());
+        }
         let stage = IndirectStage::new(device, config, self.size())?;
         let outputs = stage.output_textures(device);
         let bound = stage.bind(
@@ -1266,6 +1316,123 @@ impl GpuRenderer {
                 } = self.pbgi.take().expect("checked");
                 let grown = (2 * needed as usize).min(largest);
                 self.set_pbgi_with(device, Some((&lit, stride, &scene)), Some(grown))?;
+                Ok(true)
+            }
+            Err(e) => Err(e.into()),
+        }
+    }
+
+    /// Reflects the scene in its mirror materials through reflection maps (`Some((lit, tile,
+    /// scene))`, Holländer 2013 §3.6.1 Fig. 3.19, [`instant_radiosity::reflections`]): a
+    /// dual-paraboloid map of `tile²` texels per mirror mesh of `scene` (metallic ≥ 0.9,
+    /// roughness ≤ 0.2), made every frame from `lit`'s surfels (lit here on the CPU by the
+    /// renderer's lights through `scene`'s triangles, and again when the lights change) by a
+    /// many-view cut at `lit`'s ε; every mirror pixel adds Fresnel × its probe's map in the
+    /// mirrored view direction to its indirect specular light. `None` removes them. Not with
+    /// the VPLs' indirect stage (the same slot; an error), and not in supersampled frames'
+    /// samples (per pixel, like the other indirect light). The cut lists hold an estimate
+    /// that [`GpuRenderer::check_reflections`] grows.
+    pub fn set_reflections(
+        &mut self,
+        device: &wgpu::Device,
+        setting: Option<(&instant_radiosity::pbgi::LitPoints, u32, &Scene)>,
+    ) -> Result<(), RenderError> {
+        self.set_reflections_with(device, setting, None)
+    }
+
+    fn set_reflections_with(
+        &mut self,
+        device: &wgpu::Device,
+        setting: Option<(&instant_radiosity::pbgi::LitPoints, u32, &Scene)>,
+        capacity: Option<usize>,
+    ) -> Result<(), RenderError> {
+        let Some((lit, tile, scene)) = setting else {
+            self.reflections = None;
+            self.bind_composition(device);
+            return Ok(());
+        };
+        if self.indirect.is_some() {
+            return Err(instant_radiosity::IndirectError::Config(
+                "reflection maps and the VPLs' indirect light both fill the indirect specular \
+                 light: use point-based GI (or no indirect light) with reflections"
+                    .into(),
+            )
+            .into());
+        }
+        use instant_radiosity::reflections::{GpuReflections, Probes, REFLECTION_FORMAT};
+        let probes = Probes::of_scene(scene);
+        let mut lit = lit.clone();
+        lit.light(scene, &self.lights)?;
+        let radiance = transfer::buffer_init(
+            device,
+            "reflection radiance",
+            bytemuck::cast_slice(&radiance_words(&lit)),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        )?;
+        let largest = manylod::gpu::largest_capacity(device);
+        let cells = (tile as f32 / lit.config().epsilon.max(0.25)).powi(2);
+        let estimate = (2.0 * probes.len() as f32 * cells * PBGI_NODE_VIEWS_PER_CELL) as usize;
+        let capacity = capacity
+            .unwrap_or(estimate)
+            .clamp((2 * probes.len()).max(2), largest);
+        let mut maps = GpuReflections::new(device, &lit, &radiance, (&probes, tile), capacity)?;
+        let (w, h) = self.size();
+        let output = transfer::texture_2d(
+            device,
+            "reflections",
+            w,
+            h,
+            REFLECTION_FORMAT,
+            transfer::STORAGE_OUTPUT,
+        );
+        maps.bind_frame(
+            device,
+            self.gbuffer_pass.frame_buffer(),
+            (&self.sized.targets).into(),
+            &output,
+        )?;
+        self.reflections = Some(ReflectionStage {
+            maps,
+            output,
+            radiance,
+            lit,
+            tile,
+            scene: scene.clone(),
+            capacity,
+        });
+        self.bind_composition(device);
+        Ok(())
+    }
+
+    /// [`GpuRenderer::check_pbgi`] for the reflection maps' cut lists.
+    pub fn check_reflections(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<bool, RenderError> {
+        let Some(r) = &self.reflections else {
+            return Ok(false);
+        };
+        match r.maps.check(device, queue) {
+            Ok(()) => Ok(false),
+            Err(instant_radiosity::IndirectError::ManyLod(manylod::ManyLodError::Capacity {
+                needed,
+                ..
+            })) => {
+                let largest = manylod::gpu::largest_capacity(device);
+                if r.capacity >= largest {
+                    return Err(instant_radiosity::IndirectError::Config(format!(
+                        "the reflection maps' cuts need {needed} node-views per list, more than \
+                         this device's largest binding holds ({largest}): raise ε or lower the \
+                         texels"
+                    ))
+                    .into());
+                }
+                let ReflectionStage {
+                    lit, tile, scene, ..
+                } = self.reflections.take().expect("checked");
+                let grown = (2 * needed as usize).min(largest);
+                self.set_reflections_with(device, Some((&lit, tile, &scene)), Some(grown))?;
                 Ok(true)
             }
             Err(e) => Err(e.into()),
@@ -1458,6 +1625,9 @@ impl GpuRenderer {
         }
         if let Some(p) = &mut self.pbgi {
             p.gather.encode(encoder, Some(&self.timer));
+        }
+        if let Some(r) = &mut self.reflections {
+            r.maps.encode(encoder, Some(&self.timer));
         }
         if let Some((bound, _)) = self.near_field.as_ref().and_then(|n| n.bound.as_ref()) {
             bound.encode(encoder, Some(&self.timer));
