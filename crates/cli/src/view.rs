@@ -173,17 +173,18 @@ const LIVE_KEYS: [&str; 13] = [
 ];
 
 /// Keys that turn others off when set (`deferred` refuses them together).
-const EXCLUSIVE: [(&str, &[&str]); 5] = [
+const EXCLUSIVE: [(&str, &[&str]); 6] = [
     ("ray-shadows", &["shadows", "manylod-shadows"]),
     ("shadows", &["ray-shadows"]),
     ("manylod-shadows", &["ray-shadows"]),
-    ("vpls", &["pbgi"]),
+    ("vpls", &["pbgi", "reflections"]),
     ("pbgi", &["vpls"]),
+    ("reflections", &["vpls"]),
 ];
 
 /// Keys that only mean something with another (`requires` in `deferred`'s flags): turning
 /// that one off removes them too.
-const DEPENDENTS: [(&str, &[&str]); 6] = [
+const DEPENDENTS: [(&str, &[&str]); 7] = [
     (
         "vpls",
         &[
@@ -199,6 +200,7 @@ const DEPENDENTS: [(&str, &[&str]); 6] = [
     ("ssaa", &["adaptive"]),
     ("adaptive", &["ssaa-metric"]),
     ("pbgi", &["pbgi-tile", "pbgi-epsilon", "pbgi-points"]),
+    ("reflections", &["reflection-epsilon", "reflection-points"]),
     ("ssao", &["ssao-kernel", "ssao-radius"]),
     (
         "subdiv",
@@ -1333,6 +1335,9 @@ impl Viewer {
         if live.renderer.check_pbgi(d, q)? {
             self.message = Some("point-based GI's cut lists grew to hold the cut".into());
         }
+        if live.renderer.check_reflections(d, q)? {
+            self.message = Some("the reflection maps' cut lists grew to hold the cut".into());
+        }
         if self.timings.len() == TIMING_HISTORY {
             self.timings.pop_front();
         }
@@ -1989,6 +1994,15 @@ impl Panel<'_> {
                         false,
                     );
                 }
+                let reflections = args.reflections.map_or("off".to_owned(), |n| n.to_string());
+                self.choice(
+                    ui,
+                    "reflections",
+                    "reflection maps of mirrors, texels",
+                    &["16", "32", "64", "128"],
+                    &reflections,
+                    true,
+                );
                 let vpls = args.vpls.map_or("off".to_owned(), |n| n.to_string());
                 self.choice(
                     ui,
