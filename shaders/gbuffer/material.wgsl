@@ -31,7 +31,8 @@ struct Material {
     occlusion_strength: f32,
     alpha_mode: u32,
     alpha_cutoff: f32,
-    _pad: u32,
+    // The sample's albedo is scaled by 1 − transmission (`scene::MaterialSample::albedo`).
+    transmission: f32,
     slots: array<TextureSlot, 5>,
 };
 
@@ -115,7 +116,7 @@ fn evaluate_material(at: SurfaceAttributes) -> MaterialSample {
     let mr = read_slot(metallic_roughness_texture, metallic_roughness_sampler, material.slots[SLOT_METALLIC_ROUGHNESS], at);
     let occlusion = read_slot(occlusion_texture, occlusion_sampler, material.slots[SLOT_OCCLUSION], at).x;
     let emission = read_slot(emissive_texture, emissive_sampler, material.slots[SLOT_EMISSIVE], at).rgb;
-    out.albedo = clamp(base.rgb, vec3<f32>(0.0), vec3<f32>(1.0));
+    out.albedo = clamp(base.rgb, vec3<f32>(0.0), vec3<f32>(1.0)) * (1.0 - material.transmission);
     out.alpha = base.a;
     out.roughness = clamp(material.roughness * mr.y, 0.0, 1.0);
     out.metallic = clamp(material.metallic * mr.z, 0.0, 1.0);

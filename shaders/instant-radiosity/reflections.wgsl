@@ -1,9 +1,10 @@
 // Reflection maps through many-view cuts (Holländer 2013 §3.6.1, Fig. 3.19). `resolve`: after
 // the probes' views were cut and splatted with nearest nodes (`manylod/nearest.wgsl`), every
 // map texel takes its nearest node's exit radiance (zero where none). `reflect`: every pixel
-// of a mirror material mirrors its view ray about its normal and reads the dual-paraboloid map
-// of the nearest probe of its material; Schlick's Fresnel times that radiance is its
-// reflection. Mirrors `instant_radiosity::reflections::{LitPoints::reflection_maps, reflect}`.
+// of a mirror or glass material mirrors its view ray about its normal and reads the
+// dual-paraboloid map of the nearest probe of its material; Schlick's Fresnel F times that
+// radiance is its reflection, and glass adds (1 − F) · transmission · tint times the map along
+// the view ray refracted into it. Mirrors `instant_radiosity::reflections::{LitPoints::reflection_maps, reflect}`.
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
 // #import manylod/common.wgsl
@@ -18,7 +19,7 @@ struct Maps {
 
 struct Reflect {
     tile: u32,
-    // Entries of `ranges` (the scene's materials).
+    // Entries of `probe_materials` (the scene's materials).
     materials: u32,
     pad0: u32,
     pad1: u32,
@@ -35,9 +36,18 @@ struct Reflect {
 @group(0) @binding(7) var normals: texture_2d<u32>;
 @group(0) @binding(8) var albedo_in: texture_2d<f32>;
 @group(0) @binding(9) var material_in: texture_2d<u32>;
-// Probe centres (xyz), material by material; per material its probes [first, count].
+// `reflections::ProbeMaterial`: a material's probes and what glass transmits.
+struct ProbeMaterial {
+    first: u32,
+    count: u32,
+    transmission: f32,
+    ior: f32,
+    tint: vec4<f32>,
+}
+
+// Probe centres (xyz), material by material.
 @group(0) @binding(10) var<storage, read> centers: array<vec4<f32>>;
-@group(0) @binding(11) var<storage, read> ranges: array<vec2<u32>>;
+@group(0) @binding(11) var<storage, read> probe_materials: array<ProbeMaterial>;
 @group(0) @binding(12) var reflection_out: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(13) var<storage, read> maps: array<vec4<f32>>;
 
@@ -88,12 +98,12 @@ fn reflect(@builtin(global_invocation_id) id: vec3<u32>) {
     let depth = textureLoad(linear_depth, id.xy, 0).x;
     let word = textureLoad(material_in, id.xy, 0).x;
     let material = word >> 16u;
-    if depth > 0.0 && word != NO_MATERIAL && material < params.materials && ranges[material].y > 0u {
-        let range = ranges[material];
+    if depth > 0.0 && word != NO_MATERIAL && material < params.materials && probe_materials[material].count > 0u {
+        let m = probe_materials[material];
         let p = position_from_view_ray(frame, id.xy, depth);
-        var best = range.x;
+        var best = m.first;
         var best_d = 3.4e38;
-        for (var k = range.x; k < range.x + range.y; k++) {
+        for (var k = m.first; k < m.first + m.count; k++) {
             let o = centers[k].xyz - p;
             let d = dot(o, o);
             if d < best_d {
@@ -106,9 +116,15 @@ fn reflect(@builtin(global_invocation_id) id: vec3<u32>) {
         let r = normalize(2.0 * dot(n, v) * n - v);
         let a = textureLoad(albedo_in, id.xy, 0);
         let metallic = f32((word >> 8u) & 0xffu) / 255.0;
-        let f0 = mix(vec3<f32>(0.04 * a.a), a.rgb, metallic);
+        let q = (m.ior - 1.0) / (m.ior + 1.0);
+        let dielectric = q * q * a.a;
+        let f0 = mix(vec3<f32>(dielectric), a.rgb, metallic);
         let f = f0 + (1.0 - f0) * pow(1.0 - clamp(dot(n, v), 0.0, 1.0), 5.0);
         out = f * map_lookup(best, r);
+        let t = refract(-v, n, 1.0 / m.ior);
+        if m.transmission > 0.0 && any(t != vec3<f32>(0.0)) {
+            out += (1.0 - f) * m.transmission * m.tint.rgb * map_lookup(best, t);
+        }
     }
     textureStore(reflection_out, id.xy, vec4<f32>(out, 1.0));
 }

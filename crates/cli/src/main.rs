@@ -38,7 +38,7 @@ struct Args {
     #[arg(long)]
     scene: Option<PathBuf>,
     /// Built-in scene when no --scene is given: cornell, spheres, checkerboard, gallery (the
-    /// glTF material's parts, one sphere each), mirrors (64 mirror spheres in the Cornell box,
+    /// glTF material's parts, one sphere each), mirrors (64 mirror and glass spheres in the Cornell box,
     /// for --reflections), or the light-culling scenes of Ishmukhametov 2013 §4.2:
     /// walls-test1 .. walls-test4.
     #[arg(long, default_value = "cornell")]
@@ -209,11 +209,12 @@ struct Args {
     /// With --pbgi: 2^LOG2 surfels sampled on the scene.
     #[arg(long, value_name = "LOG2", default_value_t = 20, requires = "pbgi", value_parser = clap::value_parser!(u32).range(4..=24))]
     pbgi_points: u32,
-    /// Mirror materials (metallic ≥ 0.9, roughness ≤ 0.2) reflect the scene through reflection
-    /// maps (GPU; Holländer 2013 §3.6.1, Fig. 3.19): every mirror mesh gets a dual-paraboloid
-    /// map of T×T texels per half, made every frame from the scene's surfels (lit on the CPU by
-    /// the direct lights) through a many-view cut; each mirror pixel adds Fresnel × its map in
-    /// the mirrored view direction. Try `--builtin mirrors`.
+    /// Mirror (metallic ≥ 0.9) and glass (transmission > 0) materials of roughness ≤ 0.2
+    /// reflect and refract the scene through maps (GPU; Holländer 2013 §3.6.1, Fig. 3.19):
+    /// every such mesh gets a dual-paraboloid map of T×T texels per half, made every frame from
+    /// the scene's surfels (lit on the CPU by the direct lights) through a many-view cut; each
+    /// of its pixels adds Fresnel × its map in the mirrored view direction, and glass adds what
+    /// it transmits along the refracted one. Try `--builtin mirrors`.
     #[arg(long, value_name = "T", conflicts_with = "vpls", value_parser = clap::value_parser!(u32).range(4..=256))]
     reflections: Option<u32>,
     /// With --reflections: the cut threshold ε in texels.
@@ -2318,7 +2319,7 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
         let c = lit.config();
         let probes = instant_radiosity::reflections::Probes::of_scene(&setup.scene);
         println!(
-            "reflect: {} mirror meshes, maps of 2 × {}x{} texels, ε {}, 2^{} surfels",
+            "reflect: {} mirror and glass meshes, maps of 2 × {}x{} texels, ε {}, 2^{} surfels",
             probes.len(),
             c.tile,
             c.tile,

@@ -1,23 +1,27 @@
-//! Per-object reflection maps through many-view cuts (Holländer 2013 §3.6.1, Fig. 3.19: "an
-//! environment map per object by finding cuts in the BVH in parallel"). Every mesh with a
-//! mirror material ([`is_mirror`]) gets a probe at the centre of its bounds; each probe is a
+//! Per-object reflection and refraction maps through many-view cuts (Holländer 2013 §3.6.1,
+//! Fig. 3.19: "an environment map per object by finding cuts in the BVH in parallel"). Every
+//! mesh with a mirror ([`is_mirror`]) or glass ([`is_glass`]) material gets a probe at the
+//! centre of its bounds; each probe is a
 //! dual-paraboloid map — two paraboloid views of `tile²` texels around +Y and −Y — of the lit
 //! surfels of point-based GI ([`LitPoints`]): the views' cut, the splat with nearest nodes,
 //! then each texel takes its nearest node's exit radiance. The probe's own object is not in
 //! its maps when it is convex: seen from inside, all its surfaces face away and the cut culls
 //! them (a concave object sees its own inner faces).
 //!
-//! In the frame, every pixel of a mirror material reflects its view ray about its normal and
-//! reads the map of the nearest probe of its material (one probe per mirror mesh, so give
-//! objects that share a material their own meshes): Schlick's Fresnel times that radiance is
-//! the pixel's reflection, which the composition adds to the indirect specular light. Glass
-//! (refraction maps) is left out.
+//! In the frame, every pixel of a probed material reflects its view ray about its normal and
+//! reads the map of the nearest probe of its material (one probe per mesh, so give objects
+//! that share a material their own meshes): Schlick's Fresnel `F` times that radiance is the
+//! pixel's reflection. Glass adds what it transmits: `(1 − F) · transmission · tint` times the
+//! map's radiance along the view ray refracted into the surface (`refract(−v, n, 1/ior)`, the
+//! classic environment-mapped refraction through one interface: the ray's way out of the
+//! object is not traced). The composition adds both to the indirect specular light.
 //!
 //! [`LitPoints::reflection_maps`] and [`reflect`] are the CPU twins of `reflections.wgsl`.
 
 use ::gpu::PassTimer;
 use ::gpu::kernel::{Binding, Kernel, Passes, Workgroups};
 use ::gpu::transfer;
+use bytemuck::Zeroable;
 use glam::{Vec2, Vec3};
 use manylod::{
     AtlasLayout, CutProblem, View,
@@ -39,24 +43,59 @@ pub fn is_mirror(m: &Material) -> bool {
     m.metallic >= MIRROR_METALLIC && m.roughness <= MIRROR_ROUGHNESS
 }
 
-/// The reflection probes of a scene: one per mesh with a mirror material, grouped by material.
+/// Whether `m` is glass: it transmits ([`Material::transmission`] > 0) and is no rougher than
+/// [`MIRROR_ROUGHNESS`].
+pub fn is_glass(m: &Material) -> bool {
+    m.transmission > 0.0 && m.roughness <= MIRROR_ROUGHNESS
+}
+
+/// Whether meshes of `m` get probes: mirrors and glass.
+pub fn has_probes(m: &Material) -> bool {
+    is_mirror(m) || is_glass(m)
+}
+
+/// A material's row in the probes' table (`reflections.wgsl`'s `ProbeMaterial`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ProbeMaterial {
+    /// Its first probe in [`Probes::centers`].
+    pub first: u32,
+    /// Its number of probes (0: neither mirror nor glass).
+    pub count: u32,
+    /// [`Material::transmission`] (0 unless glass).
+    pub transmission: f32,
+    /// [`Material::ior`].
+    pub ior: f32,
+    /// The base colour (RGB, then 0): the tint of the light glass transmits.
+    pub tint: [f32; 4],
+}
+
+/// The reflection probes of a scene: one per mesh with a mirror or glass material, grouped by
+/// material.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Probes {
     /// Probe centres (the meshes' bounds' centres), material by material.
     pub centers: Vec<Vec3>,
-    /// Per material index, its probes: `[first, count]` into `centers` (`count` 0: not a
-    /// mirror).
-    pub by_material: Vec<[u32; 2]>,
+    /// Per material index, its probes and what the reflect pass needs of it.
+    pub materials: Vec<ProbeMaterial>,
 }
 
 impl Probes {
-    /// The probes of `scene`'s mirror meshes.
+    /// The probes of `scene`'s mirror and glass meshes.
     pub fn of_scene(scene: &Scene) -> Self {
         let mut centers = Vec::new();
-        let mut by_material = vec![[0u32; 2]; scene.materials.len()];
+        let mut materials = Vec::with_capacity(scene.materials.len());
         for (m, material) in scene.materials.iter().enumerate() {
-            by_material[m][0] = centers.len() as u32;
-            if !is_mirror(material) {
+            let first = centers.len() as u32;
+            let glass = is_glass(material);
+            materials.push(ProbeMaterial {
+                first,
+                count: 0,
+                transmission: if glass { material.transmission } else { 0.0 },
+                ior: material.ior,
+                tint: material.base_color.truncate().extend(0.0).to_array(),
+            });
+            if !(glass || is_mirror(material)) {
                 continue;
             }
             for mesh in scene
@@ -72,12 +111,9 @@ impl Probes {
                     centers.push(bounds.center());
                 }
             }
-            by_material[m][1] = centers.len() as u32 - by_material[m][0];
+            materials[m].count = centers.len() as u32 - first;
         }
-        Self {
-            centers,
-            by_material,
-        }
+        Self { centers, materials }
     }
 
     /// The number of probes.
@@ -92,7 +128,7 @@ impl Probes {
 
     /// The probe a point of material `material` reflects from: the nearest of its material's.
     pub fn nearest(&self, material: u32, p: Vec3) -> Option<usize> {
-        let [first, count] = *self.by_material.get(material as usize)?;
+        let ProbeMaterial { first, count, .. } = *self.materials.get(material as usize)?;
         (first..first + count).map(|i| i as usize).min_by(|&a, &b| {
             p.distance_squared(self.centers[a])
                 .total_cmp(&p.distance_squared(self.centers[b]))
@@ -167,16 +203,21 @@ pub fn map_lookup(maps: &[Vec3], probe: usize, d: Vec3, tile: u32) -> Vec3 {
     maps[(2 * probe + half) * (tile * tile) as usize + (y as u32 * tile + x as u32) as usize]
 }
 
-/// Schlick's Fresnel of a mirror of `albedo`, `metallic` and specular factor `specular` seen
-/// under `cos_theta`: `F0 = mix(0.04 · specular, albedo, metallic)`.
-pub fn fresnel(albedo: Vec3, metallic: f32, specular: f32, cos_theta: f32) -> Vec3 {
-    let f0 = Vec3::splat(0.04 * specular).lerp(albedo, metallic);
+/// Schlick's Fresnel of a surface of `albedo`, `metallic`, specular factor `specular` and
+/// index of refraction `ior` seen under `cos_theta`: `F0 = mix(((ior − 1)/(ior + 1))² ·
+/// specular, albedo, metallic)` (glTF's dielectric; 0.04 · specular at the default ior 1.5).
+pub fn fresnel(albedo: Vec3, metallic: f32, (specular, ior): (f32, f32), cos_theta: f32) -> Vec3 {
+    let q = (ior - 1.0) / (ior + 1.0);
+    let dielectric = q * q * specular;
+    let f0 = Vec3::splat(dielectric).lerp(albedo, metallic);
     f0 + (Vec3::ONE - f0) * (1.0 - cos_theta.clamp(0.0, 1.0)).powi(5)
 }
 
-/// The reflection of one G-buffer pixel (CPU twin of `reflections.wgsl`'s `reflect`): zero
-/// unless its material has probes; else Fresnel × the nearest probe's map in the mirrored
-/// view direction. `(position, normal, eye)` in world space.
+/// The reflection (and, on glass, transmission) of one G-buffer pixel (CPU twin of
+/// `reflections.wgsl`'s `reflect`): zero unless its material has probes; else Fresnel × the
+/// nearest probe's map in the mirrored view direction, plus on glass `(1 − F) · transmission
+/// · tint` × the map in the refracted view direction. `(position, normal, eye)` in world
+/// space.
 pub fn reflect(
     probes: &Probes,
     maps: &[Vec3],
@@ -187,9 +228,17 @@ pub fn reflect(
     let Some(probe) = probes.nearest(material, position) else {
         return Vec3::ZERO;
     };
+    let m = probes.materials[material as usize];
     let v = (eye - position).normalize_or_zero();
     let r = (2.0 * normal.dot(v) * normal - v).normalize_or_zero();
-    fresnel(albedo, metallic, specular, normal.dot(v)) * map_lookup(maps, probe, r, tile)
+    let f = fresnel(albedo, metallic, (specular, m.ior), normal.dot(v));
+    let mut out = f * map_lookup(maps, probe, r, tile);
+    let t = (-v).refract(normal, 1.0 / m.ior);
+    if m.transmission > 0.0 && t != Vec3::ZERO {
+        let tint = Vec3::from_slice(&m.tint[..3]);
+        out += (Vec3::ONE - f) * m.transmission * tint * map_lookup(maps, probe, t, tile);
+    }
+    out
 }
 
 #[repr(C)]
@@ -239,8 +288,8 @@ impl GpuReflections {
     ) -> Result<Self, IndirectError> {
         if probes.is_empty() {
             return Err(IndirectError::Config(
-                "no reflection probes: the scene has no mirror material (metallic ≥ 0.9, \
-                 roughness ≤ 0.2)"
+                "no reflection probes: the scene has no mirror (metallic ≥ 0.9) or glass \
+                 (transmission > 0) material of roughness ≤ 0.2"
                     .into(),
             ));
         }
@@ -355,7 +404,8 @@ impl GpuReflections {
             .iter()
             .map(|c| c.extend(0.0).to_array())
             .collect();
-        let ranges: Vec<[u32; 2]> = self.probes.by_material.clone();
+        let materials = &self.probes.materials;
+        let none = [ProbeMaterial::zeroed()];
         let storage = wgpu::BufferUsages::STORAGE;
         let centers = transfer::buffer_init(
             device,
@@ -363,19 +413,19 @@ impl GpuReflections {
             bytemuck::cast_slice(&probe_words),
             storage,
         )?;
-        let ranges_buffer = transfer::buffer_init(
+        let materials_buffer = transfer::buffer_init(
             device,
-            "probe ranges",
-            bytemuck::cast_slice(if ranges.is_empty() {
-                &[[0u32; 2]]
+            "probe materials",
+            bytemuck::cast_slice(if materials.is_empty() {
+                &none
             } else {
-                &ranges[..]
+                &materials[..]
             }),
             storage,
         )?;
         let params = ReflectParams {
             tile: self.tile,
-            materials: ranges.len() as u32,
+            materials: materials.len() as u32,
             _pad: [0; 2],
         };
         let params = transfer::buffer_init(
@@ -421,7 +471,7 @@ impl GpuReflections {
                 wgpu::BindingResource::TextureView(&albedo),
                 wgpu::BindingResource::TextureView(&material),
                 centers.as_entire_binding(),
-                ranges_buffer.as_entire_binding(),
+                materials_buffer.as_entire_binding(),
                 self.maps.as_entire_binding(),
                 wgpu::BindingResource::TextureView(&out),
             ],

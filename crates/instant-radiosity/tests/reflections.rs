@@ -5,7 +5,7 @@
 use glam::Vec3;
 use instant_radiosity::pbgi::{LitPoints, PbgiConfig};
 use instant_radiosity::reflections::{
-    GpuReflections, Probes, REFLECTION_FORMAT, is_mirror, map_texel, reflect,
+    GpuReflections, Probes, REFLECTION_FORMAT, has_probes, is_glass, map_texel, reflect,
 };
 use instant_radiosity::vpl;
 use tiled_shading::GpuLight;
@@ -21,16 +21,32 @@ const TILE: u32 = 32;
 fn probes_sit_at_the_mirror_meshes() {
     let scene = scene::mirror_spheres(8);
     let probes = Probes::of_scene(&scene);
-    assert_eq!(probes.len(), 8, "one probe per mirror sphere");
-    let mirrors: Vec<usize> = (0..scene.materials.len())
-        .filter(|&m| is_mirror(&scene.materials[m]))
+    assert_eq!(probes.len(), 8, "one probe per sphere");
+    let probed: Vec<usize> = (0..scene.materials.len())
+        .filter(|&m| has_probes(&scene.materials[m]))
         .collect();
-    assert_eq!(mirrors.len(), 4, "four metals");
-    for (m, range) in probes.by_material.iter().enumerate() {
-        assert_eq!(range[1], if mirrors.contains(&m) { 2 } else { 0 });
+    assert_eq!(probed.len(), 4, "two metals, two glasses");
+    for (m, row) in probes.materials.iter().enumerate() {
+        assert_eq!(row.count, if probed.contains(&m) { 2 } else { 0 });
+        let material = &scene.materials[m];
+        assert_eq!(
+            row.transmission > 0.0,
+            is_glass(material),
+            "{}",
+            material.name
+        );
     }
+    assert_eq!(
+        probes
+            .materials
+            .iter()
+            .filter(|r| r.transmission > 0.0)
+            .count(),
+        2,
+        "clear and green glass"
+    );
     // A point on a sphere's surface reflects from that sphere's probe.
-    for mesh in scene.meshes.iter().filter(|m| m.name.starts_with("mirror")) {
+    for mesh in scene.meshes.iter().filter(|m| m.name.starts_with("sphere")) {
         let p = mesh.positions[7];
         let probe = probes.nearest(mesh.material, p).expect("a probe");
         let center = probes.centers[probe];
@@ -46,6 +62,81 @@ fn probes_sit_at_the_mirror_meshes() {
         None,
         "the walls reflect nothing"
     );
+}
+
+/// Glass in closed form: under a uniform environment of radiance `L`, clear glass that
+/// transmits all returns `F · L + (1 − F) · L = L` at every angle (nothing is absorbed); seen
+/// head-on it reflects `F0 = ((ior − 1)/(ior + 1))² = 0.04` of what lies in front (the map's
+/// +Y half, seen from above) and transmits `0.96 · tint` of what lies behind (−Y, the ray
+/// passes straight through); a mirror transmits nothing.
+#[test]
+fn glass_reflects_and_transmits_by_fresnel() {
+    let scene = scene::mirror_spheres(4);
+    let probes = Probes::of_scene(&scene);
+    let clear = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "glass")
+        .expect("glass") as u32;
+    let green = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "green glass")
+        .expect("tint") as u32;
+    let silver = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "silver")
+        .expect("silver") as u32;
+    let center = probes.centers[probes.nearest(clear, Vec3::ZERO).expect("a probe")];
+    let texels = (TILE * TILE) as usize;
+    let (above, below) = (Vec3::new(0.2, 0.5, 0.9), Vec3::new(0.7, 0.3, 0.1));
+    let maps: Vec<Vec3> = (0..2 * probes.len())
+        .flat_map(|view| std::iter::repeat_n(if view % 2 == 0 { above } else { below }, texels))
+        .collect();
+    let uniform = vec![Vec3::splat(0.8); maps.len()];
+    let top = center + Vec3::new(0.0, 0.05, 0.0);
+    for eye in [
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(0.7, 0.2, 0.1),
+        Vec3::new(-0.3, 0.06, 0.2),
+    ] {
+        let got = reflect(
+            &probes,
+            &uniform,
+            TILE,
+            (clear, Vec3::ZERO, 0.0, 1.0),
+            (top, Vec3::Y, center + eye),
+        );
+        assert!(
+            (got - Vec3::splat(0.8)).abs().max_element() < 1e-5,
+            "{got} from {eye}"
+        );
+    }
+    let head_on = |material| {
+        reflect(
+            &probes,
+            &maps,
+            TILE,
+            (material, Vec3::ZERO, 0.0, 1.0),
+            (top, Vec3::Y, top + Vec3::Y),
+        )
+    };
+    let tint = scene.materials[green as usize].base_color.truncate();
+    for (material, tint) in [(clear, Vec3::ONE), (green, tint)] {
+        let want = 0.04 * above + 0.96 * tint * below;
+        let got = head_on(material);
+        assert!((got - want).abs().max_element() < 1e-5, "{got} vs {want}");
+    }
+    let albedo = scene.materials[silver as usize].base_color.truncate();
+    let got = reflect(
+        &probes,
+        &maps,
+        TILE,
+        (silver, albedo, 1.0, 1.0),
+        (top, Vec3::Y, top + Vec3::Y),
+    );
+    assert!((got - albedo * above).abs().max_element() < 1e-5, "{got}");
 }
 
 /// The maps' texels against rays: from each probe through each texel centre (starting past
@@ -93,7 +184,7 @@ fn maps_match_rays_and_the_gpu() {
         let own = scene
             .meshes
             .iter()
-            .filter(|m| m.name.starts_with("mirror"))
+            .filter(|m| m.name.starts_with("sphere"))
             .find(|m| m.positions[0].distance(center) < 0.1)
             .map_or(0.0, |m| {
                 m.positions
@@ -257,7 +348,7 @@ fn maps_match_rays_and_the_gpu() {
     let image = interleave::gpu::download_image::<[half::f16; 4]>(d, q, &output)
         .expect("output")
         .map(|p| p.map(half::f16::to_f32));
-    let (mut mirrors, mut far) = (0, 0);
+    let (mut mirrors, mut far, mut glass) = (0, 0, 0);
     for y in 0..size.1 {
         for x in 0..size.0 {
             let word = gb.material.get(x, y);
@@ -278,13 +369,22 @@ fn maps_match_rays_and_the_gpu() {
                 Vec3::ZERO
             };
             mirrors += usize::from(want != Vec3::ZERO);
+            let word = gb.material.get(x, y);
+            glass += usize::from(
+                word != u32::MAX
+                    && is_glass(&scene.materials[gbuffer::unpack_material(word).2 as usize]),
+            );
             let g = image.get(x, y);
             if (0..3).any(|c| (g[c] - want[c]).abs() > 2e-3 * want[c].abs().max(1e-2)) {
                 far += 1;
             }
         }
     }
-    println!("reflect pass: {mirrors} mirror pixels, {far} differ from the CPU twin");
+    println!(
+        "reflect pass: {mirrors} reflecting pixels ({glass} of glass), {far} differ from the \
+         CPU twin"
+    );
+    assert!(glass > 20, "the glass spheres should show: {glass} pixels");
     assert!(
         mirrors > 50,
         "the spheres should show: {mirrors} mirror pixels"

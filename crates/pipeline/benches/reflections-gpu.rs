@@ -1,6 +1,6 @@
 //! `reflections-bench`: reflection maps through many-view cuts (Holländer 2013 §3.6.1,
 //! Fig. 3.19: 400 reflecting objects, 2 M polygons, 2 M points, every object's map in 40 ms on
-//! a GTX 480). `scene::mirror_spheres(400)` — 400 mirror spheres in the Cornell box — sampled
+//! a GTX 480). `scene::mirror_spheres(400)` — 400 mirror and glass spheres in the Cornell box — sampled
 //! into 2^21 surfels lit by the room's light; every sphere's dual-paraboloid map (two views of
 //! `tile²` texels) by the probes' cut, the splat with nearest nodes and the maps' resolve
 //! (`instant_radiosity::reflections::GpuReflections`), per tile and ε. Baseline in the same
@@ -213,7 +213,7 @@ fn main() -> Result<()> {
             let radius = scene
                 .meshes
                 .iter()
-                .filter(|m| m.name.starts_with("mirror"))
+                .filter(|m| m.name.starts_with("sphere"))
                 .filter_map(|m| m.positions.first())
                 .map(|p| p.distance(c))
                 .fold(f32::INFINITY, f32::min);
@@ -240,7 +240,7 @@ fn main() -> Result<()> {
         frames,
     );
     md.push_str(&format!(
-        "\n`scene::mirror_spheres({objects})`: {} mirror spheres in the Cornell box ({} \
+        "\n`scene::mirror_spheres({objects})`: {} mirror and glass spheres in the Cornell box ({} \
          triangles), 2^{points_log2} surfels lit by the room's light (on the CPU, \
          {lighting_cpu_ms:.0} ms; not timed). Per sphere a dual-paraboloid map (two views of \
          tile² texels): the probes' basic cut, the splat with nearest nodes, the maps' resolve. \

@@ -1322,13 +1322,14 @@ impl GpuRenderer {
         }
     }
 
-    /// Reflects the scene in its mirror materials through reflection maps (`Some((lit, tile,
-    /// scene))`, Holländer 2013 §3.6.1 Fig. 3.19, [`instant_radiosity::reflections`]): a
-    /// dual-paraboloid map of `tile²` texels per mirror mesh of `scene` (metallic ≥ 0.9,
-    /// roughness ≤ 0.2), made every frame from `lit`'s surfels (lit here on the CPU by the
-    /// renderer's lights through `scene`'s triangles, and again when the lights change) by a
-    /// many-view cut at `lit`'s ε; every mirror pixel adds Fresnel × its probe's map in the
-    /// mirrored view direction to its indirect specular light. `None` removes them. Not with
+    /// Reflects (and refracts) the scene in its mirror and glass materials through maps
+    /// (`Some((lit, tile, scene))`, Holländer 2013 §3.6.1 Fig. 3.19,
+    /// [`instant_radiosity::reflections`]): a dual-paraboloid map of `tile²` texels per mirror
+    /// or glass mesh of `scene` (metallic ≥ 0.9 or transmission > 0, roughness ≤ 0.2), made
+    /// every frame from `lit`'s surfels (lit here on the CPU by the renderer's lights through
+    /// `scene`'s triangles, and again when the lights change) by a many-view cut at `lit`'s ε;
+    /// every such pixel adds Fresnel × its probe's map in the mirrored view direction, and on
+    /// glass what it transmits along the refracted one, to its indirect specular light. `None` removes them. Not with
     /// the VPLs' indirect stage (the same slot; an error), and not in supersampled frames'
     /// samples (per pixel, like the other indirect light). The cut lists hold an estimate
     /// that [`GpuRenderer::check_reflections`] grows.

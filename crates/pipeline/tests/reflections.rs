@@ -8,7 +8,7 @@
 use instant_radiosity::{
     IndirectConfig,
     pbgi::{LitPoints, PbgiConfig},
-    reflections::is_mirror,
+    reflections::has_probes,
     vpl,
 };
 use pipeline::gpu::GpuRenderer;
@@ -56,7 +56,7 @@ fn reflections_brighten_only_the_mirrors() {
         for x in 0..w {
             let word = gb.material.get(x, y);
             let mirror = word != u32::MAX
-                && is_mirror(&scene.materials[gbuffer::unpack_material(word).2 as usize]);
+                && has_probes(&scene.materials[gbuffer::unpack_material(word).2 as usize]);
             let (a, b) = (plain.get(x, y), reflected.get(x, y));
             if mirror {
                 mirrors += 1;

@@ -201,29 +201,35 @@ pub fn cornell_box() -> Scene {
     b.scene
 }
 
-/// The Cornell box without its blocks, holding `n` (1..=4096) mirror spheres on a lattice
-/// that fills the middle of the room, in four metals (roughness 0.05), each sphere its own
-/// mesh: the set-up of Holländer 2013 Fig. 3.19 (hundreds of reflecting objects, each with its
-/// own reflection map).
+/// The Cornell box without its blocks, holding `n` (1..=4096) spheres on a lattice that fills
+/// the middle of the room, in turn silver, gold, clear glass and green glass (roughness 0.05;
+/// the glass transmits all, ior 1.5), each sphere its own mesh: the set-up of Holländer 2013
+/// Fig. 3.19 (hundreds of reflecting and refracting objects, each with its own map).
 pub fn mirror_spheres(n: u32) -> Scene {
     let n = n.clamp(1, 4096);
     let mut scene = cornell_box();
     scene.meshes.retain(|m| m.name != "blocks");
     let mut b = Builder { scene };
-    let metals = [
-        ("silver", Vec3::new(0.97, 0.96, 0.91)),
-        ("gold", Vec3::new(1.0, 0.78, 0.34)),
-        ("copper", Vec3::new(0.96, 0.64, 0.54)),
-        ("chrome", Vec3::new(0.55, 0.56, 0.55)),
+    let finishes = [
+        ("silver", Vec3::new(0.97, 0.96, 0.91), 1.0),
+        ("gold", Vec3::new(1.0, 0.78, 0.34), 1.0),
+        ("glass", Vec3::ONE, 0.0),
+        ("green glass", Vec3::new(0.55, 0.9, 0.6), 0.0),
     ]
-    .map(|(name, rgb)| b.material(name, rgb, 0.05, 1.0));
+    .map(|(name, rgb, metallic)| {
+        let m = b.material(name, rgb, 0.05, metallic);
+        if metallic == 0.0 {
+            b.scene.materials[m as usize].transmission = 1.0;
+        }
+        m
+    });
     let k = (n as f32).cbrt().ceil() as u32;
     let (lo, hi) = (Vec3::new(0.1, 0.06, 0.12), Vec3::new(0.456, 0.44, 0.48));
     let spacing = (hi - lo) / k as f32;
     let radius = 0.3 * spacing.min_element();
     for i in 0..n {
         let cell = Vec3::new((i % k) as f32, ((i / k) % k) as f32, (i / (k * k)) as f32);
-        let mesh = b.mesh(&format!("mirror {i}"), metals[i as usize % 4]);
+        let mesh = b.mesh(&format!("sphere {i}"), finishes[i as usize % 4]);
         Builder::sphere(mesh, lo + (cell + 0.5) * spacing, radius, 24, 12);
     }
     b.scene

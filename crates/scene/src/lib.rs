@@ -270,6 +270,15 @@ pub struct Material {
     /// `KHR_materials_specular`'s `specularFactor`; an OBJ material whose `Ks` is black has
     /// 0: Lambert only). 1 by default.
     pub specular: f32,
+    /// The share of light that passes through the surface instead of its diffuse lobe (glTF
+    /// `KHR_materials_transmission`'s factor, in \[0, 1\]): [`Material::evaluate`] scales the
+    /// albedo by 1 − it; the deferred renderer draws the transmitted light through refraction
+    /// maps (`instant_radiosity::reflections`), while the VPLs, the surfels and the path
+    /// tracer see only the scaled diffuse lobe (no light passes through). 0 by default.
+    pub transmission: f32,
+    /// Index of refraction (glTF `KHR_materials_ior`, at least 1); 1.5 by default. The
+    /// reflection maps' Fresnel takes its F0 from it; the direct lighting keeps 0.04.
+    pub ior: f32,
 }
 
 impl Material {
@@ -309,6 +318,7 @@ impl Material {
             ("normal scale", self.normal_scale),
             ("occlusion strength", self.occlusion_strength),
             ("alpha cutoff", cutoff),
+            ("transmission", self.transmission),
         ];
         let problem = if !self.base_color.is_finite() {
             Some(format!("base colour {} is not finite", self.base_color))
@@ -319,6 +329,16 @@ impl Material {
             ))
         } else if let Some((what, v)) = scalars.iter().find(|(_, v)| !v.is_finite()) {
             Some(format!("{what} {v} is not finite"))
+        } else if !(0.0..=1.0).contains(&self.transmission) {
+            Some(format!(
+                "transmission {} is outside [0, 1]",
+                self.transmission
+            ))
+        } else if !(self.ior >= 1.0 && self.ior.is_finite()) {
+            Some(format!(
+                "index of refraction {} is not a finite value ≥ 1",
+                self.ior
+            ))
         } else {
             self.textures()
                 .find(|(_, t)| {
@@ -367,6 +387,8 @@ impl Default for Material {
             metallic: 0.0,
             emissive: Vec3::ZERO,
             specular: 1.0,
+            transmission: 0.0,
+            ior: 1.5,
         }
     }
 }

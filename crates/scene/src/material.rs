@@ -262,7 +262,9 @@ impl SurfaceAttributes {
 /// BRDF reads.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MaterialSample {
-    /// Linear base colour (factor × texture × vertex colour), clamped to \[0, 1\].
+    /// Linear base colour (factor × texture × vertex colour), clamped to \[0, 1\], times
+    /// 1 − [`Material::transmission`]: the light that glass transmits leaves its diffuse lobe
+    /// (and, for the rare metal that transmits, its tint too).
     pub albedo: Vec3,
     /// Alpha (factor × texture × vertex colour).
     pub alpha: f32,
@@ -317,7 +319,7 @@ impl Material {
             None => at.normal,
         };
         MaterialSample {
-            albedo: base.truncate().clamp(Vec3::ZERO, Vec3::ONE),
+            albedo: base.truncate().clamp(Vec3::ZERO, Vec3::ONE) * (1.0 - self.transmission),
             alpha: base.w,
             roughness: (self.roughness * mr.y).clamp(0.0, 1.0),
             metallic: (self.metallic * mr.z).clamp(0.0, 1.0),

@@ -367,3 +367,25 @@ fn scenes_too_large_or_without_extent_are_errors() {
         assert!(e.contains(why), "{why}: {e}");
     }
 }
+
+/// A material built in code with a transmission outside [0, 1] or an index of refraction
+/// below 1 (or not finite) is refused, naming the value.
+#[test]
+fn impossible_transmission_and_ior_are_errors() {
+    let glass = |transmission, ior| scene::Material {
+        name: "glass".into(),
+        transmission,
+        ior,
+        ..Default::default()
+    };
+    assert!(glass(1.0, 1.5).validate().is_ok());
+    for (m, what) in [
+        (glass(1.5, 1.5), "transmission 1.5"),
+        (glass(-0.1, 1.5), "transmission -0.1"),
+        (glass(0.5, 0.5), "refraction 0.5"),
+        (glass(0.5, f32::NAN), "refraction NaN"),
+    ] {
+        let e = m.validate().expect_err(what).to_string();
+        assert!(e.contains(what), "{e}");
+    }
+}

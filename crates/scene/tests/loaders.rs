@@ -352,7 +352,8 @@ fn damaged_helmet_has_all_five_texture_roles() {
 
 /// A one-triangle glTF written here with every material feature the model holds: a second
 /// texture-coordinate set, tangents, vertex colours, `KHR_texture_transform`, a sampler, a
-/// normal scale, an occlusion strength, MASK with its cutoff and `doubleSided`;
+/// normal scale, an occlusion strength, MASK with its cutoff, `doubleSided`,
+/// `KHR_materials_transmission` and `KHR_materials_ior`;
 /// `base_color_info` is the base colour's `textureInfo`.
 fn featured_gltf(name: &str, base_color_info: &str) -> PathBuf {
     let dir = tmp(name);
@@ -373,7 +374,7 @@ fn featured_gltf(name: &str, base_color_info: &str) -> PathBuf {
         .save(dir.join("t.png"))
         .expect("png");
     let json = format!(
-        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_texture_transform"],
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_texture_transform","KHR_materials_transmission","KHR_materials_ior"],
         "buffers":[{{"uri":"t.bin","byteLength":180}}],
         "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}},
           {{"buffer":0,"byteOffset":60,"byteLength":24}},{{"buffer":0,"byteOffset":84,"byteLength":48}},
@@ -390,7 +391,8 @@ fn featured_gltf(name: &str, base_color_info: &str) -> PathBuf {
             "metallicRoughnessTexture":{{"index":0}}}},
           "normalTexture":{{"index":0,"scale":0.5}},"occlusionTexture":{{"index":0,"strength":0.25}},
           "emissiveTexture":{{"index":0,"texCoord":1}},"emissiveFactor":[1,1,1],
-          "alphaMode":"MASK","alphaCutoff":0.3,"doubleSided":true}}],
+          "alphaMode":"MASK","alphaCutoff":0.3,"doubleSided":true,
+          "extensions":{{"KHR_materials_transmission":{{"transmissionFactor":0.75}},"KHR_materials_ior":{{"ior":1.33}}}}}}],
         "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1,"TEXCOORD_1":2,"TANGENT":3,"COLOR_0":4}},"material":0}}]}}],
         "nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],"scene":0}}"#
     );
@@ -423,6 +425,7 @@ fn gltf_material_features_load_as_the_file_states() {
     assert_eq!((m.normal_scale, m.occlusion_strength), (0.5, 0.25));
     assert_eq!(m.alpha_mode, AlphaMode::Mask { cutoff: 0.3 });
     assert!(m.double_sided);
+    assert_eq!((m.transmission, m.ior), (0.75, 1.33));
     assert_eq!(m.textures().count(), 5);
     assert_eq!(
         s.textures[0].sampler,

@@ -85,8 +85,8 @@ pub struct GpuMaterial {
     pub alpha_mode: u32,
     /// The mask's cutoff.
     pub alpha_cutoff: f32,
-    /// Padding to 16-byte alignment.
-    pub _pad: u32,
+    /// [`scene::Material::transmission`]: the sampled albedo is scaled by 1 − it.
+    pub transmission: f32,
     /// Base colour, metallic-roughness, normal, occlusion, emissive.
     pub slots: [GpuTextureSlot; 5],
 }
@@ -110,7 +110,7 @@ impl GpuMaterial {
             occlusion_strength: m.occlusion_strength,
             alpha_mode,
             alpha_cutoff,
-            _pad: 0,
+            transmission: m.transmission,
             slots: m.roles().map(|(_, t)| GpuTextureSlot::new(t)),
         }
     }

@@ -581,6 +581,10 @@ fn material(index: usize, m: &gltf::Material) -> Result<Material, SceneErrorKind
         specular: m
             .specular()
             .map_or(1.0, |s| s.specular_factor().clamp(0.0, 1.0)),
+        transmission: m
+            .transmission()
+            .map_or(0.0, |t| t.transmission_factor().clamp(0.0, 1.0)),
+        ior: m.ior().unwrap_or(1.5).max(1.0),
         name,
     })
 }
