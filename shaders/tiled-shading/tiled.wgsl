@@ -1,7 +1,5 @@
-// #import gbuffer/frame.wgsl
-// #import gbuffer/normal_encoding.wgsl
-// #import tiled-shading/lighting.wgsl
 // #import tiled-shading/shadows.wgsl
+// #import tiled-shading/pixels.wgsl
 // Light accumulation: brute force (`brute_force`, every light at every pixel) and tile-based
 // deferred shading in one compute pass (`shade_tiles`, Ishmukhametov 2013 §2.4.1 after
 // Andersson 2009): one workgroup per screen tile loads its G-buffer pixels, reduces their depth bounds
@@ -31,27 +29,6 @@ const COSINE_QUANTUM: f32 = 1048576.0;
 const CONE_EPSILON: f32 = 1e-3;
 const SLICE_EPSILON: f32 = 1e-5;
 
-struct Params {
-    light_count: u32,
-    tiles_x: u32,
-    // 1: write every tile's list to `lists` (tests); 0: only the counts.
-    record_lists: u32,
-    // Entries per tile in `lists`.
-    list_stride: u32,
-    // Exponential cluster slicing (`Slicing`).
-    slice_near: f32,
-    slice_scale: f32,
-    _pad0: u32,
-    _pad1: u32,
-};
-
-@group(0) @binding(0) var<uniform> frame: Frame;
-@group(0) @binding(1) var<uniform> params: Params;
-@group(0) @binding(2) var<storage, read> lights: array<Light>;
-@group(0) @binding(3) var linear_depth_texture: texture_2d<f32>;
-@group(0) @binding(4) var normal_texture: texture_2d<u32>;
-@group(0) @binding(5) var albedo_texture: texture_2d<f32>;
-@group(0) @binding(6) var material_texture: texture_2d<u32>;
 @group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(8) var specular_out: texture_storage_2d<rgba32float, write>;
 // Per tile: the number of lights in its list (the light-count heatmap).
@@ -67,13 +44,6 @@ var<workgroup> list_count: atomic<u32>;
 var<workgroup> list_size: u32;
 var<workgroup> list_light: array<u32, CAPACITY>;
 var<workgroup> list_mask: array<u32, CAPACITY>;
-
-struct Sample {
-    position: vec3<f32>,
-    depth: f32,
-    normal: vec3<f32>,
-    present: bool,
-};
 
 fn slice_of(depth: f32) -> u32 {
     let k = floor(log(max(depth / params.slice_near, 1.0)) * params.slice_scale);
@@ -219,43 +189,6 @@ fn cone_rejects(light: Light) -> bool {
     }
     let cone = light_cone(light.position);
     return cone.w > 0.0 && faces_away(cone.xyz, cone.w);
-}
-
-fn load_sample(pixel: vec2<u32>, size: vec2<u32>) -> Sample {
-    var s: Sample;
-    s.present = false;
-    if pixel.x >= size.x || pixel.y >= size.y {
-        return s;
-    }
-    let depth = textureLoad(linear_depth_texture, pixel, 0).x;
-    if depth <= 0.0 {
-        return s;
-    }
-    s.present = true;
-    s.position = position_from_view_ray(frame, pixel, depth);
-    s.depth = depth;
-    s.normal = decode_octahedral_snorm(unpack2x16snorm(textureLoad(normal_texture, pixel, 0).x));
-    return s;
-}
-
-// Albedo, roughness and metallic of a pixel (`gbuffer::pack_material`'s word), and the
-// specular factor (the albedo's alpha).
-struct SurfaceMaterial {
-    albedo: vec3<f32>,
-    roughness: f32,
-    metallic: f32,
-    specular: f32,
-};
-
-fn load_material(pixel: vec2<u32>) -> SurfaceMaterial {
-    let word = textureLoad(material_texture, pixel, 0).x;
-    let albedo = textureLoad(albedo_texture, pixel, 0);
-    return SurfaceMaterial(
-        albedo.rgb,
-        f32(word & 0xffu) / 255.0,
-        f32((word >> 8u) & 0xffu) / 255.0,
-        albedo.a,
-    );
 }
 
 // Brute force (`Method::BruteForce`): every light at every pixel, 8 × 8 invocations per

@@ -93,7 +93,9 @@ pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS)
     .union(wgpu::Features::SUBGROUP)
     .union(wgpu::Features::FLOAT32_FILTERABLE)
-    .union(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM);
+    .union(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM)
+    .union(wgpu::Features::FLOAT32_BLENDABLE)
+    .union(wgpu::Features::DEPTH_CLIP_CONTROL);
 
 impl Gpu {
     /// Chooses an adapter from the environment and creates its device.

@@ -418,6 +418,7 @@ impl GpuRenderer {
             lights.len(),
             false,
         )?;
+        shading.bind_depth(&mut bound, &sized.targets.depth)?;
         bound.set_lights(queue, lights)?;
         Ok(bound)
     }

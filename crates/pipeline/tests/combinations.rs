@@ -84,7 +84,7 @@ impl Ssaa {
 }
 
 /// Levels of each switch.
-const LEVELS: [usize; 10] = [4, 4, 4, 4, 2, 2, 2, 3, 2, 2];
+const LEVELS: [usize; 10] = [5, 4, 4, 4, 2, 2, 2, 3, 2, 2];
 
 fn combo(levels: [usize; 10]) -> Combo {
     Combo {

@@ -262,7 +262,8 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
     }
     let planes = &tile.frustum.planes;
     match method {
-        Method::BruteForce => ALL_SLICES,
+        // A light volume holds the light's whole influence: brute force's image.
+        Method::BruteForce | Method::LightVolumes => ALL_SLICES,
         Method::Tiled => {
             if sphere_meets(planes, world, light.radius) {
                 ALL_SLICES

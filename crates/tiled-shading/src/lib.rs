@@ -46,6 +46,8 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "shadows.wgsl",
         "shadow_raster.wgsl",
         "tiled.wgsl",
+        "pixels.wgsl",
+        "volumes.wgsl",
     ],
 );
 
@@ -147,9 +149,14 @@ impl From<&Light> for GpuLight {
 /// How lights are assigned to pixels.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Method {
-    /// Every light at every pixel (thesis §4.1 "traditional deferred shading" as one compute
-    /// pass): the baseline and the reference.
+    /// Every light at every pixel (the light loop of thesis §1.3 step 3 as one compute pass):
+    /// the reference.
     BruteForce,
+    /// Traditional deferred shading (thesis §4.1, Hargreaves 2004): every light drawn as an
+    /// instanced low-polygon volume (sphere, cone, or a full-screen triangle for directional
+    /// lights), back faces only, depth-tested against the scene, each fragment shading one
+    /// light and blended additively into the accumulation (the thesis's baseline).
+    LightVolumes,
     /// Tile-based deferred shading (§2.4.1): per-tile depth bounds and a sphere–frustum test.
     #[default]
     Tiled,
@@ -161,18 +168,20 @@ pub enum Method {
 }
 
 impl Method {
-    /// Every method, baseline first.
-    pub const ALL: [Method; 4] = [
+    /// Every method, the reference first.
+    pub const ALL: [Method; 5] = [
         Method::BruteForce,
         Method::Tiled,
         Method::TiledCones,
         Method::Clustered,
+        Method::LightVolumes,
     ];
 
-    /// The command-line name (`brute`, `tiled`, `tiled-cones`, `clustered`).
+    /// The command-line name (`brute`, `tiled`, `tiled-cones`, `clustered`, `volumes`).
     pub fn name(self) -> &'static str {
         match self {
             Method::BruteForce => "brute",
+            Method::LightVolumes => "volumes",
             Method::Tiled => "tiled",
             Method::TiledCones => "tiled-cones",
             Method::Clustered => "clustered",
@@ -194,7 +203,9 @@ impl FromStr for Method {
             .into_iter()
             .find(|m| m.name() == s)
             .ok_or_else(|| {
-                format!("unknown shading method {s:?} (brute, tiled, tiled-cones, clustered)")
+                format!(
+                    "unknown shading method {s:?} (brute, tiled, tiled-cones, clustered, volumes)"
+                )
             })
     }
 }

@@ -527,3 +527,112 @@ fn bad_input_is_an_error() {
     );
     assert!(matches!(&no_storage, Err(e) if e.to_string().contains("specular output")));
 }
+
+/// Traditional deferred shading (thesis §4.1) on a G-buffer rendered on the GPU, its light
+/// volumes depth-tested against the scene's depth buffer where the device can clamp their
+/// depth: the brute-force image, with the eye inside a light's volume, volumes reaching past
+/// the far plane, narrow spots (cones) and wide ones (spheres), hemispherical and directional
+/// lights.
+#[test]
+fn light_volumes_equal_brute_force() {
+    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+        return;
+    };
+    let (device, queue) = (&g.device, &g.queue);
+    let scene = scene::spheres_on_plane(5);
+    let mut camera = scene.camera_or_framed();
+    let bounds = scene.bounds();
+    let farthest = (0..8)
+        .map(|i| {
+            let pick = |bit, lo: f32, hi: f32| if i & bit == 0 { lo } else { hi };
+            let corner = Vec3::new(
+                pick(1, bounds.min.x, bounds.max.x),
+                pick(2, bounds.min.y, bounds.max.y),
+                pick(4, bounds.min.z, bounds.max.z),
+            );
+            (corner.distance(camera.eye), corner)
+        })
+        .fold((0.0, Vec3::ZERO), |a, b| if b.0 > a.0 { b } else { a });
+    camera.far = farthest.0 * 1.01;
+    let mut lights = scene::scatter_point_lights(bounds, 200, 11);
+    let p = |v: Vec3| format!("{},{},{}", v.x, v.y, v.z);
+    lights.extend(
+        [
+            // The eye inside the volume.
+            format!("point:{},3,1,1,1,2", p(camera.eye)),
+            // Past the far plane.
+            format!("point:{},4,1,1,1,2", p(farthest.1)),
+            "spot:0,3,0,0,-1,0,6,20,35".to_string(),
+            "spot:1,2,1,0.3,-1,0,5,60,80".to_string(),
+            "hemi:1,0.5,1,0,1,0,3".to_string(),
+            "dir:0.3,-1,0.2,1,1,1,0.5".to_string(),
+        ]
+        .iter()
+        .map(|s| s.parse::<Light>().expect("light")),
+    );
+    let lights = tiled_shading::gpu_lights(&lights).expect("valid lights");
+    let (w, h) = (160, 112);
+    let pass = gbuffer::gpu::GBufferPass::new(device).expect("gbuffer pass");
+    let gpu_scene = gbuffer::gpu::GpuScene::upload(device, queue, &scene, &pass).expect("upload");
+    let targets = gbuffer::gpu::GBufferTargets::new(device, w, h).expect("targets");
+    pass.write_frame(queue, &Frame::new(&camera, w, h));
+    let mut encoder = device.create_command_encoder(&Default::default());
+    pass.encode(&mut encoder, &gpu_scene, &targets, None);
+    queue.submit([encoder.finish()]);
+    let shade = |method: Method, depth: bool| {
+        let stage = gpu::LightShading::new(device, &config(method, 16)).expect("stage");
+        let outputs = gpu::LightShading::output_textures(device, w, h);
+        let outputs = [&outputs[0], &outputs[1]];
+        let mut bound = stage
+            .bind(
+                device,
+                pass.frame_buffer(),
+                (&targets).into(),
+                outputs,
+                lights.len(),
+                false,
+            )
+            .expect("bind");
+        if depth {
+            stage
+                .bind_depth(&mut bound, &targets.depth)
+                .expect("scene depth");
+        }
+        assert_eq!(
+            stage.depth_tested(&bound),
+            depth
+                && device
+                    .features()
+                    .contains(::gpu::wgpu::Features::DEPTH_CLIP_CONTROL)
+        );
+        bound.set_lights(queue, &lights).expect("lights");
+        let mut encoder = device.create_command_encoder(&Default::default());
+        stage.encode(&bound, &mut encoder, None);
+        queue.submit([encoder.finish()]);
+        let [diffuse, specular] = gpu::read_outputs(device, queue, outputs).expect("read");
+        Shaded {
+            diffuse,
+            specular,
+            tiles: (0, 0),
+            counts: Vec::new(),
+            lists: Vec::new(),
+        }
+    };
+    let brute = shade(Method::BruteForce, false);
+    let lit = brute
+        .diffuse
+        .pixels()
+        .iter()
+        .filter(|v| v.max_element() > 0.0)
+        .count();
+    assert!(lit > (w * h / 2) as usize, "{lit} lit pixels");
+    for depth in [true, false] {
+        compare(
+            &format!("volumes (scene depth {depth}) vs brute"),
+            &brute,
+            &shade(Method::LightVolumes, depth),
+            GPU_RELATIVE,
+            1e-5,
+        );
+    }
+}

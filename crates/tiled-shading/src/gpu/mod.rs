@@ -1,9 +1,10 @@
 //! The light accumulation on the GPU: one compute pass per frame of `tiled.wgsl` — its
 //! `brute_force` entry point (8 × 8 invocations per workgroup, every light per pixel) or
 //! `shade_tiles` (one workgroup per tile, [`Method::Tiled`], [`Method::TiledCones`] or
-//! [`Method::Clustered`]). Pipelines,
-//! buffers and bind groups are built once; [`LightShading::set_lights`] and
-//! [`LightShading::set_camera`] only write buffers.
+//! [`Method::Clustered`]) — or one render pass of `volumes.wgsl` drawing every light's
+//! volume ([`Method::LightVolumes`], [`volumes`]). Pipelines, buffers and bind groups are
+//! built once; [`BoundShading::set_lights`] and [`BoundShading::set_camera`] only write
+//! buffers.
 //!
 //! ```no_run
 //! use tiled_shading::{Method, ShadingConfig, gpu::run};
@@ -20,6 +21,7 @@
 
 pub mod run;
 pub mod shadows;
+pub mod volumes;
 
 pub use run::{run, run_shadowed};
 
@@ -32,6 +34,7 @@ use glam::{Vec3, Vec4};
 use scene::Camera;
 
 use crate::{GpuLight, Method, ShadingConfig, ShadingError, Slicing};
+use volumes::VolumeMeshes;
 
 /// Format of the diffuse and specular accumulation textures.
 pub const ACCUMULATION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -61,9 +64,31 @@ pub struct ShadingParams {
 /// textures and a light buffer of some capacity; [`LightShading::encode`] records the pass.
 pub struct LightShading {
     config: ShadingConfig,
-    pipeline: wgpu::ComputePipeline,
+    pipeline: Pipeline,
     layout: Layout,
     shadow_layout: Layout,
+}
+
+/// The pass a [`LightShading`] records.
+enum Pipeline {
+    /// One compute dispatch (brute force, tiled, clustered).
+    Compute(wgpu::ComputePipeline),
+    /// Light volumes: depth-tested against the scene when [`LightShading::bind_depth`] gave
+    /// its depth and the device can clamp the volumes' depth (`DEPTH_CLIP_CONTROL`, so a
+    /// back face past the far plane still lights the surfaces in front of it), else not.
+    Volumes {
+        tested: Option<wgpu::RenderPipeline>,
+        untested: wgpu::RenderPipeline,
+    },
+}
+
+/// What a [`BoundShading`] of [`Method::LightVolumes`] draws with.
+struct BoundVolumes {
+    order: wgpu::Buffer,
+    meshes: VolumeMeshes,
+    ranges: [std::ops::Range<u32>; 3],
+    targets: [wgpu::TextureView; 2],
+    depth: Option<wgpu::TextureView>,
 }
 
 /// A [`LightShading`] bound to one G-buffer, its outputs and a light buffer.
@@ -79,6 +104,7 @@ pub struct BoundShading {
     size: (u32, u32),
     tiles: (u32, u32),
     brute_force: bool,
+    volumes: Option<BoundVolumes>,
 }
 
 /// The compile-time constants of `tiled.wgsl`'s `shade_tiles` for `config`.
@@ -122,6 +148,9 @@ impl LightShading {
     /// Builds the pipeline of `config` (bad configurations are an error here).
     pub fn new(device: &wgpu::Device, config: &ShadingConfig) -> Result<Self, ShadingError> {
         config.validate()?;
+        if config.method == Method::LightVolumes {
+            return Self::volumes(device, config);
+        }
         let (module, entry) = if config.method == Method::BruteForce {
             (crate::SHADERS.module(device, "tiled.wgsl")?, "brute_force")
         } else {
@@ -143,7 +172,93 @@ impl LightShading {
         let pipeline = kernel::pipeline(device, &module, entry, &[&layout, &shadow_layout], &[]);
         Ok(Self {
             config: *config,
-            pipeline,
+            pipeline: Pipeline::Compute(pipeline),
+            layout,
+            shadow_layout,
+        })
+    }
+
+    /// The render pipelines of [`Method::LightVolumes`]: additive blending into the two
+    /// accumulation targets needs `FLOAT32_BLENDABLE` (an error naming it when absent).
+    fn volumes(device: &wgpu::Device, config: &ShadingConfig) -> Result<Self, ShadingError> {
+        ::gpu::DeviceNeeds {
+            features: wgpu::Features::FLOAT32_BLENDABLE,
+            ..Default::default()
+        }
+        .check(device.features(), &device.limits())?;
+        let module = crate::SHADERS.module(device, "volumes.wgsl")?;
+        // Frame, params, lights; the G-buffer; the draw order and the volumes' corners.
+        let mut bindings = vec![Binding::Uniform, Binding::Uniform, Binding::StorageRead];
+        bindings.extend(GBUFFER_BINDINGS);
+        bindings.extend([Binding::StorageRead, Binding::StorageRead]);
+        let stages = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let layout = Layout::new(device, "light volumes", stages, &bindings);
+        let shadow_layout = Layout::new(
+            device,
+            "shadow lookup",
+            wgpu::ShaderStages::FRAGMENT,
+            &shadows::LOOKUP_BINDINGS,
+        );
+        let pipeline_layout =
+            kernel::pipeline_layout(device, "light volumes", &[&layout, &shadow_layout]);
+        let add = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::One,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let target = Some(wgpu::ColorTargetState {
+            format: ACCUMULATION_FORMAT,
+            blend: Some(wgpu::BlendState {
+                color: add,
+                alpha: add,
+            }),
+            write_mask: wgpu::ColorWrites::ALL,
+        });
+        let clamp = device
+            .features()
+            .contains(wgpu::Features::DEPTH_CLIP_CONTROL);
+        let pipeline = |depth_test: bool| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("light volumes"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("volume_vertex"),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &[("DEPTH_TESTED", f64::from(u8::from(depth_test)))],
+                        ..Default::default()
+                    },
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: Some(wgpu::Face::Front),
+                    unclipped_depth: depth_test,
+                    ..Default::default()
+                },
+                depth_stencil: depth_test.then(|| wgpu::DepthStencilState {
+                    format: gbuffer::DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::GreaterEqual),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("volume_fragment"),
+                    compilation_options: Default::default(),
+                    targets: &[target.clone(), target.clone()],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        Ok(Self {
+            config: *config,
+            pipeline: Pipeline::Volumes {
+                tested: clamp.then(|| pipeline(true)),
+                untested: pipeline(false),
+            },
             layout,
             shadow_layout,
         })
@@ -155,7 +270,7 @@ impl LightShading {
     }
 
     /// Two textures of `width × height` for [`LightShading::bind`]'s outputs
-    /// ([`ACCUMULATION_FORMAT`], storage + sampled + copy source).
+    /// ([`ACCUMULATION_FORMAT`], storage + render attachment + sampled + copy source).
     pub fn output_textures(device: &wgpu::Device, width: u32, height: u32) -> [wgpu::Texture; 2] {
         ["diffuse accumulation", "specular accumulation"].map(|label| {
             transfer::texture_2d(
@@ -164,7 +279,7 @@ impl LightShading {
                 width,
                 height,
                 ACCUMULATION_FORMAT,
-                transfer::STORAGE_OUTPUT,
+                transfer::STORAGE_OUTPUT | wgpu::TextureUsages::RENDER_ATTACHMENT,
             )
         })
     }
@@ -173,7 +288,8 @@ impl LightShading {
     /// diffuse and specular `outputs` ([`ACCUMULATION_FORMAT`], G-buffer size, storage) and a
     /// new light buffer for `capacity` lights (empty until [`BoundShading::set_lights`]). With
     /// `record_lists`, every tile's list is kept for [`BoundShading::read_lists`] (tiles ×
-    /// capacity entries: for tests). Textures of the wrong size, format or usage are an error.
+    /// capacity entries: for tests). Textures of the wrong size, format or usage are an error
+    /// (light volumes render into the outputs: they need `RENDER_ATTACHMENT`, and no lists).
     pub fn bind(
         &self,
         device: &wgpu::Device,
@@ -197,7 +313,12 @@ impl LightShading {
         ] {
             kernel::check_texture(what, texture, size, format, input)?;
         }
-        let output = wgpu::TextureUsages::STORAGE_BINDING;
+        let volumes = matches!(self.pipeline, Pipeline::Volumes { .. });
+        let output = if volumes {
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+        } else {
+            wgpu::TextureUsages::STORAGE_BINDING
+        };
         for (what, texture) in [
             ("diffuse output", outputs[0]),
             ("specular output", outputs[1]),
@@ -209,12 +330,16 @@ impl LightShading {
         let capacity = capacity.max(1);
         let lights = storage(device, "lights", (capacity * size_of::<GpuLight>()) as u64)?;
         let counts = storage(device, "tile light counts", tiles * 4)?;
-        let stride = if record_lists { capacity as u64 } else { 0 };
+        let stride = if record_lists && !volumes {
+            capacity as u64
+        } else {
+            0
+        };
         let lists = storage(device, "tile light lists", tiles * stride * 8)?;
         let params = ShadingParams {
             light_count: 0,
             tiles_x,
-            record_lists: u32::from(record_lists),
+            record_lists: u32::from(stride > 0),
             list_stride: stride as u32,
             slice_near: 1.0,
             slice_scale: 1.0,
@@ -227,26 +352,61 @@ impl LightShading {
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
         let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let views = [
+        let inputs = [
             view(gbuffer.linear_depth),
             view(gbuffer.normal),
             view(gbuffer.albedo),
             view(gbuffer.material),
-            view(outputs[0]),
-            view(outputs[1]),
         ];
+        let targets = [view(outputs[0]), view(outputs[1])];
         let mut resources = vec![
             frame.as_entire_binding(),
             params_buffer.as_entire_binding(),
             lights.as_entire_binding(),
         ];
-        resources.extend(views.iter().map(wgpu::BindingResource::TextureView));
-        let brute_force = self.config.method == Method::BruteForce;
-        if !brute_force {
-            resources.extend([counts.as_entire_binding(), lists.as_entire_binding()]);
-        }
+        resources.extend(inputs.iter().map(wgpu::BindingResource::TextureView));
+        let brute_force = matches!(
+            self.config.method,
+            Method::BruteForce | Method::LightVolumes
+        );
+        let volumes = if volumes {
+            let order = storage(device, "light volume order", capacity as u64 * 4)?;
+            let meshes = VolumeMeshes::new();
+            let corners = transfer::buffer_init(
+                device,
+                "light volume corners",
+                bytemuck::cast_slice(&meshes.corners),
+                wgpu::BufferUsages::STORAGE,
+            )?;
+            let group = self.layout.bind(
+                device,
+                &[
+                    resources.clone(),
+                    vec![order.as_entire_binding(), corners.as_entire_binding()],
+                ]
+                .concat(),
+            );
+            let volumes = BoundVolumes {
+                order,
+                meshes,
+                ranges: [0..0, 0..0, 0..0],
+                targets,
+                depth: None,
+            };
+            Some((group, volumes))
+        } else {
+            resources.extend(targets.iter().map(wgpu::BindingResource::TextureView));
+            if !brute_force {
+                resources.extend([counts.as_entire_binding(), lists.as_entire_binding()]);
+            }
+            None
+        };
+        let (group, volumes) = match volumes {
+            Some((group, volumes)) => (group, Some(volumes)),
+            None => (self.layout.bind(device, &resources), None),
+        };
         Ok(BoundShading {
-            group: self.layout.bind(device, &resources),
+            group,
             shadow_group: shadows::lookup_group(device, &self.shadow_layout, Default::default())?,
             params,
             params_buffer,
@@ -257,7 +417,32 @@ impl LightShading {
             size,
             tiles: (tiles_x, tiles_y),
             brute_force,
+            volumes,
         })
+    }
+
+    /// Lets light volumes ([`Method::LightVolumes`]) be depth-tested against `depth`, the
+    /// scene's depth buffer of the G-buffer `bound` reads ([`gbuffer::DEPTH_FORMAT`], its
+    /// size, render attachment): only pixels in front of a volume's back face are shaded.
+    /// Without it (or without `DEPTH_CLIP_CONTROL`) every pixel a volume covers is — the same
+    /// image, more fragments. Nothing to do for the compute methods.
+    pub fn bind_depth(
+        &self,
+        bound: &mut BoundShading,
+        depth: &wgpu::Texture,
+    ) -> Result<(), ShadingError> {
+        let Some(volumes) = &mut bound.volumes else {
+            return Ok(());
+        };
+        kernel::check_texture(
+            "scene depth",
+            depth,
+            bound.size,
+            gbuffer::DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )?;
+        volumes.depth = Some(depth.create_view(&Default::default()));
+        Ok(())
     }
 
     /// Makes `bound` look shadows up in `inputs` (what is `None` there no light of the light
@@ -270,6 +455,18 @@ impl LightShading {
     ) -> Result<(), ShadingError> {
         bound.shadow_group = shadows::lookup_group(device, &self.shadow_layout, inputs)?;
         Ok(())
+    }
+
+    /// Whether `bound`'s light volumes are depth-tested against the scene (a scene depth
+    /// given to [`LightShading::bind_depth`] and a device with `DEPTH_CLIP_CONTROL`).
+    pub fn depth_tested(&self, bound: &BoundShading) -> bool {
+        matches!(
+            self.pipeline,
+            Pipeline::Volumes {
+                tested: Some(_),
+                ..
+            }
+        ) && bound.volumes.as_ref().is_some_and(|v| v.depth.is_some())
     }
 
     /// The pass name in timings: `light accumulation (METHOD)`.
@@ -295,6 +492,15 @@ impl LightShading {
         timer: Option<&PassTimer>,
         name: &str,
     ) {
+        let compute = match &self.pipeline {
+            Pipeline::Compute(p) => p,
+            Pipeline::Volumes { tested, untested } => {
+                if let Some(volumes) = &bound.volumes {
+                    encode_volumes(bound, volumes, (tested, untested), encoder, timer, name);
+                }
+                return;
+            }
+        };
         let workgroups = if bound.brute_force {
             Workgroups::covering(bound.size.0, bound.size.1, 8)
         } else {
@@ -302,7 +508,7 @@ impl LightShading {
         };
         Passes::one(
             name,
-            &self.pipeline,
+            compute,
             vec![bound.group.clone(), bound.shadow_group.clone()],
             workgroups,
         )
@@ -324,6 +530,11 @@ impl BoundShading {
             });
         }
         queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(lights));
+        if let Some(volumes) = &mut self.volumes {
+            let (order, ranges) = volumes::draw_order(lights);
+            queue.write_buffer(&volumes.order, 0, bytemuck::cast_slice(&order));
+            volumes.ranges = ranges;
+        }
         self.params.light_count = lights.len() as u32;
         queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
         Ok(())
@@ -386,6 +597,60 @@ impl BoundShading {
                 })
                 .collect(),
         ))
+    }
+}
+
+/// Records the light volumes' render pass: the targets cleared, then one instanced draw per
+/// mesh — spheres, cones, the full-screen triangle.
+fn encode_volumes(
+    bound: &BoundShading,
+    volumes: &BoundVolumes,
+    (tested, untested): (&Option<wgpu::RenderPipeline>, &wgpu::RenderPipeline),
+    encoder: &mut wgpu::CommandEncoder,
+    timer: Option<&PassTimer>,
+    name: &str,
+) {
+    let (pipeline, depth) = match (tested, &volumes.depth) {
+        (Some(tested), Some(depth)) => (tested, Some(depth)),
+        _ => (untested, None),
+    };
+    let attachment = |view| {
+        Some(wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                store: wgpu::StoreOp::Store,
+            },
+        })
+    };
+    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(name),
+        color_attachments: &[
+            attachment(&volumes.targets[0]),
+            attachment(&volumes.targets[1]),
+        ],
+        depth_stencil_attachment: depth.map(|view| wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: None,
+            stencil_ops: None,
+        }),
+        timestamp_writes: timer.and_then(|t| t.render_pass(name)),
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, &bound.group, &[]);
+    pass.set_bind_group(1, &bound.shadow_group, &[]);
+    let meshes = &volumes.meshes;
+    for (vertices, instances) in [&meshes.sphere, &meshes.cone, &meshes.screen]
+        .into_iter()
+        .zip(&volumes.ranges)
+    {
+        if !instances.is_empty() {
+            pass.draw(vertices.clone(), instances.clone());
+        }
     }
 }
 
