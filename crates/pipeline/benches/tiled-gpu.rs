@@ -1,5 +1,6 @@
 //! `tiled-bench`: the light accumulation of Ishmukhametov 2013 on the GPU — brute force, tiled,
-//! tiled with normal-cone back-face culling and clustered — (1) on Sponza at 1920×1080 and
+//! tiled with normal-cone back-face culling, clustered and traditional deferred shading with
+//! light volumes (§4.1, depth-tested against the G-buffer's depth) — (1) on Sponza at 1920×1080 and
 //! 3840×2160 with 256 to 65 536 scattered bounded point lights, (2) on the thesis's tests 1–4
 //! (the wall scene with 0, 100, 500, 1000 lights behind the wall) with and without CPU
 //! view-frustum culling. Every time is the GPU time of the light accumulation pass alone,
@@ -18,7 +19,8 @@ use pipeline::{DEFAULT_AMBIENT, ShadingConfig, ShadingMethod, gpu::GpuRenderer};
 use scene::{Camera, Light};
 use serde::Serialize;
 
-/// Benchmarks brute-force, tiled, tiled + normal-cone and clustered light accumulation.
+/// Benchmarks brute-force, tiled, tiled + normal-cone, clustered and light-volume light
+/// accumulation.
 #[derive(Parser, Debug)]
 struct Args {
     #[command(flatten)]
@@ -210,7 +212,9 @@ fn markdown(r: &Report) -> String {
         s,
         "Every time is the GPU time of the light accumulation pass alone (the G-buffer, composition \
          and CPU work excluded); 16×16 tiles; brute force (every light at every pixel) measured in \
-         the same run is the baseline. Lights: bounded point lights whose attenuation is exactly \
+         the same run is the baseline; `volumes` is the thesis's traditional deferred shading (§4.1: \
+         instanced light volumes, back faces depth-tested against the scene, additive blending — \
+         a render pass, timed like the others). Lights: bounded point lights whose attenuation is exactly \
          zero at their radius, so every method renders the same image (tested).\n\n\
          ## Light-count sweep: `{}`, {}\n\n\
          Lights scattered uniformly through the scene's bounds (`scatter_point_lights`, radius \
@@ -264,9 +268,10 @@ fn markdown(r: &Report) -> String {
         "\n## Thesis tests 1–4 (§4.2): `scene::thesis_walls`\n\n\
          55 lights in view, 1445 outside the view frustum, and 0 / 100 / 500 / 1000 lights just \
          behind the back wall (cullable by normals). VFC = CPU view-frustum culling of lights \
-         (§4.1) before upload. Cells: ms; cones vs tiled = tiled ms / tiled-cones ms.\n\n\
-         | test | size | lights | VFC | sent | brute | tiled | tiled-cones | clustered | cones vs tiled | tiled list | cones list |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|"
+         (§4.1) before upload. Cells: ms; cones vs tiled = tiled ms / tiled-cones ms; tiled vs \
+         volumes = volumes ms / tiled ms.\n\n\
+         | test | size | lights | VFC | sent | brute | volumes | tiled | tiled-cones | clustered | cones vs tiled | tiled vs volumes | tiled list | cones list |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     let mut keys: Vec<(u32, u32, u32, bool)> = r
         .tests
@@ -290,7 +295,7 @@ fn markdown(r: &Report) -> String {
         let first = rows[0];
         let _ = writeln!(
             s,
-            "| {} | {}×{} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | ×{:.2} | {} | {} |",
+            "| {} | {}×{} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | ×{:.2} | ×{:.1} | {} | {} |",
             key.0,
             key.1,
             key.2,
@@ -298,10 +303,12 @@ fn markdown(r: &Report) -> String {
             if key.3 { "on" } else { "off" },
             first.lights_sent,
             ms("brute"),
+            ms("volumes"),
             ms("tiled"),
             ms("tiled-cones"),
             ms("clustered"),
             ms("tiled") / ms("tiled-cones"),
+            ms("volumes") / ms("tiled"),
             list("tiled"),
             list("tiled-cones"),
         );
@@ -309,7 +316,8 @@ fn markdown(r: &Report) -> String {
     let _ = writeln!(
         s,
         "\nThesis (Radeon HD 5730, 1280×720, whole frame, VFC on): tiled-cones vs tiled 0.95× \
-         (test 1), 1.17× (test 2), 1.50× (test 3), 1.66× (test 4)."
+         (test 1), 1.17× (test 2), 1.50× (test 3), 1.66× (test 4); tiled vs traditional \
+         deferred (volumes) 1.18×, 1.60×, 2.17×, 2.36×."
     );
     s
 }
