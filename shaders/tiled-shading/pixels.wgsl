@@ -15,8 +15,9 @@ struct Params {
     // Exponential cluster slicing (`Slicing`).
     slice_near: f32,
     slice_scale: f32,
+    // Light groups of `light_groups` (clustered).
+    group_count: u32,
     _pad0: u32,
-    _pad1: u32,
 };
 
 @group(0) @binding(0) var<uniform> frame: Frame;

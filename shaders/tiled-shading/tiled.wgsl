@@ -7,6 +7,10 @@
 // lights: every invocation tests one light of a batch against the tile frustum and appends it
 // to the tile's list in workgroup memory; whenever the list could overflow with the next batch,
 // and after the last one, the invocations switch back to pixels and shade from the list.
+// Clustered (§2.5 after Olsson et al. 2012) finds its lights through a light hierarchy: the
+// lights in Morton order in groups of GROUP under bounding spheres (`tiled_shading::LightGroups`);
+// a batch of THREADS groups is tested against the tile frustum, and only the lights of the
+// groups that pass are tested one by one.
 // Twin of `tiled_shading::cpu` (same names). `tiled_shading::gpu::specialisation` sets
 // METHOD, TILE and WG.
 
@@ -28,6 +32,8 @@ const NORMAL_QUANTUM: f32 = 32768.0;
 const COSINE_QUANTUM: f32 = 1048576.0;
 const CONE_EPSILON: f32 = 1e-3;
 const SLICE_EPSILON: f32 = 1e-5;
+// Lights per group of the clustered light hierarchy (`tiled_shading::LIGHT_GROUP`).
+const GROUP: u32 = 32u;
 
 @group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(8) var specular_out: texture_storage_2d<rgba32float, write>;
@@ -35,6 +41,9 @@ const SLICE_EPSILON: f32 = 1e-5;
 @group(0) @binding(9) var<storage, read_write> counts: array<u32>;
 // Per tile: (light index, slice mask) × list_stride, when params.record_lists is 1.
 @group(0) @binding(10) var<storage, read_write> lists: array<vec2<u32>>;
+// Clustered: the light hierarchy (`LightGroups::words`) — each group's bounding sphere
+// (centre, radius as float bits), then the light indices in Morton order, four per entry.
+@group(0) @binding(11) var<storage, read> light_tree: array<vec4<u32>>;
 
 // Tree reductions over the invocations: (min depth bits, max depth bits, slice mask, _) and
 // (quantized normal sum xyz, least quantized cosine) — four-way steps, no same-address atomics.
@@ -44,6 +53,11 @@ var<workgroup> list_count: atomic<u32>;
 var<workgroup> list_size: u32;
 var<workgroup> list_light: array<u32, CAPACITY>;
 var<workgroup> list_mask: array<u32, CAPACITY>;
+// Clustered: the groups of the current batch that meet the tile frustum, and the slice starts.
+var<workgroup> passed_count: atomic<u32>;
+var<workgroup> passed_size: u32;
+var<workgroup> passed_groups: array<u32, THREADS>;
+var<workgroup> slice_starts: array<f32, 33>;
 
 fn slice_of(depth: f32) -> u32 {
     let k = floor(log(max(depth / params.slice_near, 1.0)) * params.slice_scale);
@@ -153,22 +167,20 @@ fn cull_light(light: Light) -> u32 {
     if !(above(0u, c, r) && above(1u, c, r) && above(2u, c, r) && above(3u, c, r)) {
         return 0u;
     }
+    if !(above(4u, c, r) && above(5u, c, r)) {
+        return 0u;
+    }
     if METHOD == METHOD_CLUSTERED {
         let depth = -dot(vec4<f32>(frame.view[0].z, frame.view[1].z, frame.view[2].z, frame.view[3].z), vec4<f32>(c, 1.0));
         let near = depth - r;
         let far = depth + r;
         var mask = 0u;
         for (var k = 0u; k < SLICES; k++) {
-            let z0 = slice_start(k);
-            let z1 = slice_start(k + 1u);
-            if far >= z0 * (1.0 - SLICE_EPSILON) && near <= z1 * (1.0 + SLICE_EPSILON) {
+            if far >= slice_starts[k] * (1.0 - SLICE_EPSILON) && near <= slice_starts[k + 1u] * (1.0 + SLICE_EPSILON) {
                 mask |= 1u << k;
             }
         }
         return mask & tile_slices;
-    }
-    if !(above(4u, c, r) && above(5u, c, r)) {
-        return 0u;
     }
     return ALL_SLICES;
 }
@@ -213,6 +225,46 @@ fn brute_force(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     textureStore(diffuse_out, id.xy, vec4<f32>(diffuse, 0.0));
     textureStore(specular_out, id.xy, vec4<f32>(specular, 0.0));
+}
+
+// Shades the tile's pixels from the list's `n` entries (and records them, for tests), then
+// empties the list; returns the entries of the tile so far.
+fn flush(
+    n: u32,
+    total: u32,
+    tile_index: u32,
+    index: u32,
+    samples: ptr<function, array<Sample, PIXELS>>,
+    pixels: ptr<function, array<vec2<u32>, PIXELS>>,
+    diffuse: ptr<function, array<vec3<f32>, PIXELS>>,
+    specular: ptr<function, array<vec3<f32>, PIXELS>>,
+) -> u32 {
+    if params.record_lists != 0u {
+        for (var j = index; j < n; j += THREADS) {
+            lists[tile_index * params.list_stride + total + j] = vec2<u32>(list_light[j], list_mask[j]);
+        }
+    }
+    for (var p = 0u; p < PIXELS; p++) {
+        if (*samples)[p].present {
+            let s = (*samples)[p];
+            let v = normalize(frame.eye.xyz - s.position);
+            let m = load_material((*pixels)[p]);
+            let slice = slice_of(s.depth);
+            for (var j = 0u; j < n; j++) {
+                if ((list_mask[j] >> slice) & 1u) == 1u {
+                    let c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
+                    (*diffuse)[p] += c.diffuse;
+                    (*specular)[p] += c.specular;
+                }
+            }
+        }
+    }
+    workgroupBarrier();
+    if index == 0u {
+        atomicStore(&list_count, 0u);
+    }
+    workgroupBarrier();
+    return total + n;
 }
 
 @compute @workgroup_size(WG, WG)
@@ -277,6 +329,9 @@ fn shade_tiles(
         tile_slices = tile_bounds.z;
         need_alpha = 0u;
     }
+    if METHOD == METHOD_CLUSTERED && index <= SLICES {
+        slice_starts[index] = slice_start(index);
+    }
     workgroupBarrier();
     let tile_index = group.y * params.tiles_x + group.x;
 
@@ -284,90 +339,105 @@ fn shade_tiles(
     var specular: array<vec3<f32>, PIXELS>;
     var total = 0u;
     if !empty {
-        // Lights in batches of THREADS; shade whenever the next batch could overflow the list.
-        let batches = (params.light_count + THREADS - 1u) / THREADS;
+        // Candidates in batches of THREADS: every light, or (clustered) the lights of the
+        // groups that meet the tile frustum, found a round of THREADS groups at a time. The
+        // pixels are shaded whenever the next batch could overflow the list, and at the end.
+        var rounds = 1u;
+        if METHOD == METHOD_CLUSTERED {
+            rounds = (params.group_count + THREADS - 1u) / THREADS;
+        }
         var alpha_ready = false;
-        for (var b = 0u; b < batches; b++) {
-            let i = b * THREADS + index;
-            var mask = 0u;
-            var pending = false;
-            if i < params.light_count {
-                mask = cull_light(lights[i]);
-                if METHOD == METHOD_CONES && mask != 0u && in_back_half_space(lights[i]) {
-                    pending = true;
-                    need_alpha = 1u;
+        for (var r = 0u; r < rounds; r++) {
+            var batches = (params.light_count + THREADS - 1u) / THREADS;
+            if METHOD == METHOD_CLUSTERED {
+                if index == 0u {
+                    atomicStore(&passed_count, 0u);
                 }
-            }
-            if METHOD == METHOD_CONES {
-                // Step 3, the cone angle α from the least cosine between the axis and a normal
-                // (a second reduction), only once some light may face away.
-                if !alpha_ready && workgroupUniformLoad(&need_alpha) != 0u {
-                    var least = 0x7fffffff;
-                    for (var p = 0u; p < PIXELS; p++) {
-                        if samples[p].present {
-                            least = min(least, i32(floor(dot(axis, samples[p].normal) * COSINE_QUANTUM)) - 1);
-                        }
-                    }
-                    reduce_i[index].w = least;
-                    workgroupBarrier();
-                    for (var stride = THREADS / 4u; stride > 0u; stride >>= 2u) {
-                        if index < stride {
-                            reduce_i[index].w = min(
-                                min(reduce_i[index].w, reduce_i[index + stride].w),
-                                min(reduce_i[index + 2u * stride].w, reduce_i[index + 3u * stride].w),
-                            );
-                        }
-                        workgroupBarrier();
-                    }
-                    if index == 0u && dot(sum, sum) >= 1.0 {
-                        tile_cone.w = clamp(f32(reduce_i[0].w) / COSINE_QUANTUM, -1.0, 1.0);
-                    }
-                    workgroupBarrier();
-                    alpha_ready = true;
-                }
-                if pending && cone_rejects(lights[i]) {
-                    mask = 0u;
-                }
-            }
-            if mask != 0u {
-                let slot = atomicAdd(&list_count, 1u);
-                list_light[slot] = i;
-                list_mask[slot] = mask;
-            }
-            workgroupBarrier();
-            if index == 0u {
-                list_size = atomicLoad(&list_count);
-            }
-            let n = workgroupUniformLoad(&list_size);
-            if n + THREADS > CAPACITY || b + 1u == batches {
-                if params.record_lists != 0u {
-                    for (var j = index; j < n; j += THREADS) {
-                        lists[tile_index * params.list_stride + total + j] = vec2<u32>(list_light[j], list_mask[j]);
+                workgroupBarrier();
+                let g = r * THREADS + index;
+                if g < params.group_count {
+                    let sphere = bitcast<vec4<f32>>(light_tree[g]);
+                    let c = sphere.xyz;
+                    let radius = sphere.w;
+                    if above(0u, c, radius) && above(1u, c, radius) && above(2u, c, radius)
+                        && above(3u, c, radius) && above(4u, c, radius) && above(5u, c, radius) {
+                        passed_groups[atomicAdd(&passed_count, 1u)] = g;
                     }
                 }
-                for (var p = 0u; p < PIXELS; p++) {
-                    if samples[p].present {
-                        let s = samples[p];
-                        let v = normalize(frame.eye.xyz - s.position);
-                        let m = load_material(pixels[p]);
-                        let slice = slice_of(s.depth);
-                        for (var j = 0u; j < n; j++) {
-                            if ((list_mask[j] >> slice) & 1u) == 1u {
-                                let c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
-                                diffuse[p] += c.diffuse;
-                                specular[p] += c.specular;
-                            }
-                        }
-                    }
-                }
-                total += n;
                 workgroupBarrier();
                 if index == 0u {
-                    atomicStore(&list_count, 0u);
+                    passed_size = atomicLoad(&passed_count);
+                }
+                batches = (workgroupUniformLoad(&passed_size) * GROUP + THREADS - 1u) / THREADS;
+            }
+            for (var b = 0u; b < batches; b++) {
+                var i = b * THREADS + index;
+                var valid = i < params.light_count;
+                if METHOD == METHOD_CLUSTERED {
+                    let k = passed_groups[min(i / GROUP, THREADS - 1u)] * GROUP + i % GROUP;
+                    valid = i / GROUP < passed_size && k < params.light_count;
+                    let o = min(k, params.light_count - 1u);
+                    i = light_tree[params.group_count + o / 4u][o % 4u];
+                }
+                var mask = 0u;
+                var pending = false;
+                if valid {
+                    mask = cull_light(lights[i]);
+                    if METHOD == METHOD_CONES && mask != 0u && in_back_half_space(lights[i]) {
+                        pending = true;
+                        need_alpha = 1u;
+                    }
+                }
+                if METHOD == METHOD_CONES {
+                    // Step 3, the cone angle α from the least cosine between the axis and a
+                    // normal (a second reduction), only once some light may face away.
+                    if !alpha_ready && workgroupUniformLoad(&need_alpha) != 0u {
+                        var least = 0x7fffffff;
+                        for (var p = 0u; p < PIXELS; p++) {
+                            if samples[p].present {
+                                least = min(least, i32(floor(dot(axis, samples[p].normal) * COSINE_QUANTUM)) - 1);
+                            }
+                        }
+                        reduce_i[index].w = least;
+                        workgroupBarrier();
+                        for (var stride = THREADS / 4u; stride > 0u; stride >>= 2u) {
+                            if index < stride {
+                                reduce_i[index].w = min(
+                                    min(reduce_i[index].w, reduce_i[index + stride].w),
+                                    min(reduce_i[index + 2u * stride].w, reduce_i[index + 3u * stride].w),
+                                );
+                            }
+                            workgroupBarrier();
+                        }
+                        if index == 0u && dot(sum, sum) >= 1.0 {
+                            tile_cone.w = clamp(f32(reduce_i[0].w) / COSINE_QUANTUM, -1.0, 1.0);
+                        }
+                        workgroupBarrier();
+                        alpha_ready = true;
+                    }
+                    if pending && cone_rejects(lights[i]) {
+                        mask = 0u;
+                    }
+                }
+                if mask != 0u {
+                    let slot = atomicAdd(&list_count, 1u);
+                    list_light[slot] = i;
+                    list_mask[slot] = mask;
                 }
                 workgroupBarrier();
+                if index == 0u {
+                    list_size = atomicLoad(&list_count);
+                }
+                let n = workgroupUniformLoad(&list_size);
+                if n + THREADS > CAPACITY {
+                    total = flush(n, total, tile_index, index, &samples, &pixels, &diffuse, &specular);
+                }
             }
         }
+        if index == 0u {
+            list_size = atomicLoad(&list_count);
+        }
+        total = flush(workgroupUniformLoad(&list_size), total, tile_index, index, &samples, &pixels, &diffuse, &specular);
     }
     for (var p = 0u; p < PIXELS; p++) {
         if pixels[p].x < size.x && pixels[p].y < size.y {

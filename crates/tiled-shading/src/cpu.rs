@@ -279,7 +279,7 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
             if keep { ALL_SLICES } else { 0 }
         }
         Method::Clustered => {
-            if !sphere_meets(&planes[..4], world, light.radius) {
+            if !sphere_meets(planes, world, light.radius) {
                 return 0;
             }
             let depth = -frame.view.row(2).dot(world.extend(1.0));

@@ -284,6 +284,95 @@ impl Slicing {
     }
 }
 
+/// Lights per group of [`LightGroups`].
+pub const LIGHT_GROUP: usize = 32;
+
+/// The light hierarchy of [`Method::Clustered`] (after Olsson et al. 2012's light BVH, one
+/// level): the lights in Morton order of their centres, cut into groups of [`LIGHT_GROUP`],
+/// each under a sphere holding its lights' spheres. A tile tests the groups first and only the
+/// lights of the groups that meet it. Directional lights come first, under a sphere of radius
+/// `f32::MAX` (they meet every tile).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LightGroups {
+    /// Light indices in Morton order.
+    pub order: Vec<u32>,
+    /// Per group of [`LIGHT_GROUP`] consecutive entries of `order`: centre xyz, radius.
+    pub spheres: Vec<[f32; 4]>,
+}
+
+impl LightGroups {
+    /// Sorts `lights` by the Morton code of their centres (10 bits per axis over the lights'
+    /// bounds) and bounds each group.
+    pub fn new(lights: &[GpuLight]) -> Self {
+        let positional = |l: &GpuLight| l.kind != LIGHT_DIRECTIONAL;
+        let (lo, hi) = lights.iter().filter(|l| positional(l)).fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), l| {
+                let p = Vec3::from(l.position);
+                (lo.min(p), hi.max(p))
+            },
+        );
+        let scale = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE)).recip() * 1023.0;
+        let morton = |l: &GpuLight| -> u32 {
+            if !positional(l) {
+                return 0;
+            }
+            let q = ((Vec3::from(l.position) - lo) * scale)
+                .clamp(Vec3::ZERO, Vec3::splat(1023.0))
+                .as_uvec3();
+            // Spread 10 bits to every third bit.
+            let spread = |mut v: u32| {
+                v = (v | (v << 16)) & 0x0300_00ff;
+                v = (v | (v << 8)) & 0x0300_f00f;
+                v = (v | (v << 4)) & 0x030c_30c3;
+                (v | (v << 2)) & 0x0924_9249
+            };
+            1 + (spread(q.x) | (spread(q.y) << 1) | (spread(q.z) << 2))
+        };
+        let mut keyed: Vec<(u32, u32)> = lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (morton(l), i as u32))
+            .collect();
+        keyed.sort_unstable();
+        let order: Vec<u32> = keyed.into_iter().map(|(_, i)| i).collect();
+        let spheres = order
+            .chunks(LIGHT_GROUP)
+            .map(|group| {
+                let members = group.iter().map(|&i| &lights[i as usize]);
+                if members.clone().any(|l| !positional(l)) {
+                    return [0.0, 0.0, 0.0, f32::MAX];
+                }
+                let (lo, hi) = members.clone().fold(
+                    (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+                    |(lo, hi), l| {
+                        let (p, r) = (Vec3::from(l.position), Vec3::splat(l.radius));
+                        (lo.min(p - r), hi.max(p + r))
+                    },
+                );
+                let centre = (lo + hi) * 0.5;
+                let radius = members
+                    .map(|l| centre.distance(Vec3::from(l.position)) + l.radius)
+                    .fold(0.0, f32::max);
+                // Rounding: grown by a relative 1e-5 so it holds every member after it.
+                centre
+                    .extend(radius * (1.0 + 1e-5) + centre.abs().max_element() * 1e-6)
+                    .to_array()
+            })
+            .collect();
+        Self { order, spheres }
+    }
+
+    /// The hierarchy as the shader reads it (`tiled.wgsl`'s `light_tree`, 16-byte entries):
+    /// the spheres' bits, then the order, zero-padded to whole entries.
+    pub fn words(&self) -> Vec<u32> {
+        let mut words: Vec<u32> = self.spheres.iter().flatten().map(|f| f.to_bits()).collect();
+        words.extend(&self.order);
+        words.resize(words.len().next_multiple_of(4), 0);
+        words
+    }
+}
+
 /// Errors of light accumulation.
 #[derive(Debug, thiserror::Error)]
 pub enum ShadingError {
@@ -451,6 +540,58 @@ mod tests {
                 Err(ShadingError::InvalidLight { index: 0, .. })
             ));
         }
+    }
+
+    #[test]
+    fn light_groups_hold_their_lights_in_morton_order() {
+        let mut lights = gpu_lights(&scene::scatter_point_lights(
+            scene::Aabb {
+                min: Vec3::splat(-5.0),
+                max: Vec3::splat(5.0),
+            },
+            1000,
+            3,
+        ))
+        .expect("lights");
+        lights[500].kind = LIGHT_DIRECTIONAL;
+        let groups = LightGroups::new(&lights);
+        let mut sorted = groups.order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..1000).collect::<Vec<u32>>());
+        assert_eq!(groups.spheres.len(), 1000usize.div_ceil(LIGHT_GROUP));
+        assert_eq!(groups.order[0], 500, "directional lights first");
+        assert_eq!(groups.spheres[0][3], f32::MAX);
+        for (g, sphere) in groups.spheres.iter().enumerate().skip(1) {
+            let (c, r) = (Vec3::new(sphere[0], sphere[1], sphere[2]), sphere[3]);
+            for &i in &groups.order[g * LIGHT_GROUP..((g + 1) * LIGHT_GROUP).min(1000)] {
+                let l = &lights[i as usize];
+                assert!(c.distance(Vec3::from(l.position)) + l.radius <= r);
+            }
+        }
+        // Morton order keeps groups local: their spheres are far smaller than those of groups
+        // in the lights' own (random) order.
+        let radius = |group: &[GpuLight]| {
+            let (lo, hi) = group.iter().fold(
+                (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+                |(lo, hi), l| {
+                    (
+                        lo.min(Vec3::from(l.position)),
+                        hi.max(Vec3::from(l.position)),
+                    )
+                },
+            );
+            let c = (lo + hi) * 0.5;
+            group
+                .iter()
+                .map(|l| c.distance(Vec3::from(l.position)) + l.radius)
+                .fold(0.0, f32::max)
+        };
+        let unsorted: f32 = lights[..992].chunks(LIGHT_GROUP).map(radius).sum::<f32>() / 31.0;
+        let sorted = groups.spheres[1..].iter().map(|s| s[3]).sum::<f32>() / 31.0;
+        assert!(
+            sorted < 0.6 * unsorted,
+            "mean radius {sorted} vs {unsorted} unsorted"
+        );
     }
 
     #[test]

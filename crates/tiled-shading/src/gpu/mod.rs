@@ -55,8 +55,10 @@ pub struct ShadingParams {
     pub slice_near: f32,
     /// [`Slicing::scale`].
     pub slice_scale: f32,
+    /// Groups of the light hierarchy ([`crate::LightGroups`], clustered).
+    pub group_count: u32,
     /// Padding to 32 bytes.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 
 /// Light accumulation with one [`ShadingConfig`]: the pipeline, built once
@@ -101,6 +103,8 @@ pub struct BoundShading {
     capacity: usize,
     counts: wgpu::Buffer,
     lists: wgpu::Buffer,
+    /// The light hierarchy of [`Method::Clustered`] (`None` otherwise).
+    light_tree: Option<wgpu::Buffer>,
     size: (u32, u32),
     tiles: (u32, u32),
     brute_force: bool,
@@ -160,12 +164,14 @@ impl LightShading {
                 "shade_tiles",
             )
         };
-        // Frame, params, lights; the G-buffer; diffuse and specular outputs; lists (tiled).
+        // Frame, params, lights; the G-buffer; diffuse and specular outputs; counts and lists,
+        // the light hierarchy (tiled).
         let mut bindings = vec![Binding::Uniform, Binding::Uniform, Binding::StorageRead];
         bindings.extend(GBUFFER_BINDINGS);
         bindings.extend([Binding::StorageTexture(ACCUMULATION_FORMAT); 2]);
         if config.method != Method::BruteForce {
             bindings.extend([Binding::Storage, Binding::Storage]);
+            bindings.push(Binding::StorageRead);
         }
         let layout = Layout::compute(device, "light shading", &bindings);
         let shadow_layout = Layout::compute(device, "shadow lookup", &shadows::LOOKUP_BINDINGS);
@@ -343,7 +349,8 @@ impl LightShading {
             list_stride: stride as u32,
             slice_near: 1.0,
             slice_scale: 1.0,
-            _pad: [0; 2],
+            group_count: 0,
+            _pad: 0,
         };
         let params_buffer = transfer::buffer_init(
             device,
@@ -369,6 +376,15 @@ impl LightShading {
             self.config.method,
             Method::BruteForce | Method::LightVolumes
         );
+        // The clustered light hierarchy's buffers; a word each for the other tiled methods.
+        let clustered = self.config.method == Method::Clustered;
+        let tree_bytes = if clustered {
+            let groups = capacity.div_ceil(crate::LIGHT_GROUP) as u64;
+            groups * 16 + (capacity as u64).next_multiple_of(4) * 4
+        } else {
+            16
+        };
+        let light_tree = storage(device, "light hierarchy", tree_bytes)?;
         let volumes = if volumes {
             let order = storage(device, "light volume order", capacity as u64 * 4)?;
             let meshes = VolumeMeshes::new();
@@ -398,6 +414,7 @@ impl LightShading {
             resources.extend(targets.iter().map(wgpu::BindingResource::TextureView));
             if !brute_force {
                 resources.extend([counts.as_entire_binding(), lists.as_entire_binding()]);
+                resources.push(light_tree.as_entire_binding());
             }
             None
         };
@@ -414,6 +431,7 @@ impl LightShading {
             capacity,
             counts,
             lists,
+            light_tree: clustered.then_some(light_tree),
             size,
             tiles: (tiles_x, tiles_y),
             brute_force,
@@ -530,6 +548,11 @@ impl BoundShading {
             });
         }
         queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(lights));
+        if let Some(tree) = &self.light_tree {
+            let groups = crate::LightGroups::new(lights);
+            queue.write_buffer(tree, 0, bytemuck::cast_slice(&groups.words()));
+            self.params.group_count = groups.spheres.len() as u32;
+        }
         if let Some(volumes) = &mut self.volumes {
             let (order, ranges) = volumes::draw_order(lights);
             queue.write_buffer(&volumes.order, 0, bytemuck::cast_slice(&order));
