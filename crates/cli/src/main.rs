@@ -2246,7 +2246,10 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
     println!(
         "shading: {}{}{}",
         shading.method,
-        if shading.method == pipeline::ShadingMethod::BruteForce {
+        if matches!(
+            shading.method,
+            pipeline::ShadingMethod::BruteForce | pipeline::ShadingMethod::LightVolumes
+        ) {
             String::new()
         } else {
             format!(", {0}x{0} tiles", shading.tile_size)

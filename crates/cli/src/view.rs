@@ -1921,7 +1921,7 @@ impl Panel<'_> {
                     ui,
                     "shading",
                     "shading",
-                    &["brute", "tiled", "tiled-cones", "clustered"],
+                    &["brute", "tiled", "tiled-cones", "clustered", "volumes"],
                     &args.shading.to_string(),
                     false,
                 );
