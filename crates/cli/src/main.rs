@@ -1118,7 +1118,10 @@ fn run() -> Result<()> {
                     Some(counts) => {
                         write_heatmap(&args, &setup.shading, width * m, height * m, &counts)?;
                     }
-                    None => eprintln!("no heatmap: brute force keeps no per-tile lists"),
+                    None => eprintln!(
+                        "no heatmap: {} keeps no per-tile lists",
+                        setup.shading.method
+                    ),
                 }
             }
             let (stages, gbuffer) = if args.dump_stages {
