@@ -7,14 +7,16 @@
 // lights: every invocation tests one light of a batch against the tile frustum and appends it
 // to the tile's list in workgroup memory; whenever the list could overflow with the next batch,
 // and after the last one, the invocations switch back to pixels and shade from the list.
-// Clustered (§2.5 after Olsson et al. 2012) finds its lights through a light hierarchy: the
-// lights in Morton order in groups of GROUP under bounding spheres (`tiled_shading::LightGroups`);
-// a batch of THREADS groups is tested against the tile frustum, and only the lights of the
-// groups that pass are tested one by one.
+// With LIGHT_TREE (`LightSearch::Tree`, after Olsson et al. 2012's light BVH) the lights are
+// found through a light hierarchy: the lights in Morton order in groups of GROUP under bounding
+// spheres (`tiled_shading::LightGroups`); a round of THREADS groups is tested against the tile
+// frustum, and only the lights of the groups that pass are tested one by one. Without it
+// (`LightSearch::Flat`, the thesis) every light is tested. The lists are the same.
 // Twin of `tiled_shading::cpu` (same names). `tiled_shading::gpu::specialisation` sets
-// METHOD, TILE and WG.
+// METHOD, TILE, WG and LIGHT_TREE.
 
 const METHOD: u32 = 1u;
+const LIGHT_TREE: bool = true;
 const TILE: u32 = 16u;
 // Invocations per tile side, min(TILE, 16); each shades PER_SIDE² pixels.
 const WG: u32 = 16u;
@@ -41,7 +43,7 @@ const GROUP: u32 = 32u;
 @group(0) @binding(9) var<storage, read_write> counts: array<u32>;
 // Per tile: (light index, slice mask) × list_stride, when params.record_lists is 1.
 @group(0) @binding(10) var<storage, read_write> lists: array<vec2<u32>>;
-// Clustered: the light hierarchy (`LightGroups::words`) — each group's bounding sphere
+// LIGHT_TREE: the light hierarchy (`LightGroups::words`) — each group's bounding sphere
 // (centre, radius as float bits), then the light indices in Morton order, four per entry.
 @group(0) @binding(11) var<storage, read> light_tree: array<vec4<u32>>;
 
@@ -53,7 +55,8 @@ var<workgroup> list_count: atomic<u32>;
 var<workgroup> list_size: u32;
 var<workgroup> list_light: array<u32, CAPACITY>;
 var<workgroup> list_mask: array<u32, CAPACITY>;
-// Clustered: the groups of the current batch that meet the tile frustum, and the slice starts.
+// LIGHT_TREE: the groups of the current round that meet the tile frustum; clustered: the slice
+// starts.
 var<workgroup> passed_count: atomic<u32>;
 var<workgroup> passed_size: u32;
 var<workgroup> passed_groups: array<u32, THREADS>;
@@ -339,17 +342,17 @@ fn shade_tiles(
     var specular: array<vec3<f32>, PIXELS>;
     var total = 0u;
     if !empty {
-        // Candidates in batches of THREADS: every light, or (clustered) the lights of the
+        // Candidates in batches of THREADS: every light, or (LIGHT_TREE) the lights of the
         // groups that meet the tile frustum, found a round of THREADS groups at a time. The
         // pixels are shaded whenever the next batch could overflow the list, and at the end.
         var rounds = 1u;
-        if METHOD == METHOD_CLUSTERED {
+        if LIGHT_TREE {
             rounds = (params.group_count + THREADS - 1u) / THREADS;
         }
         var alpha_ready = false;
         for (var r = 0u; r < rounds; r++) {
             var batches = (params.light_count + THREADS - 1u) / THREADS;
-            if METHOD == METHOD_CLUSTERED {
+            if LIGHT_TREE {
                 if index == 0u {
                     atomicStore(&passed_count, 0u);
                 }
@@ -373,7 +376,7 @@ fn shade_tiles(
             for (var b = 0u; b < batches; b++) {
                 var i = b * THREADS + index;
                 var valid = i < params.light_count;
-                if METHOD == METHOD_CLUSTERED {
+                if LIGHT_TREE {
                     let k = passed_groups[min(i / GROUP, THREADS - 1u)] * GROUP + i % GROUP;
                     valid = i / GROUP < passed_size && k < params.light_count;
                     let o = min(k, params.light_count - 1u);

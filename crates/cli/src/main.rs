@@ -58,6 +58,11 @@ struct Args {
     /// Tile side in pixels for the tiled and clustered light accumulation: 8, 16 or 32.
     #[arg(long, default_value_t = 16)]
     tile: u32,
+    /// How the tiled and clustered light accumulation finds each tile's lights: tree (through
+    /// a light hierarchy, Morton-ordered groups of 32) or flat (every light per tile, as the
+    /// thesis); the same lists either way.
+    #[arg(long, default_value = "tree")]
+    light_search: pipeline::LightSearch,
     /// Cull lights against the view frustum on the CPU before the light accumulation
     /// (Ishmukhametov 2013 §4.1).
     #[arg(long)]
@@ -1347,6 +1352,7 @@ fn prepare(args: &Args) -> Result<Setup> {
     let shading = pipeline::ShadingConfig {
         method: args.shading,
         tile_size: args.tile,
+        search: args.light_search,
     };
     shading.validate()?;
     let indirect = match args.vpls {

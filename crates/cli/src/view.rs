@@ -622,6 +622,7 @@ impl Live {
         let shading = pipeline::ShadingConfig {
             method: args.shading,
             tile_size: args.tile,
+            search: args.light_search,
         };
         shading.validate()?;
         let shadows = args
@@ -1931,6 +1932,14 @@ impl Panel<'_> {
                     "tile",
                     &["8", "16", "32"],
                     &args.tile.to_string(),
+                    false,
+                );
+                self.choice(
+                    ui,
+                    "light-search",
+                    "light search",
+                    &["tree", "flat"],
+                    &args.light_search.to_string(),
                     false,
                 );
                 let lights = self.recipe.get("lights").unwrap_or("off");

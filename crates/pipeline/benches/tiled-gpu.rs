@@ -15,7 +15,7 @@ use bench::per_frame_sum;
 use clap::Parser;
 use common::time_passes;
 use gpu::Gpu;
-use pipeline::{DEFAULT_AMBIENT, ShadingConfig, ShadingMethod, gpu::GpuRenderer};
+use pipeline::{DEFAULT_AMBIENT, LightSearch, ShadingConfig, ShadingMethod, gpu::GpuRenderer};
 use scene::{Camera, Light};
 use serde::Serialize;
 
@@ -33,6 +33,27 @@ const SIZES: [(u32, u32); 2] = [(1920, 1080), (3840, 2160)];
 const LIGHTS: [usize; 7] = [256, 1024, 4096, 16384, 65536, 262_144, 1_048_576];
 /// Above this many lights only the culled compute methods run (brute force takes seconds).
 const MOST_FOR_ALL: usize = 65536;
+
+/// What is measured, by report name: every method, the tiled ones with both light searches
+/// (`-flat`: every light per tile, as the thesis; without: through the light hierarchy).
+const VARIANTS: [(&str, ShadingMethod, LightSearch); 8] = [
+    ("brute", ShadingMethod::BruteForce, LightSearch::Flat),
+    ("tiled-flat", ShadingMethod::Tiled, LightSearch::Flat),
+    ("tiled", ShadingMethod::Tiled, LightSearch::Tree),
+    (
+        "tiled-cones-flat",
+        ShadingMethod::TiledCones,
+        LightSearch::Flat,
+    ),
+    ("tiled-cones", ShadingMethod::TiledCones, LightSearch::Tree),
+    (
+        "clustered-flat",
+        ShadingMethod::Clustered,
+        LightSearch::Flat,
+    ),
+    ("clustered", ShadingMethod::Clustered, LightSearch::Tree),
+    ("volumes", ShadingMethod::LightVolumes, LightSearch::Flat),
+];
 const TESTS: [(u32, u32); 4] = [(1, 0), (2, 100), (3, 500), (4, 1000)];
 const TEST_SIZES: [(u32, u32); 2] = [(1280, 720), (1920, 1080)];
 
@@ -77,7 +98,7 @@ fn measure(
     gpu: &Gpu,
     renderer: &mut GpuRenderer,
     camera: &Camera,
-    method: ShadingMethod,
+    (method, search): (ShadingMethod, LightSearch),
     frames: u32,
 ) -> Result<(Stat, Option<f64>)> {
     renderer.set_shading(
@@ -86,6 +107,7 @@ fn measure(
         &ShadingConfig {
             method,
             tile_size: 16,
+            search,
         },
     )?;
     let name = renderer.shading().pass_name();
@@ -120,7 +142,7 @@ fn main() -> Result<()> {
             let lights = scene::scatter_point_lights(scene.bounds(), count, 1);
             renderer.set_lights(&gpu.device, &gpu.queue, &lights)?;
             let mut brute = None;
-            for method in ShadingMethod::ALL {
+            for (name, method, search) in VARIANTS {
                 let slow = matches!(
                     method,
                     ShadingMethod::BruteForce | ShadingMethod::LightVolumes
@@ -128,13 +150,14 @@ fn main() -> Result<()> {
                 if slow && count > MOST_FOR_ALL {
                     continue;
                 }
-                let (ms, mean_list) = measure(&gpu, &mut renderer, &camera, method, frames)?;
+                let (ms, mean_list) =
+                    measure(&gpu, &mut renderer, &camera, (method, search), frames)?;
                 if method == ShadingMethod::BruteForce {
                     brute = Some(ms.median_ms);
                 }
                 let speedup = brute.map(|b| b / ms.median_ms);
                 println!(
-                    "{w}x{h} {count:>7} lights {method:<12} {:>9.3} ms  ×{:<7.1} mean list {}",
+                    "{w}x{h} {count:>7} lights {name:<16} {:>9.3} ms  ×{:<7.1} mean list {}",
                     ms.median_ms,
                     speedup.unwrap_or(f64::NAN),
                     mean_list.map_or("-".into(), |m| format!("{m:.1}"))
@@ -143,7 +166,7 @@ fn main() -> Result<()> {
                     width: w,
                     height: h,
                     lights: count,
-                    method: method.to_string(),
+                    method: name.to_string(),
                     ms,
                     speedup_vs_brute: speedup,
                     mean_list,
@@ -169,10 +192,11 @@ fn main() -> Result<()> {
                     walls.lights.clone()
                 };
                 renderer.set_lights(&gpu.device, &gpu.queue, &sent)?;
-                for method in ShadingMethod::ALL {
-                    let (ms, mean_list) = measure(&gpu, &mut renderer, &cam, method, frames)?;
+                for (name, method, search) in VARIANTS {
+                    let (ms, mean_list) =
+                        measure(&gpu, &mut renderer, &cam, (method, search), frames)?;
                     println!(
-                        "test {test} {w}x{h} {:>4}/{} lights{} {method:<12} {:>8.3} ms",
+                        "test {test} {w}x{h} {:>4}/{} lights{} {name:<16} {:>8.3} ms",
                         sent.len(),
                         walls.lights.len(),
                         if frustum_culling { " (VFC)" } else { "" },
@@ -185,7 +209,7 @@ fn main() -> Result<()> {
                         lights_total: walls.lights.len(),
                         frustum_culling,
                         lights_sent: sent.len(),
-                        method: method.to_string(),
+                        method: name.to_string(),
                         ms,
                         mean_list,
                     });
@@ -230,12 +254,12 @@ fn markdown(r: &Report) -> String {
          Lights scattered uniformly through the scene's bounds (`scatter_point_lights`, radius \
          0.6·diagonal/∛N). Cells: ms (speed-up over brute force); mean list = lights per \
          non-empty tile. Above 65 536 lights brute force and the volumes are not run (seconds \
-         per frame). Clustered finds each tile's lights through its light hierarchy (groups of 32 \
-         lights in Morton order under bounding spheres); tiled and tiled-cones test every light \
-         per tile, as the thesis.\n",
+         per frame). `-flat`: every light tested per tile, as the thesis; without: the tile finds \
+         its lights through the light hierarchy (groups of 32 lights in Morton order under \
+         bounding spheres) — the same lists.\n",
         r.scene, r.camera
     );
-    let methods: Vec<String> = ShadingMethod::ALL.iter().map(ToString::to_string).collect();
+    let methods: Vec<&str> = VARIANTS.iter().map(|v| v.0).collect();
     let _ = writeln!(
         s,
         "| size | lights | {} | tiled list | cones list | clustered list |\n|---|---|{}---|---|---|",
@@ -282,10 +306,11 @@ fn markdown(r: &Report) -> String {
         "\n## Thesis tests 1–4 (§4.2): `scene::thesis_walls`\n\n\
          55 lights in view, 1445 outside the view frustum, and 0 / 100 / 500 / 1000 lights just \
          behind the back wall (cullable by normals). VFC = CPU view-frustum culling of lights \
-         (§4.1) before upload. Cells: ms; cones vs tiled = tiled ms / tiled-cones ms; tiled vs \
-         volumes = volumes ms / tiled ms.\n\n\
-         | test | size | lights | VFC | sent | brute | volumes | tiled | tiled-cones | clustered | cones vs tiled | tiled vs volumes | tiled list | cones list |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+         (§4.1) before upload. Cells: ms; cones vs tiled = tiled ms / tiled-cones ms, with the \
+         thesis's flat search and with the light hierarchy; tiled vs volumes = volumes ms / \
+         tiled-flat ms.\n\n\
+         | test | size | lights | VFC | sent | brute | volumes | tiled-flat | tiled-cones-flat | tiled | tiled-cones | clustered | cones vs tiled (flat) | cones vs tiled | tiled vs volumes | tiled list | cones list |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     let mut keys: Vec<(u32, u32, u32, bool)> = r
         .tests
@@ -309,7 +334,7 @@ fn markdown(r: &Report) -> String {
         let first = rows[0];
         let _ = writeln!(
             s,
-            "| {} | {}×{} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | ×{:.2} | ×{:.1} | {} | {} |",
+            "| {} | {}×{} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | ×{:.2} | ×{:.2} | ×{:.1} | {} | {} |",
             key.0,
             key.1,
             key.2,
@@ -318,11 +343,14 @@ fn markdown(r: &Report) -> String {
             first.lights_sent,
             ms("brute"),
             ms("volumes"),
+            ms("tiled-flat"),
+            ms("tiled-cones-flat"),
             ms("tiled"),
             ms("tiled-cones"),
             ms("clustered"),
+            ms("tiled-flat") / ms("tiled-cones-flat"),
             ms("tiled") / ms("tiled-cones"),
-            ms("volumes") / ms("tiled"),
+            ms("volumes") / ms("tiled-flat"),
             list("tiled"),
             list("tiled-cones"),
         );

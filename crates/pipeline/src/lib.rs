@@ -35,7 +35,7 @@ use scene::Light;
 /// Ambient term `A` of the composition (linear RGB).
 pub const DEFAULT_AMBIENT: Vec3 = Vec3::splat(0.03);
 
-pub use tiled_shading::{GpuLight, Method as ShadingMethod, ShadingConfig};
+pub use tiled_shading::{GpuLight, LightSearch, Method as ShadingMethod, ShadingConfig};
 
 /// This crate's WGSL (`shaders/pipeline/`, carried into the package by the `shaders` link).
 pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(

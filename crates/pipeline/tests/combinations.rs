@@ -240,6 +240,7 @@ fn render_gpu(gpu: &gpu::Gpu, given: &Scene, c: &Combo, animate: bool) -> gbuffe
         &pipeline::ShadingConfig {
             method: c.shading,
             tile_size: 16,
+            ..Default::default()
         },
     )
     .expect("shading");
@@ -437,6 +438,7 @@ fn every_sampled_combination_renders_and_keeps_the_invariants() {
             let shading = pipeline::ShadingConfig {
                 method: c.shading,
                 tile_size: 16,
+                ..Default::default()
             };
             let (expected, _) =
                 cpu::render_indirect(&inputs, &shading, indirect).expect("cpu frame");

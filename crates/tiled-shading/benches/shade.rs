@@ -19,6 +19,7 @@ fn shade(c: &mut Criterion) {
         let config = ShadingConfig {
             method,
             tile_size: 16,
+            ..Default::default()
         };
         c.bench_function(&format!("shade {method} test 3 320x180"), |b| {
             b.iter(|| cpu::shade(&gb, &frame, &camera, &lights, &config, None).expect("shade"))

@@ -213,6 +213,44 @@ impl FromStr for Method {
 /// Depth slices of [`Method::Clustered`]: a 32-bit mask holds a tile's occupied slices.
 pub const CLUSTER_SLICES: u32 = 32;
 
+/// How a tile of the tiled methods finds the lights that meet it (the same lists either way).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum LightSearch {
+    /// Through the light hierarchy ([`LightGroups`]): the groups first, then only the lights
+    /// of the groups that meet the tile.
+    #[default]
+    Tree,
+    /// Every light against every tile, as the thesis.
+    Flat,
+}
+
+impl LightSearch {
+    /// The command-line name (`tree`, `flat`).
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSearch::Tree => "tree",
+            LightSearch::Flat => "flat",
+        }
+    }
+}
+
+impl fmt::Display for LightSearch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for LightSearch {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        [LightSearch::Tree, LightSearch::Flat]
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| format!("unknown light search {s:?} (tree, flat)"))
+    }
+}
+
 /// What the light accumulation does.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShadingConfig {
@@ -220,6 +258,8 @@ pub struct ShadingConfig {
     pub method: Method,
     /// Tile side in pixels: 8, 16 (default, as the thesis) or 32.
     pub tile_size: u32,
+    /// How tiles find their lights (tiled, tiled + cones, clustered).
+    pub search: LightSearch,
 }
 
 impl Default for ShadingConfig {
@@ -227,6 +267,7 @@ impl Default for ShadingConfig {
         Self {
             method: Method::Tiled,
             tile_size: 16,
+            search: LightSearch::Tree,
         }
     }
 }
@@ -287,8 +328,8 @@ impl Slicing {
 /// Lights per group of [`LightGroups`].
 pub const LIGHT_GROUP: usize = 32;
 
-/// The light hierarchy of [`Method::Clustered`] (after Olsson et al. 2012's light BVH, one
-/// level): the lights in Morton order of their centres, cut into groups of [`LIGHT_GROUP`],
+/// The light hierarchy of the tiled methods' [`LightSearch::Tree`] (after Olsson et al. 2012's
+/// light BVH, one level): the lights in Morton order of their centres, cut into groups of [`LIGHT_GROUP`],
 /// each under a sphere holding its lights' spheres. A tile tests the groups first and only the
 /// lights of the groups that meet it. Directional lights come first, under a sphere of radius
 /// `f32::MAX` (they meet every tile).

@@ -9,7 +9,7 @@ use gbuffer::{Frame, GBuffer, Image};
 use glam::Vec3;
 use scene::{Camera, Light, Scene};
 use tiled_shading::{
-    GpuLight, Method, ShadingConfig, ShadingError,
+    GpuLight, LightSearch, Method, ShadingConfig, ShadingError,
     cpu::{self, Shaded},
     gpu,
 };
@@ -76,7 +76,11 @@ fn walls(behind: u32, width: u32, height: u32) -> Case {
 }
 
 fn config(method: Method, tile_size: u32) -> ShadingConfig {
-    ShadingConfig { method, tile_size }
+    ShadingConfig {
+        method,
+        tile_size,
+        ..Default::default()
+    }
 }
 
 fn shade_cpu(c: &Case, config: &ShadingConfig) -> Shaded {
@@ -310,15 +314,28 @@ fn gpu_matches_cpu_images_and_lists() {
     };
     for c in [spheres(100, 70, 300), walls(500, 128, 72)] {
         let brute = shade_cpu(&c, &config(Method::BruteForce, 16));
+        // Every method and tile size through the light hierarchy; at 16 × 16 also every light
+        // per tile (the lists must be the same).
+        let searches = [
+            (LightSearch::Tree, [8, 16, 32].as_slice()),
+            (LightSearch::Flat, &[16]),
+        ];
         for method in Method::ALL {
-            for tile in [8, 16, 32] {
-                if method == Method::BruteForce && tile != 16 {
+            for (search, tile) in searches
+                .iter()
+                .flat_map(|(s, tiles)| tiles.iter().map(move |&t| (*s, t)))
+            {
+                let brute_like = matches!(method, Method::BruteForce | Method::LightVolumes);
+                if brute_like && (tile != 16 || search == LightSearch::Flat) {
                     continue;
                 }
-                let cfg = config(method, tile);
+                let cfg = ShadingConfig {
+                    search,
+                    ..config(method, tile)
+                };
                 let gpu_out = c.run_gpu(g, &cfg);
                 compare(
-                    &format!("gpu {method} {tile} vs brute"),
+                    &format!("gpu {method} {tile} {search} vs brute"),
                     &brute,
                     &gpu_out,
                     GPU_RELATIVE,

@@ -80,6 +80,7 @@ fn shaded_gpu(
     let config = ShadingConfig {
         method: Method::Tiled,
         tile_size: 16,
+        ..Default::default()
     };
     gpu::run_shadowed(g, scene, gb, frame, camera, lights, &config, &CONFIG).expect("shadowed")
 }
@@ -121,6 +122,7 @@ fn cpu_lookup_on_the_read_back_maps_equals_the_gpu_shading() {
     let config = ShadingConfig {
         method: Method::Tiled,
         tile_size: 16,
+        ..Default::default()
     };
     let cpu_shaded =
         cpu::shade(&view.0, &view.1, &camera, &lights, &config, Some(&maps)).expect("cpu");
@@ -210,6 +212,7 @@ fn shadows_only_remove_light_and_do_remove_it() {
     let config = ShadingConfig {
         method: Method::Tiled,
         tile_size: 16,
+        ..Default::default()
     };
     let lit = gpu::run(
         g,
@@ -328,6 +331,7 @@ fn paraboloid_shadows_from_a_ray_cast_atlas() {
     let config = ShadingConfig {
         method: Method::Tiled,
         tile_size: 16,
+        ..Default::default()
     };
     let inputs = gpu::shadows::ShadowInputs {
         maps: None,
@@ -374,6 +378,7 @@ fn ray_shadows_equal_their_cpu_twin_and_the_shadow_rays_of_an_independent_bvh() 
     let config = ShadingConfig {
         method: Method::Tiled,
         tile_size: 16,
+        ..Default::default()
     };
     let inputs = gpu::shadows::ShadowInputs {
         rays: Some(&gpu_rays),

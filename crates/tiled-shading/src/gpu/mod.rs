@@ -33,7 +33,7 @@ use gbuffer::gpu::{GBUFFER_BINDINGS, GBufferTextures};
 use glam::{Vec3, Vec4};
 use scene::Camera;
 
-use crate::{GpuLight, Method, ShadingConfig, ShadingError, Slicing};
+use crate::{GpuLight, LightSearch, Method, ShadingConfig, ShadingError, Slicing};
 use volumes::VolumeMeshes;
 
 /// Format of the diffuse and specular accumulation textures.
@@ -103,7 +103,7 @@ pub struct BoundShading {
     capacity: usize,
     counts: wgpu::Buffer,
     lists: wgpu::Buffer,
-    /// The light hierarchy of [`Method::Clustered`] (`None` otherwise).
+    /// The light hierarchy of [`LightSearch::Tree`] (`None` otherwise).
     light_tree: Option<wgpu::Buffer>,
     size: (u32, u32),
     tiles: (u32, u32),
@@ -122,21 +122,25 @@ pub fn specialisation(config: &ShadingConfig) -> Specialisation {
         .set("METHOD", format!("{method}u"))
         .set("TILE", format!("{}u", config.tile_size))
         .set("WG", format!("{}u", config.tile_size.min(16)))
+        .set("LIGHT_TREE", config.search == LightSearch::Tree)
 }
 
-/// Every shader variant this crate builds: `tiled.wgsl` for each tiled method and tile size.
+/// Every shader variant this crate builds: `tiled.wgsl` for each tiled method, tile size and
+/// light search.
 pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
     let methods = [Method::Tiled, Method::TiledCones, Method::Clustered];
     methods
         .into_iter()
         .flat_map(|method| {
-            [8, 16, 32].map(|tile_size| {
-                let config = ShadingConfig {
-                    method,
-                    tile_size,
-                    ..Default::default()
-                };
-                ("tiled.wgsl", specialisation(&config))
+            [8, 16, 32].into_iter().flat_map(move |tile_size| {
+                [LightSearch::Tree, LightSearch::Flat].map(|search| {
+                    let config = ShadingConfig {
+                        method,
+                        tile_size,
+                        search,
+                    };
+                    ("tiled.wgsl", specialisation(&config))
+                })
             })
         })
         .collect()
@@ -376,9 +380,9 @@ impl LightShading {
             self.config.method,
             Method::BruteForce | Method::LightVolumes
         );
-        // The clustered light hierarchy's buffers; a word each for the other tiled methods.
-        let clustered = self.config.method == Method::Clustered;
-        let tree_bytes = if clustered {
+        // The light hierarchy's buffer; one entry for a flat search.
+        let tree = !brute_force && self.config.search == LightSearch::Tree;
+        let tree_bytes = if tree {
             let groups = capacity.div_ceil(crate::LIGHT_GROUP) as u64;
             groups * 16 + (capacity as u64).next_multiple_of(4) * 4
         } else {
@@ -431,7 +435,7 @@ impl LightShading {
             capacity,
             counts,
             lists,
-            light_tree: clustered.then_some(light_tree),
+            light_tree: tree.then_some(light_tree),
             size,
             tiles: (tiles_x, tiles_y),
             brute_force,
