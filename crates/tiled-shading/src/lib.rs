@@ -1,8 +1,10 @@
 //! Light accumulation for deferred shading (Ishmukhametov 2013): every light at every pixel
 //! (brute force), tile-based deferred shading with per-tile depth bounds (§2.4.1, after
 //! Andersson 2009 and Lauritzen 2010), the same with normal-cone back-face culling of lights
-//! (chapter 4, steps 1–7), and a clustered variant with exponential depth slices (§2.5, after
-//! Olsson et al. 2012). CPU reference in [`cpu`], one compute pass per method in [`gpu`].
+//! (chapter 4, steps 1–7), a clustered variant with exponential depth slices (§2.5, after
+//! Olsson et al. 2012) — the three finding a tile's lights through a light hierarchy
+//! ([`LightGroups`], [`LightSearch`]) — and traditional deferred shading with light volumes
+//! (§4.1). CPU reference in [`cpu`], one pass per method in [`gpu`].
 //!
 //! All methods produce the same two images — the diffuse and specular sums of
 //! [`lighting::shade_light`] over the lights — because every light has a finite radius at
