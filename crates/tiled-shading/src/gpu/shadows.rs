@@ -1,7 +1,7 @@
 //! Shadow maps of the direct lights on the GPU ([`crate::shadows`] says what they hold):
 //! `shadow_raster.wgsl` draws the scene's depth into one layer of a `Depth32Float` array per
 //! view, one depth-only render pass per layer; the light accumulation reads them through its
-//! bind group 1 (`shadows.wgsl`, [`super::BoundShading::set_shadows`]).
+//! bind group 1 (`shadows.wgsl`, [`super::LightShading::bind_shadows`]).
 //!
 //! ```no_run
 //! use tiled_shading::{gpu::shadows::{GpuShadowMaps, ShadowMapPass}, shadows::{self, ShadowMapConfig}};
