@@ -25,7 +25,7 @@ pub struct VolumeMeshes {
     /// The sphere's vertices: a twice subdivided icosahedron (320 faces) whose faces are all
     /// at least 1 from the centre, so it holds the unit sphere.
     pub sphere: Range<u32>,
-    /// The cone's: apex at the origin, axis +z, height 1, a base polygon of [`CONE_SIDES`]
+    /// The cone's: apex at the origin, axis +z, height 1, a base polygon of 16
     /// sides around the unit circle.
     pub cone: Range<u32>,
     /// The full-screen triangle's (clip space, clockwise: a back face).
