@@ -190,3 +190,154 @@ pub fn measure_error(encoding: NormalEncoding, bits: u32, count: usize) -> (f32,
         .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1 + b.1));
     (max, (sum / normals.len() as f64) as f32)
 }
+
+/// Thesis §3.6 "per-pixel view space": the frame whose z is the direction from the pixel to
+/// the eye, x = normalize(z.z, 0, −z.x), y = z × x (columns x, y, z). A surface the eye sees
+/// has a normal with z ≥ 0 in it, so x and y suffice — in perspective too, where plain view
+/// space ([`NormalEncoding::XyReconstructZ`]) sees normals with z < 0 near the image edges.
+/// `to_eye` (unit) must not be parallel to y.
+pub fn per_pixel_view_frame(to_eye: Vec3) -> glam::Mat3 {
+    let z = to_eye;
+    let x = Vec3::new(z.z, 0.0, -z.x).normalize();
+    glam::Mat3::from_cols(x, z.cross(x), z)
+}
+
+/// Per-pixel view-space encoding of `n` seen along `to_eye`: its x and y in
+/// [`per_pixel_view_frame`], in \[0, 1\].
+pub fn encode_per_pixel_view(n: Vec3, to_eye: Vec3) -> Vec2 {
+    let f = per_pixel_view_frame(to_eye);
+    Vec2::new(f.x_axis.dot(n), f.y_axis.dot(n)) * 0.5 + 0.5
+}
+
+/// Inverse of [`encode_per_pixel_view`]: z = √(1 − x² − y²) ≥ 0, back to the caller's space.
+pub fn decode_per_pixel_view(e: Vec2, to_eye: Vec3) -> Vec3 {
+    let a = e * 2.0 - 1.0;
+    per_pixel_view_frame(to_eye) * Vec3::new(a.x, a.y, (1.0 - a.length_squared()).max(0.0).sqrt())
+}
+
+/// The unit directions from pixels to the eye of a 90° × 90° view looking down −z, in view
+/// space, `side` × `side` of them: where [`measure_per_pixel_view_error`] looks.
+fn view_directions(side: usize) -> impl Iterator<Item = Vec3> {
+    (0..side * side).map(move |i| {
+        let s = |k: usize| (k as f32 + 0.5) / side as f32 * 2.0 - 1.0;
+        Vec3::new(-s(i % side), -s(i / side), 1.0).normalize()
+    })
+}
+
+/// (maximum, mean) angular error in degrees of the per-pixel view-space encoding at `bits` per
+/// value: `count` Fibonacci-sphere normals, each seen from the 8 × 8 pixels of a 90° view that
+/// see its front (normal · direction to the eye ≥ 0).
+pub fn measure_per_pixel_view_error(bits: u32, count: usize) -> (f32, f32) {
+    use rayon::prelude::*;
+    let scale = ((1u64 << bits) - 1) as f32;
+    let views: Vec<Vec3> = view_directions(8).collect();
+    let normals: Vec<Vec3> = fibonacci_sphere(count).collect();
+    let (max, sum, n) = normals
+        .par_iter()
+        .flat_map_iter(|&n| {
+            views
+                .iter()
+                .filter(move |v| n.dot(**v) >= 0.0)
+                .map(move |&v| (n, v))
+        })
+        .map(|(n, v)| {
+            let q = (encode_per_pixel_view(n, v) * scale).round() / scale;
+            let e = angle_deg(n, decode_per_pixel_view(q, v).normalize_or_zero());
+            (e, f64::from(e), 1u64)
+        })
+        .reduce(
+            || (0.0, 0.0, 0),
+            |a, b| (a.0.max(b.0), a.1 + b.1, a.2 + b.2),
+        );
+    (max, (sum / n as f64) as f32)
+}
+
+/// Kaplanyan 2010's best fit for normals in three unorm8 channels (thesis §3.6): `n` (unit)
+/// stored as `t · n · 0.5 + 0.5` with the length `t` ∈ (0, 1] whose quantized vector,
+/// normalized, is nearest to `n` — found by trying every 8-bit value of the largest component
+/// (the exact search the thesis calls too expensive for real time).
+pub fn best_fit_length(n: Vec3) -> f32 {
+    let m = n.abs().max_element();
+    let decode = |b: u8| f32::from(b) / 255.0 * 2.0 - 1.0;
+    (128..=255u8)
+        .map(|b| decode(b) / m)
+        .filter(|&t| t > 0.0 && t <= 1.0)
+        .map(|t| (angle_deg(n, decode_unorm8x3(encode_unorm8x3(n * t))), t))
+        .fold((f32::INFINITY, 1.0), |a, b| if b.0 < a.0 { b } else { a })
+        .1
+}
+
+/// A vector in \[−1, 1\]³ as three unorm8 values (`v · 0.5 + 0.5`, rounded).
+pub fn encode_unorm8x3(v: Vec3) -> [u8; 3] {
+    (v * 0.5 + 0.5)
+        .clamp(Vec3::ZERO, Vec3::ONE)
+        .to_array()
+        .map(|c| (c * 255.0).round() as u8)
+}
+
+/// Three unorm8 values back to a unit vector (`normalize(b / 255 · 2 − 1)`).
+pub fn decode_unorm8x3(b: [u8; 3]) -> Vec3 {
+    Vec3::from_array(b.map(|c| f32::from(c) / 255.0 * 2.0 - 1.0)).normalize_or_zero()
+}
+
+/// The precomputed best-fit lengths (Kaplanyan 2010, thesis §3.6: "prebake the results of the
+/// search" into a texture): by symmetry a length depends only on the sorted magnitudes of the
+/// components, so one `size × size` table over (mid / max, min / max) ∈ \[0, 1\]² holds them.
+#[derive(Clone, Debug)]
+pub struct BestFitTable {
+    size: usize,
+    lengths: Vec<f32>,
+}
+
+impl BestFitTable {
+    /// Searches every texel's direction ([`best_fit_length`]); `size` ≥ 2.
+    pub fn new(size: usize) -> Self {
+        use rayon::prelude::*;
+        let size = size.max(2);
+        let lengths = (0..size * size)
+            .into_par_iter()
+            .map(|i| {
+                let s = |k: usize| k as f32 / (size - 1) as f32;
+                let (u, v) = (s(i % size), s(i / size));
+                best_fit_length(Vec3::new(v * u, u, 1.0).normalize())
+            })
+            .collect();
+        Self { size, lengths }
+    }
+
+    /// The stored length for `n`'s direction (nearest texel).
+    pub fn length(&self, n: Vec3) -> f32 {
+        let mut a = n.abs().to_array();
+        a.sort_by(f32::total_cmp);
+        let [lo, mid, hi] = a;
+        let hi = hi.max(f32::MIN_POSITIVE);
+        let texel = |x: f32| ((x * (self.size - 1) as f32).round() as usize).min(self.size - 1);
+        let (u, v) = (mid / hi, if mid > 0.0 { lo / mid } else { 0.0 });
+        self.lengths[texel(v) * self.size + texel(u)]
+    }
+
+    /// Encodes `n` with its tabulated length.
+    pub fn encode(&self, n: Vec3) -> [u8; 3] {
+        encode_unorm8x3(n * self.length(n))
+    }
+}
+
+/// (maximum, mean) angular error in degrees over `count` Fibonacci-sphere normals of three
+/// unorm8 channels: `table` `None` stores the normalized normal (the banding the thesis shows),
+/// `Some` the best-fit length from the table.
+pub fn measure_unorm8x3_error(table: Option<&BestFitTable>, count: usize) -> (f32, f32) {
+    use rayon::prelude::*;
+    let normals: Vec<Vec3> = fibonacci_sphere(count).collect();
+    let (max, sum) = normals
+        .par_iter()
+        .map(|&n| {
+            let stored = match table {
+                Some(t) => t.encode(n),
+                None => encode_unorm8x3(n),
+            };
+            let e = angle_deg(n, decode_unorm8x3(stored));
+            (e, f64::from(e))
+        })
+        .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1 + b.1));
+    (max, (sum / normals.len() as f64) as f32)
+}

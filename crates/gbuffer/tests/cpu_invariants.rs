@@ -284,3 +284,55 @@ fn triangles_behind_the_camera_and_crossing_the_near_plane_are_clipped() {
         assert_ne!(r.triangle_id.get(x, 60), u32::MAX, "floor missing at x={x}");
     }
 }
+
+/// Thesis §3.6's per-pixel view space: exact without quantization for every normal facing the
+/// eye, including those whose plain view-space z is negative (near the image edges), where the
+/// XY encoding loses the sign; quantized, it has XY's bounds (the same √ near the rim).
+#[test]
+fn per_pixel_view_space_keeps_normals_facing_the_eye() {
+    use gbuffer::normal::{angle_deg, decode_per_pixel_view, encode_per_pixel_view};
+    let to_eye = Vec3::new(0.6, 0.0, 0.8);
+    let n = Vec3::new(1.0, 0.1, -0.2).normalize();
+    assert!(n.z < 0.0 && n.dot(to_eye) > 0.0);
+    let xy = NormalEncoding::XyReconstructZ;
+    assert!(angle_deg(n, xy.decode(xy.encode(n))) > 10.0);
+    assert!(
+        angle_deg(
+            n,
+            decode_per_pixel_view(encode_per_pixel_view(n, to_eye), to_eye)
+        ) < 0.01
+    );
+    for n in gbuffer::normal::fibonacci_sphere(5000).filter(|n| n.dot(to_eye) >= 0.0) {
+        let d = decode_per_pixel_view(encode_per_pixel_view(n, to_eye), to_eye);
+        assert!(angle_deg(n, d) < 0.05, "{n} -> {d}");
+    }
+    let (m8, mean8) = gbuffer::normal::measure_per_pixel_view_error(8, 20_000);
+    let (m16, mean16) = gbuffer::normal::measure_per_pixel_view_error(16, 20_000);
+    eprintln!(
+        "per-pixel view space 8 bit: max {m8:.4}° mean {mean8:.4}°   16 bit: max {m16:.5}° mean {mean16:.5}°"
+    );
+    assert!(
+        m8 <= 7.2 && m16 <= 0.45 && mean8 < m8 && mean16 < m16,
+        "{m8} {m16}"
+    );
+}
+
+/// Kaplanyan 2010's best fit (thesis §3.6): scaling the normal by its best length before
+/// storing it in three unorm8 channels uses the cells off the unit sphere, so the mean error
+/// falls to a third or less of storing the normalized normal (the thesis's banding) and the
+/// worst one falls too, through a 512² table of the search; the lengths lie in (0, 1].
+#[test]
+fn best_fit_normals_beat_normalized_normals_in_three_bytes() {
+    use gbuffer::normal::{BestFitTable, best_fit_length, measure_unorm8x3_error};
+    let table = BestFitTable::new(512);
+    for n in gbuffer::normal::fibonacci_sphere(2000) {
+        let t = best_fit_length(n);
+        assert!(t > 0.0 && t <= 1.0, "{n}: {t}");
+    }
+    let (plain_max, plain_mean) = measure_unorm8x3_error(None, 100_000);
+    let (fit_max, fit_mean) = measure_unorm8x3_error(Some(&table), 100_000);
+    eprintln!(
+        "3 × unorm8: normalized max {plain_max:.4}° mean {plain_mean:.4}°; best fit (512² table) max {fit_max:.4}° mean {fit_mean:.4}°"
+    );
+    assert!(fit_max < plain_max && fit_mean < plain_mean / 3.0);
+}
