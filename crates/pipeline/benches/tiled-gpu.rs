@@ -55,15 +55,24 @@ const VARIANTS: [(&str, ShadingMethod, LightSearch); 8] = [
     ("volumes", ShadingMethod::LightVolumes, LightSearch::Flat),
 ];
 const TESTS: [(u32, u32); 4] = [(1, 0), (2, 100), (3, 500), (4, 1000)];
+/// A view down Sponza's side aisle (eye, target): pillars and arches near the eye against the
+/// far end of the colonnade — depth discontinuities in most tiles, where clusters should pay.
+const COLONNADE: ([f32; 3], [f32; 3]) = ([-14.0, 2.5, -4.5], [14.0, 3.0, -3.5]);
+const COLONNADE_LIGHTS: [usize; 3] = [4096, 16384, 65536];
 const TEST_SIZES: [(u32, u32); 2] = [(1280, 720), (1920, 1080)];
 
 #[derive(Serialize)]
 struct Row {
+    /// `main` (the scene's camera) or `colonnade` ([`COLONNADE`]).
+    view: &'static str,
     width: u32,
     height: u32,
     lights: usize,
     method: String,
     ms: Stat,
+    /// The whole frame: every pass of the renderer (z-prepass, G-buffer, light accumulation,
+    /// composition, output).
+    frame_ms: Stat,
     /// Median brute-force ms / median ms (same run; none above [`MOST_FOR_ALL`] lights).
     speedup_vs_brute: Option<f64>,
     /// Mean list length over tiles with a surface (None for brute force).
@@ -80,6 +89,8 @@ struct TestRow {
     lights_sent: usize,
     method: String,
     ms: Stat,
+    /// The whole frame, as [`Row::frame_ms`].
+    frame_ms: Stat,
     mean_list: Option<f64>,
 }
 
@@ -89,18 +100,20 @@ struct Report {
     frames: u32,
     scene: String,
     camera: String,
+    colonnade: String,
     sweep: Vec<Row>,
     tests: Vec<TestRow>,
 }
 
-/// Median ms of the light accumulation pass and the mean list length of non-empty tiles.
+/// Times of the light accumulation pass and of the whole frame, and the mean list length of
+/// non-empty tiles.
 fn measure(
     gpu: &Gpu,
     renderer: &mut GpuRenderer,
     camera: &Camera,
     (method, search): (ShadingMethod, LightSearch),
     frames: u32,
-) -> Result<(Stat, Option<f64>)> {
+) -> Result<(Stat, Stat, Option<f64>)> {
     renderer.set_shading(
         &gpu.device,
         &gpu.queue,
@@ -113,13 +126,15 @@ fn measure(
     let name = renderer.shading().pass_name();
     let t = time_passes(gpu, renderer, camera, DEFAULT_AMBIENT, frames)?;
     let ms = Stat::of(per_frame_sum(&t, &[name.as_str()]));
+    let every: Vec<&str> = t.iter().map(|(n, _)| n.as_str()).collect();
+    let frame = Stat::of(per_frame_sum(&t, &every));
     let mean = renderer
         .light_counts(&gpu.device, &gpu.queue)?
         .map(|counts| {
             let lit: Vec<u32> = counts.into_iter().filter(|&c| c > 0).collect();
             lit.iter().map(|&c| f64::from(c)).sum::<f64>() / lit.len().max(1) as f64
         });
-    Ok((ms, mean))
+    Ok((ms, frame, mean))
 }
 
 fn main() -> Result<()> {
@@ -135,45 +150,26 @@ fn main() -> Result<()> {
     let q = &args.quick;
     let (sizes, counts, tests) = (q.sweep(&SIZES), q.sweep(&LIGHTS), q.sweep(&TESTS));
 
-    let mut sweep = Vec::new();
-    for (w, h) in sizes.iter().copied().map(bench::size) {
-        let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, &scene, &[], w, h)?;
-        for &count in counts {
-            let lights = scene::scatter_point_lights(scene.bounds(), count, 1);
-            renderer.set_lights(&gpu.device, &gpu.queue, &lights)?;
-            let mut brute = None;
-            for (name, method, search) in VARIANTS {
-                let slow = matches!(
-                    method,
-                    ShadingMethod::BruteForce | ShadingMethod::LightVolumes
-                );
-                if slow && count > MOST_FOR_ALL {
-                    continue;
-                }
-                let (ms, mean_list) =
-                    measure(&gpu, &mut renderer, &camera, (method, search), frames)?;
-                if method == ShadingMethod::BruteForce {
-                    brute = Some(ms.median_ms);
-                }
-                let speedup = brute.map(|b| b / ms.median_ms);
-                println!(
-                    "{w}x{h} {count:>7} lights {name:<16} {:>9.3} ms  ×{:<7.1} mean list {}",
-                    ms.median_ms,
-                    speedup.unwrap_or(f64::NAN),
-                    mean_list.map_or("-".into(), |m| format!("{m:.1}"))
-                );
-                sweep.push(Row {
-                    width: w,
-                    height: h,
-                    lights: count,
-                    method: name.to_string(),
-                    ms,
-                    speedup_vs_brute: speedup,
-                    mean_list,
-                });
-            }
-        }
-    }
+    let mut sweep = light_sweep(&gpu, &scene, &camera, "main", sizes, counts, frames)?;
+    let colonnade = Camera {
+        eye: COLONNADE.0.into(),
+        target: COLONNADE.1.into(),
+        ..camera
+    };
+    let colonnade_counts = if q.quick {
+        &COLONNADE_LIGHTS[..1]
+    } else {
+        &COLONNADE_LIGHTS
+    };
+    sweep.extend(light_sweep(
+        &gpu,
+        &scene,
+        &colonnade,
+        "colonnade",
+        &SIZES[..1],
+        colonnade_counts,
+        frames,
+    )?);
 
     let mut rows = Vec::new();
     for &(test, behind) in tests {
@@ -193,7 +189,7 @@ fn main() -> Result<()> {
                 };
                 renderer.set_lights(&gpu.device, &gpu.queue, &sent)?;
                 for (name, method, search) in VARIANTS {
-                    let (ms, mean_list) =
+                    let (ms, frame_ms, mean_list) =
                         measure(&gpu, &mut renderer, &cam, (method, search), frames)?;
                     println!(
                         "test {test} {w}x{h} {:>4}/{} lights{} {name:<16} {:>8.3} ms",
@@ -211,6 +207,7 @@ fn main() -> Result<()> {
                         lights_sent: sent.len(),
                         method: name.to_string(),
                         ms,
+                        frame_ms,
                         mean_list,
                     });
                 }
@@ -218,12 +215,14 @@ fn main() -> Result<()> {
         }
     }
 
+    let (_, colonnade) = bench::scene_labels(&path, &colonnade);
     let (scene, camera) = bench::scene_labels(&path, &camera);
     let report = Report {
         header: bench::Header::new(&gpu),
         frames: frames,
         scene,
         camera,
+        colonnade,
         sweep,
         tests: rows,
     };
@@ -234,6 +233,62 @@ fn main() -> Result<()> {
         &markdown(&report),
     )?;
     Ok(())
+}
+
+/// Every variant at every size and light count (scattered over the scene's bounds) from
+/// `camera`, labelled `view`.
+fn light_sweep(
+    gpu: &Gpu,
+    scene: &scene::Scene,
+    camera: &Camera,
+    view: &'static str,
+    sizes: &[(u32, u32)],
+    counts: &[usize],
+    frames: u32,
+) -> Result<Vec<Row>> {
+    let mut sweep = Vec::new();
+    for (w, h) in sizes.iter().copied().map(bench::size) {
+        let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, scene, &[], w, h)?;
+        for &count in counts {
+            let lights = scene::scatter_point_lights(scene.bounds(), count, 1);
+            renderer.set_lights(&gpu.device, &gpu.queue, &lights)?;
+            let mut brute = None;
+            for (name, method, search) in VARIANTS {
+                let slow = matches!(
+                    method,
+                    ShadingMethod::BruteForce | ShadingMethod::LightVolumes
+                );
+                if slow && count > MOST_FOR_ALL {
+                    continue;
+                }
+                let (ms, frame_ms, mean_list) =
+                    measure(gpu, &mut renderer, camera, (method, search), frames)?;
+                if method == ShadingMethod::BruteForce {
+                    brute = Some(ms.median_ms);
+                }
+                let speedup = brute.map(|b| b / ms.median_ms);
+                println!(
+                    "{view} {w}x{h} {count:>7} lights {name:<16} {:>9.3} ms (frame {:>9.3})  ×{:<7.1} mean list {}",
+                    ms.median_ms,
+                    frame_ms.median_ms,
+                    speedup.unwrap_or(f64::NAN),
+                    mean_list.map_or("-".into(), |m| format!("{m:.1}"))
+                );
+                sweep.push(Row {
+                    view,
+                    width: w,
+                    height: h,
+                    lights: count,
+                    method: name.to_string(),
+                    ms,
+                    frame_ms,
+                    speedup_vs_brute: speedup,
+                    mean_list,
+                });
+            }
+        }
+    }
+    Ok(sweep)
 }
 
 fn markdown(r: &Report) -> String {
@@ -259,48 +314,22 @@ fn markdown(r: &Report) -> String {
          bounding spheres) — the same lists.\n",
         r.scene, r.camera
     );
-    let methods: Vec<&str> = VARIANTS.iter().map(|v| v.0).collect();
+    sweep_table(&mut s, r, "main");
     let _ = writeln!(
         s,
-        "| size | lights | {} | tiled list | cones list | clustered list |\n|---|---|{}---|---|---|",
-        methods.join(" | "),
-        "---|".repeat(methods.len())
+        "\n## Depth discontinuities: Sponza's colonnade, {}\n\n\
+         The same lights seen down the side aisle: pillars and arches near the eye against the \
+         far end in most tiles.\n",
+        r.colonnade
     );
-    let mut keys: Vec<(u32, u32, usize)> = r
-        .sweep
-        .iter()
-        .map(|x| (x.width, x.height, x.lights))
-        .collect();
-    keys.dedup();
-    for (w, h, n) in keys {
-        let row = |m: &str| {
-            r.sweep
-                .iter()
-                .find(|x| (x.width, x.height, x.lights) == (w, h, n) && x.method == m)
-        };
-        let cells: Vec<String> = methods
-            .iter()
-            .map(|m| {
-                row(m).map_or("—".into(), |x| match x.speedup_vs_brute {
-                    Some(speedup) => format!("{:.3} (×{speedup:.1})", x.ms.median_ms),
-                    None => format!("{:.3}", x.ms.median_ms),
-                })
-            })
-            .collect();
-        let list = |m: &str| {
-            row(m)
-                .and_then(|x| x.mean_list)
-                .map_or("—".into(), |l| format!("{l:.1}"))
-        };
-        let _ = writeln!(
-            s,
-            "| {w}×{h} | {n} | {} | {} | {} | {} |",
-            cells.join(" | "),
-            list("tiled"),
-            list("tiled-cones"),
-            list("clustered")
-        );
-    }
+    sweep_table(&mut s, r, "colonnade");
+    let _ = writeln!(
+        s,
+        "\n## Whole frames\n\n\
+         Every pass of the renderer (z-prepass, G-buffer, light accumulation, composition, \
+         output), ms, 1920×1080.\n"
+    );
+    frame_table(&mut s, r);
     let _ = writeln!(
         s,
         "\n## Thesis tests 1–4 (§4.2): `scene::thesis_walls`\n\n\
@@ -362,4 +391,105 @@ fn markdown(r: &Report) -> String {
          deferred (volumes) 1.18×, 1.60×, 2.17×, 2.36×."
     );
     s
+}
+
+/// The light-count sweep of `view` as a table: light accumulation ms (× brute force).
+fn sweep_table(s: &mut String, r: &Report, view: &str) {
+    use std::fmt::Write;
+    let methods: Vec<&str> = VARIANTS.iter().map(|v| v.0).collect();
+    let _ = writeln!(
+        s,
+        "| size | lights | {} | tiled list | cones list | clustered list |\n|---|---|{}---|---|---|",
+        methods.join(" | "),
+        "---|".repeat(methods.len())
+    );
+    let rows: Vec<&Row> = r.sweep.iter().filter(|x| x.view == view).collect();
+    let mut keys: Vec<(u32, u32, usize)> =
+        rows.iter().map(|x| (x.width, x.height, x.lights)).collect();
+    keys.dedup();
+    for (w, h, n) in keys {
+        let row = |m: &str| {
+            rows.iter()
+                .find(|x| (x.width, x.height, x.lights) == (w, h, n) && x.method == m)
+        };
+        let cells: Vec<String> = methods
+            .iter()
+            .map(|m| {
+                row(m).map_or("—".into(), |x| match x.speedup_vs_brute {
+                    Some(speedup) => format!("{:.3} (×{speedup:.1})", x.ms.median_ms),
+                    None => format!("{:.3}", x.ms.median_ms),
+                })
+            })
+            .collect();
+        let list = |m: &str| {
+            row(m)
+                .and_then(|x| x.mean_list)
+                .map_or("—".into(), |l| format!("{l:.1}"))
+        };
+        let _ = writeln!(
+            s,
+            "| {w}×{h} | {n} | {} | {} | {} | {} |",
+            cells.join(" | "),
+            list("tiled"),
+            list("tiled-cones"),
+            list("clustered")
+        );
+    }
+}
+
+/// Whole-frame ms of every variant at 1920×1080: the sweep's views, and the thesis tests at
+/// 1280×720 with CPU frustum culling (the thesis's whole-frame setting).
+fn frame_table(s: &mut String, r: &Report) {
+    use std::fmt::Write;
+    let methods: Vec<&str> = VARIANTS.iter().map(|v| v.0).collect();
+    let _ = writeln!(
+        s,
+        "| case | lights | {} |\n|---|---|{}",
+        methods.join(" | "),
+        "---|".repeat(methods.len())
+    );
+    let mut keys: Vec<(&str, usize)> = r
+        .sweep
+        .iter()
+        .filter(|x| x.width == 1920)
+        .map(|x| (x.view, x.lights))
+        .collect();
+    keys.dedup();
+    for (view, n) in keys {
+        let cells: Vec<String> = methods
+            .iter()
+            .map(|m| {
+                r.sweep
+                    .iter()
+                    .find(|x| x.width == 1920 && x.view == view && x.lights == n && x.method == *m)
+                    .map_or("—".into(), |x| format!("{:.3}", x.frame_ms.median_ms))
+            })
+            .collect();
+        let _ = writeln!(s, "| Sponza {view} | {n} | {} |", cells.join(" | "));
+    }
+    let mut tests: Vec<(u32, usize)> = r
+        .tests
+        .iter()
+        .filter(|x| x.width == 1280 && x.frustum_culling)
+        .map(|x| (x.test, x.lights_sent))
+        .collect();
+    tests.dedup();
+    for (test, sent) in tests {
+        let cells: Vec<String> = methods
+            .iter()
+            .map(|m| {
+                r.tests
+                    .iter()
+                    .find(|x| {
+                        x.test == test && x.width == 1280 && x.frustum_culling && x.method == *m
+                    })
+                    .map_or("—".into(), |x| format!("{:.3}", x.frame_ms.median_ms))
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| test {test}, 1280×720, VFC | {sent} | {} |",
+            cells.join(" | ")
+        );
+    }
 }
