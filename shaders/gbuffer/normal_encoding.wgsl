@@ -64,3 +64,18 @@ fn decode_octahedral_snorm(e: vec2<f32>) -> vec3<f32> {
 }
 fn encode_octahedral(n: vec3<f32>) -> vec2<f32> { return encode_octahedral_snorm(n) * 0.5 + 0.5; }
 fn decode_octahedral(e: vec2<f32>) -> vec3<f32> { return decode_octahedral_snorm(e * 2.0 - 1.0); }
+
+// Per-pixel view space (thesis §3.6): x and y in the frame whose z points from the pixel to
+// the eye (`gbuffer::normal::per_pixel_view_frame`); z ≥ 0 for every normal the eye sees.
+fn per_pixel_view_frame(to_eye: vec3<f32>) -> mat3x3<f32> {
+    let x = normalize(vec3<f32>(to_eye.z, 0.0, -to_eye.x));
+    return mat3x3<f32>(x, cross(to_eye, x), to_eye);
+}
+fn encode_per_pixel_view(n: vec3<f32>, to_eye: vec3<f32>) -> vec2<f32> {
+    let f = per_pixel_view_frame(to_eye);
+    return vec2<f32>(dot(f[0], n), dot(f[1], n)) * 0.5 + 0.5;
+}
+fn decode_per_pixel_view(e: vec2<f32>, to_eye: vec3<f32>) -> vec3<f32> {
+    let a = e * 2.0 - 1.0;
+    return per_pixel_view_frame(to_eye) * vec3<f32>(a, sqrt(max(1.0 - dot(a, a), 0.0)));
+}

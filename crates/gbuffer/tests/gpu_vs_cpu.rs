@@ -357,10 +357,14 @@ fn wgsl_normal_encodings_match_rust() {
     let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
     let input_buf = gpu::transfer::buffer_init(d, "normals", bytemuck::cast_slice(&input), storage)
         .expect("buffer");
-    let encoded = gpu::transfer::buffer_init(d, "encoded", &vec![0u8; count * 5 * 8], storage)
-        .expect("buffer");
-    let decoded = gpu::transfer::buffer_init(d, "decoded", &vec![0u8; count * 5 * 16], storage)
-        .expect("buffer");
+    // The five encodings, then the per-pixel view-space one.
+    let encodings = normal::NormalEncoding::ALL.len() + 1;
+    let encoded =
+        gpu::transfer::buffer_init(d, "encoded", &vec![0u8; count * encodings * 8], storage)
+            .expect("buffer");
+    let decoded =
+        gpu::transfer::buffer_init(d, "decoded", &vec![0u8; count * encodings * 16], storage)
+            .expect("buffer");
     let module = gbuffer::SHADERS
         .module(d, "encode_normals.wgsl")
         .expect("shader");
@@ -404,6 +408,32 @@ fn wgsl_normal_encodings_match_rust() {
             );
         }
     }
+    // Per-pixel view space along `encode_normals.wgsl`'s PER_PIXEL_TO_EYE, for the normals
+    // facing it.
+    let to_eye = Vec3::new(0.3, -0.2, 0.98).normalize();
+    let k = normal::NormalEncoding::ALL.len();
+    let mut checked = 0;
+    for (i, &n) in normals
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| n.dot(to_eye) >= 1e-3)
+    {
+        let cpu_e = normal::encode_per_pixel_view(n, to_eye);
+        let gpu_e = e[k * count + i];
+        assert!(
+            (cpu_e.x - gpu_e[0]).abs() < 1e-5 && (cpu_e.y - gpu_e[1]).abs() < 1e-5,
+            "per-pixel view space: encode {n}: {cpu_e} vs {gpu_e:?}"
+        );
+        let g = dec[k * count + i];
+        let cpu_d = normal::decode_per_pixel_view(cpu_e, to_eye);
+        let angle = normal::angle_deg(cpu_d, Vec3::new(g[0], g[1], g[2]));
+        assert!(
+            angle < 0.01,
+            "per-pixel view space: decode of {n} differs by {angle}°"
+        );
+        checked += 1;
+    }
+    assert!(checked > count / 3, "{checked} normals face the eye");
 }
 
 #[test]
