@@ -55,7 +55,7 @@ pub struct ShadingParams {
     pub slice_near: f32,
     /// [`Slicing::scale`].
     pub slice_scale: f32,
-    /// Groups of the light hierarchy ([`crate::LightGroups`], clustered).
+    /// Groups of the light hierarchy ([`crate::LightGroups`], [`LightSearch::Tree`]).
     pub group_count: u32,
     /// Padding to 32 bytes.
     pub _pad: u32,
@@ -87,7 +87,9 @@ enum Pipeline {
 /// What a [`BoundShading`] of [`Method::LightVolumes`] draws with.
 struct BoundVolumes {
     order: wgpu::Buffer,
-    meshes: VolumeMeshes,
+    /// Vertex ranges of the sphere, the cone and the full-screen triangle in the corners.
+    meshes: [std::ops::Range<u32>; 3],
+    /// Instance ranges of the lights drawn with each ([`volumes::draw_order`]).
     ranges: [std::ops::Range<u32>; 3],
     targets: [wgpu::TextureView; 2],
     depth: Option<wgpu::TextureView>,
@@ -107,7 +109,8 @@ pub struct BoundShading {
     light_tree: Option<wgpu::Buffer>,
     size: (u32, u32),
     tiles: (u32, u32),
-    brute_force: bool,
+    /// No per-tile lists (brute force, light volumes).
+    listless: bool,
     volumes: Option<BoundVolumes>,
 }
 
@@ -376,12 +379,12 @@ impl LightShading {
             lights.as_entire_binding(),
         ];
         resources.extend(inputs.iter().map(wgpu::BindingResource::TextureView));
-        let brute_force = matches!(
+        let listless = matches!(
             self.config.method,
             Method::BruteForce | Method::LightVolumes
         );
         // The light hierarchy's buffer; one entry for a flat search.
-        let tree = !brute_force && self.config.search == LightSearch::Tree;
+        let tree = !listless && self.config.search == LightSearch::Tree;
         let tree_bytes = if tree {
             let groups = capacity.div_ceil(crate::LIGHT_GROUP) as u64;
             groups * 16 + (capacity as u64).next_multiple_of(4) * 4
@@ -408,7 +411,7 @@ impl LightShading {
             );
             let volumes = BoundVolumes {
                 order,
-                meshes,
+                meshes: [meshes.sphere, meshes.cone, meshes.screen],
                 ranges: [0..0, 0..0, 0..0],
                 targets,
                 depth: None,
@@ -416,7 +419,7 @@ impl LightShading {
             Some((group, volumes))
         } else {
             resources.extend(targets.iter().map(wgpu::BindingResource::TextureView));
-            if !brute_force {
+            if !listless {
                 resources.extend([counts.as_entire_binding(), lists.as_entire_binding()]);
                 resources.push(light_tree.as_entire_binding());
             }
@@ -438,7 +441,7 @@ impl LightShading {
             light_tree: tree.then_some(light_tree),
             size,
             tiles: (tiles_x, tiles_y),
-            brute_force,
+            listless,
             volumes,
         })
     }
@@ -523,7 +526,7 @@ impl LightShading {
                 return;
             }
         };
-        let workgroups = if bound.brute_force {
+        let workgroups = if bound.listless {
             Workgroups::covering(bound.size.0, bound.size.1, 8)
         } else {
             Workgroups::Direct([bound.tiles.0, bound.tiles.1, 1])
@@ -580,13 +583,14 @@ impl BoundShading {
         self.capacity
     }
 
-    /// Reads back each tile's list length (`None` for brute force, which has no lists).
+    /// Reads back each tile's list length (`None` for brute force and light volumes, which
+    /// keep no lists).
     pub fn read_counts(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Option<Vec<u32>>, ShadingError> {
-        if self.brute_force {
+        if self.listless {
             return Ok(None);
         }
         let mut counts: Vec<u32> = transfer::read_pod(device, queue, &self.counts)?;
@@ -670,11 +674,7 @@ fn encode_volumes(
     pass.set_pipeline(pipeline);
     pass.set_bind_group(0, &bound.group, &[]);
     pass.set_bind_group(1, &bound.shadow_group, &[]);
-    let meshes = &volumes.meshes;
-    for (vertices, instances) in [&meshes.sphere, &meshes.cone, &meshes.screen]
-        .into_iter()
-        .zip(&volumes.ranges)
-    {
+    for (vertices, instances) in volumes.meshes.iter().zip(&volumes.ranges) {
         if !instances.is_empty() {
             pass.draw(vertices.clone(), instances.clone());
         }
