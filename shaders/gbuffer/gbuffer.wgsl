@@ -108,20 +108,24 @@ struct SurfaceFragment {
 };
 
 // A fragment's attributes (coordinates with their fine derivatives, the facing normal) and
-// its evaluated material; a fragment its material's alpha does not keep is discarded. Call
-// in uniform control flow (the derivatives).
-fn surface_fragment(in: VertexOut) -> SurfaceFragment {
+// its evaluated material, alpha included. Call in uniform control flow (the derivatives).
+fn evaluate_fragment(in: VertexOut) -> SurfaceFragment {
     // The derivatives over the texture footprint (`Frame::with_texture_footprint`).
     let footprint = max(frame.sampling.z, 1.0);
     let uv_dx = dpdxFine(in.uv) * footprint;
     let uv_dy = dpdyFine(in.uv) * footprint;
     let facing = facing_normal(in.normal, in.to_eye);
     let at = SurfaceAttributes(in.uv, uv_dx, uv_dy, facing.normal, facing.back_face, in.tangent, in.color);
-    let m = evaluate_material(at);
-    if !alpha_keeps(m.alpha, dither_threshold(vec2<u32>(in.clip.xy))) {
+    return SurfaceFragment(at, evaluate_material(at));
+}
+
+// `evaluate_fragment`, and a fragment its material's alpha does not keep is discarded.
+fn surface_fragment(in: VertexOut) -> SurfaceFragment {
+    let f = evaluate_fragment(in);
+    if !alpha_keeps(f.m.alpha, dither_threshold(vec2<u32>(in.clip.xy))) {
         discard;
     }
-    return SurfaceFragment(at, m);
+    return f;
 }
 
 @fragment

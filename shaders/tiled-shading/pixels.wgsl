@@ -4,21 +4,7 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/normal_encoding.wgsl
 // #import tiled-shading/lighting.wgsl
-
-struct Params {
-    light_count: u32,
-    tiles_x: u32,
-    // 1: write every tile's list to `lists` (tests); 0: only the counts.
-    record_lists: u32,
-    // Entries per tile in `lists`.
-    list_stride: u32,
-    // Exponential cluster slicing (`Slicing`).
-    slice_near: f32,
-    slice_scale: f32,
-    // Light groups of `light_groups` (clustered).
-    group_count: u32,
-    _pad0: u32,
-};
+// #import tiled-shading/params.wgsl
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<uniform> params: Params;

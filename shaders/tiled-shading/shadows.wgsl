@@ -26,18 +26,19 @@ struct ShadowParams {
     _pad1: f32,
 };
 
-// Group 1: the shadow maps (`tiled_shading::gpu::shadows`); a 1×1 stand-in when no light
-// has shadows.
-@group(1) @binding(0) var<storage, read> shadow_views: array<ShadowView>;
-@group(1) @binding(1) var<uniform> shadow_params: ShadowParams;
-@group(1) @binding(2) var shadow_maps: texture_depth_2d_array;
-@group(1) @binding(3) var shadow_sampler: sampler;
+// Group SHADOW_GROUP (1; the Forward+ pass sets 3, and RAY_GROUP with it): the shadow maps
+// (`tiled_shading::gpu::shadows`); a 1×1 stand-in when no light has shadows.
+const SHADOW_GROUP: u32 = 1u;
+@group(SHADOW_GROUP) @binding(0) var<storage, read> shadow_views: array<ShadowView>;
+@group(SHADOW_GROUP) @binding(1) var<uniform> shadow_params: ShadowParams;
+@group(SHADOW_GROUP) @binding(2) var shadow_maps: texture_depth_2d_array;
+@group(SHADOW_GROUP) @binding(3) var shadow_sampler: sampler;
 // The ManyLoD atlas of the lights with paraboloid shadows (a stand-in without them).
-@group(1) @binding(4) var<storage, read> atlas: array<u32>;
-@group(1) @binding(5) var<uniform> atlas_params: AtlasParams;
+@group(SHADOW_GROUP) @binding(4) var<storage, read> atlas: array<u32>;
+@group(SHADOW_GROUP) @binding(5) var<uniform> atlas_params: AtlasParams;
 // The scene's BVH for the lights with ray shadows (stand-ins without them): nodes and
 // triangles at bindings 6 and 7 (`rays.wgsl`), and:
-@group(1) @binding(8) var<uniform> ray_params: RayParams;
+@group(SHADOW_GROUP) @binding(8) var<uniform> ray_params: RayParams;
 
 struct RayParams {
     offset: f32,

@@ -12,6 +12,11 @@
 // spheres (`tiled_shading::LightGroups`); a round of THREADS groups is tested against the tile
 // frustum, and only the lights of the groups that pass are tested one by one. Without it
 // (`LightSearch::Flat`, the thesis) every light is tested. The lists are the same.
+// Forward+ (METHOD_FORWARD, §2.4.2) only builds the lists, for the depths from the near plane
+// to the tile's farthest opaque surface (the far plane where a pixel shows no surface, so
+// blended surfaces in front of the opaque ones find their lights too), marks the entries that
+// also meet the opaque depth bounds (FORWARD_OPAQUE) and keeps them in `lists` for the
+// forward pass (`forward.wgsl`).
 // Twin of `tiled_shading::cpu` (same names). `tiled_shading::gpu::specialisation` sets
 // METHOD, TILE, WG and LIGHT_TREE.
 
@@ -28,6 +33,10 @@ const CAPACITY: u32 = 768u;
 const METHOD_TILED: u32 = 1u;
 const METHOD_CONES: u32 = 2u;
 const METHOD_CLUSTERED: u32 = 3u;
+const METHOD_FORWARD: u32 = 4u;
+// Forward+ entry bits (`tiled_shading::cpu::FORWARD_OPAQUE`, `FORWARD_BLENDED`).
+const FORWARD_OPAQUE: u32 = 1u;
+const FORWARD_BLENDED: u32 = 2u;
 const SLICES: u32 = 32u;
 const ALL_SLICES: u32 = 0xffffffffu;
 const NORMAL_QUANTUM: f32 = 32768.0;
@@ -94,6 +103,9 @@ var<workgroup> tile_corners: array<vec3<f32>, 8>;
 var<workgroup> tile_center: vec3<f32>;
 var<workgroup> tile_cone: vec4<f32>;
 var<workgroup> tile_slices: u32;
+// Forward+: the near and far planes at the opaque depth bounds, and whether there are any.
+var<workgroup> opaque_planes: array<vec4<f32>, 2>;
+var<workgroup> opaque_present: bool;
 // Set when a light of the current batch may face away: α is then computed (once per tile).
 var<workgroup> need_alpha: u32;
 
@@ -163,6 +175,9 @@ fn faces_away(light_axis: vec3<f32>, cos_delta: f32) -> bool {
 // The normal-cone part of `cull_light` is `cone_rejects`, run after α is known.
 fn cull_light(light: Light) -> u32 {
     if light.kind == LIGHT_DIRECTIONAL {
+        if METHOD == METHOD_FORWARD {
+            return FORWARD_BLENDED | select(0u, FORWARD_OPAQUE, opaque_present);
+        }
         return ALL_SLICES;
     }
     let c = light.position;
@@ -184,6 +199,12 @@ fn cull_light(light: Light) -> u32 {
             }
         }
         return mask & tile_slices;
+    }
+    if METHOD == METHOD_FORWARD {
+        let near = opaque_planes[0];
+        let far = opaque_planes[1];
+        let opaque = opaque_present && dot(near.xyz, c) + near.w >= -r && dot(far.xyz, c) + far.w >= -r;
+        return FORWARD_BLENDED | select(0u, FORWARD_OPAQUE, opaque);
     }
     return ALL_SLICES;
 }
@@ -243,12 +264,12 @@ fn flush(
     specular: ptr<function, array<vec3<f32>, PIXELS>>,
 ) -> u32 {
     if params.record_lists != 0u {
-        for (var j = index; j < n; j += THREADS) {
+        for (var j = index; j < n && total + j < params.list_stride; j += THREADS) {
             lists[tile_index * params.list_stride + total + j] = vec2<u32>(list_light[j], list_mask[j]);
         }
     }
     for (var p = 0u; p < PIXELS; p++) {
-        if (*samples)[p].present {
+        if METHOD != METHOD_FORWARD && (*samples)[p].present {
             let s = (*samples)[p];
             let v = normalize(frame.eye.xyz - s.position);
             let m = load_material((*pixels)[p]);
@@ -298,6 +319,9 @@ fn shade_tiles(
             if METHOD == METHOD_CLUSTERED {
                 bounds.z |= 1u << slice_of(samples[i].depth);
             }
+        } else if METHOD == METHOD_FORWARD && all(pixels[i] < size) {
+            // A pixel without a surface: blended surfaces there may lie at any depth.
+            bounds.z = 1u;
         }
     }
     reduce_u[index] = bounds;
@@ -322,11 +346,24 @@ fn shade_tiles(
     let tile_bounds = workgroupUniformLoad(&reduce_u[0]);
     let sum = vec3<f32>(reduce_i[0].xyz);
     let axis = normalize_or_zero(sum);
-    let empty = tile_bounds.x > tile_bounds.y;
+    let opaque = tile_bounds.x <= tile_bounds.y;
+    // A Forward+ tile without opaque surfaces may still show blended ones.
+    let empty = !opaque && METHOD != METHOD_FORWARD;
     let origin = group.xy * TILE;
     if index == 0u {
         let rect = vec4<u32>(origin.x, min(origin.x + TILE, size.x), origin.y, min(origin.y + TILE, size.y));
-        tile_frustum(rect, bitcast<f32>(tile_bounds.x), bitcast<f32>(tile_bounds.y));
+        var near = bitcast<f32>(tile_bounds.x);
+        var far = bitcast<f32>(tile_bounds.y);
+        if METHOD == METHOD_FORWARD {
+            opaque_present = opaque;
+            if opaque {
+                opaque_planes[0] = world_plane(vec3<f32>(0.0, 0.0, -1.0), -near);
+                opaque_planes[1] = world_plane(vec3<f32>(0.0, 0.0, 1.0), far);
+            }
+            near = params.slice_near;
+            far = select(far, slice_start(SLICES), !opaque || tile_bounds.z != 0u);
+        }
+        tile_frustum(rect, near, far);
         // cos α = −1 until step 3 runs (lazily, below).
         tile_cone = vec4<f32>(axis, -1.0);
         tile_slices = tile_bounds.z;
@@ -443,7 +480,7 @@ fn shade_tiles(
         total = flush(workgroupUniformLoad(&list_size), total, tile_index, index, &samples, &pixels, &diffuse, &specular);
     }
     for (var p = 0u; p < PIXELS; p++) {
-        if pixels[p].x < size.x && pixels[p].y < size.y {
+        if METHOD != METHOD_FORWARD && pixels[p].x < size.x && pixels[p].y < size.y {
             textureStore(diffuse_out, pixels[p], vec4<f32>(diffuse[p], 0.0));
             textureStore(specular_out, pixels[p], vec4<f32>(specular[p], 0.0));
         }

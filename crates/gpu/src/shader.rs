@@ -160,8 +160,10 @@ impl Library {
         Ok(())
     }
 
-    /// Validates every file in its default variant and every listed variant; returns all
-    /// failures. Also fails for a `.wgsl` file in `folder` that the library does not declare.
+    /// Validates every listed variant, and every file without a listed variant in its default
+    /// variant (a file with listed variants is built only as those: its defaults may not
+    /// compile alone, e.g. bind-group numbers its variants move); returns all failures. Also
+    /// fails for a `.wgsl` file in `folder` that the library does not declare.
     pub fn validate_all(
         &self,
         folder: &std::path::Path,
@@ -170,6 +172,7 @@ impl Library {
         let mut failures: Vec<String> = self
             .files
             .iter()
+            .filter(|(f, _)| !variants.iter().any(|(v, _)| v == f))
             .map(|(f, _)| (*f, Specialisation::default()))
             .chain(variants.iter().map(|(f, s)| (*f, s.clone())))
             .filter_map(|(f, s)| self.validate(f, &s).err())

@@ -26,6 +26,12 @@ pub const CONE_EPSILON: f32 = 1e-3;
 pub const SLICE_EPSILON: f32 = 1e-5;
 /// List entry mask of methods without slices.
 pub const ALL_SLICES: u32 = u32::MAX;
+/// A [`Method::ForwardPlus`] list entry's bit: the light meets the tile's opaque depth bounds
+/// (the opaque surfaces are shaded from these entries).
+pub const FORWARD_OPAQUE: u32 = 1;
+/// A [`Method::ForwardPlus`] list entry's bit: the light meets the depths from the near plane to
+/// the tile's far bound (every entry has it; blended surfaces are shaded from all).
+pub const FORWARD_BLENDED: u32 = 2;
 
 /// One G-buffer pixel as the light accumulation reads it.
 #[derive(Clone, Copy, Debug)]
@@ -242,18 +248,35 @@ pub struct Tile {
     pub bounds: TileBounds,
     /// Frustum at the depth bounds.
     pub frustum: TileFrustum,
+    /// [`Method::ForwardPlus`]: the frustum from the near plane to the tile's far bound
+    /// ([`forward_far`]), where blended surfaces may lie.
+    pub reach: TileFrustum,
     /// Cluster slicing of the view.
     pub slicing: Slicing,
+}
+
+/// The far bound of a [`Method::ForwardPlus`] tile: its largest opaque depth, or the far plane
+/// where some pixel (`open`) or every pixel shows no surface.
+pub fn forward_far(bounds: &TileBounds, open: bool, slicing: &Slicing) -> f32 {
+    if open || bounds.is_empty() {
+        slicing.start(CLUSTER_SLICES)
+    } else {
+        bounds.max_depth
+    }
 }
 
 /// Whether `light` goes into the tile's list under `method`, and for which slices: 0 =
 /// culled, [`ALL_SLICES`] = kept (tiled methods), else the mask of occupied clusters of the
 /// tile it overlaps (clustered).
 pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) -> u32 {
-    if tile.bounds.is_empty() {
+    if tile.bounds.is_empty() && method != Method::ForwardPlus {
         return 0;
     }
     let world = Vec3::from(light.position);
+    if light.kind == LIGHT_DIRECTIONAL && method == Method::ForwardPlus {
+        let opaque = !tile.bounds.is_empty();
+        return FORWARD_BLENDED | if opaque { FORWARD_OPAQUE } else { 0 };
+    }
     if light.kind == LIGHT_DIRECTIONAL {
         // Light from one direction: a light cone of half-angle 0.
         let away = method == Method::TiledCones
@@ -277,6 +300,13 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
                     && light_cone(&tile.frustum, world)
                         .is_some_and(|cone| faces_away(tile.bounds.cone(), cone)));
             if keep { ALL_SLICES } else { 0 }
+        }
+        Method::ForwardPlus => {
+            if !sphere_meets(&tile.reach.planes, world, light.radius) {
+                return 0;
+            }
+            let opaque = !tile.bounds.is_empty() && sphere_meets(planes, world, light.radius);
+            FORWARD_BLENDED | if opaque { FORWARD_OPAQUE } else { 0 }
         }
         Method::Clustered => {
             if !sphere_meets(planes, world, light.radius) {
@@ -344,9 +374,11 @@ pub fn shade(
                 .collect();
             let present: Vec<Sample> = samples.iter().flatten().copied().collect();
             let bounds = tile_bounds(&present, &slicing);
+            let far = forward_far(&bounds, present.len() < coords.len(), &slicing);
             let tile = Tile {
                 bounds,
                 frustum: tile_frustum(frame, rect, bounds.min_depth, bounds.max_depth),
+                reach: tile_frustum(frame, rect, slicing.near, far),
                 slicing,
             };
             let list: Vec<(u32, u32)> = lights
@@ -367,7 +399,12 @@ pub fn shade(
                             &s,
                             (lights, shadows),
                             &list,
-                            slicing.slice(s.depth),
+                            // Forward+ shades opaque surfaces from the FORWARD_OPAQUE entries.
+                            if config.method == Method::ForwardPlus {
+                                0
+                            } else {
+                                slicing.slice(s.depth)
+                            },
                         )
                     });
                     (x, y, d, sp)

@@ -43,6 +43,8 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     imports: [gbuffer::SHADERS, manylod::SHADERS],
     files: [
         "lighting.wgsl",
+        "params.wgsl",
+        "forward.wgsl",
         "rays.wgsl",
         "shadow_view.wgsl",
         "shadows.wgsl",
@@ -167,19 +169,28 @@ pub enum Method {
     /// Clusters of a tile and an exponential depth slice (§2.5): a light is evaluated at a
     /// pixel only when it overlaps the pixel's cluster.
     Clustered,
+    /// Forward+ (tiled forward shading, §2.4.2 after Harada et al. 2012): the tiles' light
+    /// lists are built from the depth pre-pass over the depths from the near plane to the
+    /// tile's farthest opaque surface (the far plane where a pixel shows the background), kept
+    /// in memory, and read by a forward pass that shades the scene's geometry — the opaque
+    /// surfaces into the light accumulation, and alpha-blended surfaces over the composed
+    /// frame ([`gpu::forward`]).
+    ForwardPlus,
 }
 
 impl Method {
     /// Every method, the reference first.
-    pub const ALL: [Method; 5] = [
+    pub const ALL: [Method; 6] = [
         Method::BruteForce,
         Method::Tiled,
         Method::TiledCones,
         Method::Clustered,
         Method::LightVolumes,
+        Method::ForwardPlus,
     ];
 
-    /// The command-line name (`brute`, `tiled`, `tiled-cones`, `clustered`, `volumes`).
+    /// The command-line name (`brute`, `tiled`, `tiled-cones`, `clustered`, `volumes`,
+    /// `forward`).
     pub fn name(self) -> &'static str {
         match self {
             Method::BruteForce => "brute",
@@ -187,6 +198,7 @@ impl Method {
             Method::Tiled => "tiled",
             Method::TiledCones => "tiled-cones",
             Method::Clustered => "clustered",
+            Method::ForwardPlus => "forward",
         }
     }
 }
@@ -206,7 +218,7 @@ impl FromStr for Method {
             .find(|m| m.name() == s)
             .ok_or_else(|| {
                 format!(
-                    "unknown shading method {s:?} (brute, tiled, tiled-cones, clustered, volumes)"
+                    "unknown shading method {s:?} (brute, tiled, tiled-cones, clustered, volumes, forward)"
                 )
             })
     }
@@ -438,6 +450,9 @@ pub enum ShadingError {
         /// Lights the buffer holds.
         capacity: usize,
     },
+    /// A pass given what another method makes (the forward pass without Forward+ lists).
+    #[error("forward+: {0}")]
+    Forward(String),
     /// Bad shadow-map settings, or more shadow views than the device holds.
     #[error("shadow maps: {0}")]
     InvalidShadows(String),

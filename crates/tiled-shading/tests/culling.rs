@@ -146,10 +146,18 @@ fn decision_margin(c: &Case, config: &ShadingConfig, t: usize, light: u32) -> f3
         .collect();
     let bounds = cpu::tile_bounds(&samples, &tiled_shading::Slicing::new(&c.camera));
     let frustum = cpu::tile_frustum(&c.frame, rect, bounds.min_depth, bounds.max_depth);
+    let slicing = tiled_shading::Slicing::new(&c.camera);
+    let open = samples.len() < ((rect[1] - rect[0]) * (rect[3] - rect[2])) as usize;
+    let far = cpu::forward_far(&bounds, open, &slicing);
+    let reach = cpu::tile_frustum(&c.frame, rect, slicing.near, far);
     let l = &c.lights[light as usize];
     let p = Vec3::from(l.position);
-    let mut margin = frustum
-        .planes
+    let planes = if config.method == Method::ForwardPlus {
+        [frustum.planes, reach.planes].concat()
+    } else {
+        frustum.planes.to_vec()
+    };
+    let mut margin = planes
         .iter()
         .map(|q| (q.truncate().dot(p) + q.w + l.radius).abs() / l.radius)
         .fold(f32::INFINITY, f32::min);
@@ -197,7 +205,13 @@ fn culled_images_equal_brute_force_on_the_cpu() {
     for c in [spheres(96, 64, 300), walls(500, 128, 72)] {
         let brute = shade_cpu(&c, &config(Method::BruteForce, 16));
         assert!(max_abs(&brute.diffuse) > 0.0, "the scene is lit");
-        for method in [Method::Tiled, Method::TiledCones, Method::Clustered] {
+        let methods = [
+            Method::Tiled,
+            Method::TiledCones,
+            Method::Clustered,
+            Method::ForwardPlus,
+        ];
+        for method in methods {
             for tile in [8, 16, 32] {
                 let culled = shade_cpu(&c, &config(method, tile));
                 compare(
@@ -334,13 +348,17 @@ fn gpu_matches_cpu_images_and_lists() {
                     ..config(method, tile)
                 };
                 let gpu_out = c.run_gpu(g, &cfg);
-                compare(
+                // Forward+ only builds lists here: its images come from drawing the scene
+                // (`pipeline`'s forward tests).
+                if method != Method::ForwardPlus {
+                    compare(
                     &format!("gpu {method} {tile} {search} vs brute"),
                     &brute,
                     &gpu_out,
                     GPU_RELATIVE,
                     1e-5,
-                );
+                    );
+                }
                 if method != Method::BruteForce {
                     let cpu_out = shade_cpu(&c, &cfg);
                     same_lists(&format!("{method} {tile}"), &c, &cfg, &gpu_out, &cpu_out);
@@ -652,4 +670,55 @@ fn light_volumes_equal_brute_force() {
             1e-5,
         );
     }
+}
+
+#[test]
+fn forward_lists_hold_the_tiled_lists_and_every_light_in_front() {
+    // Forward+ marks as opaque exactly the lights tiled shading lists (the same planes), and
+    // lists besides every light that reaches the tile between the near plane and its far
+    // bound: a surface in front of the opaque ones, or over the background, finds its lights.
+    for c in [spheres(96, 64, 300), walls(500, 128, 72)] {
+        let tiled = shade_cpu(&c, &config(Method::Tiled, 16));
+        let forward = shade_cpu(&c, &config(Method::ForwardPlus, 16));
+        let mut in_front = 0;
+        for (t, (tiled, forward)) in tiled.lists.iter().zip(&forward.lists).enumerate() {
+            let opaque: Vec<u32> = forward
+                .iter()
+                .filter(|e| e.1 & cpu::FORWARD_OPAQUE != 0)
+                .map(|e| e.0)
+                .collect();
+            let listed: Vec<u32> = tiled.iter().map(|e| e.0).collect();
+            assert_eq!(opaque, listed, "tile {t}: the opaque entries are tiled's list");
+            assert!(
+                forward.iter().all(|e| e.1 & cpu::FORWARD_BLENDED != 0),
+                "tile {t}: every entry serves blended surfaces"
+            );
+            in_front += forward.len() - opaque.len();
+        }
+        assert!(in_front > 0, "some lights reach only what lies in front");
+    }
+    // Over the background (a tile without any surface), the lights in front of the camera are
+    // listed: the spheres seen from above, the plane's edge in view.
+    let scene = scene::spheres_on_plane(3);
+    let camera = Camera::look_at(Vec3::new(0.0, 3.0, 9.0), Vec3::new(0.0, 2.0, 0.0));
+    let mut c = case(&scene, camera, &[], 64, 48);
+    c.lights = tiled_shading::gpu_lights(&[Light::Point {
+        position: Vec3::new(0.0, 2.0, 6.0),
+        color: Vec3::ONE,
+        intensity: 1.0,
+        radius: 2.0,
+    }])
+    .expect("valid");
+    let forward = shade_cpu(&c, &config(Method::ForwardPlus, 16));
+    let (tx, _) = forward.tiles;
+    let empty = |t: usize| {
+        let rect = cpu::tile_pixels(16, 64, 48, t as u32 % tx, t as u32 / tx);
+        (rect[2]..rect[3]).all(|y| (rect[0]..rect[1]).all(|x| c.gb.linear_depth.get(x, y) <= 0.0))
+    };
+    let background: Vec<usize> = (0..forward.lists.len()).filter(|&t| empty(t)).collect();
+    assert!(!background.is_empty(), "the view shows background");
+    assert!(
+        background.iter().any(|&t| forward.counts[t] == 1),
+        "the light in front of the camera is listed over the background"
+    );
 }

@@ -4,7 +4,7 @@
 use ::gpu::GpuError;
 use ::gpu::kernel::{self, Binding, Layout};
 
-use super::upload::DrawState;
+use super::upload::{BlendedSurfaces, Draw, DrawState};
 use super::{GBufferTargets, GpuAttributes, GpuScene};
 use crate::{
     ALBEDO_FORMAT, DEPTH_FORMAT, EMISSION_FORMAT, Frame, LINEAR_DEPTH_FORMAT, MATERIAL_FORMAT,
@@ -172,6 +172,27 @@ impl GBufferPass {
         self.draw(pass, &self.frame, scene, |s| pipelines[usize::from(s.cull)]);
     }
 
+    /// Draws only `scene`'s alpha-blended meshes (whatever [`GpuScene::blended`] says), back
+    /// to front: by the distance from `eye` to the centre of each mesh's bounding box at
+    /// upload (an order per mesh, not per triangle), with `pipelines` as
+    /// [`GBufferPass::draw_scene`] takes them.
+    pub fn draw_blended(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipelines: [&wgpu::RenderPipeline; 2],
+        scene: &GpuScene,
+        eye: glam::Vec3,
+    ) {
+        let mut order: Vec<&Draw> = scene.draws.iter().filter(|d| d.state.blended).collect();
+        order.sort_by(|a, b| {
+            eye.distance_squared(b.center)
+                .total_cmp(&eye.distance_squared(a.center))
+        });
+        self.draw_each(pass, &self.frame, scene, order, |s| {
+            pipelines[usize::from(s.cull)]
+        });
+    }
+
     /// The uniform buffer holding the [`Frame`]; later screen-space passes bind it too.
     pub fn frame_buffer(&self) -> &wgpu::Buffer {
         &self.frame.buffer
@@ -255,8 +276,8 @@ impl GBufferPass {
         self.draw(&mut pass, frame, scene, |s| self.after_prepass.get(s.cull));
     }
 
-    /// Draws every draw of `scene` with the pipeline `pick` chooses for its state, binding
-    /// `frame` and each draw's material.
+    /// Draws every draw of `scene` (but the blended ones when it draws them forward) with the
+    /// pipeline `pick` chooses for its state, binding `frame` and each draw's material.
     fn draw<'p>(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
@@ -264,12 +285,29 @@ impl GBufferPass {
         scene: &GpuScene,
         pick: impl Fn(DrawState) -> &'p wgpu::RenderPipeline,
     ) {
+        let forward = scene.blended == BlendedSurfaces::Forward;
+        let draws = scene
+            .draws
+            .iter()
+            .filter(|d| !(forward && d.state.blended));
+        self.draw_each(pass, frame, scene, draws, pick);
+    }
+
+    /// Draws `draws` of `scene` in order.
+    fn draw_each<'d, 'p>(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        frame: &FrameUniform,
+        scene: &GpuScene,
+        draws: impl IntoIterator<Item = &'d Draw>,
+        pick: impl Fn(DrawState) -> &'p wgpu::RenderPipeline,
+    ) {
         pass.set_bind_group(0, &frame.group, &[]);
         pass.set_vertex_buffer(0, scene.positions.slice(..));
         pass.set_vertex_buffer(1, scene.attributes.slice(..));
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
         let mut bound: Option<&wgpu::RenderPipeline> = None;
-        for d in &scene.draws {
+        for d in draws {
             let pipeline = pick(d.state);
             if !bound.is_some_and(|b| std::ptr::eq(b, pipeline)) {
                 pass.set_pipeline(pipeline);
@@ -391,6 +429,33 @@ pub fn scene_pipeline(
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     (vertex, fragment): (&str, Option<(&str, &[wgpu::TextureFormat])>),
+    depth: (wgpu::CompareFunction, bool),
+    cull_back: bool,
+) -> wgpu::RenderPipeline {
+    let targets: Vec<Option<wgpu::ColorTargetState>> = fragment
+        .map_or(&[][..], |(_, formats)| formats)
+        .iter()
+        .map(|&format| Some(format.into()))
+        .collect();
+    let fragment = fragment.map(|(entry, _)| (entry, &targets[..]));
+    scene_pipeline_with(
+        device,
+        label,
+        layout,
+        module,
+        (vertex, fragment),
+        depth,
+        cull_back,
+    )
+}
+
+/// [`scene_pipeline`] with the fragment stage's colour target states (blending, write masks).
+pub fn scene_pipeline_with(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    (vertex, fragment): (&str, Option<(&str, &[Option<wgpu::ColorTargetState>])>),
     (compare, write): (wgpu::CompareFunction, bool),
     cull_back: bool,
 ) -> wgpu::RenderPipeline {
@@ -410,11 +475,6 @@ pub fn scene_pipeline(
             attributes: &attributes,
         }));
     }
-    let targets: Vec<Option<wgpu::ColorTargetState>> = fragment
-        .map_or(&[][..], |(_, formats)| formats)
-        .iter()
-        .map(|&format| Some(format.into()))
-        .collect();
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),
         layout: Some(layout),
@@ -438,11 +498,11 @@ pub fn scene_pipeline(
             bias: Default::default(),
         }),
         multisample: Default::default(),
-        fragment: fragment.map(|(entry, _)| wgpu::FragmentState {
+        fragment: fragment.map(|(entry, targets)| wgpu::FragmentState {
             module,
             entry_point: Some(entry),
             compilation_options: Default::default(),
-            targets: &targets,
+            targets,
         }),
         multiview_mask: None,
         cache: None,

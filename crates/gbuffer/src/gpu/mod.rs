@@ -8,11 +8,13 @@ pub mod targets;
 pub mod textures;
 pub mod upload;
 
-pub use gbuffer::{FrameUniform, GBufferPass, begin_scene_pass, scene_pipeline};
+pub use gbuffer::{
+    FrameUniform, GBufferPass, begin_scene_pass, scene_pipeline, scene_pipeline_with,
+};
 pub use run::{run, run_with};
 pub use targets::{GBufferTargets, GBufferTextures, UploadedGBuffer};
 pub use textures::MaterialTextures;
-pub use upload::GpuScene;
+pub use upload::{BlendedSurfaces, GpuScene};
 
 use ::gpu::kernel::Binding;
 use bytemuck::Zeroable;

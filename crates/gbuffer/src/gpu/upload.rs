@@ -13,6 +13,20 @@ pub(super) struct DrawState {
     pub(super) cull: bool,
     /// Fragments discarded by alpha (`MASK` or `BLEND`): the z-prepass needs a fragment stage.
     pub(super) alpha_tested: bool,
+    /// An alpha-blended material (`BLEND`).
+    pub(super) blended: bool,
+}
+
+/// How the G-buffer passes draw alpha-blended (`BLEND`) materials.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BlendedSurfaces {
+    /// Into the G-buffer, each fragment kept with probability alpha by a 4 × 4 ordered dither
+    /// (stochastic transparency: right on average over a pixel block, in every stage).
+    #[default]
+    Dithered,
+    /// Not at all: a forward pass draws them over the composed frame
+    /// ([`GBufferPass::draw_blended`]).
+    Forward,
 }
 
 pub(super) struct Draw {
@@ -21,6 +35,8 @@ pub(super) struct Draw {
     pub(super) base_vertex: i32,
     pub(super) material: usize,
     pub(super) state: DrawState,
+    /// The centre of the mesh's bounding box at upload (the order of blended draws).
+    pub(super) center: glam::Vec3,
     /// `DrawIndexedIndirect` arguments the G-buffer passes draw this mesh with instead
     /// ([`GpuScene::draw_indirect`]).
     pub(super) indirect: Option<wgpu::Buffer>,
@@ -35,6 +51,7 @@ pub struct GpuScene {
     pub(super) indices: wgpu::Buffer,
     pub(super) draws: Vec<Draw>,
     pub(super) material_groups: Vec<wgpu::BindGroup>,
+    pub(super) blended: BlendedSurfaces,
     /// The textures the materials read.
     pub textures: MaterialTextures,
     /// Number of triangles.
@@ -56,6 +73,23 @@ impl GpuScene {
                 instances.clone(),
             );
         }
+    }
+
+    /// Sets how the G-buffer passes draw alpha-blended materials (dithered by default).
+    pub fn set_blended(&mut self, blended: BlendedSurfaces) {
+        self.blended = blended;
+    }
+
+    /// How the G-buffer passes draw alpha-blended materials.
+    pub fn blended(&self) -> BlendedSurfaces {
+        self.blended
+    }
+
+    /// Whether some drawn mesh has an alpha-blended material.
+    pub fn has_blended(&self) -> bool {
+        self.draws
+            .iter()
+            .any(|d| d.state.blended && d.index_count > 0)
     }
 
     /// The vertex buffers: positions (`[f32; 3]` a vertex) and [`GpuAttributes`], with
@@ -131,7 +165,9 @@ impl GpuScene {
                 state: DrawState {
                     cull: !material.double_sided,
                     alpha_tested: material.alpha_mode != AlphaMode::Opaque,
+                    blended: material.alpha_mode == AlphaMode::Blend,
                 },
+                center: box_center(&m.positions),
                 indirect: None,
             });
             indices.extend_from_slice(&m.indices);
@@ -186,8 +222,20 @@ impl GpuScene {
             indices,
             draws,
             material_groups,
+            blended: BlendedSurfaces::Dithered,
             textures,
             triangle_count: scene.triangle_count() as u64,
         })
     }
+}
+
+/// The centre of the bounding box of `points` (the origin for none).
+fn box_center(points: &[glam::Vec3]) -> glam::Vec3 {
+    let Some(&first) = points.first() else {
+        return glam::Vec3::ZERO;
+    };
+    let (lo, hi) = points
+        .iter()
+        .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    (lo + hi) * 0.5
 }

@@ -19,6 +19,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod forward;
 pub mod run;
 pub mod shadows;
 pub mod volumes;
@@ -119,6 +120,7 @@ pub fn specialisation(config: &ShadingConfig) -> Specialisation {
     let method = match config.method {
         Method::TiledCones => 2,
         Method::Clustered => 3,
+        Method::ForwardPlus => 4,
         _ => 1,
     };
     Specialisation::default()
@@ -129,9 +131,20 @@ pub fn specialisation(config: &ShadingConfig) -> Specialisation {
 }
 
 /// Every shader variant this crate builds: `tiled.wgsl` for each tiled method, tile size and
-/// light search.
+/// light search, and `forward.wgsl` for each tile size.
 pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
-    let methods = [Method::Tiled, Method::TiledCones, Method::Clustered];
+    let forward = [8, 16, 32].map(|tile_size| ("forward.wgsl", forward::specialisation(tile_size)));
+    tiled_variants().into_iter().chain(forward).collect()
+}
+
+/// `tiled.wgsl`'s variants.
+fn tiled_variants() -> Vec<(&'static str, Specialisation)> {
+    let methods = [
+        Method::Tiled,
+        Method::TiledCones,
+        Method::Clustered,
+        Method::ForwardPlus,
+    ];
     methods
         .into_iter()
         .flat_map(|method| {
@@ -345,6 +358,8 @@ impl LightShading {
         let counts = storage(device, "tile light counts", tiles * 4)?;
         let stride = if record_lists && !volumes {
             capacity as u64
+        } else if self.config.method == Method::ForwardPlus {
+            forward::list_stride(device, tiles, capacity)
         } else {
             0
         };
