@@ -7,7 +7,7 @@ use ::gpu::{PassTimer, transfer};
 use adaptive_ssaa::SsaaConfig;
 use gbuffer::{
     Frame, Image, TextureOptions,
-    gpu::{GBufferPass, GBufferTargets, GpuScene},
+    gpu::{BlendedSurfaces, GBufferPass, GBufferTargets, GpuScene},
 };
 use glam::{Vec3, Vec4};
 use scene::{Camera, Light, Scene};
@@ -18,7 +18,7 @@ use wgpu::util::DeviceExt;
 use crate::skinning::{BoundSkinning, Skinning};
 use crate::subdivision::{SubdivisionPlan, SubdivisionStage};
 use crate::supersampling::{Supersampling, SupersamplingKernels};
-use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig};
+use crate::{GpuLight, PassTiming, RenderError, Rendered, ShadingConfig, ShadingMethod};
 use instant_radiosity::{
     IndirectConfig,
     gpu::{BoundIndirect, IndirectStage},
@@ -30,7 +30,9 @@ use scene::animation::{Pose, Rig};
 use tiled_shading::gpu::shadows::{
     AtlasBindings, GpuRays, GpuShadowMaps, ShadowInputs, ShadowMapPass,
 };
+use tiled_shading::gpu::forward::{BoundForward, ForwardPass};
 use tiled_shading::gpu::{ACCUMULATION_FORMAT, BoundShading, LightShading};
+use tiled_shading::ShadingError;
 use tiled_shading::rays::RayShadows;
 use tiled_shading::shadows::{self, ShadowMapConfig};
 
@@ -132,6 +134,8 @@ pub struct GpuRenderer {
     lights: Vec<GpuLight>,
     shading: LightShading,
     shading_bound: BoundShading,
+    /// The forward pass of [`tiled_shading::Method::ForwardPlus`].
+    forward: Option<ForwardStage>,
     composition: Kernel,
     composition_group: wgpu::BindGroup,
     ambient: wgpu::Buffer,
@@ -155,6 +159,13 @@ pub struct GpuRenderer {
     no_ssao: wgpu::Buffer,
     bounds: scene::Aabb,
     timer: PassTimer,
+}
+
+/// Forward+ as the renderer holds it: the forward pass and its binding to the culling pass's
+/// lists (`None` until [`GpuRenderer::rebind`] makes them).
+struct ForwardStage {
+    pass: ForwardPass,
+    bound: Option<BoundForward>,
 }
 
 /// Screen-space ambient occlusion as the renderer holds it ([`GpuRenderer::set_ssao`]): the
@@ -287,7 +298,8 @@ impl SizedTargets {
                 width,
                 height,
                 RADIANCE_FORMAT,
-                transfer::STORAGE_OUTPUT,
+                // Forward+ blends transparent surfaces over it.
+                transfer::STORAGE_OUTPUT | wgpu::TextureUsages::RENDER_ATTACHMENT,
             ),
             direct: LightShading::output_textures(device, width, height),
             no_indirect: [
@@ -378,6 +390,7 @@ impl GpuRenderer {
             lights: gpu_lights,
             shading,
             shading_bound,
+            forward: None,
             composition,
             composition_group,
             ambient,
@@ -436,6 +449,9 @@ impl GpuRenderer {
         )?;
         if let Some(camera) = &self.camera {
             bound.set_camera(queue, camera);
+        }
+        if let Some(f) = &mut self.forward {
+            f.bound = Some(f.pass.bind(device, &bound, &self.ambient)?);
         }
         self.shading_bound = bound;
         if let Some(s) = self.supersampling.take() {
@@ -581,6 +597,13 @@ impl GpuRenderer {
         queue: &wgpu::Queue,
         config: Option<&SsaaConfig>,
     ) -> Result<(), RenderError> {
+        if config.is_some() && self.forward.is_some() {
+            return Err(ShadingError::Forward(
+                "supersampling shades G-buffer samples, which Forward+ does not: pick a deferred method first"
+                    .into(),
+            )
+            .into());
+        }
         self.supersampling = match config {
             Some(config) => Some(self.new_supersampling(device, queue, config, None)?),
             None => None,
@@ -612,8 +635,13 @@ impl GpuRenderer {
             .transpose()
     }
 
-    /// Switches the light accumulation to `config` (brute force, tiled, tiled with normal
-    /// cones, clustered; tile size).
+    /// Switches the light accumulation to `config` (brute force, light volumes, tiled, tiled
+    /// with normal cones, clustered, Forward+; tile size). Forward+ draws the scene a second
+    /// time, lit from its tiles' lists, and draws alpha-blended materials over the composed
+    /// frame, back to front (lit directly and by the ambient light, without the frame's
+    /// indirect light and screen-space occlusion); every other method, and
+    /// Forward+ on a device without `FLOAT32_BLENDABLE`, dithers them into the G-buffer.
+    /// Forward+ and supersampling exclude each other (an error names the other).
     pub fn set_shading(
         &mut self,
         device: &wgpu::Device,
@@ -623,7 +651,34 @@ impl GpuRenderer {
         if self.shading.config() == config {
             return Ok(());
         }
-        self.shading = LightShading::new(device, config)?;
+        let forward = config.method == ShadingMethod::ForwardPlus;
+        if forward && self.supersampling.is_some() {
+            return Err(ShadingError::Forward(
+                "supersampling shades G-buffer samples, which Forward+ does not: unset it first"
+                    .into(),
+            )
+            .into());
+        }
+        let shading = LightShading::new(device, config)?;
+        // Bound in `rebind`, to the lists of the new culling pass.
+        let forward = if forward {
+            Some(ForwardStage {
+                pass: ForwardPass::new(device, &self.gbuffer_pass, config)?,
+                bound: None,
+            })
+        } else {
+            None
+        };
+        self.shading = shading;
+        self.forward = forward;
+        // Blended surfaces: over the frame with Forward+ where the device blends the frame's
+        // format, else dithered into the G-buffer.
+        let blends = self.forward.as_ref().is_some_and(|f| f.pass.blends());
+        self.scene.set_blended(if blends {
+            BlendedSurfaces::Forward
+        } else {
+            BlendedSurfaces::Dithered
+        });
         self.rebind(device, queue)
     }
 
@@ -763,6 +818,13 @@ impl GpuRenderer {
         };
         if let Some(s) = &mut self.supersampling {
             s.bind_shadows(device, &self.shading, inputs)?;
+        }
+        if let Some(ForwardStage {
+            pass,
+            bound: Some(bound),
+        }) = &mut self.forward
+        {
+            pass.bind_shadows(device, bound, inputs)?;
         }
         Ok(self
             .shading
@@ -1622,6 +1684,16 @@ impl GpuRenderer {
         }
         self.shading
             .encode(&self.shading_bound, encoder, Some(&self.timer));
+        if let Some(ForwardStage {
+            pass,
+            bound: Some(bound),
+        }) = &self.forward
+        {
+            let direct = [&self.sized.direct[0], &self.sized.direct[1]];
+            let scene = (&self.gbuffer_pass, &self.scene);
+            let depth = &self.sized.targets.depth;
+            pass.encode_opaque(bound, encoder, scene, depth, direct, Some(&self.timer));
+        }
         if let Some(i) = &self.indirect {
             i.stage.encode(&i.bound, encoder, Some(&self.timer));
         }
@@ -1642,6 +1714,18 @@ impl GpuRenderer {
             Workgroups::covering(w, h, 8),
         )
         .encode(encoder, Some(&self.timer));
+        if let (
+            Some(ForwardStage {
+                pass,
+                bound: Some(bound),
+            }),
+            Some(camera),
+        ) = (&self.forward, &self.camera)
+        {
+            let scene = (&self.gbuffer_pass, &self.scene);
+            let (depth, radiance) = (&self.sized.targets.depth, &self.sized.radiance);
+            pass.encode_blended(bound, encoder, scene, depth, radiance, camera.eye, Some(&self.timer));
+        }
         if let Some(s) = &self.supersampling {
             s.encode(encoder, &self.shading, &self.timer);
         }
