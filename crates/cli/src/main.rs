@@ -51,8 +51,10 @@ struct Args {
     #[arg(long, value_parser = parse_light_count)]
     lights: Option<usize>,
     /// Light accumulation: brute, tiled, tiled-cones (tiled with normal-cone back-face
-    /// culling), clustered, or volumes (traditional deferred shading: instanced light
-    /// volumes, additive blending; the GPU needs FLOAT32_BLENDABLE).
+    /// culling), clustered, volumes (traditional deferred shading: instanced light
+    /// volumes, additive blending; the GPU needs FLOAT32_BLENDABLE), or forward (Forward+:
+    /// the tiles' lists light the scene drawn again, and alpha-blended materials are blended
+    /// over the frame back to front instead of dithered; not with --ssaa).
     #[arg(long, default_value = "tiled")]
     shading: pipeline::ShadingMethod,
     /// Tile side in pixels for the tiled and clustered light accumulation: 8, 16 or 32.

@@ -1922,7 +1922,14 @@ impl Panel<'_> {
                     ui,
                     "shading",
                     "shading",
-                    &["brute", "tiled", "tiled-cones", "clustered", "volumes"],
+                    &[
+                        "brute",
+                        "tiled",
+                        "tiled-cones",
+                        "clustered",
+                        "volumes",
+                        "forward",
+                    ],
                     &args.shading.to_string(),
                     false,
                 );

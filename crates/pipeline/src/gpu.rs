@@ -27,12 +27,12 @@ use instant_radiosity::{
     vpl::VplSet,
 };
 use scene::animation::{Pose, Rig};
+use tiled_shading::ShadingError;
+use tiled_shading::gpu::forward::{BoundForward, ForwardPass};
 use tiled_shading::gpu::shadows::{
     AtlasBindings, GpuRays, GpuShadowMaps, ShadowInputs, ShadowMapPass,
 };
-use tiled_shading::gpu::forward::{BoundForward, ForwardPass};
 use tiled_shading::gpu::{ACCUMULATION_FORMAT, BoundShading, LightShading};
-use tiled_shading::ShadingError;
 use tiled_shading::rays::RayShadows;
 use tiled_shading::shadows::{self, ShadowMapConfig};
 
@@ -599,8 +599,7 @@ impl GpuRenderer {
     ) -> Result<(), RenderError> {
         if config.is_some() && self.forward.is_some() {
             return Err(ShadingError::Forward(
-                "supersampling shades G-buffer samples, which Forward+ does not: pick a deferred method first"
-                    .into(),
+                "Forward+ and supersampling exclude each other (supersampling shades G-buffer samples; Forward+ shades drawn geometry): pick another shading method first".into(),
             )
             .into());
         }
@@ -654,8 +653,7 @@ impl GpuRenderer {
         let forward = config.method == ShadingMethod::ForwardPlus;
         if forward && self.supersampling.is_some() {
             return Err(ShadingError::Forward(
-                "supersampling shades G-buffer samples, which Forward+ does not: unset it first"
-                    .into(),
+                "Forward+ and supersampling exclude each other (supersampling shades G-buffer samples; Forward+ shades drawn geometry): unset supersampling first".into(),
             )
             .into());
         }
@@ -1724,7 +1722,15 @@ impl GpuRenderer {
         {
             let scene = (&self.gbuffer_pass, &self.scene);
             let (depth, radiance) = (&self.sized.targets.depth, &self.sized.radiance);
-            pass.encode_blended(bound, encoder, scene, depth, radiance, camera.eye, Some(&self.timer));
+            pass.encode_blended(
+                bound,
+                encoder,
+                scene,
+                depth,
+                radiance,
+                camera.eye,
+                Some(&self.timer),
+            );
         }
         if let Some(s) = &self.supersampling {
             s.encode(encoder, &self.shading, &self.timer);

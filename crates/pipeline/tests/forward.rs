@@ -37,7 +37,9 @@ fn render(
     r.set_shading(d, q, &config).expect("shading");
     match shadows {
         Shadows::None => {}
-        Shadows::Maps => r.set_shadows(d, q, Some(&Default::default())).expect("maps"),
+        Shadows::Maps => r
+            .set_shadows(d, q, Some(&Default::default()))
+            .expect("maps"),
         Shadows::Rays => r.set_ray_shadows(d, q, Some(scene)).expect("rays"),
     }
     r.render(d, q, camera, pipeline::DEFAULT_AMBIENT)
@@ -61,8 +63,22 @@ fn forward_plus_equals_brute_force() {
     for (name, scene, lights) in cases {
         let camera = scene.camera_or_framed();
         for shadows in [Shadows::None, Shadows::Maps, Shadows::Rays] {
-            let brute = render(gpu, scene, &lights, &camera, ShadingMethod::BruteForce, shadows);
-            let forward = render(gpu, scene, &lights, &camera, ShadingMethod::ForwardPlus, shadows);
+            let brute = render(
+                gpu,
+                scene,
+                &lights,
+                &camera,
+                ShadingMethod::BruteForce,
+                shadows,
+            );
+            let forward = render(
+                gpu,
+                scene,
+                &lights,
+                &camera,
+                ShadingMethod::ForwardPlus,
+                shadows,
+            );
             let db = psnr(&brute, &forward);
             let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"));
             assert!(
@@ -93,7 +109,12 @@ fn panes(panes: [bool; 2], opaque: bool, reversed: bool) -> Scene {
         AlphaMode::Blend
     };
     let materials = vec![
-        material("wall", Vec3::new(51.0, 102.0, 153.0), 1.0, AlphaMode::Opaque),
+        material(
+            "wall",
+            Vec3::new(51.0, 102.0, 153.0),
+            1.0,
+            AlphaMode::Opaque,
+        ),
         material("a", Vec3::new(204.0, 51.0, 51.0), 0.4, mode),
         material("b", Vec3::new(51.0, 204.0, 51.0), 0.6, mode),
     ];
@@ -212,7 +233,14 @@ fn blended_surfaces_composite_back_to_front_over_the_frame() {
     let lights = pane_lights();
     let camera = Camera::look_at(Vec3::new(0.0, 1.0, 5.0), Vec3::new(0.0, 1.0, 0.0));
     let brute = |scene: &Scene| {
-        render(gpu, scene, &lights, &camera, ShadingMethod::BruteForce, Shadows::None)
+        render(
+            gpu,
+            scene,
+            &lights,
+            &camera,
+            ShadingMethod::BruteForce,
+            Shadows::None,
+        )
     };
     let behind = brute(&panes([false, false], true, false));
     let a = brute(&panes([true, false], true, false));
@@ -221,7 +249,14 @@ fn blended_surfaces_composite_back_to_front_over_the_frame() {
     let (mut in_a, mut in_both) = (0, 0);
     for reversed in [false, true] {
         let scene = panes([true, true], false, reversed);
-        let got = render(gpu, &scene, &lights, &camera, ShadingMethod::ForwardPlus, Shadows::None);
+        let got = render(
+            gpu,
+            &scene,
+            &lights,
+            &camera,
+            ShadingMethod::ForwardPlus,
+            Shadows::None,
+        );
         for y in 0..SIZE.1 {
             for x in 0..SIZE.0 {
                 let over = |under: Vec4, pane: &Image<[f32; 4]>, alpha: f32| {
@@ -256,5 +291,8 @@ fn blended_surfaces_composite_back_to_front_over_the_frame() {
             }
         }
     }
-    assert!(in_a > 50 && in_both > 20, "{in_a} pixels in a, {in_both} in both");
+    assert!(
+        in_a > 50 && in_both > 20,
+        "{in_a} pixels in a, {in_both} in both"
+    );
 }

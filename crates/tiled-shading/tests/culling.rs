@@ -352,11 +352,11 @@ fn gpu_matches_cpu_images_and_lists() {
                 // (`pipeline`'s forward tests).
                 if method != Method::ForwardPlus {
                     compare(
-                    &format!("gpu {method} {tile} {search} vs brute"),
-                    &brute,
-                    &gpu_out,
-                    GPU_RELATIVE,
-                    1e-5,
+                        &format!("gpu {method} {tile} {search} vs brute"),
+                        &brute,
+                        &gpu_out,
+                        GPU_RELATIVE,
+                        1e-5,
                     );
                 }
                 if method != Method::BruteForce {
@@ -688,7 +688,10 @@ fn forward_lists_hold_the_tiled_lists_and_every_light_in_front() {
                 .map(|e| e.0)
                 .collect();
             let listed: Vec<u32> = tiled.iter().map(|e| e.0).collect();
-            assert_eq!(opaque, listed, "tile {t}: the opaque entries are tiled's list");
+            assert_eq!(
+                opaque, listed,
+                "tile {t}: the opaque entries are tiled's list"
+            );
             assert!(
                 forward.iter().all(|e| e.1 & cpu::FORWARD_BLENDED != 0),
                 "tile {t}: every entry serves blended surfaces"

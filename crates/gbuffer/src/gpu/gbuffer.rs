@@ -286,10 +286,7 @@ impl GBufferPass {
         pick: impl Fn(DrawState) -> &'p wgpu::RenderPipeline,
     ) {
         let forward = scene.blended == BlendedSurfaces::Forward;
-        let draws = scene
-            .draws
-            .iter()
-            .filter(|d| !(forward && d.state.blended));
+        let draws = scene.draws.iter().filter(|d| !(forward && d.state.blended));
         self.draw_each(pass, frame, scene, draws, pick);
     }
 
