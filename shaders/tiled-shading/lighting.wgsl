@@ -102,3 +102,8 @@ fn reflect_light(intensity: vec3<f32>, l: vec3<f32>, n: vec3<f32>, v: vec3<f32>,
     out.specular = e * (d * vis) * f;
     return out;
 }
+
+// Rec. 709 luminance (`scene::luminance`).
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}

@@ -17,6 +17,11 @@
 // blended surfaces in front of the opaque ones find their lights too), marks the entries that
 // also meet the opaque depth bounds (FORWARD_OPAQUE) and keeps them in `lists` for the
 // forward pass (`forward.wgsl`).
+// The light pre-pass's lighting pass (METHOD_PREPASS, §2.1 after Engel 2008) culls as tiled
+// and writes the light buffer instead: diffuse light E/π summed in rgb, and in alpha the
+// luminance of the summed specular light without its Fresnel factor (E·D·V, monochrome); its
+// second geometry pass (`light_prepass.wgsl`) applies the materials. With `record_lists` the
+// monochrome specular goes to the specular output too (for the CPU twin).
 // Twin of `tiled_shading::cpu` (same names). `tiled_shading::gpu::specialisation` sets
 // METHOD, TILE, WG and LIGHT_TREE.
 
@@ -34,6 +39,7 @@ const METHOD_TILED: u32 = 1u;
 const METHOD_CONES: u32 = 2u;
 const METHOD_CLUSTERED: u32 = 3u;
 const METHOD_FORWARD: u32 = 4u;
+const METHOD_PREPASS: u32 = 5u;
 // Forward+ entry bits (`tiled_shading::cpu::FORWARD_OPAQUE`, `FORWARD_BLENDED`).
 const FORWARD_OPAQUE: u32 = 1u;
 const FORWARD_BLENDED: u32 = 2u;
@@ -276,7 +282,13 @@ fn flush(
             let slice = slice_of(s.depth);
             for (var j = 0u; j < n; j++) {
                 if ((list_mask[j] >> slice) & 1u) == 1u {
-                    let c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
+                    var c: Accumulated;
+                    if METHOD == METHOD_PREPASS {
+                        // Only the roughness of the material: F = 1 (a white metal).
+                        c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, vec3<f32>(1.0), m.roughness, 1.0, 1.0);
+                    } else {
+                        c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
+                    }
                     (*diffuse)[p] += c.diffuse;
                     (*specular)[p] += c.specular;
                 }
@@ -480,7 +492,13 @@ fn shade_tiles(
         total = flush(workgroupUniformLoad(&list_size), total, tile_index, index, &samples, &pixels, &diffuse, &specular);
     }
     for (var p = 0u; p < PIXELS; p++) {
-        if METHOD != METHOD_FORWARD && pixels[p].x < size.x && pixels[p].y < size.y {
+        if METHOD == METHOD_PREPASS && pixels[p].x < size.x && pixels[p].y < size.y {
+            let mono = luminance(specular[p]);
+            textureStore(diffuse_out, pixels[p], vec4<f32>(diffuse[p], mono));
+            if params.record_lists != 0u {
+                textureStore(specular_out, pixels[p], vec4<f32>(vec3<f32>(mono), 0.0));
+            }
+        } else if METHOD != METHOD_FORWARD && pixels[p].x < size.x && pixels[p].y < size.y {
             textureStore(diffuse_out, pixels[p], vec4<f32>(diffuse[p], 0.0));
             textureStore(specular_out, pixels[p], vec4<f32>(specular[p], 0.0));
         }

@@ -54,7 +54,9 @@ struct Args {
     /// culling), clustered, volumes (traditional deferred shading: instanced light
     /// volumes, additive blending; the GPU needs FLOAT32_BLENDABLE), or forward (Forward+:
     /// the tiles' lists light the scene drawn again, and alpha-blended materials are blended
-    /// over the frame back to front instead of dithered; not with --ssaa).
+    /// over the frame back to front instead of dithered; not with --ssaa), or light-prepass
+    /// (deferred lighting: a light buffer with monochrome specular, then a second geometry pass
+    /// applying the materials — a comparator; not with --ssaa).
     #[arg(long, default_value = "tiled")]
     shading: pipeline::ShadingMethod,
     /// Tile side in pixels for the tiled and clustered light accumulation: 8, 16 or 32.

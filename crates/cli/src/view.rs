@@ -1929,6 +1929,7 @@ impl Panel<'_> {
                         "clustered",
                         "volumes",
                         "forward",
+                        "light-prepass",
                     ],
                     &args.shading.to_string(),
                     false,

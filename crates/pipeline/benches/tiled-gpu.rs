@@ -36,7 +36,7 @@ const MOST_FOR_ALL: usize = 65536;
 
 /// What is measured, by report name: every method, the tiled ones with both light searches
 /// (`-flat`: every light per tile, as the thesis; without: through the light hierarchy).
-const VARIANTS: [(&str, ShadingMethod, LightSearch); 8] = [
+const VARIANTS: [(&str, ShadingMethod, LightSearch); 10] = [
     ("brute", ShadingMethod::BruteForce, LightSearch::Flat),
     ("tiled-flat", ShadingMethod::Tiled, LightSearch::Flat),
     ("tiled", ShadingMethod::Tiled, LightSearch::Tree),
@@ -53,13 +53,26 @@ const VARIANTS: [(&str, ShadingMethod, LightSearch); 8] = [
     ),
     ("clustered", ShadingMethod::Clustered, LightSearch::Tree),
     ("volumes", ShadingMethod::LightVolumes, LightSearch::Flat),
+    ("forward", ShadingMethod::ForwardPlus, LightSearch::Tree),
+    (
+        "light-prepass",
+        ShadingMethod::LightPrePass,
+        LightSearch::Tree,
+    ),
 ];
+/// The passes that stand for a method's light accumulation besides its compute or volume pass:
+/// Forward+'s geometry pass lighting the opaque surfaces, the light pre-pass's second geometry
+/// pass applying the materials.
+const LIGHTING_PASSES: [&str; 2] = ["forward+ opaque", "light pre-pass materials"];
 const TESTS: [(u32, u32); 4] = [(1, 0), (2, 100), (3, 500), (4, 1000)];
 /// A view down Sponza's side aisle (eye, target): pillars and arches near the eye against the
 /// far end of the colonnade — depth discontinuities in most tiles, where clusters should pay.
 const COLONNADE: ([f32; 3], [f32; 3]) = ([-14.0, 2.5, -4.5], [14.0, 3.0, -3.5]);
 const COLONNADE_LIGHTS: [usize; 3] = [4096, 16384, 65536];
 const TEST_SIZES: [(u32, u32); 2] = [(1280, 720), (1920, 1080)];
+/// Test 4's walls seen at a grazing angle (eye, target): along the left side wall from near its
+/// open end to the back wall — tiles over the side wall span tens of metres of depth.
+const GRAZING: ([f32; 3], [f32; 3]) = ([-28.5, 3.0, -1.0], [-27.0, 3.5, -40.0]);
 
 #[derive(Serialize)]
 struct Row {
@@ -81,6 +94,8 @@ struct Row {
 
 #[derive(Serialize)]
 struct TestRow {
+    /// `thesis` (the test's camera) or `grazing` ([`GRAZING`]).
+    view: &'static str,
     test: u32,
     width: u32,
     height: u32,
@@ -125,7 +140,9 @@ fn measure(
     )?;
     let name = renderer.shading().pass_name();
     let t = time_passes(gpu, renderer, camera, DEFAULT_AMBIENT, frames)?;
-    let ms = Stat::of(per_frame_sum(&t, &[name.as_str()]));
+    let mut lighting = vec![name.as_str()];
+    lighting.extend(LIGHTING_PASSES);
+    let ms = Stat::of(per_frame_sum(&t, &lighting));
     let every: Vec<&str> = t.iter().map(|(n, _)| n.as_str()).collect();
     let frame = Stat::of(per_frame_sum(&t, &every));
     let mean = renderer
@@ -175,43 +192,24 @@ fn main() -> Result<()> {
     for &(test, behind) in tests {
         let walls = scene::thesis_walls(behind);
         let cam = walls.camera.unwrap_or_else(|| walls.camera_or_framed());
-        for (w, h) in TEST_SIZES.map(bench::size) {
-            let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, &walls, &[], w, h)?;
-            for frustum_culling in [true, false] {
-                let all = pipeline::validate_lights(&walls.lights)?;
-                let sent: Vec<Light> = if frustum_culling {
-                    tiled_shading::frustum_cull(&cam, w as f32 / h as f32, &all)
-                        .into_iter()
-                        .map(|i| walls.lights[i as usize])
-                        .collect()
-                } else {
-                    walls.lights.clone()
-                };
-                renderer.set_lights(&gpu.device, &gpu.queue, &sent)?;
-                for (name, method, search) in VARIANTS {
-                    let (ms, frame_ms, mean_list) =
-                        measure(&gpu, &mut renderer, &cam, (method, search), frames)?;
-                    println!(
-                        "test {test} {w}x{h} {:>4}/{} lights{} {name:<16} {:>8.3} ms",
-                        sent.len(),
-                        walls.lights.len(),
-                        if frustum_culling { " (VFC)" } else { "" },
-                        ms.median_ms
-                    );
-                    rows.push(TestRow {
-                        test,
-                        width: w,
-                        height: h,
-                        lights_total: walls.lights.len(),
-                        frustum_culling,
-                        lights_sent: sent.len(),
-                        method: name.to_string(),
-                        ms,
-                        frame_ms,
-                        mean_list,
-                    });
-                }
-            }
+        for size in TEST_SIZES {
+            thesis_test(
+                &gpu,
+                (&walls, test),
+                ("thesis", &cam),
+                size,
+                frames,
+                &mut rows,
+            )?;
+        }
+        if test == 4 {
+            let grazing = Camera {
+                eye: GRAZING.0.into(),
+                target: GRAZING.1.into(),
+                ..cam
+            };
+            let view = ("grazing", &grazing);
+            thesis_test(&gpu, (&walls, test), view, SIZES[0], frames, &mut rows)?;
         }
     }
 
@@ -232,6 +230,57 @@ fn main() -> Result<()> {
         &report,
         &markdown(&report),
     )?;
+    Ok(())
+}
+
+/// Every variant on thesis test `test`'s `walls` from `camera` (labelled `view`) at `size`,
+/// with and without CPU view-frustum culling.
+fn thesis_test(
+    gpu: &Gpu,
+    (walls, test): (&scene::Scene, u32),
+    (view, cam): (&'static str, &Camera),
+    size: (u32, u32),
+    frames: u32,
+    rows: &mut Vec<TestRow>,
+) -> Result<()> {
+    let (w, h) = bench::size(size);
+    let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, walls, &[], w, h)?;
+    for frustum_culling in [true, false] {
+        let all = pipeline::validate_lights(&walls.lights)?;
+        let sent: Vec<Light> = if frustum_culling {
+            tiled_shading::frustum_cull(cam, w as f32 / h as f32, &all)
+                .into_iter()
+                .map(|i| walls.lights[i as usize])
+                .collect()
+        } else {
+            walls.lights.clone()
+        };
+        renderer.set_lights(&gpu.device, &gpu.queue, &sent)?;
+        for (name, method, search) in VARIANTS {
+            let (ms, frame_ms, mean_list) =
+                measure(gpu, &mut renderer, cam, (method, search), frames)?;
+            println!(
+                "test {test} {view} {w}x{h} {:>4}/{} lights{} {name:<16} {:>8.3} ms",
+                sent.len(),
+                walls.lights.len(),
+                if frustum_culling { " (VFC)" } else { "" },
+                ms.median_ms
+            );
+            rows.push(TestRow {
+                view,
+                test,
+                width: w,
+                height: h,
+                lights_total: walls.lights.len(),
+                frustum_culling,
+                lights_sent: sent.len(),
+                method: name.to_string(),
+                ms,
+                frame_ms,
+                mean_list,
+            });
+        }
+    }
     Ok(())
 }
 
@@ -337,21 +386,24 @@ fn markdown(r: &Report) -> String {
          behind the back wall (cullable by normals). VFC = CPU view-frustum culling of lights \
          (§4.1) before upload. Cells: ms; cones vs tiled = tiled ms / tiled-cones ms, with the \
          thesis's flat search and with the light hierarchy; tiled vs volumes = volumes ms / \
-         tiled-flat ms.\n\n\
-         | test | size | lights | VFC | sent | brute | volumes | tiled-flat | tiled-cones-flat | tiled | tiled-cones | clustered | cones vs tiled (flat) | cones vs tiled | tiled vs volumes | tiled list | cones list |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+         tiled-flat ms. The `grazing` view looks along test 4's left side wall to the back \
+         wall: tiles over the side wall span tens of metres of depth (where clusters should \
+         pay). `forward` = Forward+'s culling pass + its geometry pass lighting the opaque \
+         surfaces; `light-prepass` = its lighting pass + its second geometry pass.\n\n\
+         | test | view | size | lights | VFC | sent | brute | volumes | tiled-flat | tiled-cones-flat | tiled | tiled-cones | clustered | forward | light-prepass | cones vs tiled (flat) | cones vs tiled | tiled vs volumes | tiled list | cones list | clustered list |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
-    let mut keys: Vec<(u32, u32, u32, bool)> = r
+    let mut keys: Vec<(u32, &str, u32, u32, bool)> = r
         .tests
         .iter()
-        .map(|x| (x.test, x.width, x.height, x.frustum_culling))
+        .map(|x| (x.test, x.view, x.width, x.height, x.frustum_culling))
         .collect();
     keys.dedup();
     for key in keys {
         let rows: Vec<&TestRow> = r
             .tests
             .iter()
-            .filter(|x| (x.test, x.width, x.height, x.frustum_culling) == key)
+            .filter(|x| (x.test, x.view, x.width, x.height, x.frustum_culling) == key)
             .collect();
         let get = |m: &str| rows.iter().find(|x| x.method == m);
         let ms = |m: &str| get(m).map_or(f64::NAN, |x| x.ms.median_ms);
@@ -363,12 +415,13 @@ fn markdown(r: &Report) -> String {
         let first = rows[0];
         let _ = writeln!(
             s,
-            "| {} | {}×{} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | ×{:.2} | ×{:.2} | ×{:.1} | {} | {} |",
+            "| {} | {} | {}×{} | {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | ×{:.2} | ×{:.2} | ×{:.1} | {} | {} | {} |",
             key.0,
             key.1,
             key.2,
+            key.3,
             first.lights_total,
-            if key.3 { "on" } else { "off" },
+            if key.4 { "on" } else { "off" },
             first.lights_sent,
             ms("brute"),
             ms("volumes"),
@@ -377,11 +430,14 @@ fn markdown(r: &Report) -> String {
             ms("tiled"),
             ms("tiled-cones"),
             ms("clustered"),
+            ms("forward"),
+            ms("light-prepass"),
             ms("tiled-flat") / ms("tiled-cones-flat"),
             ms("tiled") / ms("tiled-cones"),
             ms("volumes") / ms("tiled-flat"),
             list("tiled"),
             list("tiled-cones"),
+            list("clustered"),
         );
     }
     let _ = writeln!(
@@ -467,28 +523,29 @@ fn frame_table(s: &mut String, r: &Report) {
             .collect();
         let _ = writeln!(s, "| Sponza {view} | {n} | {} |", cells.join(" | "));
     }
-    let mut tests: Vec<(u32, usize)> = r
+    // The thesis's setting, and the grazing view at 1920×1080.
+    let whole = |x: &&TestRow| x.frustum_culling && (x.width == 1280) == (x.view == "thesis");
+    let mut tests: Vec<(u32, &str, u32, u32, usize)> = r
         .tests
         .iter()
-        .filter(|x| x.width == 1280 && x.frustum_culling)
-        .map(|x| (x.test, x.lights_sent))
+        .filter(whole)
+        .map(|x| (x.test, x.view, x.width, x.height, x.lights_sent))
         .collect();
     tests.dedup();
-    for (test, sent) in tests {
+    for (test, view, w, h, sent) in tests {
         let cells: Vec<String> = methods
             .iter()
             .map(|m| {
                 r.tests
                     .iter()
-                    .find(|x| {
-                        x.test == test && x.width == 1280 && x.frustum_culling && x.method == *m
-                    })
+                    .filter(whole)
+                    .find(|x| x.test == test && x.view == view && x.method == *m)
                     .map_or("—".into(), |x| format!("{:.3}", x.frame_ms.median_ms))
             })
             .collect();
         let _ = writeln!(
             s,
-            "| test {test}, 1280×720, VFC | {sent} | {} |",
+            "| test {test} {view}, {w}×{h}, VFC | {sent} | {} |",
             cells.join(" | ")
         );
     }

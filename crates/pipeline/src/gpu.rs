@@ -29,6 +29,7 @@ use instant_radiosity::{
 use scene::animation::{Pose, Rig};
 use tiled_shading::ShadingError;
 use tiled_shading::gpu::forward::{BoundForward, ForwardPass};
+use tiled_shading::gpu::light_prepass::{BoundLightPrePass, LightPrePass};
 use tiled_shading::gpu::shadows::{
     AtlasBindings, GpuRays, GpuShadowMaps, ShadowInputs, ShadowMapPass,
 };
@@ -136,6 +137,8 @@ pub struct GpuRenderer {
     shading_bound: BoundShading,
     /// The forward pass of [`tiled_shading::Method::ForwardPlus`].
     forward: Option<ForwardStage>,
+    /// The second geometry pass of [`tiled_shading::Method::LightPrePass`].
+    prepass: Option<PrePassStage>,
     composition: Kernel,
     composition_group: wgpu::BindGroup,
     ambient: wgpu::Buffer,
@@ -166,6 +169,13 @@ pub struct GpuRenderer {
 struct ForwardStage {
     pass: ForwardPass,
     bound: Option<BoundForward>,
+}
+
+/// The light pre-pass as the renderer holds it: the materials pass, and the light buffer of the
+/// frame's size with the pass bound to it (`None` until [`GpuRenderer::rebind`] makes them).
+struct PrePassStage {
+    pass: LightPrePass,
+    bound: Option<(wgpu::Texture, BoundLightPrePass)>,
 }
 
 /// Screen-space ambient occlusion as the renderer holds it ([`GpuRenderer::set_ssao`]): the
@@ -359,8 +369,16 @@ impl GpuRenderer {
             &COMPOSITION_BINDINGS,
             &[],
         );
-        let shading_bound =
-            Self::bind_shading(device, queue, &shading, &gbuffer_pass, &sized, &gpu_lights)?;
+        let outputs = [&sized.direct[0], &sized.direct[1]];
+        let shading_bound = Self::bind_shading(
+            device,
+            queue,
+            &shading,
+            &gbuffer_pass,
+            &sized,
+            outputs,
+            &gpu_lights,
+        )?;
         let no_ssao = transfer::buffer_init(
             device,
             "no ssao",
@@ -391,6 +409,7 @@ impl GpuRenderer {
             shading,
             shading_bound,
             forward: None,
+            prepass: None,
             composition,
             composition_group,
             ambient,
@@ -421,13 +440,14 @@ impl GpuRenderer {
         shading: &LightShading,
         gbuffer_pass: &GBufferPass,
         sized: &SizedTargets,
+        outputs: [&wgpu::Texture; 2],
         lights: &[GpuLight],
     ) -> Result<BoundShading, RenderError> {
         let mut bound = shading.bind(
             device,
             gbuffer_pass.frame_buffer(),
             (&sized.targets).into(),
-            [&sized.direct[0], &sized.direct[1]],
+            outputs,
             lights.len(),
             false,
         )?;
@@ -439,12 +459,27 @@ impl GpuRenderer {
     /// Rebinds the light accumulation and the composition to the current targets, lights,
     /// camera and indirect stage.
     fn rebind(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(), RenderError> {
+        // The light pre-pass's lighting pass writes its light buffer, not the diffuse light.
+        if let Some(p) = &mut self.prepass {
+            let (w, h) = (self.sized.targets.width, self.sized.targets.height);
+            let light_buffer = LightPrePass::light_buffer(device, w, h);
+            let bound = p.pass.bind(device, &light_buffer)?;
+            p.bound = Some((light_buffer, bound));
+        }
+        let first = match &self.prepass {
+            Some(PrePassStage {
+                bound: Some((light_buffer, _)),
+                ..
+            }) => light_buffer,
+            _ => &self.sized.direct[0],
+        };
         let mut bound = Self::bind_shading(
             device,
             queue,
             &self.shading,
             &self.gbuffer_pass,
             &self.sized,
+            [first, &self.sized.direct[1]],
             &self.lights,
         )?;
         if let Some(camera) = &self.camera {
@@ -597,10 +632,11 @@ impl GpuRenderer {
         queue: &wgpu::Queue,
         config: Option<&SsaaConfig>,
     ) -> Result<(), RenderError> {
-        if config.is_some() && self.forward.is_some() {
-            return Err(ShadingError::Forward(
-                "Forward+ and supersampling exclude each other (supersampling shades G-buffer samples; Forward+ shades drawn geometry): pick another shading method first".into(),
-            )
+        if config.is_some() && (self.forward.is_some() || self.prepass.is_some()) {
+            return Err(ShadingError::Incompatible(format!(
+                "{} and supersampling exclude each other (supersampling shades G-buffer samples; {0} shades drawn geometry): pick another shading method first",
+                self.shading.config().method
+            ))
             .into());
         }
         self.supersampling = match config {
@@ -651,10 +687,12 @@ impl GpuRenderer {
             return Ok(());
         }
         let forward = config.method == ShadingMethod::ForwardPlus;
-        if forward && self.supersampling.is_some() {
-            return Err(ShadingError::Forward(
-                "Forward+ and supersampling exclude each other (supersampling shades G-buffer samples; Forward+ shades drawn geometry): unset supersampling first".into(),
-            )
+        let prepass = config.method == ShadingMethod::LightPrePass;
+        if (forward || prepass) && self.supersampling.is_some() {
+            return Err(ShadingError::Incompatible(format!(
+                "{} and supersampling exclude each other (supersampling shades G-buffer samples; {0} shades drawn geometry): unset supersampling first",
+                config.method
+            ))
             .into());
         }
         let shading = LightShading::new(device, config)?;
@@ -667,8 +705,17 @@ impl GpuRenderer {
         } else {
             None
         };
+        let prepass = if prepass {
+            Some(PrePassStage {
+                pass: LightPrePass::new(device, &self.gbuffer_pass)?,
+                bound: None,
+            })
+        } else {
+            None
+        };
         self.shading = shading;
         self.forward = forward;
+        self.prepass = prepass;
         // Blended surfaces: over the frame with Forward+ where the device blends the frame's
         // format, else dithered into the G-buffer.
         let blends = self.forward.as_ref().is_some_and(|f| f.pass.blends());
@@ -1691,6 +1738,16 @@ impl GpuRenderer {
             let scene = (&self.gbuffer_pass, &self.scene);
             let depth = &self.sized.targets.depth;
             pass.encode_opaque(bound, encoder, scene, depth, direct, Some(&self.timer));
+        }
+        if let Some(PrePassStage {
+            pass,
+            bound: Some((_, bound)),
+        }) = &self.prepass
+        {
+            let direct = [&self.sized.direct[0], &self.sized.direct[1]];
+            let scene = (&self.gbuffer_pass, &self.scene);
+            let depth = &self.sized.targets.depth;
+            pass.encode(bound, encoder, scene, depth, direct, Some(&self.timer));
         }
         if let Some(i) = &self.indirect {
             i.stage.encode(&i.bound, encoder, Some(&self.timer));

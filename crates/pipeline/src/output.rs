@@ -18,6 +18,7 @@ use ::gpu::kernel::{self, Binding, Dispatch, Layout, Passes, Workgroups};
 use ::gpu::{GpuError, PassTimer};
 use gbuffer::Image;
 use glam::{Mat3, Vec3};
+use scene::luminance;
 
 use crate::RenderError;
 
@@ -66,10 +67,6 @@ impl Default for OutputTransform {
             tone_mapper: ToneMapper::AcesFitted,
         }
     }
-}
-
-fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
 /// Hill's fitted ACES (`aces_fitted` in `output.wgsl`).

@@ -33,7 +33,7 @@ pub use builtin::{
 pub use bvh::{Bvh, Hit};
 pub use camera::Camera;
 pub use glam;
-pub use light::{Light, scatter_point_lights};
+pub use light::{Light, luminance, scatter_point_lights};
 pub use material::{
     AlphaMode, MaterialSample, Sampler, SceneTextures, SurfaceAttributes, TextureRef, UvTransform,
     Wrap, dither_threshold, role_space, texture_spaces,

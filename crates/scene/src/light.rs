@@ -251,3 +251,8 @@ pub fn scatter_point_lights(bounds: Aabb, count: usize, seed: u64) -> Vec<Light>
         })
         .collect()
 }
+
+/// Rec. 709 luminance of a linear RGB colour.
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}

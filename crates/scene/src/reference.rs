@@ -28,7 +28,9 @@ use std::f32::consts::{FRAC_1_PI, PI};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::{Bvh, Camera, Light, MaterialSample, Scene, SceneTextures, SurfaceAttributes};
+use crate::{
+    Bvh, Camera, Light, MaterialSample, Scene, SceneTextures, SurfaceAttributes, luminance,
+};
 
 /// How far a ray leaves a surface at `p`: 10⁻⁴ of (1 + its largest coordinate), so the
 /// surface does not hit itself in f32 at any distance from the origin. The renderer's shadow
@@ -101,10 +103,6 @@ pub struct PathTracer<'s> {
     textures: SceneTextures,
     sums: Vec<[f64; 3]>,
     samples: u32,
-}
-
-fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
 /// PCG32 (O'Neill), seeded per pixel and sample so that results do not depend on threads.

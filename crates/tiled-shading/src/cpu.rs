@@ -287,7 +287,7 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
     match method {
         // A light volume holds the light's whole influence: brute force's image.
         Method::BruteForce | Method::LightVolumes => ALL_SLICES,
-        Method::Tiled => {
+        Method::Tiled | Method::LightPrePass => {
             if sphere_meets(planes, world, light.radius) {
                 ALL_SLICES
             } else {
@@ -394,7 +394,7 @@ pub fn shade(
                     let (d, sp) = s.map_or((Vec3::ZERO, Vec3::ZERO), |s| {
                         shade_pixel(
                             gb,
-                            frame,
+                            (frame, config.method),
                             (x, y),
                             &s,
                             (lights, shadows),
@@ -432,10 +432,12 @@ pub fn shade(
     })
 }
 
-/// The (diffuse, specular) sums at one pixel over the list entries that cover its slice.
+/// The (diffuse, specular) sums at one pixel over the list entries that cover its slice; for
+/// the light pre-pass the light buffer's diffuse light and, grey, its monochrome specular
+/// light (the luminance of the specular sum with F = 1).
 fn shade_pixel(
     gb: &GBuffer,
-    frame: &Frame,
+    (frame, method): (&Frame, Method),
     (x, y): (u32, u32),
     s: &Sample,
     (lights, shadows): (&[GpuLight], Option<&ShadowMaps>),
@@ -445,22 +447,29 @@ fn shade_pixel(
     let v = (frame.eye.truncate() - s.position).normalize();
     let (albedo, specular) = gbuffer::unpack_albedo(gb.albedo.get(x, y));
     let (roughness, metallic, _) = unpack_material(gb.material.get(x, y));
+    let prepass = method == Method::LightPrePass;
     let surface = Surface {
         p: s.position,
         n: s.normal,
         v,
-        albedo,
+        // The light pre-pass has only the roughness: F = 1, a white metal.
+        albedo: if prepass { Vec3::ONE } else { albedo },
         roughness,
-        metallic,
-        specular,
+        metallic: if prepass { 1.0 } else { metallic },
+        specular: if prepass { 1.0 } else { specular },
     };
-    list.iter().filter(|(_, mask)| mask >> slice & 1 == 1).fold(
+    let (d, sp) = list.iter().filter(|(_, mask)| mask >> slice & 1 == 1).fold(
         (Vec3::ZERO, Vec3::ZERO),
         |(d, sp), &(i, _)| {
             let (dl, sl) = shade_shadowed(&lights[i as usize], &surface, shadows);
             (d + dl, sp + sl)
         },
-    )
+    );
+    if prepass {
+        (d, Vec3::splat(scene::luminance(sp)))
+    } else {
+        (d, sp)
+    }
 }
 
 /// Per pixel, how many lights contribute (non-zero attenuation and `N·L > 0`): what an ideal

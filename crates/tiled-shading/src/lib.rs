@@ -45,6 +45,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "lighting.wgsl",
         "params.wgsl",
         "forward.wgsl",
+        "light_prepass.wgsl",
         "rays.wgsl",
         "shadow_view.wgsl",
         "shadows.wgsl",
@@ -176,21 +177,29 @@ pub enum Method {
     /// surfaces into the light accumulation, and alpha-blended surfaces over the composed
     /// frame ([`gpu::forward`]).
     ForwardPlus,
+    /// The light pre-pass (deferred lighting, §2.1 after Engel 2008), a comparator: the
+    /// lighting pass culls as [`Method::Tiled`] from the normals, depth and roughness only and
+    /// writes a light buffer — diffuse light, and the luminance of the specular light without
+    /// its Fresnel factor — and a second geometry pass applies the materials
+    /// ([`gpu::light_prepass`]; monochrome specular: exact only for white lights on materials
+    /// whose Fresnel factor does not vary).
+    LightPrePass,
 }
 
 impl Method {
     /// Every method, the reference first.
-    pub const ALL: [Method; 6] = [
+    pub const ALL: [Method; 7] = [
         Method::BruteForce,
         Method::Tiled,
         Method::TiledCones,
         Method::Clustered,
         Method::LightVolumes,
         Method::ForwardPlus,
+        Method::LightPrePass,
     ];
 
     /// The command-line name (`brute`, `tiled`, `tiled-cones`, `clustered`, `volumes`,
-    /// `forward`).
+    /// `forward`, `light-prepass`).
     pub fn name(self) -> &'static str {
         match self {
             Method::BruteForce => "brute",
@@ -199,6 +208,7 @@ impl Method {
             Method::TiledCones => "tiled-cones",
             Method::Clustered => "clustered",
             Method::ForwardPlus => "forward",
+            Method::LightPrePass => "light-prepass",
         }
     }
 }
@@ -218,7 +228,7 @@ impl FromStr for Method {
             .find(|m| m.name() == s)
             .ok_or_else(|| {
                 format!(
-                    "unknown shading method {s:?} (brute, tiled, tiled-cones, clustered, volumes, forward)"
+                    "unknown shading method {s:?} (brute, tiled, tiled-cones, clustered, volumes, forward, light-prepass)"
                 )
             })
     }
@@ -450,9 +460,10 @@ pub enum ShadingError {
         /// Lights the buffer holds.
         capacity: usize,
     },
-    /// A pass given what another method makes (the forward pass without Forward+ lists).
-    #[error("forward+: {0}")]
-    Forward(String),
+    /// A geometry-pass method (Forward+, the light pre-pass) given what it cannot take: the
+    /// forward pass without Forward+ lists, supersampling.
+    #[error("{0}")]
+    Incompatible(String),
     /// Bad shadow-map settings, or more shadow views than the device holds.
     #[error("shadow maps: {0}")]
     InvalidShadows(String),

@@ -349,11 +349,13 @@ fn gpu_matches_cpu_images_and_lists() {
                 };
                 let gpu_out = c.run_gpu(g, &cfg);
                 // Forward+ only builds lists here: its images come from drawing the scene
-                // (`pipeline`'s forward tests).
+                // (`pipeline`'s forward tests); the light pre-pass writes its light buffer
+                // (compared with its CPU twin's).
+                let prepass = (method == Method::LightPrePass).then(|| shade_cpu(&c, &cfg));
                 if method != Method::ForwardPlus {
                     compare(
                         &format!("gpu {method} {tile} {search} vs brute"),
-                        &brute,
+                        prepass.as_ref().unwrap_or(&brute),
                         &gpu_out,
                         GPU_RELATIVE,
                         1e-5,
@@ -724,4 +726,61 @@ fn forward_lists_hold_the_tiled_lists_and_every_light_in_front() {
         background.iter().any(|&t| forward.counts[t] == 1),
         "the light in front of the camera is listed over the background"
     );
+}
+
+#[test]
+fn the_light_buffer_holds_the_diffuse_light_and_monochrome_specular() {
+    // The light pre-pass's lighting pass, on the CPU: its diffuse light is brute force's (the
+    // same terms), and its specular is grey, the luminance of the specular light of a white
+    // metal (F = 1) — brute force's where every surface is one.
+    let mut c = spheres(96, 64, 300);
+    let brute = shade_cpu(&c, &config(Method::BruteForce, 16));
+    let prepass = shade_cpu(&c, &config(Method::LightPrePass, 16));
+    let diffuse_only = |s: &Shaded| Shaded {
+        specular: Image::filled(s.diffuse.width(), s.diffuse.height(), Vec3::ZERO),
+        ..s.clone()
+    };
+    compare(
+        "light buffer diffuse",
+        &diffuse_only(&brute),
+        &diffuse_only(&prepass),
+        0.0,
+        SAME_TERMS,
+    );
+    assert!(
+        prepass
+            .specular
+            .pixels()
+            .iter()
+            .all(|s| s.x == s.y && s.y == s.z && s.x >= 0.0),
+        "grey specular"
+    );
+    assert!(max_abs(&prepass.specular) > 0.0);
+    // Every surface a white metal of its roughness: F = 1 everywhere.
+    let (w, h) = (c.gb.width(), c.gb.height());
+    for y in 0..h {
+        for x in 0..w {
+            let [.., specular] = c.gb.albedo.get(x, y);
+            c.gb.albedo.set(x, y, [255, 255, 255, specular]);
+            let (roughness, _, id) = gbuffer::unpack_material(c.gb.material.get(x, y));
+            c.gb.material
+                .set(x, y, gbuffer::pack_material(roughness, 1.0, id));
+        }
+    }
+    let metal = shade_cpu(&c, &config(Method::BruteForce, 16));
+    let grey = Shaded {
+        specular: Image::from_vec(
+            w,
+            h,
+            metal
+                .specular
+                .pixels()
+                .iter()
+                .map(|&s| Vec3::splat(scene::luminance(s)))
+                .collect(),
+        )
+        .expect("w × h"),
+        ..metal
+    };
+    compare("white metals", &grey, &prepass, 1e-5, SAME_TERMS);
 }

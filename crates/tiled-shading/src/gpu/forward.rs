@@ -96,8 +96,8 @@ impl ForwardPass {
     ) -> Result<Self, ShadingError> {
         config.validate()?;
         if config.method != Method::ForwardPlus {
-            return Err(ShadingError::Forward(format!(
-                "the forward pass reads Forward+ lists, not {} ones",
+            return Err(ShadingError::Incompatible(format!(
+                "Forward+: the forward pass reads Forward+ lists, not {} ones",
                 config.method
             )));
         }
@@ -191,8 +191,8 @@ impl ForwardPass {
         ambient: &wgpu::Buffer,
     ) -> Result<BoundForward, ShadingError> {
         if lists.params.list_stride == 0 || lists.listless {
-            return Err(ShadingError::Forward(
-                "the forward pass needs the lists of a Forward+ culling pass".into(),
+            return Err(ShadingError::Incompatible(
+                "Forward+: the forward pass needs the lists of a Forward+ culling pass".into(),
             ));
         }
         let group = self.lists_layout.bind_buffers(

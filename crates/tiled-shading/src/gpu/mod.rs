@@ -20,6 +20,7 @@
 //! ```
 
 pub mod forward;
+pub mod light_prepass;
 pub mod run;
 pub mod shadows;
 pub mod volumes;
@@ -121,6 +122,7 @@ pub fn specialisation(config: &ShadingConfig) -> Specialisation {
         Method::TiledCones => 2,
         Method::Clustered => 3,
         Method::ForwardPlus => 4,
+        Method::LightPrePass => 5,
         _ => 1,
     };
     Specialisation::default()
@@ -144,6 +146,7 @@ fn tiled_variants() -> Vec<(&'static str, Specialisation)> {
         Method::TiledCones,
         Method::Clustered,
         Method::ForwardPlus,
+        Method::LightPrePass,
     ];
     methods
         .into_iter()
