@@ -217,7 +217,7 @@ fn main() -> Result<()> {
     let (scene, camera) = bench::scene_labels(&path, &camera);
     let report = Report {
         header: bench::Header::new(&gpu),
-        frames: frames,
+        frames,
         scene,
         camera,
         colonnade,

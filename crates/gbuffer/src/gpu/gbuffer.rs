@@ -446,13 +446,16 @@ pub fn scene_pipeline(
     )
 }
 
+/// A fragment stage of [`scene_pipeline_with`]: its entry point and colour target states.
+pub type FragmentTargets<'a> = (&'a str, &'a [Option<wgpu::ColorTargetState>]);
+
 /// [`scene_pipeline`] with the fragment stage's colour target states (blending, write masks).
 pub fn scene_pipeline_with(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
-    (vertex, fragment): (&str, Option<(&str, &[Option<wgpu::ColorTargetState>])>),
+    (vertex, fragment): (&str, Option<FragmentTargets<'_>>),
     (compare, write): (wgpu::CompareFunction, bool),
     cull_back: bool,
 ) -> wgpu::RenderPipeline {
