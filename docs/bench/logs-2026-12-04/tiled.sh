@@ -1,4 +1,4 @@
-# The light accumulation with traditional deferred shading (light volumes) beside brute force,
+# The light accumulation with traditional deferred shading (light volumes), Forward+ and the light pre-pass beside brute force,
 # tiled, tiled + cones and clustered, on the device: `bash docs/bench/logs-2026-12-04/tiled.sh`
 # with .gpu-bin/tiled-gpu (stripped `cargo bench -p deferred-pipeline --bench tiled-gpu
 # --no-run` executable) and Sponza under .gpu-data/fixtures. A short discarded run first
