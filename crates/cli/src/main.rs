@@ -59,6 +59,11 @@ struct Args {
     /// applying the materials — a comparator; not with --ssaa).
     #[arg(long, default_value = "tiled")]
     shading: pipeline::ShadingMethod,
+    /// Alpha-blended materials: dithered into the G-buffer, or forward (blended over the frame
+    /// back to front, lit from Forward+ lists; the GPU needs FLOAT32_BLENDABLE; not with --ssaa
+    /// or --shading light-prepass). --shading forward always blends them forward.
+    #[arg(long, default_value = "dithered")]
+    blend: gbuffer::gpu::BlendedSurfaces,
     /// Tile side in pixels for the tiled and clustered light accumulation: 8, 16 or 32.
     #[arg(long, default_value_t = 16)]
     tile: u32,
@@ -1589,6 +1594,7 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
     let moves = setup.scene.rig.is_some();
     renderer.set_output(d, Some(setup.output))?;
     renderer.set_shading(d, q, &setup.shading)?;
+    renderer.set_blended(d, q, args.blend)?;
     renderer.set_shadows(d, q, setup.shadow_config.as_ref())?;
     if let Some(tile) = args.manylod_shadows {
         let config = ShadowConfig {

@@ -635,7 +635,15 @@ impl Live {
         let ssao = crate::ssao_setting(&args, &self.setup.scene)?;
         let output = crate::output_transform(&args)?;
         let r = &mut self.renderer;
-        r.set_shading(d, q, &shading)?;
+        // Dithering first where asked (the light pre-pass refuses blended surfaces drawn
+        // forward), forward after the method that draws them.
+        if args.blend == gbuffer::gpu::BlendedSurfaces::Dithered {
+            r.set_blended(d, q, args.blend)?;
+            r.set_shading(d, q, &shading)?;
+        } else {
+            r.set_shading(d, q, &shading)?;
+            r.set_blended(d, q, args.blend)?;
+        }
         r.set_shadows(d, q, shadows.as_ref())?;
         r.set_ssaa(d, q, ssaa.as_ref())?;
         r.set_ssao(d, q, ssao.as_ref().map(|(c, e)| (c, *e)))?;
@@ -1940,6 +1948,14 @@ impl Panel<'_> {
                     "tile",
                     &["8", "16", "32"],
                     &args.tile.to_string(),
+                    false,
+                );
+                self.choice(
+                    ui,
+                    "blend",
+                    "blended surfaces",
+                    &["dithered", "forward"],
+                    &args.blend.to_string(),
                     false,
                 );
                 self.choice(

@@ -14,6 +14,7 @@ use bench::Stat;
 use bench::per_frame_sum;
 use clap::Parser;
 use common::time_passes;
+use gbuffer::gpu::BlendedSurfaces;
 use gpu::Gpu;
 use pipeline::{DEFAULT_AMBIENT, LightSearch, ShadingConfig, ShadingMethod, gpu::GpuRenderer};
 use scene::{Camera, Light};
@@ -27,6 +28,10 @@ struct Args {
     common: bench::SceneArgs,
     #[command(flatten)]
     quick: bench::Quick,
+    /// Only the transparency frames (`tiled-transparency-<adapter>-<date>`): the material
+    /// gallery with its blended sphere, dithered or drawn forward.
+    #[arg(long)]
+    transparency: bool,
 }
 
 const SIZES: [(u32, u32); 2] = [(1920, 1080), (3840, 2160)];
@@ -158,6 +163,9 @@ fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
     let gpu = args.common.options.gpu()?;
     let frames = args.common.options.frames(10);
+    if args.transparency {
+        return transparency(&gpu, &args, frames);
+    }
     let (path, scene, camera) = args.common.scene.load_viewed()?;
     println!(
         "scene: {} ({} triangles)",
@@ -549,4 +557,160 @@ fn frame_table(s: &mut String, r: &Report) {
             cells.join(" | ")
         );
     }
+}
+
+/// How blended surfaces are drawn in [`transparency`]: (report name, light accumulation, how).
+const BLENDS: [(&str, ShadingMethod, BlendedSurfaces); 4] = [
+    (
+        "tiled, dithered",
+        ShadingMethod::Tiled,
+        BlendedSurfaces::Dithered,
+    ),
+    (
+        "tiled, blended forward",
+        ShadingMethod::Tiled,
+        BlendedSurfaces::Forward,
+    ),
+    (
+        "forward+",
+        ShadingMethod::ForwardPlus,
+        BlendedSurfaces::Forward,
+    ),
+    (
+        "light pre-pass, dithered",
+        ShadingMethod::LightPrePass,
+        BlendedSurfaces::Dithered,
+    ),
+];
+/// The passes [`transparency`] reports one by one.
+const TRANSPARENCY_PASSES: [&str; 6] = [
+    "gbuffer",
+    "light accumulation",
+    "forward+ lists (blended)",
+    "forward+ opaque",
+    "light pre-pass materials",
+    "forward+ blended",
+];
+
+#[derive(Serialize)]
+struct TransparencyRow {
+    method: &'static str,
+    lights: usize,
+    frame_ms: Stat,
+    /// Median ms of each of [`TRANSPARENCY_PASSES`] that ran ("light accumulation" stands for
+    /// the method's pass).
+    passes: Vec<(String, f64)>,
+}
+
+#[derive(Serialize)]
+struct TransparencyReport {
+    header: bench::Header,
+    frames: u32,
+    scene: String,
+    rows: Vec<TransparencyRow>,
+}
+
+/// Whole frames of the material gallery (one half-transparent sphere among opaque ones) at
+/// 1920×1080 under its own lights and 4096 scattered ones, for each of [`BLENDS`].
+fn transparency(gpu: &Gpu, args: &Args, frames: u32) -> Result<()> {
+    let scene = scene::material_gallery();
+    let camera = scene.camera_or_framed();
+    let (w, h) = bench::size((1920, 1080));
+    let mut rows = Vec::new();
+    for count in [0, 4096] {
+        let mut lights = scene.lights.clone();
+        lights.extend(scene::scatter_point_lights(scene.bounds(), count, 1));
+        let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, &scene, &lights, w, h)?;
+        for (method_name, method, blended) in BLENDS {
+            renderer.set_blended(&gpu.device, &gpu.queue, BlendedSurfaces::Dithered)?;
+            let config = ShadingConfig {
+                method,
+                ..Default::default()
+            };
+            renderer.set_shading(&gpu.device, &gpu.queue, &config)?;
+            renderer.set_blended(&gpu.device, &gpu.queue, blended)?;
+            let shading = renderer.shading().pass_name();
+            let t = time_passes(gpu, &mut renderer, &camera, DEFAULT_AMBIENT, frames)?;
+            let every: Vec<&str> = t.iter().map(|(n, _)| n.as_str()).collect();
+            let frame_ms = Stat::of(per_frame_sum(&t, &every));
+            let passes: Vec<(String, f64)> = TRANSPARENCY_PASSES
+                .iter()
+                .filter_map(|&p| {
+                    let name = if p == "light accumulation" {
+                        shading.as_str()
+                    } else {
+                        p
+                    };
+                    t.iter().any(|(n, _)| n == name).then(|| {
+                        (
+                            p.to_string(),
+                            Stat::of(per_frame_sum(&t, &[name])).median_ms,
+                        )
+                    })
+                })
+                .collect();
+            println!(
+                "gallery {w}x{h} {:>5} lights {method_name:<26} frame {:>8.3} ms  {passes:?}",
+                lights.len(),
+                frame_ms.median_ms
+            );
+            rows.push(TransparencyRow {
+                method: method_name,
+                lights: lights.len(),
+                frame_ms,
+                passes,
+            });
+        }
+    }
+    let report = TransparencyReport {
+        header: bench::Header::new(gpu),
+        frames,
+        scene: "scene::material_gallery".into(),
+        rows,
+    };
+    args.common.options.write_report(
+        &report.header,
+        "tiled-transparency-",
+        &report,
+        &transparency_markdown(&report),
+    )?;
+    Ok(())
+}
+
+fn transparency_markdown(r: &TransparencyReport) -> String {
+    use std::fmt::Write;
+    let mut s = r.header.markdown(
+        "Transparency: blended surfaces dithered or drawn forward (Forward+ lists)",
+        r.frames,
+    );
+    let _ = writeln!(
+        s,
+        "`{}` at 1920×1080 (one alpha-BLEND sphere among opaque ones), whole frames and passes, \
+         ms. `blended forward`: tiled deferred shading for the opaque surfaces, a Forward+ \
+         culling pass for the blended ones' lists and their forward pass over the frame.\n\n\
+         | lights | method | frame | {} |\n|---|---|---|{}",
+        r.scene,
+        TRANSPARENCY_PASSES.join(" | "),
+        "---|".repeat(TRANSPARENCY_PASSES.len())
+    );
+    for row in &r.rows {
+        let cells: Vec<String> = TRANSPARENCY_PASSES
+            .iter()
+            .map(|p| {
+                row.passes
+                    .iter()
+                    .find(|(n, _)| n == p)
+                    .map_or("—".into(), |(_, ms)| format!("{ms:.3}"))
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.3} | {} |",
+            row.lights,
+            row.method,
+            row.frame_ms.median_ms,
+            cells.join(" | ")
+        );
+    }
+    s
 }

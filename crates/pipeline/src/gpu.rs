@@ -135,8 +135,10 @@ pub struct GpuRenderer {
     lights: Vec<GpuLight>,
     shading: LightShading,
     shading_bound: BoundShading,
-    /// The forward pass of [`tiled_shading::Method::ForwardPlus`].
+    /// The forward pass of [`tiled_shading::Method::ForwardPlus`], or of blended surfaces.
     forward: Option<ForwardStage>,
+    /// How blended surfaces are drawn ([`GpuRenderer::set_blended`]).
+    blended: BlendedSurfaces,
     /// The second geometry pass of [`tiled_shading::Method::LightPrePass`].
     prepass: Option<PrePassStage>,
     composition: Kernel,
@@ -165,10 +167,13 @@ pub struct GpuRenderer {
 }
 
 /// Forward+ as the renderer holds it: the forward pass and its binding to the culling pass's
-/// lists (`None` until [`GpuRenderer::rebind`] makes them).
+/// lists (`None` until [`GpuRenderer::rebind`] makes them), and, when the light accumulation is
+/// a deferred method drawing blended surfaces forward ([`GpuRenderer::set_blended`]), the
+/// Forward+ culling pass of their lists and its binding.
 struct ForwardStage {
     pass: ForwardPass,
     bound: Option<BoundForward>,
+    cull: Option<(LightShading, Option<BoundShading>)>,
 }
 
 /// The light pre-pass as the renderer holds it: the materials pass, and the light buffer of the
@@ -409,6 +414,7 @@ impl GpuRenderer {
             shading,
             shading_bound,
             forward: None,
+            blended: BlendedSurfaces::Dithered,
             prepass: None,
             composition,
             composition_group,
@@ -486,7 +492,20 @@ impl GpuRenderer {
             bound.set_camera(queue, camera);
         }
         if let Some(f) = &mut self.forward {
-            f.bound = Some(f.pass.bind(device, &bound, &self.ambient)?);
+            let lists = match &mut f.cull {
+                Some((cull, slot)) => {
+                    let direct = [&self.sized.direct[0], &self.sized.direct[1]];
+                    let (pass, sized) = (&self.gbuffer_pass, &self.sized);
+                    let mut lists =
+                        Self::bind_shading(device, queue, cull, pass, sized, direct, &self.lights)?;
+                    if let Some(camera) = &self.camera {
+                        lists.set_camera(queue, camera);
+                    }
+                    &*slot.insert(lists)
+                }
+                None => &bound,
+            };
+            f.bound = Some(f.pass.bind(device, lists, &self.ambient)?);
         }
         self.shading_bound = bound;
         if let Some(s) = self.supersampling.take() {
@@ -633,11 +652,15 @@ impl GpuRenderer {
         config: Option<&SsaaConfig>,
     ) -> Result<(), RenderError> {
         if config.is_some() && (self.forward.is_some() || self.prepass.is_some()) {
-            return Err(ShadingError::Incompatible(format!(
-                "{} and supersampling exclude each other (supersampling shades G-buffer samples; {0} shades drawn geometry): pick another shading method first",
-                self.shading.config().method
-            ))
-            .into());
+            let why = if self.blended == BlendedSurfaces::Forward {
+                "blended surfaces drawn forward and supersampling exclude each other: supersampling shades samples of the G-buffer, which then holds no blended surfaces".to_string()
+            } else {
+                let method = self.shading.config().method;
+                format!(
+                    "{method} and supersampling exclude each other: supersampling shades samples of the G-buffer, {method} draws the scene again"
+                )
+            };
+            return Err(ShadingError::Incompatible(format!("{why}; switch one off first")).into());
         }
         self.supersampling = match config {
             Some(config) => Some(self.new_supersampling(device, queue, config, None)?),
@@ -688,23 +711,21 @@ impl GpuRenderer {
         }
         let forward = config.method == ShadingMethod::ForwardPlus;
         let prepass = config.method == ShadingMethod::LightPrePass;
+        if prepass && self.blended == BlendedSurfaces::Forward {
+            return Err(ShadingError::Incompatible(
+                "the light pre-pass and blended surfaces drawn forward exclude each other: dither them first (set_blended)".into(),
+            )
+            .into());
+        }
         if (forward || prepass) && self.supersampling.is_some() {
             return Err(ShadingError::Incompatible(format!(
-                "{} and supersampling exclude each other (supersampling shades G-buffer samples; {0} shades drawn geometry): unset supersampling first",
+                "{} and supersampling exclude each other: supersampling shades samples of the G-buffer, {0} draws the scene again; switch supersampling off first",
                 config.method
             ))
             .into());
         }
         let shading = LightShading::new(device, config)?;
-        // Bound in `rebind`, to the lists of the new culling pass.
-        let forward = if forward {
-            Some(ForwardStage {
-                pass: ForwardPass::new(device, &self.gbuffer_pass, config)?,
-                bound: None,
-            })
-        } else {
-            None
-        };
+        let forward = self.forward_stage(device, config, self.blended)?;
         let prepass = if prepass {
             Some(PrePassStage {
                 pass: LightPrePass::new(device, &self.gbuffer_pass)?,
@@ -716,15 +737,94 @@ impl GpuRenderer {
         self.shading = shading;
         self.forward = forward;
         self.prepass = prepass;
-        // Blended surfaces: over the frame with Forward+ where the device blends the frame's
-        // format, else dithered into the G-buffer.
-        let blends = self.forward.as_ref().is_some_and(|f| f.pass.blends());
-        self.scene.set_blended(if blends {
+        self.draw_blended();
+        self.rebind(device, queue)
+    }
+
+    /// Draws alpha-blended materials forward, over the composed frame and back to front
+    /// ([`BlendedSurfaces::Forward`], lit from Forward+ lists built by their own culling pass
+    /// beside the light accumulation), or dithers them into the G-buffer
+    /// ([`BlendedSurfaces::Dithered`], the default). Forward+ always draws them forward. Drawn
+    /// forward they are lit directly and by the ambient light, without the frame's indirect
+    /// light and screen-space occlusion; it needs `FLOAT32_BLENDABLE` (an error names it) and
+    /// excludes supersampling and the light pre-pass (errors say so).
+    pub fn set_blended(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        blended: BlendedSurfaces,
+    ) -> Result<(), RenderError> {
+        if blended == self.blended {
+            return Ok(());
+        }
+        let config = *self.shading.config();
+        if blended == BlendedSurfaces::Forward {
+            ::gpu::DeviceNeeds {
+                features: wgpu::Features::FLOAT32_BLENDABLE,
+                ..Default::default()
+            }
+            .check(device.features(), &device.limits())?;
+            let clash = if self.supersampling.is_some() {
+                Some("supersampling".to_string())
+            } else if config.method == ShadingMethod::LightPrePass {
+                Some(config.method.to_string())
+            } else {
+                None
+            };
+            if let Some(clash) = clash {
+                return Err(ShadingError::Incompatible(format!(
+                    "blended surfaces drawn forward and {clash} exclude each other: switch {clash} off first"
+                ))
+                .into());
+            }
+        }
+        self.forward = self.forward_stage(device, &config, blended)?;
+        self.blended = blended;
+        self.draw_blended();
+        self.rebind(device, queue)
+    }
+
+    /// The forward pass `config` and `blended` need: Forward+'s own (lit from the light
+    /// accumulation's lists), blended surfaces' over a deferred method (with their own culling
+    /// pass), or none.
+    fn forward_stage(
+        &self,
+        device: &wgpu::Device,
+        config: &ShadingConfig,
+        blended: BlendedSurfaces,
+    ) -> Result<Option<ForwardStage>, RenderError> {
+        let own = config.method == ShadingMethod::ForwardPlus;
+        if !own
+            && (blended == BlendedSurfaces::Dithered
+                || config.method == ShadingMethod::LightPrePass)
+        {
+            return Ok(None);
+        }
+        let lists = ShadingConfig {
+            method: ShadingMethod::ForwardPlus,
+            ..*config
+        };
+        let cull = if own {
+            None
+        } else {
+            Some((LightShading::new(device, &lists)?, None))
+        };
+        Ok(Some(ForwardStage {
+            pass: ForwardPass::new(device, &self.gbuffer_pass, &lists)?,
+            bound: None,
+            cull,
+        }))
+    }
+
+    /// Keeps blended meshes out of the G-buffer while a forward pass draws them (where the
+    /// device blends the frame's format), else dithers them into it.
+    fn draw_blended(&mut self) {
+        let forward = self.forward.as_ref().is_some_and(|f| f.pass.blends());
+        self.scene.set_blended(if forward {
             BlendedSurfaces::Forward
         } else {
             BlendedSurfaces::Dithered
         });
-        self.rebind(device, queue)
     }
 
     /// Replaces the direct lights (the light buffer is rebound for their count; no shader is
@@ -867,6 +967,7 @@ impl GpuRenderer {
         if let Some(ForwardStage {
             pass,
             bound: Some(bound),
+            ..
         }) = &mut self.forward
         {
             pass.bind_shadows(device, bound, inputs)?;
@@ -880,6 +981,13 @@ impl GpuRenderer {
     fn write_lights(&mut self, queue: &wgpu::Queue) -> Result<(), RenderError> {
         if let Some(s) = &mut self.supersampling {
             s.shading_mut().set_lights(queue, &self.lights)?;
+        }
+        if let Some(ForwardStage {
+            cull: Some((_, Some(lists))),
+            ..
+        }) = &mut self.forward
+        {
+            lists.set_lights(queue, &self.lights)?;
         }
         Ok(self.shading_bound.set_lights(queue, &self.lights)?)
     }
@@ -1127,6 +1235,13 @@ impl GpuRenderer {
         }
         self.gbuffer_pass.write_frame(queue, &frame);
         self.shading_bound.set_camera(queue, camera);
+        if let Some(ForwardStage {
+            cull: Some((_, Some(lists))),
+            ..
+        }) = &mut self.forward
+        {
+            lists.set_camera(queue, camera);
+        }
         if let Some(s) = &mut self.supersampling {
             s.set_camera(queue, camera);
         }
@@ -1732,12 +1847,26 @@ impl GpuRenderer {
         if let Some(ForwardStage {
             pass,
             bound: Some(bound),
+            cull,
         }) = &self.forward
         {
-            let direct = [&self.sized.direct[0], &self.sized.direct[1]];
-            let scene = (&self.gbuffer_pass, &self.scene);
-            let depth = &self.sized.targets.depth;
-            pass.encode_opaque(bound, encoder, scene, depth, direct, Some(&self.timer));
+            match cull {
+                // Blended surfaces over a deferred method: only their lists.
+                Some((cull, Some(lists))) => {
+                    cull.encode_as(
+                        lists,
+                        encoder,
+                        Some(&self.timer),
+                        "forward+ lists (blended)",
+                    );
+                }
+                _ => {
+                    let direct = [&self.sized.direct[0], &self.sized.direct[1]];
+                    let scene = (&self.gbuffer_pass, &self.scene);
+                    let depth = &self.sized.targets.depth;
+                    pass.encode_opaque(bound, encoder, scene, depth, direct, Some(&self.timer));
+                }
+            }
         }
         if let Some(PrePassStage {
             pass,
@@ -1773,6 +1902,7 @@ impl GpuRenderer {
             Some(ForwardStage {
                 pass,
                 bound: Some(bound),
+                ..
             }),
             Some(camera),
         ) = (&self.forward, &self.camera)

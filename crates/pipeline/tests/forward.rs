@@ -7,6 +7,7 @@
 //! pre-pass (item 2): brute force's image where its monochrome specular is exact (white
 //! lights, white metals and specular-free dielectrics), close elsewhere.
 
+use gbuffer::gpu::BlendedSurfaces;
 use gbuffer::{Frame, Image};
 use glam::{Vec3, Vec4};
 use pipeline::{ShadingConfig, ShadingMethod, gpu::GpuRenderer, psnr};
@@ -31,6 +32,18 @@ fn render(
     method: ShadingMethod,
     shadows: Shadows,
 ) -> Image<[f32; 4]> {
+    let dithered = BlendedSurfaces::Dithered;
+    render_blended(gpu, scene, lights, camera, (method, dithered), shadows)
+}
+
+fn render_blended(
+    gpu: &gpu::Gpu,
+    scene: &Scene,
+    lights: &[Light],
+    camera: &Camera,
+    (method, blended): (ShadingMethod, BlendedSurfaces),
+    shadows: Shadows,
+) -> Image<[f32; 4]> {
     let (d, q) = (&gpu.device, &gpu.queue);
     let mut r = GpuRenderer::new(d, q, scene, lights, SIZE.0, SIZE.1).expect("renderer");
     let config = ShadingConfig {
@@ -38,6 +51,7 @@ fn render(
         ..Default::default()
     };
     r.set_shading(d, q, &config).expect("shading");
+    r.set_blended(d, q, blended).expect("blended");
     match shadows {
         Shadows::None => {}
         Shadows::Maps => r
@@ -250,16 +264,16 @@ fn blended_surfaces_composite_back_to_front_over_the_frame() {
     let b = brute(&panes([false, true], true, false));
     let frame = Frame::new(&camera, SIZE.0, SIZE.1);
     let (mut in_a, mut in_both) = (0, 0);
+    // Forward+, and tiled deferred shading drawing the blended panes forward (reversed).
     for reversed in [false, true] {
         let scene = panes([true, true], false, reversed);
-        let got = render(
-            gpu,
-            &scene,
-            &lights,
-            &camera,
-            ShadingMethod::ForwardPlus,
-            Shadows::None,
-        );
+        let forward = BlendedSurfaces::Forward;
+        let method = if reversed {
+            (ShadingMethod::Tiled, forward)
+        } else {
+            (ShadingMethod::ForwardPlus, forward)
+        };
+        let got = render_blended(gpu, &scene, &lights, &camera, method, Shadows::None);
         for y in 0..SIZE.1 {
             for x in 0..SIZE.0 {
                 let over = |under: Vec4, pane: &Image<[f32; 4]>, alpha: f32| {

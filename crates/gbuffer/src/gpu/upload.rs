@@ -29,6 +29,35 @@ pub enum BlendedSurfaces {
     Forward,
 }
 
+impl BlendedSurfaces {
+    /// The command-line name (`dithered`, `forward`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Dithered => "dithered",
+            Self::Forward => "forward",
+        }
+    }
+}
+
+impl std::fmt::Display for BlendedSurfaces {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for BlendedSurfaces {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        [Self::Dithered, Self::Forward]
+            .into_iter()
+            .find(|b| b.name() == s)
+            .ok_or_else(|| {
+                format!("unknown way to draw blended surfaces {s:?} (dithered, forward)")
+            })
+    }
+}
+
 pub(super) struct Draw {
     pub(super) first_index: u32,
     pub(super) index_count: u32,

@@ -40,7 +40,9 @@ use crate::{Method, ShadingConfig, ShadingError};
 /// heatmap still says how many met it).
 pub fn list_stride(device: &wgpu::Device, tiles: u64, capacity: usize) -> u64 {
     let limits = device.limits();
-    let binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+    let binding = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
     (capacity as u64).min(binding / (tiles.max(1) * 8)).max(1)
 }
 
