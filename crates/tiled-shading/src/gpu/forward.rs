@@ -27,7 +27,7 @@
 use ::gpu::kernel::{self, Binding, Layout};
 use ::gpu::shader::Specialisation;
 use ::gpu::{DeviceNeeds, PassTimer};
-use gbuffer::gpu::{GBufferPass, GpuScene, begin_scene_pass, scene_pipeline_with};
+use gbuffer::gpu::{GBufferPass, GpuScene, scene_pipeline_with};
 use glam::Vec3;
 
 use super::shadows::{self, ShadowInputs};
@@ -237,17 +237,16 @@ impl ForwardPass {
         outputs: [&wgpu::Texture; 2],
         timer: Option<&PassTimer>,
     ) {
-        let name = "forward+ opaque";
-        let mut pass = begin_scene_pass(
+        super::draw_into_accumulation(
             encoder,
-            name,
-            &[(outputs[0], 0.0), (outputs[1], 0.0)],
-            (depth, false),
-            timer.and_then(|t| t.render_pass(name)),
+            "forward+ opaque",
+            (gbuffer, scene),
+            depth,
+            outputs,
+            &[&bound.lists, &bound.shadows],
+            &self.opaque,
+            timer,
         );
-        pass.set_bind_group(2, &bound.lists, &[]);
-        pass.set_bind_group(3, &bound.shadows, &[]);
-        gbuffer.draw_scene(&mut pass, [&self.opaque[0], &self.opaque[1]], scene);
     }
 
     /// Records the blended pass: `scene`'s alpha-blended meshes, back to front from `eye`,

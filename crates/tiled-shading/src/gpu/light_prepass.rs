@@ -25,7 +25,7 @@
 
 use ::gpu::kernel::{self, Binding, Layout};
 use ::gpu::{PassTimer, transfer};
-use gbuffer::gpu::{GBufferPass, GpuScene, begin_scene_pass, scene_pipeline};
+use gbuffer::gpu::{GBufferPass, GpuScene, scene_pipeline};
 
 use super::ACCUMULATION_FORMAT;
 use crate::ShadingError;
@@ -118,15 +118,15 @@ impl LightPrePass {
         outputs: [&wgpu::Texture; 2],
         timer: Option<&PassTimer>,
     ) {
-        let name = "light pre-pass materials";
-        let mut pass = begin_scene_pass(
+        super::draw_into_accumulation(
             encoder,
-            name,
-            &[(outputs[0], 0.0), (outputs[1], 0.0)],
-            (depth, false),
-            timer.and_then(|t| t.render_pass(name)),
+            "light pre-pass materials",
+            (gbuffer, scene),
+            depth,
+            outputs,
+            &[&bound.group],
+            &self.pipelines,
+            timer,
         );
-        pass.set_bind_group(2, &bound.group, &[]);
-        gbuffer.draw_scene(&mut pass, [&self.pipelines[0], &self.pipelines[1]], scene);
     }
 }

@@ -699,6 +699,34 @@ fn encode_volumes(
     }
 }
 
+/// Records a pass that draws `scene` again after the depth pre-pass into the light
+/// accumulation (Forward+'s opaque pass, the light pre-pass's second geometry pass): `outputs`
+/// cleared, `depth` loaded, `groups` bound from group 2 on, each mesh with the one of
+/// `pipelines` (two-sided, one-sided) its material picks, timed as `name`.
+#[allow(clippy::too_many_arguments)]
+fn draw_into_accumulation(
+    encoder: &mut wgpu::CommandEncoder,
+    name: &str,
+    (gbuffer, scene): (&gbuffer::gpu::GBufferPass, &gbuffer::gpu::GpuScene),
+    depth: &wgpu::Texture,
+    outputs: [&wgpu::Texture; 2],
+    groups: &[&wgpu::BindGroup],
+    pipelines: &[wgpu::RenderPipeline; 2],
+    timer: Option<&PassTimer>,
+) {
+    let mut pass = gbuffer::gpu::begin_scene_pass(
+        encoder,
+        name,
+        &[(outputs[0], 0.0), (outputs[1], 0.0)],
+        (depth, false),
+        timer.and_then(|t| t.render_pass(name)),
+    );
+    for (i, group) in groups.iter().enumerate() {
+        pass.set_bind_group(2 + i as u32, *group, &[]);
+    }
+    gbuffer.draw_scene(&mut pass, [&pipelines[0], &pipelines[1]], scene);
+}
+
 /// Reads back diffuse and specular accumulation textures ([`ACCUMULATION_FORMAT`]).
 pub fn read_outputs(
     device: &wgpu::Device,
