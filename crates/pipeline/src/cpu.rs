@@ -161,8 +161,12 @@ pub fn render_indirect(
         None => None,
     };
     let t = Instant::now();
-    let direct =
+    let mut direct =
         tiled_shading::cpu::shade(&gb, &frame, camera, &gpu_lights, shading, maps.as_ref())?;
+    if shading.method == tiled_shading::Method::LightPrePass {
+        // Its lighting pass made a light buffer; the second geometry pass applies materials.
+        direct = tiled_shading::cpu::apply_light_prepass(&gb, &frame, &direct);
+    }
     timed(
         &mut timings,
         &format!("light accumulation ({})", shading.method),

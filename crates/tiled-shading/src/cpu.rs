@@ -472,6 +472,41 @@ fn shade_pixel(
     }
 }
 
+/// The light pre-pass's second geometry pass from the G-buffer (the twin of
+/// `light_prepass.wgsl`, which reads the rasterised material instead): given `light`, the
+/// lighting pass's light buffer ([`shade`] with [`Method::LightPrePass`]: diffuse light, grey
+/// monochrome specular), the diffuse light as it is and the monochrome specular times the
+/// Fresnel factor at N·V, tinted by the diffuse light's chromaticity.
+pub fn apply_light_prepass(gb: &GBuffer, frame: &Frame, light: &Shaded) -> Shaded {
+    let (w, h) = (gb.width(), gb.height());
+    let specular: Vec<Vec3> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let Some(s) = sample(gb, frame, x, y) else {
+                return Vec3::ZERO;
+            };
+            let n_dot_v = s
+                .normal
+                .dot((frame.eye.truncate() - s.position).normalize())
+                .clamp(0.0, 1.0);
+            let fw = (1.0 - n_dot_v).powi(5);
+            let (albedo, factor) = gbuffer::unpack_albedo(gb.albedo.get(x, y));
+            let (_, metallic, _) = unpack_material(gb.material.get(x, y));
+            let dielectric = Vec3::splat(factor * (0.04 + 0.96 * fw));
+            let f = dielectric.lerp(albedo + (Vec3::ONE - albedo) * fw, metallic);
+            let diffuse = light.diffuse.get(x, y);
+            let lum = scene::luminance(diffuse);
+            let chroma = if lum > 0.0 { diffuse / lum } else { Vec3::ONE };
+            f * light.specular.get(x, y).x * chroma
+        })
+        .collect();
+    Shaded {
+        specular: Image::from_vec(w, h, specular).expect("w × h pixels"),
+        ..light.clone()
+    }
+}
+
 /// Per pixel, how many lights contribute (non-zero attenuation and `N·L > 0`): what an ideal
 /// per-pixel culling would evaluate, for heatmaps beside the per-tile list lengths.
 pub fn contributing_lights(gb: &GBuffer, frame: &Frame, lights: &[GpuLight]) -> Image<u32> {
