@@ -1,11 +1,14 @@
 //! `tiled-bench`: the light accumulation of Ishmukhametov 2013 on the GPU — brute force, tiled,
-//! tiled with normal-cone back-face culling, clustered and traditional deferred shading with
-//! light volumes (§4.1, depth-tested against the G-buffer's depth) — (1) on Sponza at 1920×1080 and
+//! tiled with normal-cone back-face culling, clustered, traditional deferred shading with
+//! light volumes (§4.1, depth-tested against the G-buffer's depth), Forward+ and the light
+//! pre-pass (§2.4.2, §2.1; with their geometry passes) — (1) on Sponza at 1920×1080 and
 //! 3840×2160 with 256 to 65 536 scattered bounded point lights, (2) on the thesis's tests 1–4
 //! (the wall scene with 0, 100, 500, 1000 lights behind the wall) with and without CPU
-//! view-frustum culling. Every time is the GPU time of the light accumulation pass alone,
-//! brute force measured in the same run as the baseline. Writes `tiled-shading-<adapter>-<date>`
-//! `.md` and `.json` under `--out`.
+//! view-frustum culling, and along test 4's side wall at a grazing angle; whole frames too.
+//! Every light-accumulation time is the GPU time of the method's own passes, brute force
+//! measured in the same run as the baseline. Writes `tiled-shading-<adapter>-<date>` `.md` and
+//! `.json` under `--out`; with `--transparency` only the transparency frames
+//! (`tiled-transparency-…`).
 
 mod common;
 
@@ -356,12 +359,15 @@ fn markdown(r: &Report) -> String {
     );
     let _ = writeln!(
         s,
-        "Every time is the GPU time of the light accumulation pass alone (the G-buffer, composition \
+        "Every time is the GPU time of the light accumulation alone (the G-buffer, composition \
          and CPU work excluded); 16×16 tiles; brute force (every light at every pixel) measured in \
          the same run is the baseline; `volumes` is the thesis's traditional deferred shading (§4.1: \
          instanced light volumes, back faces depth-tested against the scene, additive blending — \
-         a render pass, timed like the others). Lights: bounded point lights whose attenuation is exactly \
-         zero at their radius, so every method renders the same image (tested).\n\n\
+         a render pass, timed like the others); `forward` is Forward+'s culling pass plus its \
+         geometry pass lighting the opaque surfaces, `light-prepass` the light pre-pass's \
+         lighting pass plus its second geometry pass. Lights: bounded point lights whose \
+         attenuation is exactly zero at their radius, so every method renders the same image \
+         (tested; the light pre-pass's monochrome specular approximates).\n\n\
          ## Light-count sweep: `{}`, {}\n\n\
          Lights scattered uniformly through the scene's bounds (`scatter_point_lights`, radius \
          0.6·diagonal/∛N). Cells: ms (speed-up over brute force); mean list = lights per \
