@@ -278,17 +278,15 @@ fn flush(
         if METHOD != METHOD_FORWARD && (*samples)[p].present {
             let s = (*samples)[p];
             let v = normalize(frame.eye.xyz - s.position);
-            let m = load_material((*pixels)[p]);
+            var m = load_material((*pixels)[p]);
+            if METHOD == METHOD_PREPASS {
+                // Only the roughness of the material: F = 1 (a white metal).
+                m = SurfaceMaterial(vec3<f32>(1.0), m.roughness, 1.0, 1.0);
+            }
             let slice = slice_of(s.depth);
             for (var j = 0u; j < n; j++) {
                 if ((list_mask[j] >> slice) & 1u) == 1u {
-                    var c: Accumulated;
-                    if METHOD == METHOD_PREPASS {
-                        // Only the roughness of the material: F = 1 (a white metal).
-                        c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, vec3<f32>(1.0), m.roughness, 1.0, 1.0);
-                    } else {
-                        c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
-                    }
+                    let c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
                     (*diffuse)[p] += c.diffuse;
                     (*specular)[p] += c.specular;
                 }

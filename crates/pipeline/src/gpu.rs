@@ -166,6 +166,34 @@ pub struct GpuRenderer {
     timer: PassTimer,
 }
 
+/// What cannot be combined, as an error naming both: supersampling shades samples of the
+/// G-buffer, so it excludes the methods that draw the scene again (Forward+, the light
+/// pre-pass) and blended surfaces drawn forward (absent from the G-buffer); the light pre-pass
+/// has no forward pass for blended surfaces.
+fn exclusions(
+    method: ShadingMethod,
+    blended: BlendedSurfaces,
+    supersampling: bool,
+) -> Result<(), RenderError> {
+    let redraws = matches!(
+        method,
+        ShadingMethod::ForwardPlus | ShadingMethod::LightPrePass
+    );
+    let forward = blended == BlendedSurfaces::Forward;
+    let clash = if supersampling && redraws {
+        format!(
+            "{method} and supersampling exclude each other: supersampling shades samples of the G-buffer, {method} draws the scene again"
+        )
+    } else if supersampling && forward {
+        "blended surfaces drawn forward and supersampling exclude each other: supersampling shades samples of the G-buffer, which then holds no blended surfaces".into()
+    } else if forward && method == ShadingMethod::LightPrePass {
+        "the light pre-pass and blended surfaces drawn forward exclude each other: it has no forward pass for them".into()
+    } else {
+        return Ok(());
+    };
+    Err(ShadingError::Incompatible(format!("{clash}; switch one off first")).into())
+}
+
 /// Forward+ as the renderer holds it: the forward pass and its binding to the culling pass's
 /// lists (`None` until [`GpuRenderer::rebind`] makes them), and, when the light accumulation is
 /// a deferred method drawing blended surfaces forward ([`GpuRenderer::set_blended`]), the
@@ -651,17 +679,7 @@ impl GpuRenderer {
         queue: &wgpu::Queue,
         config: Option<&SsaaConfig>,
     ) -> Result<(), RenderError> {
-        if config.is_some() && (self.forward.is_some() || self.prepass.is_some()) {
-            let why = if self.blended == BlendedSurfaces::Forward {
-                "blended surfaces drawn forward and supersampling exclude each other: supersampling shades samples of the G-buffer, which then holds no blended surfaces".to_string()
-            } else {
-                let method = self.shading.config().method;
-                format!(
-                    "{method} and supersampling exclude each other: supersampling shades samples of the G-buffer, {method} draws the scene again"
-                )
-            };
-            return Err(ShadingError::Incompatible(format!("{why}; switch one off first")).into());
-        }
+        exclusions(self.shading.config().method, self.blended, config.is_some())?;
         self.supersampling = match config {
             Some(config) => Some(self.new_supersampling(device, queue, config, None)?),
             None => None,
@@ -709,24 +727,10 @@ impl GpuRenderer {
         if self.shading.config() == config {
             return Ok(());
         }
-        let forward = config.method == ShadingMethod::ForwardPlus;
-        let prepass = config.method == ShadingMethod::LightPrePass;
-        if prepass && self.blended == BlendedSurfaces::Forward {
-            return Err(ShadingError::Incompatible(
-                "the light pre-pass and blended surfaces drawn forward exclude each other: dither them first (set_blended)".into(),
-            )
-            .into());
-        }
-        if (forward || prepass) && self.supersampling.is_some() {
-            return Err(ShadingError::Incompatible(format!(
-                "{} and supersampling exclude each other: supersampling shades samples of the G-buffer, {0} draws the scene again; switch supersampling off first",
-                config.method
-            ))
-            .into());
-        }
+        exclusions(config.method, self.blended, self.supersampling.is_some())?;
         let shading = LightShading::new(device, config)?;
         let forward = self.forward_stage(device, config, self.blended)?;
-        let prepass = if prepass {
+        let prepass = if config.method == ShadingMethod::LightPrePass {
             Some(PrePassStage {
                 pass: LightPrePass::new(device, &self.gbuffer_pass)?,
                 bound: None,
@@ -764,20 +768,8 @@ impl GpuRenderer {
                 ..Default::default()
             }
             .check(device.features(), &device.limits())?;
-            let clash = if self.supersampling.is_some() {
-                Some("supersampling".to_string())
-            } else if config.method == ShadingMethod::LightPrePass {
-                Some(config.method.to_string())
-            } else {
-                None
-            };
-            if let Some(clash) = clash {
-                return Err(ShadingError::Incompatible(format!(
-                    "blended surfaces drawn forward and {clash} exclude each other: switch {clash} off first"
-                ))
-                .into());
-            }
         }
+        exclusions(config.method, blended, self.supersampling.is_some())?;
         self.forward = self.forward_stage(device, &config, blended)?;
         self.blended = blended;
         self.draw_blended();
@@ -794,10 +786,7 @@ impl GpuRenderer {
         blended: BlendedSurfaces,
     ) -> Result<Option<ForwardStage>, RenderError> {
         let own = config.method == ShadingMethod::ForwardPlus;
-        if !own
-            && (blended == BlendedSurfaces::Dithered
-                || config.method == ShadingMethod::LightPrePass)
-        {
+        if !own && blended == BlendedSurfaces::Dithered {
             return Ok(None);
         }
         let lists = ShadingConfig {

@@ -265,18 +265,33 @@ pub fn forward_far(bounds: &TileBounds, open: bool, slicing: &Slicing) -> f32 {
     }
 }
 
+/// A [`Method::ForwardPlus`] entry for `light` (0: culled): [`FORWARD_BLENDED`] when it meets
+/// [`Tile::reach`], with [`FORWARD_OPAQUE`] when it also meets the opaque depth bounds (a
+/// directional light meets every frustum).
+fn forward_entry(tile: &Tile, light: &GpuLight) -> u32 {
+    let world = Vec3::from(light.position);
+    let meets = |planes: &[Vec4]| {
+        light.kind == LIGHT_DIRECTIONAL || sphere_meets(planes, world, light.radius)
+    };
+    if !meets(&tile.reach.planes) {
+        return 0;
+    }
+    let opaque = !tile.bounds.is_empty() && meets(&tile.frustum.planes);
+    FORWARD_BLENDED | if opaque { FORWARD_OPAQUE } else { 0 }
+}
+
 /// Whether `light` goes into the tile's list under `method`, and for which slices: 0 =
 /// culled, [`ALL_SLICES`] = kept (tiled methods), else the mask of occupied clusters of the
 /// tile it overlaps (clustered).
 pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) -> u32 {
-    if tile.bounds.is_empty() && method != Method::ForwardPlus {
+    if method == Method::ForwardPlus {
+        // Its tiles list lights for blended surfaces even without opaque ones.
+        return forward_entry(tile, light);
+    }
+    if tile.bounds.is_empty() {
         return 0;
     }
     let world = Vec3::from(light.position);
-    if light.kind == LIGHT_DIRECTIONAL && method == Method::ForwardPlus {
-        let opaque = !tile.bounds.is_empty();
-        return FORWARD_BLENDED | if opaque { FORWARD_OPAQUE } else { 0 };
-    }
     if light.kind == LIGHT_DIRECTIONAL {
         // Light from one direction: a light cone of half-angle 0.
         let away = method == Method::TiledCones
@@ -301,13 +316,7 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
                         .is_some_and(|cone| faces_away(tile.bounds.cone(), cone)));
             if keep { ALL_SLICES } else { 0 }
         }
-        Method::ForwardPlus => {
-            if !sphere_meets(&tile.reach.planes, world, light.radius) {
-                return 0;
-            }
-            let opaque = !tile.bounds.is_empty() && sphere_meets(planes, world, light.radius);
-            FORWARD_BLENDED | if opaque { FORWARD_OPAQUE } else { 0 }
-        }
+        Method::ForwardPlus => forward_entry(tile, light),
         Method::Clustered => {
             if !sphere_meets(planes, world, light.radius) {
                 return 0;

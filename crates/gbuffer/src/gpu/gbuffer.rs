@@ -446,11 +446,25 @@ pub fn scene_pipeline(
     )
 }
 
-/// A fragment stage of [`scene_pipeline_with`]: its entry point and colour target states.
+/// A fragment stage of [`scene_pipelines`]: its entry point and colour target states.
 pub type FragmentTargets<'a> = (&'a str, &'a [Option<wgpu::ColorTargetState>]);
 
-/// [`scene_pipeline`] with the fragment stage's colour target states (blending, write masks).
-pub fn scene_pipeline_with(
+/// [`scene_pipeline`] for both sides, with the fragment stage's colour target states (blending,
+/// write masks): [two-sided, one-sided], as [`GBufferPass::draw_scene`] takes them.
+pub fn scene_pipelines(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    stages: (&str, Option<FragmentTargets<'_>>),
+    depth: (wgpu::CompareFunction, bool),
+) -> [wgpu::RenderPipeline; 2] {
+    [false, true]
+        .map(|cull| scene_pipeline_with(device, label, layout, module, stages, depth, cull))
+}
+
+/// [`scene_pipeline`] with the fragment stage's colour target states.
+fn scene_pipeline_with(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::PipelineLayout,

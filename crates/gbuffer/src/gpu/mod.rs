@@ -8,9 +8,7 @@ pub mod targets;
 pub mod textures;
 pub mod upload;
 
-pub use gbuffer::{
-    FrameUniform, GBufferPass, begin_scene_pass, scene_pipeline, scene_pipeline_with,
-};
+pub use gbuffer::{FrameUniform, GBufferPass, begin_scene_pass, scene_pipeline, scene_pipelines};
 pub use run::{run, run_with};
 pub use targets::{GBufferTargets, GBufferTextures, UploadedGBuffer};
 pub use textures::MaterialTextures;

@@ -27,7 +27,7 @@
 use ::gpu::kernel::{self, Binding, Layout};
 use ::gpu::shader::Specialisation;
 use ::gpu::{DeviceNeeds, PassTimer};
-use gbuffer::gpu::{GBufferPass, GpuScene, scene_pipeline_with};
+use gbuffer::gpu::{GBufferPass, GpuScene, scene_pipelines};
 use glam::Vec3;
 
 use super::shadows::{self, ShadowInputs};
@@ -132,17 +132,8 @@ impl ForwardPass {
             &[frame, material, &lists_layout, &shadow_layout],
         );
         let pipelines = |label, entry, targets: &[Option<wgpu::ColorTargetState>], depth| {
-            [false, true].map(|cull| {
-                scene_pipeline_with(
-                    device,
-                    label,
-                    &layout,
-                    &module,
-                    ("vs_main", Some((entry, targets))),
-                    depth,
-                    cull,
-                )
-            })
+            let stages = ("vs_main", Some((entry, targets)));
+            scene_pipelines(device, label, &layout, &module, stages, depth)
         };
         let accumulation = Some(wgpu::ColorTargetState::from(ACCUMULATION_FORMAT));
         let opaque = pipelines(

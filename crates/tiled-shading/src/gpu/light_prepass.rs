@@ -25,7 +25,7 @@
 
 use ::gpu::kernel::{self, Binding, Layout};
 use ::gpu::{PassTimer, transfer};
-use gbuffer::gpu::{GBufferPass, GpuScene, scene_pipeline};
+use gbuffer::gpu::{GBufferPass, GpuScene, scene_pipelines};
 
 use super::ACCUMULATION_FORMAT;
 use crate::ShadingError;
@@ -55,18 +55,18 @@ impl LightPrePass {
         let [frame, material] = gbuffer.layouts();
         let pipeline_layout =
             kernel::pipeline_layout(device, "light pre-pass", &[frame, material, &layout]);
-        let targets = [ACCUMULATION_FORMAT, ACCUMULATION_FORMAT];
-        let pipelines = [false, true].map(|cull| {
-            scene_pipeline(
-                device,
-                "light pre-pass materials",
-                &pipeline_layout,
-                &module,
-                ("vs_main", Some(("fs_light_prepass", &targets[..]))),
-                (wgpu::CompareFunction::Equal, false),
-                cull,
-            )
-        });
+        let target = Some(wgpu::ColorTargetState::from(ACCUMULATION_FORMAT));
+        let pipelines = scene_pipelines(
+            device,
+            "light pre-pass materials",
+            &pipeline_layout,
+            &module,
+            (
+                "vs_main",
+                Some(("fs_light_prepass", &[target.clone(), target])),
+            ),
+            (wgpu::CompareFunction::Equal, false),
+        );
         Ok(Self { pipelines, layout })
     }
 
