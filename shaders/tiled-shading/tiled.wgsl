@@ -1,9 +1,10 @@
 // #import tiled-shading/shadows.wgsl
 // #import tiled-shading/pixels.wgsl
+// #import tiled-shading/slices.wgsl
 // Light accumulation: brute force (`brute_force`, every light at every pixel) and tile-based
 // deferred shading in one compute pass (`shade_tiles`, Ishmukhametov 2013 §2.4.1 after
 // Andersson 2009): one workgroup per screen tile loads its G-buffer pixels, reduces their depth bounds
-// (and normal cone, chapter 4 steps 2–3; and occupied cluster slices, §2.5), then switches to
+// (and normal cone, chapter 4 steps 2–3; and occupied depth slices, §2.5), then switches to
 // lights: every invocation tests one light of a batch against the tile frustum and appends it
 // to the tile's list in workgroup memory; whenever the list could overflow with the next batch,
 // and after the last one, the invocations switch back to pixels and shade from the list.
@@ -37,19 +38,17 @@ const CAPACITY: u32 = 768u;
 
 const METHOD_TILED: u32 = 1u;
 const METHOD_CONES: u32 = 2u;
-const METHOD_CLUSTERED: u32 = 3u;
+const METHOD_SLICES: u32 = 3u;
 const METHOD_FORWARD: u32 = 4u;
 const METHOD_PREPASS: u32 = 5u;
 // Forward+ entry bits (`tiled_shading::cpu::FORWARD_OPAQUE`, `FORWARD_BLENDED`).
 const FORWARD_OPAQUE: u32 = 1u;
 const FORWARD_BLENDED: u32 = 2u;
-const SLICES: u32 = 32u;
 const ALL_SLICES: u32 = 0xffffffffu;
 const NORMAL_QUANTUM: f32 = 32768.0;
 const COSINE_QUANTUM: f32 = 1048576.0;
 const CONE_EPSILON: f32 = 1e-3;
-const SLICE_EPSILON: f32 = 1e-5;
-// Lights per group of the clustered light hierarchy (`tiled_shading::LIGHT_GROUP`).
+// Lights per group of the light hierarchy (`tiled_shading::LIGHT_GROUP`).
 const GROUP: u32 = 32u;
 
 @group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba32float, write>;
@@ -70,21 +69,12 @@ var<workgroup> list_count: atomic<u32>;
 var<workgroup> list_size: u32;
 var<workgroup> list_light: array<u32, CAPACITY>;
 var<workgroup> list_mask: array<u32, CAPACITY>;
-// LIGHT_TREE: the groups of the current round that meet the tile frustum; clustered: the slice
+// LIGHT_TREE: the groups of the current round that meet the tile frustum; slices: the slice
 // starts.
 var<workgroup> passed_count: atomic<u32>;
 var<workgroup> passed_size: u32;
 var<workgroup> passed_groups: array<u32, THREADS>;
 var<workgroup> slice_starts: array<f32, 33>;
-
-fn slice_of(depth: f32) -> u32 {
-    let k = floor(log(max(depth / params.slice_near, 1.0)) * params.slice_scale);
-    return min(u32(max(k, 0.0)), SLICES - 1u);
-}
-
-fn slice_start(k: u32) -> f32 {
-    return params.slice_near * exp(f32(k) / params.slice_scale);
-}
 
 fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
     let len2 = dot(v, v);
@@ -92,12 +82,6 @@ fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
         return v * inverseSqrt(len2);
     }
     return vec3<f32>(0.0);
-}
-
-// A view-space plane (normal n, offset w) in world space: n·(R p + t) + w = (Rᵀn)·p + n·t + w.
-fn world_plane(n: vec3<f32>, w: f32) -> vec4<f32> {
-    let unit = n / length(n);
-    return vec4<f32>((vec4<f32>(unit, 0.0) * frame.view).xyz, dot(unit, frame.view[3].xyz) + w / length(n));
 }
 
 // The tile's culling data, computed once by invocation 0 and read by all (broadcast reads
@@ -117,21 +101,18 @@ var<workgroup> need_alpha: u32;
 
 // `tile_frustum`: the tile's planes at its depth bounds and its 8 corners (chapter 4 step 4).
 fn tile_frustum(rect: vec4<u32>, near: f32, far: f32) {
-    let l = (f32(rect.x) * frame.viewport.z * 2.0 - 1.0) * frame.tan_half_fov.x;
-    let r = (f32(rect.y) * frame.viewport.z * 2.0 - 1.0) * frame.tan_half_fov.x;
-    let t = (1.0 - f32(rect.z) * frame.viewport.w * 2.0) * frame.tan_half_fov.y;
-    let b = (1.0 - f32(rect.w) * frame.viewport.w * 2.0) * frame.tan_half_fov.y;
-    tile_planes[0] = world_plane(vec3<f32>(1.0, 0.0, l), 0.0);
-    tile_planes[1] = world_plane(vec3<f32>(-1.0, 0.0, -r), 0.0);
-    tile_planes[2] = world_plane(vec3<f32>(0.0, -1.0, -t), 0.0);
-    tile_planes[3] = world_plane(vec3<f32>(0.0, 1.0, b), 0.0);
+    let s = edge_slopes(rect);
+    let sides = side_planes(s);
+    for (var i = 0u; i < 4u; i++) {
+        tile_planes[i] = sides[i];
+    }
     tile_planes[4] = world_plane(vec3<f32>(0.0, 0.0, -1.0), -near);
     tile_planes[5] = world_plane(vec3<f32>(0.0, 0.0, 1.0), far);
     var center = vec3<f32>(0.0);
     for (var i = 0u; i < 8u; i++) {
         let z = select(far, near, i < 4u);
-        let sx = select(r, l, (i & 1u) == 0u);
-        let sy = select(b, t, (i & 2u) == 0u);
+        let sx = select(s.y, s.x, (i & 1u) == 0u);
+        let sy = select(s.w, s.z, (i & 2u) == 0u);
         let corner = (frame.inv_view * vec4<f32>(sx * z, sy * z, -z, 1.0)).xyz;
         tile_corners[i] = corner;
         center += corner;
@@ -184,6 +165,9 @@ fn cull_light(light: Light) -> u32 {
         if METHOD == METHOD_FORWARD {
             return FORWARD_BLENDED | select(0u, FORWARD_OPAQUE, opaque_present);
         }
+        if METHOD == METHOD_SLICES {
+            return tile_slices;
+        }
         return ALL_SLICES;
     }
     let c = light.position;
@@ -194,8 +178,8 @@ fn cull_light(light: Light) -> u32 {
     if !(above(4u, c, r) && above(5u, c, r)) {
         return 0u;
     }
-    if METHOD == METHOD_CLUSTERED {
-        let depth = -dot(vec4<f32>(frame.view[0].z, frame.view[1].z, frame.view[2].z, frame.view[3].z), vec4<f32>(c, 1.0));
+    if METHOD == METHOD_SLICES {
+        let depth = view_depth(c);
         let near = depth - r;
         let far = depth + r;
         var mask = 0u;
@@ -326,7 +310,7 @@ fn shade_tiles(
             if METHOD == METHOD_CONES {
                 normals += vec4<i32>(vec3<i32>(round(samples[i].normal * NORMAL_QUANTUM)), 0);
             }
-            if METHOD == METHOD_CLUSTERED {
+            if METHOD == METHOD_SLICES {
                 bounds.z |= 1u << slice_of(samples[i].depth);
             }
         } else if METHOD == METHOD_FORWARD && all(pixels[i] < size) {
@@ -379,7 +363,7 @@ fn shade_tiles(
         tile_slices = tile_bounds.z;
         need_alpha = 0u;
     }
-    if METHOD == METHOD_CLUSTERED && index <= SLICES {
+    if METHOD == METHOD_SLICES && index <= SLICES {
         slice_starts[index] = slice_start(index);
     }
     workgroupBarrier();

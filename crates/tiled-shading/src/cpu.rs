@@ -69,7 +69,8 @@ pub struct TileBounds {
     pub normal_sum: IVec3,
     /// Minimum over pixels of `⌊cos(axis, n)·Q⌋ − 1` (Q = [`COSINE_QUANTUM`]); `cos α` = this / Q.
     pub min_cosine: i32,
-    /// Bit k set when a pixel lies in cluster slice k ([`Method::Clustered`]).
+    /// Bit k set when a pixel lies in cluster slice k ([`Method::TiledSlices`],
+    /// [`Method::Clustered`]).
     pub slices: u32,
 }
 
@@ -282,7 +283,7 @@ fn forward_entry(tile: &Tile, light: &GpuLight) -> u32 {
 
 /// Whether `light` goes into the tile's list under `method`, and for which slices: 0 =
 /// culled, [`ALL_SLICES`] = kept (tiled methods), else the mask of occupied clusters of the
-/// tile it overlaps (clustered).
+/// tile it overlaps (tiled slices, clustered).
 pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) -> u32 {
     if method == Method::ForwardPlus {
         // Its tiles list lights for blended surfaces even without opaque ones.
@@ -296,7 +297,12 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
         // Light from one direction: a light cone of half-angle 0.
         let away = method == Method::TiledCones
             && faces_away(tile.bounds.cone(), (-Vec3::from(light.direction), 1.0));
-        return if away { 0 } else { ALL_SLICES };
+        return match method {
+            _ if away => 0,
+            // It reaches every occupied cluster.
+            Method::TiledSlices | Method::Clustered => tile.bounds.slices,
+            _ => ALL_SLICES,
+        };
     }
     let planes = &tile.frustum.planes;
     match method {
@@ -317,7 +323,14 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
             if keep { ALL_SLICES } else { 0 }
         }
         Method::ForwardPlus => forward_entry(tile, light),
-        Method::Clustered => {
+        Method::TiledSlices | Method::Clustered => {
+            // A cluster is bounded in depth by its slice alone, a tile's slices also by the
+            // tile's depth bounds.
+            let planes = if method == Method::Clustered {
+                &planes[..4]
+            } else {
+                &planes[..]
+            };
             if !sphere_meets(planes, world, light.radius) {
                 return 0;
             }
@@ -353,7 +366,7 @@ pub struct Shaded {
 
 /// Light accumulation with `config.method`: per tile, the bounds, the frustum and the list
 /// of lights that pass [`cull_light`]; then per pixel the sums of [`shade_shadowed`] (with `shadows`, else unshadowed) over the
-/// list (over the entries whose mask holds the pixel's slice, when clustered).
+/// list (over the entries whose mask holds the pixel's slice).
 pub fn shade(
     gb: &GBuffer,
     frame: &Frame,

@@ -1,10 +1,10 @@
 //! Light accumulation for deferred shading (Ishmukhametov 2013): every light at every pixel
 //! (brute force), tile-based deferred shading with per-tile depth bounds (§2.4.1, after
 //! Andersson 2009 and Lauritzen 2010), the same with normal-cone back-face culling of lights
-//! (chapter 4, steps 1–7), a clustered variant with exponential depth slices (§2.5, after
-//! Olsson et al. 2012) — the three finding a tile's lights through a light hierarchy
-//! ([`LightGroups`], [`LightSearch`]) — and traditional deferred shading with light volumes
-//! (§4.1). CPU reference in [`cpu`], one pass per method in [`gpu`].
+//! (chapter 4, steps 1–7), tile lists with exponential depth-slice masks, clustered shading
+//! (§2.5, after Olsson et al. 2012: per-cluster lists of the occupied clusters) — all finding
+//! their lights through a light hierarchy ([`LightGroups`], [`LightSearch`]) — Forward+, the
+//! light pre-pass and traditional deferred shading with light volumes (§4.1). CPU reference in [`cpu`], one pass per method in [`gpu`].
 //!
 //! All methods produce the same two images — the diffuse and specular sums of
 //! [`lighting::shade_light`] over the lights — because every light has a finite radius at
@@ -51,6 +51,8 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "shadows.wgsl",
         "shadow_raster.wgsl",
         "tiled.wgsl",
+        "clustered.wgsl",
+        "slices.wgsl",
         "pixels.wgsl",
         "volumes.wgsl",
     ],
@@ -167,8 +169,17 @@ pub enum Method {
     Tiled,
     /// [`Method::Tiled`] plus normal-cone back-face culling of lights (chapter 4, steps 1–7).
     TiledCones,
-    /// Clusters of a tile and an exponential depth slice (§2.5): a light is evaluated at a
-    /// pixel only when it overlaps the pixel's cluster.
+    /// Tile lists with depth-slice masks (a one-pass approximation of §2.5's clusters): each
+    /// tile's list holds the lights that meet its frustum, each with the mask of the tile's
+    /// occupied exponential depth slices it overlaps; a pixel evaluates the entries whose mask
+    /// holds its slice.
+    TiledSlices,
+    /// Clustered deferred shading (§2.5 after Olsson et al. 2012): every pixel's cluster key
+    /// (its tile of the screen and exponential depth slice) is flagged from the depth buffer,
+    /// the occupied clusters are compacted, each finds its lights through the light
+    /// hierarchy (a workgroup per cluster, lights of any number) and a pixel shades exactly
+    /// its cluster's list ([`gpu::clustered`]). The same lists as [`Method::TiledSlices`]
+    /// without the tile's depth bounds: per cluster, not per tile.
     Clustered,
     /// Forward+ (tiled forward shading, §2.4.2 after Harada et al. 2012): the tiles' light
     /// lists are built from the depth pre-pass over the depths from the near plane to the
@@ -188,24 +199,26 @@ pub enum Method {
 
 impl Method {
     /// Every method, the reference first.
-    pub const ALL: [Method; 7] = [
+    pub const ALL: [Method; 8] = [
         Method::BruteForce,
         Method::Tiled,
         Method::TiledCones,
+        Method::TiledSlices,
         Method::Clustered,
         Method::LightVolumes,
         Method::ForwardPlus,
         Method::LightPrePass,
     ];
 
-    /// The command-line name (`brute`, `tiled`, `tiled-cones`, `clustered`, `volumes`,
-    /// `forward`, `light-prepass`).
+    /// The command-line name (`brute`, `tiled`, `tiled-cones`, `tiled-slices`, `clustered`,
+    /// `volumes`, `forward`, `light-prepass`).
     pub fn name(self) -> &'static str {
         match self {
             Method::BruteForce => "brute",
             Method::LightVolumes => "volumes",
             Method::Tiled => "tiled",
             Method::TiledCones => "tiled-cones",
+            Method::TiledSlices => "tiled-slices",
             Method::Clustered => "clustered",
             Method::ForwardPlus => "forward",
             Method::LightPrePass => "light-prepass",
@@ -228,13 +241,14 @@ impl FromStr for Method {
             .find(|m| m.name() == s)
             .ok_or_else(|| {
                 format!(
-                    "unknown shading method {s:?} (brute, tiled, tiled-cones, clustered, volumes, forward, light-prepass)"
+                    "unknown shading method {s:?} (brute, tiled, tiled-cones, tiled-slices, clustered, volumes, forward, light-prepass)"
                 )
             })
     }
 }
 
-/// Depth slices of [`Method::Clustered`]: a 32-bit mask holds a tile's occupied slices.
+/// Depth slices of [`Method::TiledSlices`] and [`Method::Clustered`]: a 32-bit mask holds a
+/// tile's occupied slices.
 pub const CLUSTER_SLICES: u32 = 32;
 
 /// How a tile of the tiled methods finds the lights that meet it (the same lists either way).
@@ -282,7 +296,7 @@ pub struct ShadingConfig {
     pub method: Method,
     /// Tile side in pixels: 8, 16 (default, as the thesis) or 32.
     pub tile_size: u32,
-    /// How tiles find their lights (tiled, tiled + cones, clustered).
+    /// How tiles (and clusters) find their lights.
     pub search: LightSearch,
 }
 

@@ -152,15 +152,25 @@ fn decision_margin(c: &Case, config: &ShadingConfig, t: usize, light: u32) -> f3
     let reach = cpu::tile_frustum(&c.frame, rect, slicing.near, far);
     let l = &c.lights[light as usize];
     let p = Vec3::from(l.position);
-    let planes = if config.method == Method::ForwardPlus {
-        [frustum.planes, reach.planes].concat()
-    } else {
-        frustum.planes.to_vec()
+    let planes = match config.method {
+        Method::ForwardPlus => [frustum.planes, reach.planes].concat(),
+        Method::Clustered => frustum.planes[..4].to_vec(),
+        _ => frustum.planes.to_vec(),
     };
     let mut margin = planes
         .iter()
         .map(|q| (q.truncate().dot(p) + q.w + l.radius).abs() / l.radius)
         .fold(f32::INFINITY, f32::min);
+    if matches!(config.method, Method::TiledSlices | Method::Clustered) {
+        // The slice tests: the light's depth interval against each slice's ends.
+        let depth = -c.frame.view.row(2).dot(p.extend(1.0));
+        for k in 0..tiled_shading::CLUSTER_SLICES {
+            let (z0, z1) = (slicing.start(k), slicing.start(k + 1));
+            margin = margin
+                .min((depth + l.radius - z0).abs() / l.radius)
+                .min((depth - l.radius - z1).abs() / l.radius);
+        }
+    }
     if config.method == Method::TiledCones {
         if let Some((axis, cos_delta)) = cpu::light_cone(&frustum, p) {
             let (normal_axis, cos_alpha) = bounds.cone();
@@ -185,12 +195,9 @@ fn same_lists(what: &str, c: &Case, config: &ShadingConfig, gpu: &Shaded, cpu: &
             let margin = decision_margin(c, config, t, light);
             assert!(
                 margin <= DECISION_MARGIN,
-                "{what}: tile {t}: light {light} is {} on the GPU only (its tests are {margin} from their thresholds)",
-                if g.iter().any(|e| e.0 == light) {
-                    "listed"
-                } else {
-                    "culled"
-                }
+                "{what}: tile {t}: light {light}'s entries differ (GPU {:?}, CPU {:?}; its tests are {margin} from their thresholds)",
+                g.iter().filter(|e| e.0 == light).collect::<Vec<_>>(),
+                k.iter().filter(|e| e.0 == light).collect::<Vec<_>>(),
             );
             marginal += 1;
         }
@@ -208,6 +215,7 @@ fn culled_images_equal_brute_force_on_the_cpu() {
         let methods = [
             Method::Tiled,
             Method::TiledCones,
+            Method::TiledSlices,
             Method::Clustered,
             Method::ForwardPlus,
         ];
@@ -390,7 +398,13 @@ fn lists_longer_than_workgroup_memory_are_shaded_in_flushes() {
     let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
         return;
     };
-    for method in [Method::Tiled, Method::TiledCones, Method::Clustered] {
+    let methods = [
+        Method::Tiled,
+        Method::TiledCones,
+        Method::TiledSlices,
+        Method::Clustered,
+    ];
+    for method in methods {
         let out = c.run_gpu(g, &config(method, 16));
         let lit: Vec<u32> = out.counts.iter().copied().filter(|&n| n > 0).collect();
         assert!(!lit.is_empty());
@@ -433,11 +447,17 @@ fn frustum_culling_keeps_every_light_that_lights_the_view() {
 }
 
 #[test]
-fn clustered_masks_hold_only_occupied_slices() {
+fn slice_masks_hold_only_occupied_slices() {
     let (w, h) = (128, 72);
     let c = walls(500, w, h);
-    let out = shade_cpu(&c, &config(Method::Clustered, 16));
     let slicing = tiled_shading::Slicing::new(&c.camera);
+    for method in [Method::TiledSlices, Method::Clustered] {
+        slice_masks_of(&c, &slicing, method, w, h);
+    }
+}
+
+fn slice_masks_of(c: &Case, slicing: &tiled_shading::Slicing, method: Method, w: u32, h: u32) {
+    let out = shade_cpu(c, &config(method, 16));
     let mut slices_used = 0u32;
     for (t, list) in out.lists.iter().enumerate() {
         let rect = cpu::tile_pixels(16, w, h, t as u32 % out.tiles.0, t as u32 / out.tiles.0);
@@ -445,16 +465,20 @@ fn clustered_masks_hold_only_occupied_slices() {
             .flat_map(|y| (rect[0]..rect[1]).map(move |x| (x, y)))
             .filter_map(|(x, y)| cpu::sample(&c.gb, &c.frame, x, y))
             .collect();
-        let occupied = cpu::tile_bounds(&samples, &slicing).slices;
+        let occupied = cpu::tile_bounds(&samples, slicing).slices;
         for &(_, mask) in list {
-            assert_ne!(mask, 0, "an entry for no cluster");
-            assert_eq!(mask & !occupied, 0, "an entry for an empty cluster");
+            assert_ne!(mask, 0, "{method}: an entry for no cluster");
+            assert_eq!(
+                mask & !occupied,
+                0,
+                "{method}: an entry for an empty cluster"
+            );
             slices_used |= mask;
         }
     }
     assert!(
         slices_used.count_ones() > 2,
-        "the view spans several depth slices"
+        "{method}: the view spans several depth slices"
     );
 }
 

@@ -1,8 +1,9 @@
 //! The light accumulation on the GPU: one compute pass per frame of `tiled.wgsl` — its
 //! `brute_force` entry point (8 × 8 invocations per workgroup, every light per pixel) or
-//! `shade_tiles` (one workgroup per tile, [`Method::Tiled`], [`Method::TiledCones`] or
-//! [`Method::Clustered`]) — or one render pass of `volumes.wgsl` drawing every light's
-//! volume ([`Method::LightVolumes`], [`volumes`]). Pipelines, buffers and bind groups are
+//! `shade_tiles` (one workgroup per tile, [`Method::Tiled`], [`Method::TiledCones`],
+//! [`Method::TiledSlices`]) — or of `clustered.wgsl`'s five dispatches ([`Method::Clustered`],
+//! [`clustered`]), or one render pass of `volumes.wgsl` drawing every light's volume
+//! ([`Method::LightVolumes`], [`volumes`]). Pipelines, buffers and bind groups are
 //! built once; [`BoundShading::set_lights`] and [`BoundShading::set_camera`] only write
 //! buffers.
 //!
@@ -19,6 +20,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod clustered;
 pub mod forward;
 pub mod light_prepass;
 pub mod run;
@@ -75,8 +77,13 @@ pub struct LightShading {
 
 /// The pass a [`LightShading`] records.
 enum Pipeline {
-    /// One compute dispatch (brute force, tiled, clustered).
+    /// One compute dispatch (brute force, the tiled methods).
     Compute(wgpu::ComputePipeline),
+    /// Clustered shading: the kernels before the shading, then `shade_clusters`.
+    Clustered {
+        kernels: Box<clustered::ClusterKernels>,
+        shade: wgpu::ComputePipeline,
+    },
     /// Light volumes: depth-tested against the scene when [`LightShading::bind_depth`] gave
     /// its depth and the device can clamp the volumes' depth (`DEPTH_CLIP_CONTROL`, so a
     /// back face past the far plane still lights the surfaces in front of it), else not.
@@ -114,13 +121,15 @@ pub struct BoundShading {
     /// No per-tile lists (brute force, light volumes).
     listless: bool,
     volumes: Option<BoundVolumes>,
+    /// The cluster grid and lists of [`Method::Clustered`].
+    clusters: Option<clustered::BoundClusters>,
 }
 
 /// The compile-time constants of `tiled.wgsl`'s `shade_tiles` for `config`.
 pub fn specialisation(config: &ShadingConfig) -> Specialisation {
     let method = match config.method {
         Method::TiledCones => 2,
-        Method::Clustered => 3,
+        Method::TiledSlices => 3,
         Method::ForwardPlus => 4,
         Method::LightPrePass => 5,
         _ => 1,
@@ -139,12 +148,22 @@ pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
     tiled_variants().into_iter().chain(forward).collect()
 }
 
-/// `tiled.wgsl`'s variants.
+/// `tiled.wgsl`'s variants, then `clustered.wgsl`'s.
 fn tiled_variants() -> Vec<(&'static str, Specialisation)> {
+    let clustered = [8, 16, 32].into_iter().flat_map(|tile_size| {
+        [LightSearch::Tree, LightSearch::Flat].map(|search| {
+            let config = ShadingConfig {
+                method: Method::Clustered,
+                tile_size,
+                search,
+            };
+            ("clustered.wgsl", clustered::specialisation(&config))
+        })
+    });
     let methods = [
         Method::Tiled,
         Method::TiledCones,
-        Method::Clustered,
+        Method::TiledSlices,
         Method::ForwardPlus,
         Method::LightPrePass,
     ];
@@ -162,6 +181,7 @@ fn tiled_variants() -> Vec<(&'static str, Specialisation)> {
                 })
             })
         })
+        .chain(clustered)
         .collect()
 }
 
@@ -177,6 +197,23 @@ impl LightShading {
         config.validate()?;
         if config.method == Method::LightVolumes {
             return Self::volumes(device, config);
+        }
+        let shadow_layout = Layout::compute(device, "shadow lookup", &shadows::LOOKUP_BINDINGS);
+        if config.method == Method::Clustered {
+            let spec = clustered::specialisation(config);
+            let module = crate::SHADERS.module_with(device, "clustered.wgsl", &spec)?;
+            let layout =
+                Layout::compute_numbered(device, "clustered shading", &clustered::shade_bindings());
+            let shade = clustered::shade_pipeline(device, &module, &layout, &shadow_layout);
+            return Ok(Self {
+                config: *config,
+                pipeline: Pipeline::Clustered {
+                    kernels: Box::new(clustered::ClusterKernels::new(device, &module)),
+                    shade,
+                },
+                layout,
+                shadow_layout,
+            });
         }
         let (module, entry) = if config.method == Method::BruteForce {
             (crate::SHADERS.module(device, "tiled.wgsl")?, "brute_force")
@@ -197,7 +234,6 @@ impl LightShading {
             bindings.push(Binding::StorageRead);
         }
         let layout = Layout::compute(device, "light shading", &bindings);
-        let shadow_layout = Layout::compute(device, "shadow lookup", &shadows::LOOKUP_BINDINGS);
         let pipeline = kernel::pipeline(device, &module, entry, &[&layout, &shadow_layout], &[]);
         Ok(Self {
             config: *config,
@@ -359,7 +395,8 @@ impl LightShading {
         let capacity = capacity.max(1);
         let lights = storage(device, "lights", (capacity * size_of::<GpuLight>()) as u64)?;
         let counts = storage(device, "tile light counts", tiles * 4)?;
-        let stride = if record_lists && !volumes {
+        let clustered = self.config.method == Method::Clustered;
+        let stride = if record_lists && !volumes && !clustered {
             capacity as u64
         } else if self.config.method == Method::ForwardPlus {
             forward::list_stride(device, tiles, capacity)
@@ -443,6 +480,22 @@ impl LightShading {
             }
             None
         };
+        let mut clusters = None;
+        let cluster_lists: [wgpu::Buffer; 2];
+        if let Pipeline::Clustered { kernels, .. } = &self.pipeline {
+            let inputs = clustered::ClusterInputs {
+                frame,
+                params: &params_buffer,
+                lights: &lights,
+                light_tree: &light_tree,
+                linear_depth: &inputs[0],
+            };
+            let bound = kernels.bind(device, tiles, inputs)?;
+            cluster_lists = bound.lists().map(|b| b.clone());
+            resources.truncate(9);
+            resources.extend(cluster_lists.iter().map(|b| b.as_entire_binding()));
+            clusters = Some(bound);
+        }
         let (group, volumes) = match volumes {
             Some((group, volumes)) => (group, Some(volumes)),
             None => (self.layout.bind(device, &resources), None),
@@ -461,6 +514,7 @@ impl LightShading {
             tiles: (tiles_x, tiles_y),
             listless,
             volumes,
+            clusters,
         })
     }
 
@@ -537,6 +591,18 @@ impl LightShading {
     ) {
         let compute = match &self.pipeline {
             Pipeline::Compute(p) => p,
+            Pipeline::Clustered { kernels, shade } => {
+                if let Some(clusters) = &bound.clusters {
+                    let mut dispatches = kernels.dispatches(clusters, bound.size);
+                    dispatches.push(kernel::Dispatch {
+                        pipeline: shade.clone(),
+                        groups: vec![bound.group.clone(), bound.shadow_group.clone()],
+                        workgroups: Workgroups::covering(bound.size.0, bound.size.1, 8),
+                    });
+                    Passes::new().pass(name, dispatches).encode(encoder, timer);
+                }
+                return;
+            }
             Pipeline::Volumes { tested, untested } => {
                 if let Some(volumes) = &bound.volumes {
                     encode_volumes(bound, volumes, (tested, untested), encoder, timer, name);
@@ -611,6 +677,10 @@ impl BoundShading {
         if self.listless {
             return Ok(None);
         }
+        if self.clusters.is_some() {
+            let lists = self.read_cluster_lists(device, queue)?;
+            return Ok(lists.map(|l| l.iter().map(|l| l.len() as u32).collect()));
+        }
         let mut counts: Vec<u32> = transfer::read_pod(device, queue, &self.counts)?;
         let (tx, ty) = self.tiles;
         counts.truncate((tx * ty) as usize);
@@ -624,6 +694,9 @@ impl BoundShading {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Option<Vec<Vec<(u32, u32)>>>, ShadingError> {
+        if self.clusters.is_some() {
+            return self.read_cluster_lists(device, queue);
+        }
         let Some(counts) = self.read_counts(device, queue)? else {
             return Ok(None);
         };
@@ -646,6 +719,23 @@ impl BoundShading {
                 })
                 .collect(),
         ))
+    }
+}
+
+impl BoundShading {
+    /// [`Method::Clustered`]'s lists gathered per tile ([`clustered::BoundClusters::read_lists`]).
+    fn read_cluster_lists(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<Vec<Vec<(u32, u32)>>>, ShadingError> {
+        let Some(clusters) = &self.clusters else {
+            return Ok(None);
+        };
+        let tiles = (self.tiles.0 * self.tiles.1) as usize;
+        clusters
+            .read_lists(device, queue, tiles, self.params.light_count)
+            .map(Some)
     }
 }
 
