@@ -1,5 +1,5 @@
 //! `deferred`: renders a scene with deferred shading (G-buffer → light accumulation: brute
-//! force, light volumes, tiled, tiled with normal cones or clustered → composition), optionally with one-bounce indirect light from VPLs shaded with
+//! force, light volumes, tiled, tiled with normal cones, tiled with slice masks or clustered → composition), optionally with one-bounce indirect light from VPLs shaded with
 //! interleaved sampling (Segovia 2006: BS → SNSM → BG → DB → B), on the GPU, or on the CPU
 //! when asked or when no GPU adapter exists; writes `render.png` and `render.exr` and prints
 //! the milliseconds of each pass (per million fragments too, like the paper's Table 3).
@@ -51,7 +51,8 @@ struct Args {
     #[arg(long, value_parser = parse_light_count)]
     lights: Option<usize>,
     /// Light accumulation: brute, tiled, tiled-cones (tiled with normal-cone back-face
-    /// culling), clustered, volumes (traditional deferred shading: instanced light
+    /// culling), tiled-slices (tile lists with depth-slice masks), clustered (per-cluster
+    /// lists after Olsson 2012), volumes (traditional deferred shading: instanced light
     /// volumes, additive blending; the GPU needs FLOAT32_BLENDABLE), or forward (Forward+:
     /// the tiles' lists light the scene drawn again, and alpha-blended materials are blended
     /// over the frame back to front instead of dithered; not with --ssaa), or light-prepass

@@ -1934,6 +1934,7 @@ impl Panel<'_> {
                         "brute",
                         "tiled",
                         "tiled-cones",
+                        "tiled-slices",
                         "clustered",
                         "volumes",
                         "forward",

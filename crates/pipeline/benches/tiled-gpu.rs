@@ -1,5 +1,5 @@
 //! `tiled-bench`: the light accumulation of Ishmukhametov 2013 on the GPU — brute force, tiled,
-//! tiled with normal-cone back-face culling, clustered, traditional deferred shading with
+//! tiled with normal-cone back-face culling, tiled with slice masks, clustered, traditional deferred shading with
 //! light volumes (§4.1, depth-tested against the G-buffer's depth), Forward+ and the light
 //! pre-pass (§2.4.2, §2.1; with their geometry passes) — (1) on Sponza at 1920×1080 and
 //! 3840×2160 with 256 to 65 536 scattered bounded point lights, (2) on the thesis's tests 1–4
@@ -23,8 +23,7 @@ use pipeline::{DEFAULT_AMBIENT, LightSearch, ShadingConfig, ShadingMethod, gpu::
 use scene::{Camera, Light};
 use serde::Serialize;
 
-/// Benchmarks brute-force, tiled, tiled + normal-cone, clustered and light-volume light
-/// accumulation.
+/// Benchmarks every light accumulation method.
 #[derive(Parser, Debug)]
 struct Args {
     #[command(flatten)]
@@ -44,7 +43,7 @@ const MOST_FOR_ALL: usize = 65536;
 
 /// What is measured, by report name: every method, the tiled ones with both light searches
 /// (`-flat`: every light per tile, as the thesis; without: through the light hierarchy).
-const VARIANTS: [(&str, ShadingMethod, LightSearch); 10] = [
+const VARIANTS: [(&str, ShadingMethod, LightSearch); 11] = [
     ("brute", ShadingMethod::BruteForce, LightSearch::Flat),
     ("tiled-flat", ShadingMethod::Tiled, LightSearch::Flat),
     ("tiled", ShadingMethod::Tiled, LightSearch::Tree),
@@ -54,6 +53,11 @@ const VARIANTS: [(&str, ShadingMethod, LightSearch); 10] = [
         LightSearch::Flat,
     ),
     ("tiled-cones", ShadingMethod::TiledCones, LightSearch::Tree),
+    (
+        "tiled-slices",
+        ShadingMethod::TiledSlices,
+        LightSearch::Tree,
+    ),
     (
         "clustered-flat",
         ShadingMethod::Clustered,
@@ -371,7 +375,8 @@ fn markdown(r: &Report) -> String {
          ## Light-count sweep: `{}`, {}\n\n\
          Lights scattered uniformly through the scene's bounds (`scatter_point_lights`, radius \
          0.6·diagonal/∛N). Cells: ms (speed-up over brute force); mean list = lights per \
-         non-empty tile. Above 65 536 lights brute force and the volumes are not run (seconds \
+         non-empty tile (for clustered: distinct lights over the tile's clusters); clustered vs \
+         tiled = tiled ms / clustered ms, both through the hierarchy. Above 65 536 lights brute force and the volumes are not run (seconds \
          per frame). `-flat`: every light tested per tile, as the thesis; without: the tile finds \
          its lights through the light hierarchy (groups of 32 lights in Morton order under \
          bounding spheres) — the same lists.\n",
@@ -469,7 +474,7 @@ fn sweep_table(s: &mut String, r: &Report, view: &str) {
     let methods: Vec<&str> = VARIANTS.iter().map(|v| v.0).collect();
     let _ = writeln!(
         s,
-        "| size | lights | {} | tiled list | cones list | clustered list |\n|---|---|{}---|---|---|",
+        "| size | lights | {} | clustered vs tiled | tiled list | cones list | clustered list |\n|---|---|{}---|---|---|---|",
         methods.join(" | "),
         "---|".repeat(methods.len())
     );
@@ -496,10 +501,12 @@ fn sweep_table(s: &mut String, r: &Report, view: &str) {
                 .and_then(|x| x.mean_list)
                 .map_or("—".into(), |l| format!("{l:.1}"))
         };
+        let ms = |m: &str| row(m).map_or(f64::NAN, |x| x.ms.median_ms);
         let _ = writeln!(
             s,
-            "| {w}×{h} | {n} | {} | {} | {} | {} |",
+            "| {w}×{h} | {n} | {} | ×{:.2} | {} | {} | {} |",
             cells.join(" | "),
+            ms("tiled") / ms("clustered"),
             list("tiled"),
             list("tiled-cones"),
             list("clustered")

@@ -85,7 +85,7 @@ impl Ssaa {
 }
 
 /// Levels of each switch.
-const LEVELS: [usize; 10] = [7, 4, 4, 4, 2, 2, 2, 3, 2, 2];
+const LEVELS: [usize; 10] = [8, 4, 4, 4, 2, 2, 2, 3, 2, 2];
 
 /// Forward+ and the light pre-pass draw the scene again: supersampling, which shades
 /// G-buffer samples, is off with them.
