@@ -3,13 +3,14 @@
 // #import tiled-shading/slices.wgsl
 // Clustered deferred shading (Olsson et al. 2012, as the thesis summarises it in §2.5), four
 // dispatches of one pass:
-// 1. `cluster_keys` (per pixel): the pixel's cluster key — its TILE × TILE screen tile and its
-//    exponential depth slice — flags the cluster in `occupied` (a grid of tiles × SLICES).
-// 2. `compact_clusters` (per grid cell): each flagged cell is appended to `clusters` (the
-//    unique clusters, in no set order) and its flag cleared for the next frame;
-//    `cluster_dispatch` then writes the indirect dispatch of step 3 (rows of ROW workgroups).
+// 1. `cluster_keys` (a workgroup per TILE × TILE screen tile): each pixel's cluster key — its
+//    tile and exponential depth slice — and, per slice, the least and greatest depth of the
+//    tile's pixels in it (the cluster's explicit bounds); the occupied clusters are appended
+//    to `clusters` (the unique clusters, compacted, in no set order) with their bounds.
+// 2. `cluster_dispatch`: the indirect dispatch of step 3 (rows of ROW workgroups); it resets
+//    the counters for the next steps and the next frame.
 // 3. `assign_lights` (a workgroup per unique cluster): the cluster's lights — those meeting
-//    the tile's side planes and the slice's depths — found through the light hierarchy
+//    the tile's side planes and the cluster's depths — found through the light hierarchy
 //    (LIGHT_TREE: groups of GROUP lights under bounding spheres, `tiled_shading::LightGroups`)
 //    or among all lights, gathered in workgroup memory, then appended to `entries` at an
 //    offset taken from `state.entry_total`; `records[cell]` = (offset, count). A cluster with
@@ -18,27 +19,32 @@
 //    OVERFLOW cluster over every light whose sphere holds the pixel (the same sums: a light
 //    adds nothing beyond its radius) — so no light count is too large.
 // Twin of `tiled_shading::cpu::shade` with `Method::Clustered` (the same lists).
-// `tiled_shading::gpu::clustered` sets TILE and LIGHT_TREE.
+// `tiled_shading::gpu::clustered` sets TILE, WG and LIGHT_TREE.
 
 const TILE: u32 = 16u;
+// Invocations per tile side in `cluster_keys`, min(TILE, 16); each reads PER_SIDE² pixels.
+const WG: u32 = 16u;
+const PER_SIDE: u32 = TILE / WG;
 const LIGHT_TREE: bool = true;
 const GROUP: u32 = 32u;
 const THREADS: u32 = 64u;
 const CAPACITY: u32 = 1024u;
 const OVERFLOW: u32 = 0xffffffffu;
 const ROW: u32 = 32768u;
+const EMPTY: u32 = 0xffffffffu;
 
 struct ClusterState {
+    // Appended by `cluster_keys`; moved to `clusters_found` and reset by `cluster_dispatch`.
     cluster_count: atomic<u32>,
+    clusters_found: u32,
     entry_total: atomic<u32>,
 };
 
 @group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(8) var specular_out: texture_storage_2d<rgba32float, write>;
-// Per grid cell (tile × SLICES + slice): 1 when a pixel of this frame lies in it.
-@group(0) @binding(9) var<storage, read_write> occupied: array<atomic<u32>>;
-// The occupied cells, `state.cluster_count` of them.
-@group(0) @binding(10) var<storage, read_write> clusters: array<u32>;
+// The unique clusters: (grid cell = tile × SLICES + slice, least depth, greatest depth as f32
+// bits, 0), `state.clusters_found` of them.
+@group(0) @binding(10) var<storage, read_write> clusters: array<vec4<u32>>;
 // `LightGroups::words`: each group's bounding sphere, then the light indices in Morton order.
 @group(0) @binding(11) var<storage, read> light_tree: array<vec4<u32>>;
 // Per grid cell: (offset into `entries` or OVERFLOW, light count) — valid for this frame's
@@ -50,59 +56,65 @@ struct ClusterState {
 // dispatch holds.
 @group(0) @binding(15) var<storage, read_write> assign_groups: array<u32, 3>;
 
-fn tiles_y(size: vec2<u32>) -> u32 {
-    return (size.y + TILE - 1u) / TILE;
-}
-
 fn cell_of(pixel: vec2<u32>, depth: f32) -> u32 {
     let tile = (pixel.y / TILE) * params.tiles_x + pixel.x / TILE;
     return tile * SLICES + slice_of(depth);
 }
 
-@compute @workgroup_size(8, 8)
-fn cluster_keys(@builtin(global_invocation_id) id: vec3<u32>) {
-    if all(id.xy == vec2<u32>(0u)) {
-        atomicStore(&state.cluster_count, 0u);
-        atomicStore(&state.entry_total, 0u);
-    }
-    let size = textureDimensions(linear_depth_texture);
-    if id.x >= size.x || id.y >= size.y {
-        return;
-    }
-    let depth = textureLoad(linear_depth_texture, id.xy, 0).x;
-    if depth <= 0.0 {
-        return;
-    }
-    let cell = cell_of(id.xy, depth);
-    // Most pixels find their cluster flagged already: a load spares the store.
-    if atomicLoad(&occupied[cell]) == 0u {
-        atomicStore(&occupied[cell], 1u);
-    }
-}
+// Per slice of `cluster_keys`' tile: the least and greatest depth (positive f32 bits order as
+// u32), EMPTY and 0 when no pixel lies in it.
+var<workgroup> slice_least: array<atomic<u32>, SLICES>;
+var<workgroup> slice_greatest: array<atomic<u32>, SLICES>;
 
-@compute @workgroup_size(THREADS)
-fn compact_clusters(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let cell = id.x + id.y * groups.x * THREADS;
-    let cells = params.tiles_x * tiles_y(textureDimensions(linear_depth_texture)) * SLICES;
-    if cell >= cells || atomicLoad(&occupied[cell]) == 0u {
-        return;
+@compute @workgroup_size(WG, WG)
+fn cluster_keys(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(local_invocation_id) local: vec3<u32>,
+    @builtin(local_invocation_index) index: u32,
+) {
+    if index < SLICES {
+        atomicStore(&slice_least[index], EMPTY);
+        atomicStore(&slice_greatest[index], 0u);
     }
-    atomicStore(&occupied[cell], 0u);
-    clusters[atomicAdd(&state.cluster_count, 1u)] = cell;
+    workgroupBarrier();
+    let size = textureDimensions(linear_depth_texture);
+    for (var i = 0u; i < PER_SIDE * PER_SIDE; i++) {
+        let pixel = group.xy * TILE + local.xy + WG * vec2<u32>(i % PER_SIDE, i / PER_SIDE);
+        if pixel.x < size.x && pixel.y < size.y {
+            let depth = textureLoad(linear_depth_texture, pixel, 0).x;
+            if depth > 0.0 {
+                let k = slice_of(depth);
+                atomicMin(&slice_least[k], bitcast<u32>(depth));
+                atomicMax(&slice_greatest[k], bitcast<u32>(depth));
+            }
+        }
+    }
+    workgroupBarrier();
+    if index < SLICES {
+        let least = atomicLoad(&slice_least[index]);
+        if least != EMPTY {
+            let tile = group.y * params.tiles_x + group.x;
+            let cluster = vec4<u32>(tile * SLICES + index, least, atomicLoad(&slice_greatest[index]), 0u);
+            clusters[atomicAdd(&state.cluster_count, 1u)] = cluster;
+        }
+    }
 }
 
 @compute @workgroup_size(1)
 fn cluster_dispatch() {
     let n = atomicLoad(&state.cluster_count);
+    state.clusters_found = n;
+    atomicStore(&state.cluster_count, 0u);
+    atomicStore(&state.entry_total, 0u);
     assign_groups[0] = min(n, ROW);
     assign_groups[1] = (n + ROW - 1u) / ROW;
     assign_groups[2] = 1u;
 }
 
-// The cluster of `assign_lights`: its tile's side planes and its slice's depths.
+// The cluster of `assign_lights`: its tile's side planes and its pixels' depths.
 var<workgroup> cluster_cell: u32;
 var<workgroup> cluster_planes: array<vec4<f32>, 4>;
-var<workgroup> cluster_slice: u32;
+var<workgroup> cluster_depths: vec2<f32>;
 var<workgroup> cluster_total: u32;
 var<workgroup> list_count: atomic<u32>;
 var<workgroup> list_size: u32;
@@ -120,14 +132,15 @@ fn sphere_meets_sides(c: vec3<f32>, r: f32) -> bool {
     return inside;
 }
 
+// Whether a sphere meets the cluster: its side planes and depths.
+fn sphere_meets_cluster(c: vec3<f32>, r: f32) -> bool {
+    let depth = view_depth(c);
+    return sphere_meets_sides(c, r) && depth + r >= cluster_depths.x && depth - r <= cluster_depths.y;
+}
+
 // `cpu::cull_light` for `Method::Clustered`.
 fn cluster_meets(light: Light) -> bool {
-    if light.kind == LIGHT_DIRECTIONAL {
-        return true;
-    }
-    let depth = view_depth(light.position);
-    return sphere_meets_sides(light.position, light.radius)
-        && meets_slice(depth - light.radius, depth + light.radius, cluster_slice);
+    return light.kind == LIGHT_DIRECTIONAL || sphere_meets_cluster(light.position, light.radius);
 }
 
 @compute @workgroup_size(THREADS)
@@ -138,10 +151,11 @@ fn assign_lights(
 ) {
     let c = group.x + group.y * groups.x;
     if index == 0u {
-        cluster_total = atomicLoad(&state.cluster_count);
+        cluster_total = state.clusters_found;
         atomicStore(&list_count, 0u);
         if c < cluster_total {
-            let cell = clusters[c];
+            let cluster = clusters[c];
+            let cell = cluster.x;
             let tile = cell / SLICES;
             let size = textureDimensions(linear_depth_texture);
             let origin = vec2<u32>(tile % params.tiles_x, tile / params.tiles_x) * TILE;
@@ -151,7 +165,7 @@ fn assign_lights(
                 cluster_planes[i] = sides[i];
             }
             cluster_cell = cell;
-            cluster_slice = cell % SLICES;
+            cluster_depths = bitcast<vec2<f32>>(cluster.yz);
         }
     }
     if c >= workgroupUniformLoad(&cluster_total) {
@@ -172,9 +186,7 @@ fn assign_lights(
             if g < params.group_count {
                 // Directional lights' group has radius f32::MAX: it meets every cluster.
                 let sphere = bitcast<vec4<f32>>(light_tree[g]);
-                let depth = view_depth(sphere.xyz);
-                if sphere_meets_sides(sphere.xyz, sphere.w)
-                    && meets_slice(depth - sphere.w, depth + sphere.w, cluster_slice) {
+                if sphere_meets_cluster(sphere.xyz, sphere.w) {
                     passed_groups[atomicAdd(&passed_count, 1u)] = g;
                 }
             }

@@ -15,12 +15,6 @@ fn slice_start(k: u32) -> f32 {
     return params.slice_near * exp(f32(k) / params.slice_scale);
 }
 
-// Whether view depths `near..far` (a light's sphere) meet slice `k`, widened by
-// SLICE_EPSILON for the rounding of `log` and `exp` (`cpu::cull_light`).
-fn meets_slice(near: f32, far: f32, k: u32) -> bool {
-    return far >= slice_start(k) * (1.0 - SLICE_EPSILON) && near <= slice_start(k + 1u) * (1.0 + SLICE_EPSILON);
-}
-
 // The view depth of a world position.
 fn view_depth(p: vec3<f32>) -> f32 {
     return -dot(vec4<f32>(frame.view[0].z, frame.view[1].z, frame.view[2].z, frame.view[3].z), vec4<f32>(p, 1.0));

@@ -34,6 +34,10 @@ struct Args {
     /// gallery with its blended sphere, dithered or drawn forward.
     #[arg(long)]
     transparency: bool,
+    /// Only these light counts (comma-separated), at 1920×1080 from both views, without the
+    /// thesis tests: a focused comparison.
+    #[arg(long, value_delimiter = ',')]
+    lights: Vec<usize>,
 }
 
 const SIZES: [(u32, u32); 2] = [(1920, 1080), (3840, 2160)];
@@ -180,18 +184,22 @@ fn main() -> Result<()> {
         scene.triangle_count()
     );
     let q = &args.quick;
-    let (sizes, counts, tests) = (q.sweep(&SIZES), q.sweep(&LIGHTS), q.sweep(&TESTS));
+    let (mut sizes, mut counts, mut tests) = (q.sweep(&SIZES), q.sweep(&LIGHTS), q.sweep(&TESTS));
+    let mut colonnade_counts = if q.quick {
+        &COLONNADE_LIGHTS[..1]
+    } else {
+        &COLONNADE_LIGHTS
+    };
+    if !args.lights.is_empty() {
+        (sizes, counts, tests) = (&SIZES[..1], &args.lights, &[]);
+        colonnade_counts = &args.lights;
+    }
 
     let mut sweep = light_sweep(&gpu, &scene, &camera, "main", sizes, counts, frames)?;
     let colonnade = Camera {
         eye: COLONNADE.0.into(),
         target: COLONNADE.1.into(),
         ..camera
-    };
-    let colonnade_counts = if q.quick {
-        &COLONNADE_LIGHTS[..1]
-    } else {
-        &COLONNADE_LIGHTS
     };
     sweep.extend(light_sweep(
         &gpu,

@@ -72,6 +72,9 @@ pub struct TileBounds {
     /// Bit k set when a pixel lies in cluster slice k ([`Method::TiledSlices`],
     /// [`Method::Clustered`]).
     pub slices: u32,
+    /// Per slice, the least and greatest view depth of the tile's pixels in it (`[+∞, −∞]`
+    /// when none): the explicit depth bounds of [`Method::Clustered`]'s clusters.
+    pub cluster_depths: [[f32; 2]; CLUSTER_SLICES as usize],
 }
 
 impl TileBounds {
@@ -119,12 +122,16 @@ pub fn tile_bounds(samples: &[Sample], slicing: &Slicing) -> TileBounds {
         normal_sum: IVec3::ZERO,
         min_cosine: i32::MAX,
         slices: 0,
+        cluster_depths: [[f32::INFINITY, f32::NEG_INFINITY]; CLUSTER_SLICES as usize],
     };
     for s in samples {
         b.min_depth = b.min_depth.min(s.depth);
         b.max_depth = b.max_depth.max(s.depth);
         b.normal_sum += quantize_normal(s.normal);
-        b.slices |= 1 << slicing.slice(s.depth);
+        let k = slicing.slice(s.depth);
+        b.slices |= 1 << k;
+        let bounds = &mut b.cluster_depths[k as usize];
+        *bounds = [bounds[0].min(s.depth), bounds[1].max(s.depth)];
     }
     let axis = b.normal_sum.as_vec3().normalize_or_zero();
     for s in samples {
@@ -323,14 +330,25 @@ pub fn cull_light(method: Method, tile: &Tile, frame: &Frame, light: &GpuLight) 
             if keep { ALL_SLICES } else { 0 }
         }
         Method::ForwardPlus => forward_entry(tile, light),
-        Method::TiledSlices | Method::Clustered => {
-            // A cluster is bounded in depth by its slice alone, a tile's slices also by the
-            // tile's depth bounds.
-            let planes = if method == Method::Clustered {
-                &planes[..4]
-            } else {
-                &planes[..]
-            };
+        Method::Clustered => {
+            // Explicit cluster bounds (Olsson et al. 2012 as §2.5 gives them): the tile's side
+            // planes and the depths of the cluster's own pixels.
+            if !sphere_meets(&planes[..4], world, light.radius) {
+                return 0;
+            }
+            let depth = -frame.view.row(2).dot(world.extend(1.0));
+            let (near, far) = (depth - light.radius, depth + light.radius);
+            let mut mask = 0;
+            for k in 0..CLUSTER_SLICES {
+                let [z0, z1] = tile.bounds.cluster_depths[k as usize];
+                if far >= z0 && near <= z1 {
+                    mask |= 1 << k;
+                }
+            }
+            mask
+        }
+        Method::TiledSlices => {
+            // The slices' own depths within the tile's depth bounds.
             if !sphere_meets(planes, world, light.radius) {
                 return 0;
             }

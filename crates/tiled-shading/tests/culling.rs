@@ -162,10 +162,14 @@ fn decision_margin(c: &Case, config: &ShadingConfig, t: usize, light: u32) -> f3
         .map(|q| (q.truncate().dot(p) + q.w + l.radius).abs() / l.radius)
         .fold(f32::INFINITY, f32::min);
     if matches!(config.method, Method::TiledSlices | Method::Clustered) {
-        // The slice tests: the light's depth interval against each slice's ends.
+        // The depth tests: the light's depth interval against each slice's ends (tiled
+        // slices) or each cluster's depth bounds (clustered).
         let depth = -c.frame.view.row(2).dot(p.extend(1.0));
         for k in 0..tiled_shading::CLUSTER_SLICES {
-            let (z0, z1) = (slicing.start(k), slicing.start(k + 1));
+            let [z0, z1] = match config.method {
+                Method::Clustered => bounds.cluster_depths[k as usize],
+                _ => [slicing.start(k), slicing.start(k + 1)],
+            };
             margin = margin
                 .min((depth + l.radius - z0).abs() / l.radius)
                 .min((depth - l.radius - z1).abs() / l.radius);
@@ -443,6 +447,31 @@ fn frustum_culling_keeps_every_light_that_lights_the_view() {
         &shade_cpu(&culled, &config(Method::BruteForce, 16)),
         1e-5,
         1e-6,
+    );
+}
+
+#[test]
+fn clusters_list_only_lights_of_their_tiles_lists() {
+    // A cluster's explicit bounds lie within its tile's depth bounds: its lights are among the
+    // tile's, and depth discontinuities make them fewer.
+    let c = walls(500, 128, 72);
+    let tiled = shade_cpu(&c, &config(Method::Tiled, 16));
+    let clustered = shade_cpu(&c, &config(Method::Clustered, 16));
+    for (t, (tile, clusters)) in sets(&tiled.lists)
+        .iter()
+        .zip(sets(&clustered.lists))
+        .enumerate()
+    {
+        let lights: BTreeSet<u32> = tile.iter().map(|e| e.0).collect();
+        assert!(
+            clusters.iter().all(|e| lights.contains(&e.0)),
+            "tile {t}: a cluster lists a light its tile does not"
+        );
+    }
+    let sum = |counts: &[u32]| counts.iter().map(|&n| u64::from(n)).sum::<u64>();
+    assert!(
+        sum(&clustered.counts) < sum(&tiled.counts),
+        "depth discontinuities leave some of a tile's lights in none of its clusters"
     );
 }
 

@@ -1,8 +1,8 @@
 //! Clustered deferred shading on the GPU ([`Method::Clustered`](crate::Method::Clustered),
-//! Olsson et al. 2012 as thesis §2.5 summarises it): `clustered.wgsl`'s five dispatches in
-//! one compute pass — cluster keys from the depth buffer, compaction of the occupied clusters
-//! (with the indirect dispatch of the next step), light assignment per cluster through the
-//! light hierarchy, and shading of every pixel from its cluster's list.
+//! Olsson et al. 2012 as thesis §2.5 summarises it): `clustered.wgsl`'s four dispatches in
+//! one compute pass — cluster keys and explicit cluster bounds from the depth buffer with the
+//! occupied clusters compacted, the indirect dispatch of the next step, light assignment per
+//! cluster through the light hierarchy, and shading of every pixel from its cluster's list.
 //!
 //! The grid holds `tiles × CLUSTER_SLICES` cells; the lists go into one buffer of
 //! [`entry_capacity`] light indices. A cluster whose lights do not fit (more than 1024, or
@@ -25,6 +25,7 @@ const ENTRIES_PER_TILE: u64 = 1024;
 pub fn specialisation(config: &ShadingConfig) -> Specialisation {
     Specialisation::default()
         .set("TILE", format!("{}u", config.tile_size))
+        .set("WG", format!("{}u", config.tile_size.min(16)))
         .set("LIGHT_TREE", config.search == crate::LightSearch::Tree)
 }
 
@@ -56,23 +57,24 @@ pub(super) fn shade_bindings() -> Vec<(u32, Binding)> {
     bindings
 }
 
-/// The kernels before the shading: keys, compaction, its indirect dispatch, assignment.
+/// The kernels before the shading: keys and compaction, the assignment's indirect dispatch,
+/// assignment.
 pub(super) struct ClusterKernels {
     keys: Kernel,
-    compact: Kernel,
     dispatch: Kernel,
     assign: Kernel,
 }
 
 /// The grid, lists and bind groups of one [`super::BoundShading`] of the clustered method.
 pub(super) struct BoundClusters {
-    groups: [wgpu::BindGroup; 4],
+    groups: [wgpu::BindGroup; 3],
     clusters: wgpu::Buffer,
     records: wgpu::Buffer,
     entries: wgpu::Buffer,
     state: wgpu::Buffer,
     assign_groups: wgpu::Buffer,
-    cells: u32,
+    /// Screen tiles across and down.
+    tiles: (u32, u32),
 }
 
 /// What the clustered kernels read besides their own buffers.
@@ -95,19 +97,7 @@ impl ClusterKernels {
                 device,
                 module,
                 "cluster_keys",
-                &[params, depth, (9, Binding::Storage), state],
-            ),
-            compact: Kernel::numbered(
-                device,
-                module,
-                "compact_clusters",
-                &[
-                    params,
-                    depth,
-                    (9, Binding::Storage),
-                    (10, Binding::Storage),
-                    state,
-                ],
+                &[params, depth, (10, Binding::Storage), state],
             ),
             dispatch: Kernel::numbered(
                 device,
@@ -134,33 +124,36 @@ impl ClusterKernels {
         }
     }
 
-    /// The grid and lists for `tiles` screen tiles and their bind groups; `records` and
-    /// `entries` are also bound by the shading group the caller makes ([`BoundClusters::lists`]).
+    /// The grid and lists for `tiles` screen tiles (across, down) and their bind groups;
+    /// `records` and `entries` are also bound by the shading group the caller makes
+    /// ([`BoundClusters::lists`]).
     pub(super) fn bind(
         &self,
         device: &wgpu::Device,
-        tiles: u64,
+        tiles: (u32, u32),
         inputs: ClusterInputs<'_>,
     ) -> Result<BoundClusters, ShadingError> {
-        let cells = tiles * u64::from(CLUSTER_SLICES);
-        let too_many = || GpuError::TooLarge {
-            what: "cluster grid".into(),
-            needed: cells,
-            limit: u64::from(u32::MAX),
-        };
-        let cells32 = u32::try_from(cells).map_err(|_| too_many())?;
-        let occupied = storage(device, "occupied clusters", cells * 4)?;
-        let clusters = storage(device, "unique clusters", cells * 4)?;
+        let tile_count = u64::from(tiles.0) * u64::from(tiles.1);
+        let cells = tile_count * u64::from(CLUSTER_SLICES);
+        if cells > u64::from(u32::MAX) {
+            return Err(GpuError::TooLarge {
+                what: "cluster grid".into(),
+                needed: cells,
+                limit: u64::from(u32::MAX),
+            }
+            .into());
+        }
+        let clusters = storage(device, "unique clusters", cells * 16)?;
         let records = storage(device, "cluster records", cells * 8)?;
         let entries = storage(
             device,
             "cluster light lists",
-            entry_capacity(device, tiles) * 4,
+            entry_capacity(device, tile_count) * 4,
         )?;
         let state = transfer::buffer(
             device,
             "cluster state",
-            8,
+            12,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         )?;
         let assign_groups = transfer::buffer(
@@ -174,17 +167,7 @@ impl ClusterKernels {
         let groups = [
             self.keys.bind(
                 device,
-                &[b(inputs.params), depth.clone(), b(&occupied), b(&state)],
-            ),
-            self.compact.bind(
-                device,
-                &[
-                    b(inputs.params),
-                    depth.clone(),
-                    b(&occupied),
-                    b(&clusters),
-                    b(&state),
-                ],
+                &[b(inputs.params), depth.clone(), b(&clusters), b(&state)],
             ),
             self.dispatch.bind(device, &[b(&state), b(&assign_groups)]),
             self.assign.bind(
@@ -209,18 +192,16 @@ impl ClusterKernels {
             entries,
             state,
             assign_groups,
-            cells: cells32,
+            tiles,
         })
     }
 
-    /// The dispatches before the shading, for a `width × height` G-buffer.
-    pub(super) fn dispatches(&self, bound: &BoundClusters, size: (u32, u32)) -> Vec<Dispatch> {
-        let [keys, compact, dispatch, assign] = &bound.groups;
+    /// The dispatches before the shading.
+    pub(super) fn dispatches(&self, bound: &BoundClusters) -> Vec<Dispatch> {
+        let [keys, dispatch, assign] = &bound.groups;
         vec![
             self.keys
-                .dispatch(keys, Workgroups::covering(size.0, size.1, 8)),
-            self.compact
-                .dispatch(compact, Workgroups::linear(bound.cells, 64)),
+                .dispatch(keys, Workgroups::Direct([bound.tiles.0, bound.tiles.1, 1])),
             self.dispatch
                 .dispatch(dispatch, Workgroups::Direct([1, 1, 1])),
             self.assign
@@ -246,11 +227,11 @@ impl BoundClusters {
         light_count: u32,
     ) -> Result<Vec<Vec<(u32, u32)>>, ShadingError> {
         let state: Vec<u32> = transfer::read_pod(device, queue, &self.state)?;
-        let clusters: Vec<u32> = transfer::read_pod(device, queue, &self.clusters)?;
+        let clusters: Vec<[u32; 4]> = transfer::read_pod(device, queue, &self.clusters)?;
         let records: Vec<[u32; 2]> = transfer::read_pod(device, queue, &self.records)?;
         let entries: Vec<u32> = transfer::read_pod(device, queue, &self.entries)?;
         let mut masks = vec![std::collections::BTreeMap::<u32, u32>::new(); tiles];
-        for &cell in &clusters[..state[0] as usize] {
+        for &[cell, ..] in &clusters[..state[1] as usize] {
             let (tile, slice) = ((cell / CLUSTER_SLICES) as usize, cell % CLUSTER_SLICES);
             let [offset, count] = records[cell as usize];
             let lights: Box<dyn Iterator<Item = u32>> = if offset == OVERFLOW {

@@ -490,7 +490,7 @@ impl LightShading {
                 light_tree: &light_tree,
                 linear_depth: &inputs[0],
             };
-            let bound = kernels.bind(device, tiles, inputs)?;
+            let bound = kernels.bind(device, (tiles_x, tiles_y), inputs)?;
             cluster_lists = bound.lists().map(|b| b.clone());
             resources.truncate(9);
             resources.extend(cluster_lists.iter().map(|b| b.as_entire_binding()));
@@ -593,7 +593,7 @@ impl LightShading {
             Pipeline::Compute(p) => p,
             Pipeline::Clustered { kernels, shade } => {
                 if let Some(clusters) = &bound.clusters {
-                    let mut dispatches = kernels.dispatches(clusters, bound.size);
+                    let mut dispatches = kernels.dispatches(clusters);
                     dispatches.push(kernel::Dispatch {
                         pipeline: shade.clone(),
                         groups: vec![bound.group.clone(), bound.shadow_group.clone()],
