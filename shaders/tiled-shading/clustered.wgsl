@@ -1,6 +1,7 @@
 // #import tiled-shading/shadows.wgsl
 // #import tiled-shading/pixels.wgsl
 // #import tiled-shading/slices.wgsl
+// #import tiled-shading/light_search.wgsl
 // Clustered deferred shading (Olsson et al. 2012, as the thesis summarises it in §2.5), four
 // dispatches of one pass:
 // 1. `cluster_keys` (a workgroup per TILE × TILE screen tile): each pixel's cluster key — its
@@ -10,23 +11,20 @@
 // 2. `cluster_dispatch`: the indirect dispatch of step 3 (rows of ROW workgroups); it resets
 //    the counters for the next steps and the next frame.
 // 3. `assign_lights` (a workgroup per unique cluster): the cluster's lights — those meeting
-//    the tile's side planes and the cluster's depths — found through the light hierarchy
-//    (LIGHT_TREE: groups of GROUP lights under bounding spheres, `tiled_shading::LightGroups`)
-//    or among all lights, gathered in workgroup memory, then appended to `entries` at an
+//    the tile's side planes and the cluster's depths — found as `light_search.wgsl` says
+//    (through the light hierarchy, or among all lights), gathered in workgroup memory, then appended to `entries` at an
 //    offset taken from `state.entry_total`; `records[cell]` = (offset, count). A cluster with
 //    more than CAPACITY lights, or whose entries do not fit, is recorded as OVERFLOW.
 // 4. `shade_clusters` (per pixel): the sums over the pixel's cluster's entries; in an
 //    OVERFLOW cluster over every light whose sphere holds the pixel (the same sums: a light
 //    adds nothing beyond its radius) — so no light count is too large.
 // Twin of `tiled_shading::cpu::shade` with `Method::Clustered` (the same lists).
-// `tiled_shading::gpu::clustered` sets TILE, WG and LIGHT_TREE.
+// `tiled_shading::gpu::clustered` sets TILE, WG and LIGHT_TREE; ROUND is THREADS.
 
 const TILE: u32 = 16u;
 // Invocations per tile side in `cluster_keys`, min(TILE, 16); each reads PER_SIDE² pixels.
 const WG: u32 = 16u;
 const PER_SIDE: u32 = TILE / WG;
-const LIGHT_TREE: bool = true;
-const GROUP: u32 = 32u;
 const THREADS: u32 = 64u;
 const CAPACITY: u32 = 1024u;
 const OVERFLOW: u32 = 0xffffffffu;
@@ -45,8 +43,6 @@ struct ClusterState {
 // The unique clusters: (grid cell = tile × SLICES + slice, least depth, greatest depth as f32
 // bits, 0), `state.clusters_found` of them.
 @group(0) @binding(10) var<storage, read_write> clusters: array<vec4<u32>>;
-// `LightGroups::words`: each group's bounding sphere, then the light indices in Morton order.
-@group(0) @binding(11) var<storage, read> light_tree: array<vec4<u32>>;
 // Per grid cell: (offset into `entries` or OVERFLOW, light count) — valid for this frame's
 // occupied cells only.
 @group(0) @binding(12) var<storage, read_write> records: array<vec2<u32>>;
@@ -120,9 +116,6 @@ var<workgroup> list_count: atomic<u32>;
 var<workgroup> list_size: u32;
 var<workgroup> list_light: array<u32, CAPACITY>;
 var<workgroup> list_offset: u32;
-var<workgroup> passed_count: atomic<u32>;
-var<workgroup> passed_size: u32;
-var<workgroup> passed_groups: array<u32, THREADS>;
 
 fn sphere_meets_sides(c: vec3<f32>, r: f32) -> bool {
     var inside = true;
@@ -171,40 +164,23 @@ fn assign_lights(
     if c >= workgroupUniformLoad(&cluster_total) {
         return;
     }
-    var rounds = 1u;
-    if LIGHT_TREE {
-        rounds = (params.group_count + THREADS - 1u) / THREADS;
-    }
-    for (var r = 0u; r < rounds; r++) {
-        var batches = (params.light_count + THREADS - 1u) / THREADS;
+    for (var r = 0u; r < search_rounds(); r++) {
+        var candidates = params.light_count;
         if LIGHT_TREE {
-            if index == 0u {
-                atomicStore(&passed_count, 0u);
-            }
-            workgroupBarrier();
-            let g = r * THREADS + index;
-            if g < params.group_count {
-                // Directional lights' group has radius f32::MAX: it meets every cluster.
-                let sphere = bitcast<vec4<f32>>(light_tree[g]);
+            let g = begin_round(r, index);
+            // Directional lights' group has radius f32::MAX: it meets every cluster.
+            if g != NO_LIGHT {
+                let sphere = group_sphere(g);
                 if sphere_meets_cluster(sphere.xyz, sphere.w) {
-                    passed_groups[atomicAdd(&passed_count, 1u)] = g;
+                    pass_group(g);
                 }
             }
-            workgroupBarrier();
-            if index == 0u {
-                passed_size = atomicLoad(&passed_count);
-            }
-            batches = (workgroupUniformLoad(&passed_size) * GROUP + THREADS - 1u) / THREADS;
+            candidates = end_round(index);
         }
+        let batches = (candidates + THREADS - 1u) / THREADS;
         for (var b = 0u; b < batches; b++) {
-            var i = b * THREADS + index;
-            var valid = i < params.light_count;
-            if LIGHT_TREE {
-                let k = passed_groups[min(i / GROUP, THREADS - 1u)] * GROUP + i % GROUP;
-                valid = i / GROUP < passed_size && k < params.light_count;
-                let o = min(k, params.light_count - 1u);
-                i = light_tree[params.group_count + o / 4u][o % 4u];
-            }
+            let i = candidate_light(b * THREADS + index);
+            let valid = i != NO_LIGHT;
             if valid && cluster_meets(lights[i]) {
                 let slot = atomicAdd(&list_count, 1u);
                 if slot < CAPACITY {

@@ -1,6 +1,7 @@
 // #import tiled-shading/shadows.wgsl
 // #import tiled-shading/pixels.wgsl
 // #import tiled-shading/slices.wgsl
+// #import tiled-shading/light_search.wgsl
 // Light accumulation: brute force (`brute_force`, every light at every pixel) and tile-based
 // deferred shading in one compute pass (`shade_tiles`, Ishmukhametov 2013 §2.4.1 after
 // Andersson 2009): one workgroup per screen tile loads its G-buffer pixels, reduces their depth bounds
@@ -8,11 +9,9 @@
 // lights: every invocation tests one light of a batch against the tile frustum and appends it
 // to the tile's list in workgroup memory; whenever the list could overflow with the next batch,
 // and after the last one, the invocations switch back to pixels and shade from the list.
-// With LIGHT_TREE (`LightSearch::Tree`, after Olsson et al. 2012's light BVH) the lights are
-// found through a light hierarchy: the lights in Morton order in groups of GROUP under bounding
-// spheres (`tiled_shading::LightGroups`); a round of THREADS groups is tested against the tile
-// frustum, and only the lights of the groups that pass are tested one by one. Without it
-// (`LightSearch::Flat`, the thesis) every light is tested. The lists are the same.
+// The lights are found as `light_search.wgsl` says: with LIGHT_TREE through the light
+// hierarchy (rounds of THREADS groups tested against the tile frustum, then the lights of
+// the groups that pass one by one), without it every light. The lists are the same.
 // Forward+ (METHOD_FORWARD, §2.4.2) only builds the lists, for the depths from the near plane
 // to the tile's farthest opaque surface (the far plane where a pixel shows no surface, so
 // blended surfaces in front of the opaque ones find their lights too), marks the entries that
@@ -24,10 +23,9 @@
 // second geometry pass (`light_prepass.wgsl`) applies the materials. With `record_lists` the
 // monochrome specular goes to the specular output too (for the CPU twin).
 // Twin of `tiled_shading::cpu` (same names). `tiled_shading::gpu::specialisation` sets
-// METHOD, TILE, WG and LIGHT_TREE.
+// METHOD, TILE, WG, ROUND (= WG²) and LIGHT_TREE.
 
 const METHOD: u32 = 1u;
-const LIGHT_TREE: bool = true;
 const TILE: u32 = 16u;
 // Invocations per tile side, min(TILE, 16); each shades PER_SIDE² pixels.
 const WG: u32 = 16u;
@@ -49,7 +47,6 @@ const NORMAL_QUANTUM: f32 = 32768.0;
 const COSINE_QUANTUM: f32 = 1048576.0;
 const CONE_EPSILON: f32 = 1e-3;
 // Lights per group of the light hierarchy (`tiled_shading::LIGHT_GROUP`).
-const GROUP: u32 = 32u;
 
 @group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(8) var specular_out: texture_storage_2d<rgba32float, write>;
@@ -57,9 +54,6 @@ const GROUP: u32 = 32u;
 @group(0) @binding(9) var<storage, read_write> counts: array<u32>;
 // Per tile: (light index, slice mask) × list_stride, when params.record_lists is 1.
 @group(0) @binding(10) var<storage, read_write> lists: array<vec2<u32>>;
-// LIGHT_TREE: the light hierarchy (`LightGroups::words`) — each group's bounding sphere
-// (centre, radius as float bits), then the light indices in Morton order, four per entry.
-@group(0) @binding(11) var<storage, read> light_tree: array<vec4<u32>>;
 
 // Tree reductions over the invocations: (min depth bits, max depth bits, slice mask, _) and
 // (quantized normal sum xyz, least quantized cosine) — four-way steps, no same-address atomics.
@@ -69,11 +63,7 @@ var<workgroup> list_count: atomic<u32>;
 var<workgroup> list_size: u32;
 var<workgroup> list_light: array<u32, CAPACITY>;
 var<workgroup> list_mask: array<u32, CAPACITY>;
-// LIGHT_TREE: the groups of the current round that meet the tile frustum; slices: the slice
-// starts.
-var<workgroup> passed_count: atomic<u32>;
-var<workgroup> passed_size: u32;
-var<workgroup> passed_groups: array<u32, THREADS>;
+// Slices: the slice starts.
 var<workgroup> slice_starts: array<f32, 33>;
 
 fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
@@ -376,43 +366,26 @@ fn shade_tiles(
         // Candidates in batches of THREADS: every light, or (LIGHT_TREE) the lights of the
         // groups that meet the tile frustum, found a round of THREADS groups at a time. The
         // pixels are shaded whenever the next batch could overflow the list, and at the end.
-        var rounds = 1u;
-        if LIGHT_TREE {
-            rounds = (params.group_count + THREADS - 1u) / THREADS;
-        }
         var alpha_ready = false;
-        for (var r = 0u; r < rounds; r++) {
-            var batches = (params.light_count + THREADS - 1u) / THREADS;
+        for (var r = 0u; r < search_rounds(); r++) {
+            var candidates = params.light_count;
             if LIGHT_TREE {
-                if index == 0u {
-                    atomicStore(&passed_count, 0u);
-                }
-                workgroupBarrier();
-                let g = r * THREADS + index;
-                if g < params.group_count {
-                    let sphere = bitcast<vec4<f32>>(light_tree[g]);
+                let g = begin_round(r, index);
+                if g != NO_LIGHT {
+                    let sphere = group_sphere(g);
                     let c = sphere.xyz;
                     let radius = sphere.w;
                     if above(0u, c, radius) && above(1u, c, radius) && above(2u, c, radius)
                         && above(3u, c, radius) && above(4u, c, radius) && above(5u, c, radius) {
-                        passed_groups[atomicAdd(&passed_count, 1u)] = g;
+                        pass_group(g);
                     }
                 }
-                workgroupBarrier();
-                if index == 0u {
-                    passed_size = atomicLoad(&passed_count);
-                }
-                batches = (workgroupUniformLoad(&passed_size) * GROUP + THREADS - 1u) / THREADS;
+                candidates = end_round(index);
             }
+            let batches = (candidates + THREADS - 1u) / THREADS;
             for (var b = 0u; b < batches; b++) {
-                var i = b * THREADS + index;
-                var valid = i < params.light_count;
-                if LIGHT_TREE {
-                    let k = passed_groups[min(i / GROUP, THREADS - 1u)] * GROUP + i % GROUP;
-                    valid = i / GROUP < passed_size && k < params.light_count;
-                    let o = min(k, params.light_count - 1u);
-                    i = light_tree[params.group_count + o / 4u][o % 4u];
-                }
+                let i = candidate_light(b * THREADS + index);
+                let valid = i != NO_LIGHT;
                 var mask = 0u;
                 var pending = false;
                 if valid {

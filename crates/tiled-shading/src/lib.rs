@@ -53,6 +53,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "tiled.wgsl",
         "clustered.wgsl",
         "slices.wgsl",
+        "light_search.wgsl",
         "pixels.wgsl",
         "volumes.wgsl",
     ],

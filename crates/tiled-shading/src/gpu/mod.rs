@@ -138,6 +138,7 @@ pub fn specialisation(config: &ShadingConfig) -> Specialisation {
         .set("METHOD", format!("{method}u"))
         .set("TILE", format!("{}u", config.tile_size))
         .set("WG", format!("{}u", config.tile_size.min(16)))
+        .set("ROUND", format!("{}u", config.tile_size.min(16).pow(2)))
         .set("LIGHT_TREE", config.search == LightSearch::Tree)
 }
 
