@@ -218,29 +218,23 @@ fn shade_clusters(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let s = load_sample(id.xy, size);
-    var diffuse = vec3<f32>(0.0);
-    var specular = vec3<f32>(0.0);
+    var sum = Accumulated(vec3<f32>(0.0), vec3<f32>(0.0));
     if s.present {
-        let v = normalize(frame.eye.xyz - s.position);
-        let m = load_material(id.xy);
+        let p = lit_pixel(s, id.xy);
         let record = records[cell_of(id.xy, s.depth)];
         if record.x != OVERFLOW {
             for (var j = 0u; j < record.y; j++) {
-                let c = shade_shadowed(lights[entries[record.x + j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
-                diffuse += c.diffuse;
-                specular += c.specular;
+                sum = add_light(sum, lights[entries[record.x + j]], p);
             }
         } else {
             for (var i = 0u; i < params.light_count; i++) {
                 let light = lights[i];
                 if light.kind == LIGHT_DIRECTIONAL || distance(light.position, s.position) <= light.radius {
-                    let c = shade_shadowed(light, s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
-                    diffuse += c.diffuse;
-                    specular += c.specular;
+                    sum = add_light(sum, light, p);
                 }
             }
         }
     }
-    textureStore(diffuse_out, id.xy, vec4<f32>(diffuse, 0.0));
-    textureStore(specular_out, id.xy, vec4<f32>(specular, 0.0));
+    textureStore(diffuse_out, id.xy, vec4<f32>(sum.diffuse, 0.0));
+    textureStore(specular_out, id.xy, vec4<f32>(sum.specular, 0.0));
 }

@@ -5,6 +5,7 @@
 // #import gbuffer/normal_encoding.wgsl
 // #import tiled-shading/lighting.wgsl
 // #import tiled-shading/params.wgsl
+// #import tiled-shading/shadows.wgsl
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<uniform> params: Params;
@@ -57,4 +58,21 @@ fn load_material(pixel: vec2<u32>) -> SurfaceMaterial {
         f32((word >> 8u) & 0xffu) / 255.0,
         albedo.a,
     );
+}
+
+// A surface pixel ready for its light loop: its sample, direction to the eye and material.
+struct LitPixel {
+    s: Sample,
+    v: vec3<f32>,
+    m: SurfaceMaterial,
+};
+
+fn lit_pixel(s: Sample, pixel: vec2<u32>) -> LitPixel {
+    return LitPixel(s, normalize(frame.eye.xyz - s.position), load_material(pixel));
+}
+
+// `sum` plus `light`'s shadowed contribution at `p` (`shade_shadowed`).
+fn add_light(sum: Accumulated, light: Light, p: LitPixel) -> Accumulated {
+    let c = shade_shadowed(light, p.s.position, p.s.normal, p.v, p.m.albedo, p.m.roughness, p.m.metallic, p.m.specular);
+    return Accumulated(sum.diffuse + c.diffuse, sum.specular + c.specular);
 }

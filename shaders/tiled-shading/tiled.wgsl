@@ -216,19 +216,15 @@ fn brute_force(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let s = load_sample(id.xy, size);
-    var diffuse = vec3<f32>(0.0);
-    var specular = vec3<f32>(0.0);
+    var sum = Accumulated(vec3<f32>(0.0), vec3<f32>(0.0));
     if s.present {
-        let v = normalize(frame.eye.xyz - s.position);
-        let m = load_material(id.xy);
+        let p = lit_pixel(s, id.xy);
         for (var i = 0u; i < params.light_count; i++) {
-            let c = shade_shadowed(lights[i], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
-            diffuse += c.diffuse;
-            specular += c.specular;
+            sum = add_light(sum, lights[i], p);
         }
     }
-    textureStore(diffuse_out, id.xy, vec4<f32>(diffuse, 0.0));
-    textureStore(specular_out, id.xy, vec4<f32>(specular, 0.0));
+    textureStore(diffuse_out, id.xy, vec4<f32>(sum.diffuse, 0.0));
+    textureStore(specular_out, id.xy, vec4<f32>(sum.specular, 0.0));
 }
 
 // Shades the tile's pixels from the list's `n` entries (and records them, for tests), then
@@ -250,21 +246,20 @@ fn flush(
     }
     for (var p = 0u; p < PIXELS; p++) {
         if METHOD != METHOD_FORWARD && (*samples)[p].present {
-            let s = (*samples)[p];
-            let v = normalize(frame.eye.xyz - s.position);
-            var m = load_material((*pixels)[p]);
+            var pixel = lit_pixel((*samples)[p], (*pixels)[p]);
             if METHOD == METHOD_PREPASS {
                 // Only the roughness of the material: F = 1 (a white metal).
-                m = SurfaceMaterial(vec3<f32>(1.0), m.roughness, 1.0, 1.0);
+                pixel.m = SurfaceMaterial(vec3<f32>(1.0), pixel.m.roughness, 1.0, 1.0);
             }
-            let slice = slice_of(s.depth);
+            let slice = slice_of(pixel.s.depth);
+            var sum = Accumulated((*diffuse)[p], (*specular)[p]);
             for (var j = 0u; j < n; j++) {
                 if ((list_mask[j] >> slice) & 1u) == 1u {
-                    let c = shade_shadowed(lights[list_light[j]], s.position, s.normal, v, m.albedo, m.roughness, m.metallic, m.specular);
-                    (*diffuse)[p] += c.diffuse;
-                    (*specular)[p] += c.specular;
+                    sum = add_light(sum, lights[list_light[j]], pixel);
                 }
             }
+            (*diffuse)[p] = sum.diffuse;
+            (*specular)[p] = sum.specular;
         }
     }
     workgroupBarrier();
