@@ -4,7 +4,8 @@
 //! (chapter 4, steps 1–7), tile lists with exponential depth-slice masks, clustered shading
 //! (§2.5, after Olsson et al. 2012: per-cluster lists of the occupied clusters) — all finding
 //! their lights through a light hierarchy ([`LightGroups`], [`LightSearch`]) — Forward+, the
-//! light pre-pass and traditional deferred shading with light volumes (§4.1). CPU reference in [`cpu`], one pass per method in [`gpu`].
+//! light pre-pass and traditional deferred shading with light volumes (§4.1). CPU reference in
+//! [`cpu`], one pass per method in [`gpu`].
 //!
 //! All methods produce the same two images — the diffuse and specular sums of
 //! [`lighting::shade_light`] over the lights — because every light has a finite radius at
@@ -176,11 +177,12 @@ pub enum Method {
     /// holds its slice.
     TiledSlices,
     /// Clustered deferred shading (§2.5 after Olsson et al. 2012): every pixel's cluster key
-    /// (its tile of the screen and exponential depth slice) is flagged from the depth buffer,
-    /// the occupied clusters are compacted, each finds its lights through the light
-    /// hierarchy (a workgroup per cluster, lights of any number) and a pixel shades exactly
-    /// its cluster's list ([`gpu::clustered`]). The same lists as [`Method::TiledSlices`]
-    /// without the tile's depth bounds: per cluster, not per tile.
+    /// (its tile of the screen and exponential depth slice) comes from the depth buffer with
+    /// each cluster's explicit bounds (the least and greatest depth of its pixels), the
+    /// occupied clusters are compacted, each finds the lights meeting its tile's side planes
+    /// and its bounds through the light hierarchy (a workgroup per cluster, lights of any
+    /// number) and a pixel shades exactly its cluster's list ([`gpu::clustered`]). A
+    /// cluster's lights are among its tile's [`Method::Tiled`] list.
     Clustered,
     /// Forward+ (tiled forward shading, §2.4.2 after Harada et al. 2012): the tiles' light
     /// lists are built from the depth pre-pass over the depths from the near plane to the

@@ -1,7 +1,7 @@
 //! The light accumulation on the GPU: one compute pass per frame of `tiled.wgsl` — its
 //! `brute_force` entry point (8 × 8 invocations per workgroup, every light per pixel) or
 //! `shade_tiles` (one workgroup per tile, [`Method::Tiled`], [`Method::TiledCones`],
-//! [`Method::TiledSlices`]) — or of `clustered.wgsl`'s five dispatches ([`Method::Clustered`],
+//! [`Method::TiledSlices`]) — or of `clustered.wgsl`'s four dispatches ([`Method::Clustered`],
 //! [`clustered`]), or one render pass of `volumes.wgsl` drawing every light's volume
 //! ([`Method::LightVolumes`], [`volumes`]). Pipelines, buffers and bind groups are
 //! built once; [`BoundShading::set_lights`] and [`BoundShading::set_camera`] only write
