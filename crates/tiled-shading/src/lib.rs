@@ -55,6 +55,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "clustered.wgsl",
         "slices.wgsl",
         "light_search.wgsl",
+        "light_tree.wgsl",
         "pixels.wgsl",
         "volumes.wgsl",
     ],
@@ -382,9 +383,15 @@ pub struct LightGroups {
     pub spheres: Vec<[f32; 4]>,
 }
 
+/// Bits of the Morton code that order the lights of [`LightGroups`]: a counting sort over
+/// 2¹⁵ buckets (32 cells per axis), as the GPU build does it each frame.
+pub const LIGHT_BUCKET_BITS: u32 = 15;
+
 impl LightGroups {
-    /// Sorts `lights` by the Morton code of their centres (10 bits per axis over the lights'
-    /// bounds) and bounds each group.
+    /// Sorts `lights` by the top [`LIGHT_BUCKET_BITS`] of the Morton code of their centres
+    /// (10 bits per axis over the lights' bounds), by index within a bucket, and bounds each
+    /// group. The GPU build (`light_tree.wgsl`) sorts the same buckets in no set order within
+    /// each.
     pub fn new(lights: &[GpuLight]) -> Self {
         let positional = |l: &GpuLight| l.kind != LIGHT_DIRECTIONAL;
         let (lo, hi) = lights.iter().filter(|l| positional(l)).fold(
@@ -394,7 +401,7 @@ impl LightGroups {
                 (lo.min(p), hi.max(p))
             },
         );
-        let scale = (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE)).recip() * 1023.0;
+        let scale = Vec3::splat(1023.0) / (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
         let morton = |l: &GpuLight| -> u32 {
             if !positional(l) {
                 return 0;
@@ -409,7 +416,8 @@ impl LightGroups {
                 v = (v | (v << 4)) & 0x030c_30c3;
                 (v | (v << 2)) & 0x0924_9249
             };
-            1 + (spread(q.x) | (spread(q.y) << 1) | (spread(q.z) << 2))
+            let code = spread(q.x) | (spread(q.y) << 1) | (spread(q.z) << 2);
+            1 + (code >> (30 - LIGHT_BUCKET_BITS))
         };
         let mut keyed: Vec<(u32, u32)> = lights
             .iter()

@@ -837,3 +837,67 @@ fn the_light_buffer_holds_the_diffuse_light_and_monochrome_specular() {
     };
     compare("white metals", &grey, &prepass, 1e-5, SAME_TERMS);
 }
+
+#[test]
+fn the_gpu_builds_the_light_hierarchy_of_its_cpu_twin() {
+    // 3000 scattered lights, a directional one among them, over the spheres scene.
+    let c = spheres(32, 32, 3000);
+    let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
+        return;
+    };
+    let uploaded =
+        gbuffer::gpu::UploadedGBuffer::new(&g.device, &g.queue, &c.gb, &c.frame).expect("upload");
+    let stage = gpu::LightShading::new(&g.device, &config(Method::Tiled, 16)).expect("stage");
+    let outputs = gpu::LightShading::output_textures(&g.device, 32, 32);
+    let mut bound = stage
+        .bind(
+            &g.device,
+            &uploaded.frame,
+            uploaded.textures(),
+            [&outputs[0], &outputs[1]],
+            c.lights.len(),
+            false,
+        )
+        .expect("bind");
+    bound.set_lights(&g.queue, &c.lights).expect("lights");
+    // Twice: the second build starts from the state the first left.
+    for _ in 0..2 {
+        let mut encoder = g.device.create_command_encoder(&Default::default());
+        stage.encode(&bound, &mut encoder, None);
+        g.queue.submit([encoder.finish()]);
+    }
+    let built = bound
+        .read_light_groups(&g.device, &g.queue)
+        .expect("read")
+        .expect("a hierarchy");
+    let twin = tiled_shading::LightGroups::new(&c.lights);
+    let mut order = built.order.clone();
+    order.sort_unstable();
+    assert_eq!(order, (0..c.lights.len() as u32).collect::<Vec<_>>());
+    assert_eq!(built.spheres.len(), twin.spheres.len());
+    let directional = |i: u32| c.lights[i as usize].kind == tiled_shading::LIGHT_DIRECTIONAL;
+    assert!(directional(built.order[0]), "directional lights first");
+    assert_eq!(built.spheres[0][3], f32::MAX);
+    for (g, sphere) in built.spheres.iter().enumerate().skip(1) {
+        let (centre, radius) = (Vec3::new(sphere[0], sphere[1], sphere[2]), sphere[3]);
+        let members = &built.order[g * tiled_shading::LIGHT_GROUP
+            ..((g + 1) * tiled_shading::LIGHT_GROUP).min(c.lights.len())];
+        for &i in members {
+            let l = &c.lights[i as usize];
+            assert!(
+                centre.distance(Vec3::from(l.position)) + l.radius <= radius,
+                "group {g} holds light {i}"
+            );
+        }
+    }
+    // The same buckets in the same order (within a bucket in any order): groups as tight as
+    // the twin's, up to members swapped across a group's end within one bucket.
+    let mean = |groups: &tiled_shading::LightGroups| {
+        groups.spheres[1..].iter().map(|s| s[3]).sum::<f32>() / (groups.spheres.len() - 1) as f32
+    };
+    let (gpu_mean, cpu_mean) = (mean(&built), mean(&twin));
+    assert!(
+        gpu_mean <= cpu_mean * 1.1,
+        "GPU groups' mean radius {gpu_mean} against the twin's {cpu_mean}"
+    );
+}

@@ -23,6 +23,7 @@
 pub mod clustered;
 pub mod forward;
 pub mod light_prepass;
+mod light_tree;
 pub mod run;
 pub mod shadows;
 pub mod volumes;
@@ -73,6 +74,8 @@ pub struct LightShading {
     pipeline: Pipeline,
     layout: Layout,
     shadow_layout: Layout,
+    /// The light hierarchy's build ([`LightSearch::Tree`] with lists).
+    tree: Option<light_tree::TreeKernels>,
 }
 
 /// The pass a [`LightShading`] records.
@@ -114,8 +117,8 @@ pub struct BoundShading {
     capacity: usize,
     counts: wgpu::Buffer,
     lists: wgpu::Buffer,
-    /// The light hierarchy of [`LightSearch::Tree`] (`None` otherwise).
-    light_tree: Option<wgpu::Buffer>,
+    /// The light hierarchy's build of [`LightSearch::Tree`] (`None` otherwise).
+    tree: Option<light_tree::BoundTree>,
     size: (u32, u32),
     tiles: (u32, u32),
     /// No per-tile lists (brute force, light volumes).
@@ -186,6 +189,16 @@ fn tiled_variants() -> Vec<(&'static str, Specialisation)> {
         .collect()
 }
 
+/// The light hierarchy's build where `config` searches through it (not brute force).
+fn tree_kernels(
+    device: &wgpu::Device,
+    config: &ShadingConfig,
+) -> Result<Option<light_tree::TreeKernels>, GpuError> {
+    let tree = config.search == LightSearch::Tree && config.method != Method::BruteForce;
+    tree.then(|| light_tree::TreeKernels::new(device))
+        .transpose()
+}
+
 fn storage(device: &wgpu::Device, label: &str, bytes: u64) -> Result<wgpu::Buffer, GpuError> {
     let usage =
         wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
@@ -214,6 +227,7 @@ impl LightShading {
                 },
                 layout,
                 shadow_layout,
+                tree: tree_kernels(device, config)?,
             });
         }
         let (module, entry) = if config.method == Method::BruteForce {
@@ -241,6 +255,7 @@ impl LightShading {
             pipeline: Pipeline::Compute(pipeline),
             layout,
             shadow_layout,
+            tree: tree_kernels(device, config)?,
         })
     }
 
@@ -327,6 +342,7 @@ impl LightShading {
             },
             layout,
             shadow_layout,
+            tree: None,
         })
     }
 
@@ -501,6 +517,12 @@ impl LightShading {
             Some((group, volumes)) => (group, Some(volumes)),
             None => (self.layout.bind(device, &resources), None),
         };
+        let light_tree_build = match (&self.tree, tree) {
+            (Some(kernels), true) => {
+                Some(kernels.bind(device, &params_buffer, &lights, &light_tree)?)
+            }
+            _ => None,
+        };
         Ok(BoundShading {
             group,
             shadow_group: shadows::lookup_group(device, &self.shadow_layout, Default::default())?,
@@ -510,7 +532,7 @@ impl LightShading {
             capacity,
             counts,
             lists,
-            light_tree: tree.then_some(light_tree),
+            tree: light_tree_build,
             size,
             tiles: (tiles_x, tiles_y),
             listless,
@@ -594,7 +616,8 @@ impl LightShading {
             Pipeline::Compute(p) => p,
             Pipeline::Clustered { kernels, shade } => {
                 if let Some(clusters) = &bound.clusters {
-                    let mut dispatches = kernels.dispatches(clusters);
+                    let mut dispatches = self.tree_dispatches(bound);
+                    dispatches.extend(kernels.dispatches(clusters));
                     dispatches.push(kernel::Dispatch {
                         pipeline: shade.clone(),
                         groups: vec![bound.group.clone(), bound.shadow_group.clone()],
@@ -616,13 +639,23 @@ impl LightShading {
         } else {
             Workgroups::Direct([bound.tiles.0, bound.tiles.1, 1])
         };
-        Passes::one(
-            name,
-            compute,
-            vec![bound.group.clone(), bound.shadow_group.clone()],
+        let mut dispatches = self.tree_dispatches(bound);
+        dispatches.push(kernel::Dispatch {
+            pipeline: compute.clone(),
+            groups: vec![bound.group.clone(), bound.shadow_group.clone()],
             workgroups,
-        )
-        .encode(encoder, timer);
+        });
+        Passes::new().pass(name, dispatches).encode(encoder, timer);
+    }
+
+    /// The light hierarchy's build for `bound`'s lights (none without the hierarchy).
+    fn tree_dispatches(&self, bound: &BoundShading) -> Vec<kernel::Dispatch> {
+        match (&self.tree, &bound.tree) {
+            (Some(kernels), Some(tree)) => {
+                kernels.dispatches(tree, bound.params.light_count, bound.params.group_count)
+            }
+            _ => Vec::new(),
+        }
     }
 }
 
@@ -640,11 +673,8 @@ impl BoundShading {
             });
         }
         queue.write_buffer(&self.lights, 0, bytemuck::cast_slice(lights));
-        if let Some(tree) = &self.light_tree {
-            let groups = crate::LightGroups::new(lights);
-            queue.write_buffer(tree, 0, bytemuck::cast_slice(&groups.words()));
-            self.params.group_count = groups.spheres.len() as u32;
-        }
+        // The hierarchy itself is built on the GPU in every pass (`light_tree`).
+        self.params.group_count = lights.len().div_ceil(crate::LIGHT_GROUP) as u32;
         if let Some(volumes) = &mut self.volumes {
             let (order, ranges) = volumes::draw_order(lights);
             queue.write_buffer(&volumes.order, 0, bytemuck::cast_slice(&order));
@@ -720,6 +750,28 @@ impl BoundShading {
                 })
                 .collect(),
         ))
+    }
+
+    /// Reads back the light hierarchy the last pass built on the GPU (`None` without
+    /// [`LightSearch::Tree`]).
+    pub fn read_light_groups(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<crate::LightGroups>, ShadingError> {
+        let Some(tree) = &self.tree else {
+            return Ok(None);
+        };
+        let words: Vec<u32> = transfer::read_pod(device, queue, tree.buffer())?;
+        let spheres = self.params.group_count as usize;
+        let order = &words[spheres * 4..spheres * 4 + self.params.light_count as usize];
+        Ok(Some(crate::LightGroups {
+            order: order.to_vec(),
+            spheres: words[..spheres * 4]
+                .chunks(4)
+                .map(|w| std::array::from_fn(|k| f32::from_bits(w[k])))
+                .collect(),
+        }))
     }
 }
 
