@@ -511,6 +511,38 @@ fn slice_masks_of(c: &Case, slicing: &tiled_shading::Slicing, method: Method, w:
     );
 }
 
+/// `c`'s G-buffer on the GPU, a 16 × 16 tiled stage and its outputs, bound for `capacity`
+/// lights.
+struct TiledStage {
+    uploaded: gbuffer::gpu::UploadedGBuffer,
+    stage: gpu::LightShading,
+    outputs: [::gpu::wgpu::Texture; 2],
+    bound: gpu::BoundShading,
+}
+
+fn tiled_stage(g: &::gpu::Gpu, c: &Case, capacity: usize) -> TiledStage {
+    let uploaded =
+        gbuffer::gpu::UploadedGBuffer::new(&g.device, &g.queue, &c.gb, &c.frame).expect("upload");
+    let stage = gpu::LightShading::new(&g.device, &config(Method::Tiled, 16)).expect("stage");
+    let outputs = gpu::LightShading::output_textures(&g.device, c.gb.width(), c.gb.height());
+    let bound = stage
+        .bind(
+            &g.device,
+            &uploaded.frame,
+            uploaded.textures(),
+            [&outputs[0], &outputs[1]],
+            capacity,
+            false,
+        )
+        .expect("bind");
+    TiledStage {
+        uploaded,
+        stage,
+        outputs,
+        bound,
+    }
+}
+
 #[test]
 fn bad_input_is_an_error() {
     let c = spheres(32, 32, 4);
@@ -565,21 +597,13 @@ fn bad_input_is_an_error() {
     let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
         return;
     };
-    let uploaded =
-        gbuffer::gpu::UploadedGBuffer::new(&g.device, &g.queue, &c.gb, &c.frame).expect("upload");
-    let stage = gpu::LightShading::new(&g.device, &config(Method::Tiled, 16)).expect("stage");
+    let TiledStage {
+        uploaded,
+        stage,
+        outputs,
+        mut bound,
+    } = tiled_stage(g, &c, 2);
     let (w, h) = (c.gb.width(), c.gb.height());
-    let outputs = gpu::LightShading::output_textures(&g.device, w, h);
-    let mut bound = stage
-        .bind(
-            &g.device,
-            &uploaded.frame,
-            uploaded.textures(),
-            [&outputs[0], &outputs[1]],
-            2,
-            false,
-        )
-        .expect("bind");
     assert!(matches!(
         bound.set_lights(&g.queue, &c.lights),
         Err(ShadingError::TooManyLights {
@@ -845,20 +869,9 @@ fn the_gpu_builds_the_light_hierarchy_of_its_cpu_twin() {
     let Some(g) = ::gpu::test_device(&tiled_shading::device_needs()) else {
         return;
     };
-    let uploaded =
-        gbuffer::gpu::UploadedGBuffer::new(&g.device, &g.queue, &c.gb, &c.frame).expect("upload");
-    let stage = gpu::LightShading::new(&g.device, &config(Method::Tiled, 16)).expect("stage");
-    let outputs = gpu::LightShading::output_textures(&g.device, 32, 32);
-    let mut bound = stage
-        .bind(
-            &g.device,
-            &uploaded.frame,
-            uploaded.textures(),
-            [&outputs[0], &outputs[1]],
-            c.lights.len(),
-            false,
-        )
-        .expect("bind");
+    let TiledStage {
+        stage, mut bound, ..
+    } = tiled_stage(g, &c, c.lights.len());
     bound.set_lights(&g.queue, &c.lights).expect("lights");
     // Twice: the second build starts from the state the first left.
     for _ in 0..2 {
