@@ -19,7 +19,7 @@
 //    OVERFLOW cluster over every light whose sphere holds the pixel (the same sums: a light
 //    adds nothing beyond its radius) — so no light count is too large.
 // Twin of `tiled_shading::cpu::shade` with `Method::Clustered` (the same lists).
-// `tiled_shading::gpu::clustered` sets TILE, WG and LIGHT_TREE; ROUND is THREADS.
+// `tiled_shading::gpu::clustered` sets TILE, WG, THREADS, ROUND (= THREADS) and LIGHT_TREE.
 
 const TILE: u32 = 16u;
 // Invocations per tile side in `cluster_keys`, min(TILE, 16); each reads PER_SIDE² pixels.

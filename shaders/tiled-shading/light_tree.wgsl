@@ -1,6 +1,7 @@
-// The light hierarchy built on the GPU each frame (`tiled_shading::LightGroups` is its CPU
-// twin; after Olsson et al. 2012, who sort the lights by Morton code every frame): five
-// dispatches before the light search of `tiled.wgsl` and `clustered.wgsl`.
+// The light hierarchy built on the GPU (`tiled_shading::LightGroups` is its CPU twin; after
+// Olsson et al. 2012, who sort the lights by Morton code every frame): five dispatches before
+// the light search of `tiled.wgsl` and `clustered.wgsl`, in the first pass after the lights
+// change (every frame when they move).
 // 1. `tree_bounds` (per light): the bounds of the positional lights' centres, reduced in
 //    workgroup memory, then into `bounds` by atomics on order-preserving float bits.
 // 2. `tree_histogram` (per light): each light's bucket — 0 for directional lights, else 1 + the

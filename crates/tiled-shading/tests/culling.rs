@@ -872,9 +872,10 @@ fn the_gpu_builds_the_light_hierarchy_of_its_cpu_twin() {
     let TiledStage {
         stage, mut bound, ..
     } = tiled_stage(g, &c, c.lights.len());
-    bound.set_lights(&g.queue, &c.lights).expect("lights");
-    // Twice: the second build starts from the state the first left.
+    // Built twice (the lights set twice): the second build starts from the state the first
+    // left.
     for _ in 0..2 {
+        bound.set_lights(&g.queue, &c.lights).expect("lights");
         let mut encoder = g.device.create_command_encoder(&Default::default());
         stage.encode(&bound, &mut encoder, None);
         g.queue.submit([encoder.finish()]);

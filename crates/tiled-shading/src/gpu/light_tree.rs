@@ -1,8 +1,8 @@
-//! The light hierarchy built on the GPU every frame (`light_tree.wgsl`; CPU twin
-//! [`crate::LightGroups`]): the lights' bounds, a counting sort of the lights by the top 15
-//! bits of their Morton codes, and the groups' bounding spheres — five dispatches at the start
-//! of the light accumulation pass of every method that searches through the hierarchy
-//! ([`crate::LightSearch::Tree`]), so lights moved on the GPU need no CPU rebuild.
+//! The light hierarchy built on the GPU (`light_tree.wgsl`; CPU twin [`crate::LightGroups`]):
+//! the lights' bounds, a counting sort of the lights by the top 15 bits of their Morton codes,
+//! and the groups' bounding spheres — five dispatches at the start of the first light
+//! accumulation pass after the lights change, for every method that searches through the
+//! hierarchy ([`crate::LightSearch::Tree`]); the CPU sorts nothing.
 
 use ::gpu::kernel::{Binding, Dispatch, Kernel, Workgroups};
 use ::gpu::{GpuError, transfer};
