@@ -133,6 +133,45 @@ fn is_edge(ids: &gbuffer::Image<u32>, x: u32, y: u32) -> bool {
     })
 }
 
+/// Vulkan's least sub-pixel precision (`subPixelPrecisionBits` ≥ 4): a pixel centre this close
+/// to a triangle's edge may be covered or not, whatever the rasterizer.
+const SUBPIXEL: f32 = 1.0 / 16.0;
+
+/// Whether pixel `(x, y)`'s centre lies within [`SUBPIXEL`] of an edge of a triangle in front
+/// of the camera — where a sliver narrower than a pixel can cover it on one side and no
+/// neighbour on either (found by random scenes: seed 781683, camera 743207, 4 triangles,
+/// 53 × 60, a centre 0.005 px outside a sliver that llvmpipe covers).
+fn near_an_edge(
+    scene: &scene::Scene,
+    camera: &scene::Camera,
+    (w, h): (u32, u32),
+    x: u32,
+    y: u32,
+) -> bool {
+    let view_projection = camera.view_projection(w as f32 / h as f32);
+    let centre = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+    let segment_distance = |a: glam::Vec2, b: glam::Vec2| {
+        let t = ((centre - a).dot(b - a) / (b - a).length_squared().max(f32::MIN_POSITIVE))
+            .clamp(0.0, 1.0);
+        centre.distance(a + (b - a) * t)
+    };
+    scene.meshes.iter().any(|m| {
+        m.indices.chunks_exact(3).any(|t| {
+            let clip = [0, 1, 2].map(|k| view_projection * m.positions[t[k] as usize].extend(1.0));
+            if clip.iter().any(|c| c.w <= 0.0) {
+                return false;
+            }
+            let screen = clip.map(|c| {
+                glam::Vec2::new(
+                    (c.x / c.w * 0.5 + 0.5) * w as f32,
+                    (0.5 - c.y / c.w * 0.5) * h as f32,
+                )
+            });
+            (0..3).any(|k| segment_distance(screen[k], screen[(k + 1) % 3]) <= SUBPIXEL)
+        })
+    })
+}
+
 /// Compares; on failure writes expected/actual/difference images and returns a message.
 fn compare(
     name: &str,
@@ -159,7 +198,9 @@ fn compare(
             let plane = planes.get(expected.triangle_id.get(x, y) as usize).copied();
             if pixel_matches(scene, (&expected.gbuffer, &actual), x, y, plane) {
                 matched += 1;
-            } else if is_edge(&expected.triangle_id, x, y) {
+            } else if is_edge(&expected.triangle_id, x, y)
+                || near_an_edge(scene, camera, (w, h), x, y)
+            {
                 diff[(y * w + x) as usize] = [255, 255, 0, 255];
             } else {
                 diff[(y * w + x) as usize] = [255, 0, 0, 255];
@@ -303,9 +344,8 @@ fn material_gallery_matches_cpu() {
 }
 
 proptest! {
-    // A fixed seed: CI sees the same 24 scenes every run. Random seeds found one disagreement
-    // (seed 781683, cam 743207, 4 triangles, 53 × 60: one interior pixel the GPU leaves empty
-    // on llvmpipe), open in the closing note of stop 48.
+    // A fixed seed: CI sees the same 24 scenes every run (the case random seeds found is
+    // `sub_pixel_slivers_may_cover_a_centre_either_way`).
     #![proptest_config(ProptestConfig {
         cases: 24,
         failure_persistence: None,
@@ -451,4 +491,16 @@ fn zero_size_is_an_error_not_a_panic() {
     };
     let s = scene::cornell_box();
     assert!(run(gpu, &s, &s.camera.expect("camera"), 0, 16).is_err());
+}
+
+/// The disagreement random seeds found (stop 48): a sliver triangle narrower than a pixel whose
+/// edge passes 0.005 px from a pixel centre that llvmpipe covers and the CPU twin does not —
+/// within the sub-pixel precision every rasterizer is allowed, so not a mismatch.
+#[test]
+fn sub_pixel_slivers_may_cover_a_centre_either_way() {
+    let scene = common::random_scene(781683, 4);
+    let camera = common::random_camera(743207);
+    assert!(near_an_edge(&scene, &camera, (53, 60), 47, 57));
+    assert!(!near_an_edge(&scene, &camera, (53, 60), 2, 2));
+    compare("sliver", &scene, &camera, 53, 60).unwrap_or_else(|e| panic!("{e}"));
 }
