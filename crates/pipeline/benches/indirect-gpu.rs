@@ -127,7 +127,8 @@ fn main() -> Result<()> {
                 let reference_ms = match &reference_ms {
                     Some(v) => v.clone(),
                     None => {
-                        let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, frames)?;
+                        let t =
+                            time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, frames, None)?;
                         let v = per_frame_sum(&t, &["shading (reference)"]);
                         reference_ms = Some(v.clone());
                         v
@@ -162,7 +163,7 @@ fn main() -> Result<()> {
                 ] {
                     let c = config(bounds, pattern, interleaving, true);
                     renderer.set_indirect(&gpu.device, &c, &set)?;
-                    let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, frames)?;
+                    let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, frames, None)?;
                     let indirect = Stat::of(per_frame_sum(&t, &INDIRECT));
                     let reference_shading = Stat::of(reference_ms.clone());
                     let speedup = reference_shading.median_ms / indirect.median_ms;

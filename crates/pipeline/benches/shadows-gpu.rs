@@ -150,7 +150,7 @@ fn main() -> Result<()> {
         let set = lights(kind, count, scene.bounds());
         let mut renderer = GpuRenderer::new(d, q, &scene, &set, w, h)?;
         let shading = renderer.shading().pass_name();
-        let plain = time_passes(&gpu, &mut renderer, &camera, DEFAULT_AMBIENT, frames)?;
+        let plain = time_passes(&gpu, &mut renderer, &camera, DEFAULT_AMBIENT, frames, None)?;
         let (method, views, passes) = match tile {
             None => {
                 renderer.set_shadows(d, q, Some(&config))?;
@@ -171,7 +171,7 @@ fn main() -> Result<()> {
                 )
             }
         };
-        let shadowed = time_passes(&gpu, &mut renderer, &camera, DEFAULT_AMBIENT, frames)?;
+        let shadowed = time_passes(&gpu, &mut renderer, &camera, DEFAULT_AMBIENT, frames, None)?;
         let maps = Stat::of(per_frame_sum(&shadowed, passes));
         let row = Row {
             lights: kind.into(),

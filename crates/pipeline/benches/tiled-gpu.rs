@@ -161,14 +161,7 @@ fn measure(
         },
     )?;
     let name = renderer.shading().pass_name();
-    let t = match moving {
-        None => time_passes(gpu, renderer, camera, DEFAULT_AMBIENT, frames)?,
-        Some(lights) => bench::time_named(frames, || {
-            renderer.set_lights(&gpu.device, &gpu.queue, lights)?;
-            let timings = renderer.time_frame(&gpu.device, &gpu.queue, camera, DEFAULT_AMBIENT)?;
-            Ok::<_, pipeline::RenderError>(timings.into_iter().map(|t| (t.name, t.ms)).collect())
-        })?,
-    };
+    let t = time_passes(gpu, renderer, camera, DEFAULT_AMBIENT, frames, moving)?;
     let mut lighting = vec![name.as_str()];
     lighting.extend(LIGHTING_PASSES);
     let ms = Stat::of(per_frame_sum(&t, &lighting));
@@ -669,7 +662,7 @@ fn transparency(gpu: &Gpu, args: &Args, frames: u32) -> Result<()> {
             renderer.set_shading(&gpu.device, &gpu.queue, &config)?;
             renderer.set_blended(&gpu.device, &gpu.queue, blended)?;
             let shading = renderer.shading().pass_name();
-            let t = time_passes(gpu, &mut renderer, &camera, DEFAULT_AMBIENT, frames)?;
+            let t = time_passes(gpu, &mut renderer, &camera, DEFAULT_AMBIENT, frames, None)?;
             let every: Vec<&str> = t.iter().map(|(n, _)| n.as_str()).collect();
             let frame_ms = Stat::of(per_frame_sum(&t, &every));
             let passes: Vec<(String, f64)> = TRANSPARENCY_PASSES
