@@ -1,5 +1,6 @@
 // #import tiled-shading/shadows.wgsl
 // #import tiled-shading/pixels.wgsl
+// #import tiled-shading/sums.wgsl
 // #import tiled-shading/slices.wgsl
 // #import tiled-shading/light_search.wgsl
 // Clustered deferred shading (Olsson et al. 2012, as the thesis summarises it in §2.5), four
@@ -38,8 +39,6 @@ struct ClusterState {
     entry_total: atomic<u32>,
 };
 
-@group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(8) var specular_out: texture_storage_2d<rgba32float, write>;
 // The unique clusters: (grid cell = tile × SLICES + slice, least depth, greatest depth as f32
 // bits, 0), `state.clusters_found` of them.
 @group(0) @binding(10) var<storage, read_write> clusters: array<vec4<u32>>;
@@ -235,6 +234,5 @@ fn shade_clusters(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
-    textureStore(diffuse_out, id.xy, vec4<f32>(sum.diffuse, 0.0));
-    textureStore(specular_out, id.xy, vec4<f32>(sum.specular, 0.0));
+    store_sums(id.xy, sum);
 }

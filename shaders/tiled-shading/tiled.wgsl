@@ -1,5 +1,6 @@
 // #import tiled-shading/shadows.wgsl
 // #import tiled-shading/pixels.wgsl
+// #import tiled-shading/sums.wgsl
 // #import tiled-shading/slices.wgsl
 // #import tiled-shading/light_search.wgsl
 // Light accumulation: brute force (`brute_force`, every light at every pixel) and tile-based
@@ -48,8 +49,6 @@ const COSINE_QUANTUM: f32 = 1048576.0;
 const CONE_EPSILON: f32 = 1e-3;
 // Lights per group of the light hierarchy (`tiled_shading::LIGHT_GROUP`).
 
-@group(0) @binding(7) var diffuse_out: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(8) var specular_out: texture_storage_2d<rgba32float, write>;
 // Per tile: the number of lights in its list (the light-count heatmap).
 @group(0) @binding(9) var<storage, read_write> counts: array<u32>;
 // Per tile: (light index, slice mask) × list_stride, when params.record_lists is 1.
@@ -223,8 +222,7 @@ fn brute_force(@builtin(global_invocation_id) id: vec3<u32>) {
             sum = add_light(sum, lights[i], p);
         }
     }
-    textureStore(diffuse_out, id.xy, vec4<f32>(sum.diffuse, 0.0));
-    textureStore(specular_out, id.xy, vec4<f32>(sum.specular, 0.0));
+    store_sums(id.xy, sum);
 }
 
 // Shades the tile's pixels from the list's `n` entries (and records them, for tests), then
@@ -449,8 +447,7 @@ fn shade_tiles(
                 textureStore(specular_out, pixels[p], vec4<f32>(vec3<f32>(mono), 0.0));
             }
         } else if METHOD != METHOD_FORWARD && pixels[p].x < size.x && pixels[p].y < size.y {
-            textureStore(diffuse_out, pixels[p], vec4<f32>(diffuse[p], 0.0));
-            textureStore(specular_out, pixels[p], vec4<f32>(specular[p], 0.0));
+            store_sums(pixels[p], Accumulated(diffuse[p], specular[p]));
         }
     }
     if index == 0u {

@@ -57,6 +57,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "light_search.wgsl",
         "light_tree.wgsl",
         "pixels.wgsl",
+        "sums.wgsl",
         "volumes.wgsl",
     ],
 );
