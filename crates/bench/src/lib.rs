@@ -177,12 +177,28 @@ pub struct Header {
     pub sm_clock_before_mhz: Option<u32>,
     /// SM clock (MHz) when the header was made, after the measurements.
     pub sm_clock_after_mhz: Option<u32>,
+    /// The least and greatest SM clock (MHz) read as a measurement's timed frames began.
+    pub sm_clock_measuring_mhz: Option<(u32, u32)>,
 }
 
 /// The current SM clock in MHz from `nvidia-smi` (first GPU), where it is present.
 pub fn sm_clock_mhz() -> Option<u32> {
+    query_clock("clocks.sm")
+}
+
+/// The greatest SM clock in MHz the first GPU may run at (`nvidia-smi`), where it is present.
+pub fn sm_clock_max_mhz() -> Option<u32> {
+    static MAX: OnceLock<Option<u32>> = OnceLock::new();
+    *MAX.get_or_init(|| query_clock("clocks.max.sm"))
+}
+
+/// The clock `field` of `nvidia-smi --query-gpu` for the first GPU, in MHz.
+fn query_clock(field: &str) -> Option<u32> {
     let out = std::process::Command::new("nvidia-smi")
-        .args(["--query-gpu=clocks.sm", "--format=csv,noheader,nounits"])
+        .args([
+            &format!("--query-gpu={field}"),
+            "--format=csv,noheader,nounits",
+        ])
         .output()
         .ok()?;
     String::from_utf8_lossy(&out.stdout)
@@ -198,6 +214,19 @@ fn clock_before() -> Option<u32> {
     *BEFORE.get_or_init(sm_clock_mhz)
 }
 
+/// The least and greatest SM clock read when a measurement's timed frames began
+/// ([`warm_then_time`]), over every measurement so far.
+static MEASURED: std::sync::Mutex<Option<(u32, u32)>> = std::sync::Mutex::new(None);
+
+fn record_measured_clock(mhz: u32) {
+    let mut range = MEASURED.lock().unwrap_or_else(|e| e.into_inner());
+    *range = Some(range.map_or((mhz, mhz), |(lo, hi)| (lo.min(mhz), hi.max(mhz))));
+}
+
+fn measured_clocks() -> Option<(u32, u32)> {
+    *MEASURED.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 impl Header {
     /// The header for `gpu`, dated today.
     pub fn new(gpu: &Gpu) -> Self {
@@ -211,6 +240,7 @@ impl Header {
             device_type: format!("{:?}", i.device_type),
             sm_clock_before_mhz: clock_before(),
             sm_clock_after_mhz: sm_clock_mhz(),
+            sm_clock_measuring_mhz: measured_clocks(),
         }
     }
 
@@ -235,7 +265,7 @@ impl Header {
         let clock =
             |c: Option<u32>| c.map_or("not read (no nvidia-smi)".into(), |c| format!("{c} MHz"));
         format!(
-            "# {title} on {} ({})\n\n- Date: {}\n- Adapter: {} ({}, {})\n- Driver: {} {}\n- SM clock: {} before, {} after the measurements\n- Timing: GPU timestamp queries, median (and minimum) of {frames} frames after a warm-up of {WARM_UP_RULE}\n\n",
+            "# {title} on {} ({})\n\n- Date: {}\n- Adapter: {} ({}, {})\n- Driver: {} {}\n- SM clock: {} before, {} after the measurements, {} as measurements began\n- Timing: GPU timestamp queries, median (and minimum) of {frames} frames after a warm-up of {WARM_UP_RULE}\n\n",
             self.adapter,
             self.backend,
             self.date,
@@ -246,6 +276,8 @@ impl Header {
             self.driver_info,
             clock(self.sm_clock_before_mhz),
             clock(self.sm_clock_after_mhz),
+            self.sm_clock_measuring_mhz
+                .map_or("not read".into(), |(lo, hi)| format!("{lo}–{hi} MHz")),
         )
     }
 }
@@ -256,8 +288,9 @@ pub struct Options {
     /// Report folder.
     #[arg(long, default_value = "docs/bench")]
     pub out: std::path::PathBuf,
-    /// Timed frames per measurement, after the warm-up (default: the benchmark's own).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Timed frames per measurement, after the warm-up (default: the benchmark's own); at
+    /// least 10, so that every median is of 10 frames or more.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(10..))]
     pub frames: Option<u32>,
     /// Measure on a software adapter too (its timings are not GPU performance).
     #[arg(long)]

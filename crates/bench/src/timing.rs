@@ -1,11 +1,21 @@
 //! Frame timing and report writing shared by the benchmark programs.
 
+use std::time::{Duration, Instant};
+
 use glam::Vec3;
 use gpu::Gpu;
 use scene::Camera;
 
 /// The warm-up every timing of this harness does before measuring (stated in each report).
-pub const WARM_UP_RULE: &str = "at least 10 frames and 300 ms of back-to-back work";
+pub const WARM_UP_RULE: &str = "at least 10 frames and 300 ms of back-to-back work, then more \
+    until the SM clock reads at least 90 % of its maximum (nvidia-smi; at most 2 s more)";
+
+/// The fraction of its maximum the SM clock must read before the timed frames begin.
+const CLOCK_UP: f64 = 0.9;
+/// The longest the warm-up goes on waiting for the clock, after its fixed part.
+const CLOCK_WAIT: Duration = Duration::from_secs(2);
+/// Work between two readings of the clock while waiting for it.
+const CLOCK_POLL: Duration = Duration::from_millis(100);
 
 /// The ManyLoDs benchmark's light (`manylod-bench`, `manylod-cuts`) at `angle` radians along
 /// its orbit: a spot light high in the scene pointing down, circling the vertical axis through
@@ -26,10 +36,10 @@ pub fn orbiting_spot(bounds: &scene::Aabb, angle: f32) -> scene::Light {
     }
 }
 
-/// Runs `frame` for a warm-up of at least 10 frames and 300 ms of back-to-back work, so that
-/// the GPU has left the idle clocks it drops to while the CPU prepares a configuration, then
-/// `frames` more times, and returns those frames' results ([run-once mode](crate::run_once):
-/// one frame, no warm-up).
+/// Runs `frame` for the warm-up of [`WARM_UP_RULE`], so that the GPU has left the idle clocks
+/// it drops to while the CPU prepares a configuration, then `frames` more times, and returns
+/// those frames' results ([run-once mode](crate::run_once): one frame, no warm-up). The clock
+/// read as the timed frames begin goes into the report's header.
 pub fn warm_then_time<T, E>(
     frames: u32,
     mut frame: impl FnMut() -> Result<T, E>,
@@ -37,13 +47,46 @@ pub fn warm_then_time<T, E>(
     if crate::run_once() {
         return frame().map(|t| vec![t]);
     }
-    let start = std::time::Instant::now();
-    let mut warm = 0;
-    while warm < 10 || start.elapsed() < std::time::Duration::from_millis(300) {
-        frame()?;
-        warm += 1;
+    let clock = warm_up(
+        &mut frame,
+        crate::sm_clock_max_mhz(),
+        &mut crate::sm_clock_mhz,
+    )?;
+    if let Some(mhz) = clock {
+        crate::record_measured_clock(mhz);
     }
     (0..frames).map(|_| frame()).collect()
+}
+
+/// The warm-up of [`WARM_UP_RULE`] with the clock read by `clock` and its maximum `max`
+/// (neither: the fixed part only); the last clock read.
+fn warm_up<T, E>(
+    frame: &mut impl FnMut() -> Result<T, E>,
+    max: Option<u32>,
+    clock: &mut dyn FnMut() -> Option<u32>,
+) -> Result<Option<u32>, E> {
+    let work = |frame: &mut dyn FnMut() -> Result<T, E>, least: u32, time: Duration| {
+        let start = Instant::now();
+        let mut done = 0;
+        while done < least || start.elapsed() < time {
+            frame()?;
+            done += 1;
+        }
+        Ok(())
+    };
+    work(frame, 10, Duration::from_millis(300))?;
+    let Some(max) = max else {
+        return Ok(None);
+    };
+    let waiting = Instant::now();
+    loop {
+        let mhz = clock();
+        let up = mhz.is_none_or(|c| f64::from(c) >= CLOCK_UP * f64::from(max));
+        if up || waiting.elapsed() >= CLOCK_WAIT {
+            return Ok(mhz);
+        }
+        work(frame, 1, CLOCK_POLL)?;
+    }
 }
 
 /// Per pass name, the per-frame milliseconds of `frames` frames of `frame`'s `(name, ms)`
@@ -166,4 +209,54 @@ pub fn write_report(
     write(&md, markdown)?;
     println!("wrote {} and {}", md.display(), json.display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A warm-up whose clock reads `readings` in turn (then the last one again): the frames it
+    /// ran, the clock it ended on and how often it read the clock.
+    fn warm_up_with(max: Option<u32>, readings: &[u32]) -> (usize, Option<u32>, usize) {
+        let mut frames = 0;
+        let mut reads = 0;
+        let mut clock = || {
+            reads += 1;
+            readings.get(reads - 1).or(readings.last()).copied()
+        };
+        let last = warm_up(
+            &mut || {
+                frames += 1;
+                Ok::<(), ()>(())
+            },
+            max,
+            &mut clock,
+        )
+        .unwrap();
+        (frames, last, reads)
+    }
+
+    #[test]
+    fn without_a_clock_the_warm_up_is_its_fixed_part() {
+        let start = Instant::now();
+        let (frames, last, reads) = warm_up_with(None, &[]);
+        assert!(frames >= 10 && start.elapsed() >= Duration::from_millis(300));
+        assert_eq!((last, reads), (None, 0));
+    }
+
+    #[test]
+    fn the_warm_up_waits_for_the_clock_to_rise() {
+        let (_, last, reads) = warm_up_with(Some(1980), &[345, 900, 1755, 1980]);
+        // 1755 MHz is below 90 % of 1980 (1782): the fourth reading ends it.
+        assert_eq!((last, reads), (Some(1980), 4));
+    }
+
+    #[test]
+    fn a_clock_that_never_rises_ends_the_warm_up_after_the_wait() {
+        let start = Instant::now();
+        let (_, last, _) = warm_up_with(Some(1980), &[345]);
+        assert_eq!(last, Some(345));
+        assert!(start.elapsed() >= Duration::from_millis(300) + CLOCK_WAIT);
+        assert!(start.elapsed() < Duration::from_millis(300) + CLOCK_WAIT + 10 * CLOCK_POLL);
+    }
 }
