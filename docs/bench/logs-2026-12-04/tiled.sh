@@ -10,7 +10,7 @@ nvidia-smi --query-gpu=clocks.sm --format=csv,noheader,nounits -lms 100 > "$OUT/
 sampler=$!
 .gpu-bin/tiled-gpu --bench --quick > /dev/null 2>&1
 echo "SM clock after the warm-up run: $(clock)" > "$OUT/tiled.txt"
-.gpu-bin/tiled-gpu --bench --out "$OUT" >> "$OUT/tiled.txt" 2>&1 || echo "tiled-gpu failed" >> "$OUT/tiled.txt"
+timeout 520 .gpu-bin/tiled-gpu --bench --out "$OUT" >> "$OUT/tiled.txt" 2>&1 || echo "tiled-gpu failed or ran past 520 s" >> "$OUT/tiled.txt"
 echo "SM clock after: $(clock)" >> "$OUT/tiled.txt"
 kill $sampler
 tail -40 "$OUT/tiled.txt"
