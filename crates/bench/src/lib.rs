@@ -13,8 +13,9 @@ pub mod chart;
 pub mod timing;
 
 pub use timing::{
-    WARM_UP_RULE, orbiting_spot, pass_stat, per_frame_sum, scene_labels, time_encoded, time_named,
-    time_recorded, warm_then_time, write_report,
+    OUTLIER_FACTOR, Remeasurement, WARM_UP_RULE, orbiting_spot, pass_stat, per_frame_sum,
+    remeasure_outliers, scene_labels, time_encoded, time_named, time_recorded, warm_then_time,
+    write_report,
 };
 
 /// Median and minimum of a set of timings.
@@ -179,6 +180,10 @@ pub struct Header {
     pub sm_clock_after_mhz: Option<u32>,
     /// The least and greatest SM clock (MHz) read as a measurement's timed frames began.
     pub sm_clock_measuring_mhz: Option<(u32, u32)>,
+    /// The configurations measured again under the bench stability rule
+    /// ([`remeasure_outliers`]), with what was measured each time; none where the benchmark
+    /// does not apply the rule.
+    pub remeasured: Option<Vec<Remeasurement>>,
 }
 
 /// The current SM clock in MHz from `nvidia-smi` (first GPU), where it is present.
@@ -227,6 +232,17 @@ fn measured_clocks() -> Option<(u32, u32)> {
     *MEASURED.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// Every configuration [`remeasure_outliers`] measured again so far.
+static REMEASURED: std::sync::Mutex<Option<Vec<Remeasurement>>> = std::sync::Mutex::new(None);
+
+fn record_remeasured(r: &[Remeasurement]) {
+    REMEASURED
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .get_or_insert_default()
+        .extend_from_slice(r);
+}
+
 impl Header {
     /// The header for `gpu`, dated today.
     pub fn new(gpu: &Gpu) -> Self {
@@ -241,6 +257,7 @@ impl Header {
             sm_clock_before_mhz: clock_before(),
             sm_clock_after_mhz: sm_clock_mhz(),
             sm_clock_measuring_mhz: measured_clocks(),
+            remeasured: REMEASURED.lock().unwrap_or_else(|e| e.into_inner()).clone(),
         }
     }
 
@@ -265,7 +282,7 @@ impl Header {
         let clock =
             |c: Option<u32>| c.map_or("not read (no nvidia-smi)".into(), |c| format!("{c} MHz"));
         format!(
-            "# {title} on {} ({})\n\n- Date: {}\n- Adapter: {} ({}, {})\n- Driver: {} {}\n- SM clock: {} before, {} after the measurements, {} as measurements began\n- Timing: GPU timestamp queries, median (and minimum) of {frames} frames after a warm-up of {WARM_UP_RULE}\n\n",
+            "# {title} on {} ({})\n\n- Date: {}\n- Adapter: {} ({}, {})\n- Driver: {} {}\n- SM clock: {} before, {} after the measurements, {} as measurements began\n- Timing: GPU timestamp queries, median (and minimum) of {frames} frames after a warm-up of {WARM_UP_RULE}\n{}\n",
             self.adapter,
             self.backend,
             self.date,
@@ -278,8 +295,39 @@ impl Header {
             clock(self.sm_clock_after_mhz),
             self.sm_clock_measuring_mhz
                 .map_or("not read".into(), |(lo, hi)| format!("{lo}–{hi} MHz")),
+            self.remeasured
+                .as_ref()
+                .map_or(String::new(), |r| remeasured_line(r)),
         )
     }
+}
+
+/// The header's line on the bench stability rule's re-measurements.
+fn remeasured_line(r: &[Remeasurement]) -> String {
+    let rule = format!(
+        "- Outliers: a configuration more than {OUTLIER_FACTOR}× off the trend of its neighbours is measured again"
+    );
+    if r.is_empty() {
+        return format!("{rule}; none was\n");
+    }
+    let each: Vec<String> = r
+        .iter()
+        .map(|m| {
+            format!(
+                "{} {:.3} → {:.3} ms (trend {:.3}){}",
+                m.configuration,
+                m.first_ms,
+                m.again_ms,
+                m.expected_ms,
+                if m.still_off {
+                    ", **still off: do not trust**"
+                } else {
+                    ""
+                }
+            )
+        })
+        .collect();
+    format!("{rule}: {}\n", each.join("; "))
 }
 
 /// The options every GPU benchmark program takes (`#[command(flatten)]` into its own).

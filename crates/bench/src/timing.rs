@@ -89,6 +89,158 @@ fn warm_up<T, E>(
     }
 }
 
+/// The bench stability rule's bound: a configuration whose median is more than this factor
+/// off the trend through its neighbours in a sweep is measured again ([`remeasure_outliers`]).
+pub const OUTLIER_FACTOR: f64 = 1.5;
+
+/// A configuration measured again by [`remeasure_outliers`]; every report's header lists them.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Remeasurement {
+    /// The configuration, as the benchmark names it.
+    pub configuration: String,
+    /// The median of the first measurement, ms.
+    pub first_ms: f64,
+    /// The median measured again, ms: what the report shows.
+    pub again_ms: f64,
+    /// What its neighbours' trend expects after the re-measurement, ms.
+    pub expected_ms: f64,
+    /// Still more than [`OUTLIER_FACTOR`] off the trend after the re-measurement: the report
+    /// flags it rather than trusting it.
+    pub still_off: bool,
+}
+
+/// Per point `(x, ms)` of one sweep, sorted by `x > 0`, what its neighbours expect: the
+/// power law through the points either side (straight in log–log), extrapolated from the two
+/// nearest at the ends; none with fewer than three points or where the neighbours share an `x`.
+fn trend(points: &[(f64, f64)]) -> Vec<Option<f64>> {
+    let n = points.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = match i {
+                _ if n < 3 => return None,
+                0 => (1, 2),
+                _ if i == n - 1 => (n - 3, n - 2),
+                _ => (i - 1, i + 1),
+            };
+            let ln = |(x, ms): (f64, f64)| (x.ln(), ms.ln());
+            let ((xa, va), (xb, vb), (xi, _)) = (ln(points[a]), ln(points[b]), ln(points[i]));
+            (xb != xa).then(|| (va + (xi - xa) / (xb - xa) * (vb - va)).exp())
+        })
+        .collect()
+}
+
+/// Whether `ms` is more than [`OUTLIER_FACTOR`] off `expected`, either way.
+fn off_trend(ms: f64, expected: f64) -> bool {
+    let ratio = ms / expected;
+    !(ratio <= OUTLIER_FACTOR && ratio >= 1.0 / OUTLIER_FACTOR)
+}
+
+/// The bench stability rule's re-measurement: `rows` form sweeps (rows of equal `sweep(r).0`,
+/// ordered by the position `sweep(r).1 > 0` along the swept parameter); every row whose
+/// `median` is more than [`OUTLIER_FACTOR`] off the trend through its neighbours is measured
+/// again by `measure_again`, once, and recorded with whether it is still off for the report's
+/// header ([`crate::Header::remeasured`]). In [run-once mode](crate::run_once) the first row
+/// is measured again regardless, so that every benchmark's re-measurement path runs in CI.
+pub fn remeasure_outliers<R, K: PartialEq, E>(
+    rows: &mut [R],
+    sweep: impl Fn(&R) -> (K, f64),
+    median: impl Fn(&R) -> f64,
+    label: impl Fn(&R) -> String,
+    measure_again: impl FnMut(&mut R) -> Result<(), E>,
+) -> Result<Vec<Remeasurement>, E> {
+    let remeasured = remeasure(
+        rows,
+        (sweep, median, label),
+        measure_again,
+        crate::run_once(),
+    )?;
+    crate::record_remeasured(&remeasured);
+    Ok(remeasured)
+}
+
+/// [`remeasure_outliers`]; with `first_regardless`, the first row is the one measured again.
+fn remeasure<R, K: PartialEq, E>(
+    rows: &mut [R],
+    (sweep, median, label): (
+        impl Fn(&R) -> (K, f64),
+        impl Fn(&R) -> f64,
+        impl Fn(&R) -> String,
+    ),
+    mut measure_again: impl FnMut(&mut R) -> Result<(), E>,
+    first_regardless: bool,
+) -> Result<Vec<Remeasurement>, E> {
+    let expected = |rows: &[R]| {
+        let mut keys: Vec<K> = Vec::new();
+        let mut sweeps: Vec<Vec<usize>> = Vec::new();
+        for (i, r) in rows.iter().enumerate() {
+            let key = sweep(r).0;
+            match keys.iter().position(|k| *k == key) {
+                Some(s) => sweeps[s].push(i),
+                None => {
+                    keys.push(key);
+                    sweeps.push(vec![i]);
+                }
+            }
+        }
+        let mut expected = vec![None; rows.len()];
+        for mut s in sweeps {
+            s.sort_by(|&a, &b| sweep(&rows[a]).1.total_cmp(&sweep(&rows[b]).1));
+            let points: Vec<(f64, f64)> = s
+                .iter()
+                .map(|&i| (sweep(&rows[i]).1, median(&rows[i])))
+                .collect();
+            for (i, e) in s.into_iter().zip(trend(&points)) {
+                expected[i] = e;
+            }
+        }
+        expected
+    };
+    let first = expected(rows);
+    let outliers: Vec<usize> = if first_regardless {
+        (0..rows.len().min(1)).collect()
+    } else {
+        (0..rows.len())
+            .filter(|&i| first[i].is_some_and(|e| off_trend(median(&rows[i]), e)))
+            .collect()
+    };
+    let mut firsts = Vec::new();
+    for &i in &outliers {
+        firsts.push(median(&rows[i]));
+        measure_again(&mut rows[i])?;
+    }
+    let again = expected(rows);
+    let remeasured: Vec<Remeasurement> = outliers
+        .into_iter()
+        .zip(firsts)
+        .map(|(i, first_ms)| {
+            let again_ms = median(&rows[i]);
+            let expected_ms = again[i].unwrap_or(again_ms);
+            Remeasurement {
+                configuration: label(&rows[i]),
+                first_ms,
+                again_ms,
+                expected_ms,
+                still_off: off_trend(again_ms, expected_ms),
+            }
+        })
+        .collect();
+    for r in &remeasured {
+        println!(
+            "re-measured {}: {:.3} ms, then {:.3} ms (its neighbours expect {:.3} ms){}",
+            r.configuration,
+            r.first_ms,
+            r.again_ms,
+            r.expected_ms,
+            if r.still_off {
+                " — still off, flagged"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(remeasured)
+}
+
 /// Per pass name, the per-frame milliseconds of `frames` frames of `frame`'s `(name, ms)`
 /// passes (passes of one name summed within a frame), after [`warm_then_time`]'s warm-up.
 pub fn time_named<E>(
@@ -234,6 +386,52 @@ mod tests {
         )
         .unwrap();
         (frames, last, reads)
+    }
+
+    #[test]
+    fn the_trend_is_the_power_law_through_the_neighbours() {
+        // t = x²: every point lies on its neighbours' power law, in the middle and at the ends.
+        let points: Vec<(f64, f64)> = [1.0, 2.0, 3.0, 8.0].map(|x| (x, x * x)).to_vec();
+        for ((_, ms), e) in points.iter().zip(trend(&points)) {
+            assert!((e.unwrap() / ms - 1.0).abs() < 1e-9);
+        }
+        assert_eq!(trend(&points[..2]), vec![None, None]);
+    }
+
+    /// A sweep with `ms` at x = 1, 2, 4, 8, 16 whose re-measurement returns x, linear, except
+    /// `at_4` at x = 4: the re-measured x values and whether each is still off.
+    fn remeasured(ms: [f64; 5], at_4: f64) -> Vec<(f64, bool)> {
+        let mut rows: Vec<(f64, f64)> = [1.0, 2.0, 4.0, 8.0, 16.0].into_iter().zip(ms).collect();
+        let r = remeasure(
+            &mut rows,
+            (
+                |r: &(f64, f64)| ((), r.0),
+                |r| r.1,
+                |r| format!("x = {}", r.0),
+            ),
+            |r| {
+                r.1 = if r.0 == 4.0 { at_4 } else { r.0 };
+                Ok::<(), ()>(())
+            },
+            false,
+        )
+        .unwrap();
+        r.iter()
+            .map(|m| (m.configuration[4..].parse().unwrap(), m.still_off))
+            .collect()
+    }
+
+    #[test]
+    fn a_configuration_far_off_its_neighbours_is_measured_again() {
+        // Linear in x, but x = 4 measured 3× slow: it and the neighbours whose trend it bends
+        // are measured again; measured right, none is off any more.
+        let again = remeasured([1.0, 2.0, 12.0, 8.0, 16.0], 4.0);
+        assert!(again.contains(&(4.0, false)));
+        assert!(again.iter().all(|(_, off)| !off));
+        // Still 3× off when measured again: flagged.
+        assert!(remeasured([1.0, 2.0, 12.0, 8.0, 16.0], 12.0).contains(&(4.0, true)));
+        // 1.4× off (within the factor): nothing is measured again.
+        assert!(remeasured([1.0, 2.0, 5.6, 8.0, 16.0], 4.0).is_empty());
     }
 
     #[test]

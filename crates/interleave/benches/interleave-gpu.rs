@@ -54,6 +54,63 @@ struct SplitResult {
     /// Bytes read + written per second, GB/s.
     split_gbps: f64,
     gather_gbps: f64,
+    /// What the row measured, to measure it again: the pattern and the split and gather
+    /// variants.
+    #[serde(skip)]
+    setup: (Pattern, SplitVariant, SplitVariant),
+}
+
+impl SplitResult {
+    /// The row of `variant` (its name) measuring `split` and `gather` on a G-buffer of `size`
+    /// whose copies `copy` measured.
+    fn new(
+        size: (u32, u32),
+        variant: String,
+        setup: (Pattern, SplitVariant, SplitVariant),
+        (split, gather): (Stat, Stat),
+        copy: &CopyResult,
+    ) -> Self {
+        let (c, cc) = (
+            copy.copy_texture_to_texture.median_ms,
+            copy.compute_copy.median_ms,
+        );
+        Self {
+            width: size.0,
+            height: size.1,
+            pattern: setup.0.to_string(),
+            variant,
+            split,
+            gather,
+            split_fraction_of_copy: c / split.median_ms,
+            gather_fraction_of_copy: c / gather.median_ms,
+            split_fraction_of_compute_copy: cc / split.median_ms,
+            gather_fraction_of_compute_copy: cc / gather.median_ms,
+            split_gbps: gbps(size, split.median_ms),
+            gather_gbps: gbps(size, gather.median_ms),
+            setup,
+        }
+    }
+
+    /// The row as the program prints it.
+    fn line(&self) -> String {
+        format!(
+            "{} {} {}: split {:.3} ms ({:.0}% of copy, {:.0}% of compute copy), gather {:.3} ms ({:.0}%, {:.0}%)",
+            name((self.width, self.height)),
+            self.pattern,
+            self.variant,
+            self.split.median_ms,
+            100.0 * self.split_fraction_of_copy,
+            100.0 * self.split_fraction_of_compute_copy,
+            self.gather.median_ms,
+            100.0 * self.gather_fraction_of_copy,
+            100.0 * self.gather_fraction_of_compute_copy
+        )
+    }
+}
+
+/// GB/s of a pass reading and writing a 16-byte/pixel image of `size` in `ms`.
+fn gbps((w, h): (u32, u32), ms: f64) -> f64 {
+    2.0 * f64::from(w * h) * 16.0 / ms * 1e-6
 }
 
 #[derive(Serialize)]
@@ -287,7 +344,7 @@ fn main() -> Result<()> {
         let compute_copy = bench
             .split_gather(&image, &identity, SplitVariant::OnePass)?
             .0;
-        let gbps = |ms: f64| 2.0 * f64::from(size.0 * size.1) * 16.0 / ms * 1e-6;
+        let gbps = |ms: f64| gbps(size, ms);
         println!(
             "copy {}: copy_texture_to_texture {:.3} ms ({:.0} GB/s), compute copy {:.3} ms ({:.0} GB/s)",
             name(size),
@@ -335,53 +392,73 @@ fn main() -> Result<()> {
             if size == (1024, 1024) {
                 continue;
             }
+            let one_pass = SplitVariant::OnePass;
             let mut rows = vec![
                 (
-                    SplitVariant::OnePass.name(),
-                    bench.split_gather(&image, &layout, SplitVariant::OnePass)?,
+                    one_pass.name(),
+                    (pattern, one_pass, one_pass),
+                    bench.split_gather(&image, &layout, one_pass)?,
                 ),
                 (
                     SplitVariant::Tiled.name(),
+                    (pattern, SplitVariant::Tiled, SplitVariant::Tiled),
                     bench.split_gather(&image, &layout, SplitVariant::Tiled)?,
                 ),
             ];
             if let Some((sv, s, gv, g)) = best {
                 rows.insert(
                     1,
-                    (format!("best {} / gather {}", sv.name(), gv.name()), (s, g)),
+                    (
+                        format!("best {} / gather {}", sv.name(), gv.name()),
+                        (pattern, sv, gv),
+                        (s, g),
+                    ),
                 );
             }
-            for (variant, (s, g)) in rows {
-                let r = SplitResult {
-                    width: size.0,
-                    height: size.1,
-                    pattern: pattern.to_string(),
-                    variant,
-                    split: s,
-                    gather: g,
-                    split_fraction_of_copy: copy_ms.median_ms / s.median_ms,
-                    gather_fraction_of_copy: copy_ms.median_ms / g.median_ms,
-                    split_fraction_of_compute_copy: compute_copy.median_ms / s.median_ms,
-                    gather_fraction_of_compute_copy: compute_copy.median_ms / g.median_ms,
-                    split_gbps: gbps(s.median_ms),
-                    gather_gbps: gbps(g.median_ms),
-                };
-                println!(
-                    "{} {} {}: split {:.3} ms ({:.0}% of copy, {:.0}% of compute copy), gather {:.3} ms ({:.0}%, {:.0}%)",
-                    name(size),
-                    r.pattern,
-                    r.variant,
-                    s.median_ms,
-                    100.0 * r.split_fraction_of_copy,
-                    100.0 * r.split_fraction_of_compute_copy,
-                    g.median_ms,
-                    100.0 * r.gather_fraction_of_copy,
-                    100.0 * r.gather_fraction_of_compute_copy
-                );
+            let copied = copy.last().context("the copy of this size was measured")?;
+            for (variant, setup, times) in rows {
+                let r = SplitResult::new(size, variant, setup, times, copied);
+                println!("{}", r.line());
                 split.push(r);
             }
         }
     }
+    // Along the patterns (by pixels per sub-buffer tile) of each size and kind of variant,
+    // split and gather apart.
+    let mut again = |r: &mut SplitResult| -> Result<()> {
+        let size = (r.width, r.height);
+        let image = bench.random_texture("gbuffer", size, FORMAT)?;
+        let (pattern, sv, gv) = r.setup;
+        let layout = SplitLayout::new(size.0, size.1, pattern)?;
+        let s = bench.split_gather(&image, &layout, sv)?.0;
+        let g = bench.split_gather(&image, &layout, gv)?.1;
+        let copied = copy
+            .iter()
+            .find(|c| c.size == name(size))
+            .context("the copy of this size was measured")?;
+        *r = SplitResult::new(size, r.variant.clone(), r.setup, (s, g), copied);
+        Ok(())
+    };
+    let sweep_of = |r: &SplitResult| {
+        let kind = r.variant.split(' ').next().unwrap_or_default().to_owned();
+        ((r.width, r.height, kind), f64::from(r.setup.0.count()))
+    };
+    let label =
+        |r: &SplitResult| format!("{} {} {}", name((r.width, r.height)), r.pattern, r.variant);
+    bench::remeasure_outliers(
+        &mut split,
+        sweep_of,
+        |r| r.split.median_ms,
+        |r| format!("split {}", label(r)),
+        &mut again,
+    )?;
+    bench::remeasure_outliers(
+        &mut split,
+        sweep_of,
+        |r| r.gather.median_ms,
+        |r| format!("gather {}", label(r)),
+        &mut again,
+    )?;
 
     // 3: blur (Table 2) and discontinuity buffer.
     let (w, h) = bench::size((1280, 1024));

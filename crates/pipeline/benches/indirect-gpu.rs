@@ -51,6 +51,10 @@ struct Row {
     speedup: f64,
     /// n·m: the speed-up of the shading alone if nothing else cost anything.
     ideal: u32,
+    /// What the row measured, to measure it again: the VPL count asked for, the pattern
+    /// and the interleaving.
+    #[serde(skip)]
+    setup: (usize, Pattern, Interleaving),
 }
 
 #[derive(Serialize)]
@@ -88,6 +92,29 @@ fn config(
         }),
         ..IndirectConfig::new(bounds)
     }
+}
+
+/// The indirect frame's passes (per name, per-frame ms) with `interleaving` of `pattern`, blur
+/// on, lit by `set`.
+fn time_indirect(
+    gpu: &gpu::Gpu,
+    renderer: &mut GpuRenderer,
+    camera: &scene::Camera,
+    bounds: scene::Aabb,
+    (pattern, interleaving): (Pattern, Interleaving),
+    set: &vpl::VplSet,
+    frames: u32,
+) -> Result<Vec<(String, Vec<f64>)>> {
+    let c = config(bounds, pattern, interleaving, true);
+    renderer.set_indirect(&gpu.device, &c, set)?;
+    Ok(time_passes(
+        gpu,
+        renderer,
+        camera,
+        Vec3::ZERO,
+        frames,
+        None,
+    )?)
 }
 
 fn main() -> Result<()> {
@@ -161,9 +188,15 @@ fn main() -> Result<()> {
                     Interleaving::Fused,
                     Interleaving::Split(SplitVariant::Tiled),
                 ] {
-                    let c = config(bounds, pattern, interleaving, true);
-                    renderer.set_indirect(&gpu.device, &c, &set)?;
-                    let t = time_passes(&gpu, &mut renderer, &camera, Vec3::ZERO, frames, None)?;
+                    let t = time_indirect(
+                        &gpu,
+                        &mut renderer,
+                        &camera,
+                        bounds,
+                        (pattern, interleaving),
+                        &set,
+                        frames,
+                    )?;
                     let indirect = Stat::of(per_frame_sum(&t, &INDIRECT));
                     let reference_shading = Stat::of(reference_ms.clone());
                     let speedup = reference_shading.median_ms / indirect.median_ms;
@@ -187,11 +220,48 @@ fn main() -> Result<()> {
                         reference_shading,
                         speedup,
                         ideal: subsets,
+                        setup: (count, pattern, interleaving),
                     });
                 }
             }
         }
     }
+    // Along the VPL counts of each size, pattern and interleaving.
+    bench::remeasure_outliers(
+        &mut rows,
+        |r| {
+            (
+                (r.width, r.height, r.pattern.clone(), r.interleaving.clone()),
+                r.vpls as f64,
+            )
+        },
+        |r| r.indirect.median_ms,
+        |r| {
+            format!(
+                "{}×{} {} VPLs {} {}",
+                r.width, r.height, r.vpls, r.pattern, r.interleaving
+            )
+        },
+        |r| -> Result<()> {
+            let (count, pattern, interleaving) = r.setup;
+            let set = vpl::generate_from_primary(&scene, &bvh, count, pattern.count(), 1)?;
+            let mut renderer =
+                GpuRenderer::new(&gpu.device, &gpu.queue, &scene, &[], r.width, r.height)?;
+            let t = time_indirect(
+                &gpu,
+                &mut renderer,
+                &camera,
+                bounds,
+                (pattern, interleaving),
+                &set,
+                frames,
+            )?;
+            r.indirect = Stat::of(per_frame_sum(&t, &INDIRECT));
+            r.speedup = r.reference_shading.median_ms / r.indirect.median_ms;
+            r.passes = t.into_iter().map(|(n, v)| (n, Stat::of(v))).collect();
+            Ok(())
+        },
+    )?;
     let (scene, camera) = bench::scene_labels(&path, &camera);
     let report = Report {
         header: bench::Header::new(&gpu),

@@ -93,6 +93,7 @@ fn main() -> Result<()> {
         let sub = Subdivider::new(&mesh.topology, &bft)?;
         let g = GpuSubdivider::new(&gpu.device, &sub, &bft)?;
         g.set_positions(&gpu.queue, &mesh.positions_f32())?;
+        let first_row = rows.len();
         for level in levels {
             let out = g.level(&gpu.device, &sub, level)?;
             let initial = bench::time_encoded(&gpu, &timer, frames, false, &|e, t| {
@@ -140,6 +141,25 @@ fn main() -> Result<()> {
                 clear_baseline,
             });
         }
+        // Along the levels of this mesh, by vertex count (the main step is linear in it).
+        bench::remeasure_outliers(
+            &mut rows[first_row..],
+            |r: &Row| ((), r.vertices as f64),
+            |r| r.evaluate.median_ms,
+            |r| format!("{name} level {} main step", r.level),
+            |r| -> Result<()> {
+                let out = g.level(&gpu.device, &sub, r.level)?;
+                r.evaluate = bench::time_encoded(&gpu, &timer, frames, false, &|e, t| {
+                    g.encode_evaluate(e, &out, Some(t));
+                })?;
+                let per_s = |ms: f64| r.vertices as f64 / (ms * 1e-3);
+                r.vertices_per_s = per_s(r.evaluate.median_ms);
+                r.vertices_per_s_total = per_s(r.initial.median_ms + r.evaluate.median_ms);
+                r.triangles_per_s_total =
+                    r.vertices_per_s_total * r.triangles as f64 / r.vertices as f64;
+                Ok(())
+            },
+        )?;
         if name != "bunny" {
             adaptive.extend(bench_adaptive(&gpu, &timer, frames, name, &mesh, &sub, &g)?);
         }
