@@ -83,7 +83,13 @@ fn shade(texel: vec2<u32>, pixel: vec2<u32>, subset: u32) -> Accumulated {
         let first = subset * params.per_subset;
         for (var k = first; k < first + params.per_subset; k++) {
             var l: vec3<f32>;
-            let intensity = vpl_intensity(vpls[k], p, params.clamp_squared, &l) * vpl_visibility(k, vpls[k], p, nrm);
+            let vpl = vpls[k];
+            let unoccluded = vpl_intensity(vpl, p, params.clamp_squared, &l);
+            // Behind the VPL or facing away from it: nothing to add, no visibility to find.
+            if all(unoccluded == vec3(0.0)) || dot(nrm, l) <= 0.0 {
+                continue;
+            }
+            let intensity = unoccluded * vpl_visibility(k, vpl, p, nrm);
             let c = reflect_light(intensity, l, nrm, v, albedo, roughness, metallic, albedo_specular.a);
             sum.diffuse += c.diffuse;
             sum.specular += c.specular;

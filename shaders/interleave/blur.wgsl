@@ -1,6 +1,8 @@
 // Edge-aware separable Gaussian blur (Segovia 2006 §4.5, Figure 4), one direction per dispatch.
 // The result is the centre plus the weighted mean of the differences to it, so a constant
-// image stays exactly constant however the sums round.
+// image stays exactly constant however the sums round. How far a pixel's walk reaches on each
+// side depends on the discontinuity buffer alone, so the `_pair` kernels blur two images
+// (irradiance → blurred, irradiance_b → blurred_b) along one walk in one dispatch.
 
 struct BlurParams {
     // (1, 0) for the horizontal pass, (0, 1) for the vertical one.
@@ -16,6 +18,8 @@ struct BlurParams {
 @group(0) @binding(2) var blurred: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(3) var<uniform> params: BlurParams;
 @group(0) @binding(4) var bilinear: sampler;
+@group(0) @binding(5) var irradiance_b: texture_2d<f32>;
+@group(0) @binding(6) var blurred_b: texture_storage_2d<rgba16float, write>;
 
 fn weight(k: i32) -> f32 {
     return params.weights[k / 4][k % 4];
@@ -32,24 +36,16 @@ fn on_discontinuity(p: vec2<i32>) -> bool {
 
 // Plain: one fetch per tap at texel centres. In the + direction a neighbour on a discontinuity
 // is blended and ends the walk; in the − direction it ends the walk unblended; a pixel on a
-// discontinuity walks only in the − direction.
-@compute @workgroup_size(16, 16)
-fn blur_plain(@builtin(global_invocation_id) id: vec3<u32>) {
-    let p = vec2<i32>(id.xy);
-    if !inside(p) {
-        return;
-    }
-    let centre = textureLoad(irradiance, p, 0);
-    var sum = vec4(0.0);
-    var total = weight(0);
+// discontinuity walks only in the − direction. The taps reached on the + and − sides.
+fn reach_plain(p: vec2<i32>) -> vec2<i32> {
+    var reach = vec2(0);
     if !on_discontinuity(p) {
         for (var k = 1; k <= params.radius; k++) {
             let q = p + params.direction * k;
             if !inside(q) {
                 break;
             }
-            sum += (textureLoad(irradiance, q, 0) - centre) * weight(k);
-            total += weight(k);
+            reach.x = k;
             if on_discontinuity(q) {
                 break;
             }
@@ -60,49 +56,109 @@ fn blur_plain(@builtin(global_invocation_id) id: vec3<u32>) {
         if !inside(q) || on_discontinuity(q) {
             break;
         }
-        sum += (textureLoad(irradiance, q, 0) - centre) * weight(k);
-        total += weight(k);
+        reach.y = k;
     }
-    textureStore(blurred, p, centre + sum / total);
+    return reach;
+}
+
+// `image` at p blurred over the taps `reach` of [`reach_plain`].
+fn blurred_plain(image: texture_2d<f32>, p: vec2<i32>, reach: vec2<i32>) -> vec4<f32> {
+    let centre = textureLoad(image, p, 0);
+    var sum = vec4(0.0);
+    var total = weight(0);
+    for (var side = 0; side < 2; side++) {
+        let step = params.direction * select(1, -1, side == 1);
+        for (var k = 1; k <= reach[side]; k++) {
+            sum += (textureLoad(image, p + step * k, 0) - centre) * weight(k);
+            total += weight(k);
+        }
+    }
+    return centre + sum / total;
+}
+
+@compute @workgroup_size(16, 16)
+fn blur_plain(@builtin(global_invocation_id) id: vec3<u32>) {
+    let p = vec2<i32>(id.xy);
+    if inside(p) {
+        textureStore(blurred, p, blurred_plain(irradiance, p, reach_plain(p)));
+    }
+}
+
+@compute @workgroup_size(16, 16)
+fn blur_plain_pair(@builtin(global_invocation_id) id: vec3<u32>) {
+    let p = vec2<i32>(id.xy);
+    if inside(p) {
+        let reach = reach_plain(p);
+        textureStore(blurred, p, blurred_plain(irradiance, p, reach));
+        textureStore(blurred_b, p, blurred_plain(irradiance_b, p, reach));
+    }
 }
 
 // Fast: taps k and k+1 fetched together at the point between their centres (0.5 texel bias)
 // with bilinear filtering; the discontinuity buffer is sampled at the same point and the walk
 // stops as soon as the filtered value is > 0. An odd last tap is fetched at its centre.
-@compute @workgroup_size(16, 16)
-fn blur_fast(@builtin(global_invocation_id) id: vec3<u32>) {
-    let p = vec2<i32>(id.xy);
-    if !inside(p) {
-        return;
-    }
-    let centre = textureLoad(irradiance, p, 0);
-    var sum = vec4(0.0);
-    var total = weight(0);
+// Fetch i of a side covers taps 2i + 1 and min(2i + 2, radius): its point (texture
+// coordinates) and summed weight.
+fn fast_fetch(p: vec2<i32>, step: vec2<i32>, i: i32) -> vec3<f32> {
+    let k = 2 * i + 1;
+    let last = min(k + 1, params.radius);
+    let size = vec2<f32>(textureDimensions(irradiance));
+    let uv = (0.5 * vec2<f32>(2 * p + step * (k + last)) + 0.5) / size;
+    return vec3(uv, weight(k) + select(0.0, weight(last), last > k));
+}
+
+// The fetches reached on the + and − sides.
+fn reach_fast(p: vec2<i32>) -> vec2<i32> {
+    var reach = vec2(0);
     for (var side = 0; side < 2; side++) {
         let step = params.direction * select(1, -1, side == 1);
         if side == 0 && on_discontinuity(p) {
             continue;
         }
-        let size = vec2<f32>(textureDimensions(irradiance));
-        for (var k = 1; k <= params.radius; k += 2) {
-            let last = min(k + 1, params.radius);
-            let qa = p + step * k;
-            let qb = p + step * last;
-            if !inside(qb) {
+        for (var i = 0; 2 * i + 1 <= params.radius; i++) {
+            if !inside(p + step * min(2 * i + 2, params.radius)) {
                 break;
             }
-            let uv = (0.5 * vec2<f32>(qa + qb) + 0.5) / size;
-            let e = textureSampleLevel(discontinuities, bilinear, uv, 0.0);
+            let e = textureSampleLevel(discontinuities, bilinear, fast_fetch(p, step, i).xy, 0.0);
             if e.r > 0.0 || e.g > 0.0 {
                 break;
             }
-            var w = weight(k);
-            if last > k {
-                w += weight(last);
-            }
-            sum += (textureSampleLevel(irradiance, bilinear, uv, 0.0) - centre) * w;
-            total += w;
+            reach[side] = i + 1;
         }
     }
-    textureStore(blurred, p, centre + sum / total);
+    return reach;
+}
+
+// `image` at p blurred over the fetches `reach` of [`reach_fast`].
+fn blurred_fast(image: texture_2d<f32>, p: vec2<i32>, reach: vec2<i32>) -> vec4<f32> {
+    let centre = textureLoad(image, p, 0);
+    var sum = vec4(0.0);
+    var total = weight(0);
+    for (var side = 0; side < 2; side++) {
+        let step = params.direction * select(1, -1, side == 1);
+        for (var i = 0; i < reach[side]; i++) {
+            let f = fast_fetch(p, step, i);
+            sum += (textureSampleLevel(image, bilinear, f.xy, 0.0) - centre) * f.z;
+            total += f.z;
+        }
+    }
+    return centre + sum / total;
+}
+
+@compute @workgroup_size(16, 16)
+fn blur_fast(@builtin(global_invocation_id) id: vec3<u32>) {
+    let p = vec2<i32>(id.xy);
+    if inside(p) {
+        textureStore(blurred, p, blurred_fast(irradiance, p, reach_fast(p)));
+    }
+}
+
+@compute @workgroup_size(16, 16)
+fn blur_fast_pair(@builtin(global_invocation_id) id: vec3<u32>) {
+    let p = vec2<i32>(id.xy);
+    if inside(p) {
+        let reach = reach_fast(p);
+        textureStore(blurred, p, blurred_fast(irradiance, p, reach));
+        textureStore(blurred_b, p, blurred_fast(irradiance_b, p, reach));
+    }
 }

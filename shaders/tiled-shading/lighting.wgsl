@@ -86,20 +86,26 @@ fn reflect_light(intensity: vec3<f32>, l: vec3<f32>, n: vec3<f32>, v: vec3<f32>,
     }
     let e = intensity * n_dot_l;
     out.diffuse = e * INV_PI;
-    let h = normalize(l + v);
+    // The half vector h = (l + v) / |l + v| enters through n·h and v·h = l·h only, which
+    // follow from n·l, n·v and l·v without forming it.
+    let l_dot_v = dot(l, v);
+    let inv_h = inverseSqrt(max(2.0 + 2.0 * l_dot_v, 1e-12));
     let n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
-    let n_dot_h = clamp(dot(n, h), 0.0, 1.0);
-    let v_dot_h = clamp(dot(v, h), 0.0, 1.0);
+    let n_dot_h = clamp((n_dot_l + dot(n, v)) * inv_h, 0.0, 1.0);
+    let v_dot_h = clamp((1.0 + l_dot_v) * inv_h, 0.0, 1.0);
     let a = max(roughness * roughness, 1e-3);
     let a2 = a * a;
     let k = n_dot_h * n_dot_h * (a2 - 1.0) + 1.0;
-    let d = a2 * INV_PI / (k * k);
-    let vis = 0.5 / (n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2) + n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2));
-    let fw = pow(1.0 - v_dot_h, 5.0);
+    // D · V = a²/π / k² · 1/2 / (n·l √(n·v² (1 − a²) + a²) + n·v √(n·l² (1 − a²) + a²)).
+    let smith = n_dot_l * sqrt(n_dot_v * n_dot_v * (1.0 - a2) + a2) + n_dot_v * sqrt(n_dot_l * n_dot_l * (1.0 - a2) + a2);
+    let d_vis = a2 * (0.5 * INV_PI) / (k * k * smith);
+    let x = 1.0 - v_dot_h;
+    let x2 = x * x;
+    let fw = x2 * x2 * x;
     // Schlick from F0 = 0.04 (dielectric, scaled by the specular factor as in
     // KHR_materials_specular) or the albedo (metal).
     let f = mix(vec3<f32>(specular * (0.04 + 0.96 * fw)), albedo + (vec3<f32>(1.0) - albedo) * fw, metallic);
-    out.specular = e * (d * vis) * f;
+    out.specular = e * d_vis * f;
     return out;
 }
 

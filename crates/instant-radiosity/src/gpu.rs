@@ -323,11 +323,18 @@ impl IndirectStage {
                     dbp.bind(device, gbuffer.linear_depth, gbuffer.normal, &db)?
                         .named("DB"),
                 );
-                let scratch = irradiance(device, "blur scratch", size);
+                // Diffuse and specular along one walk per pixel, in one dispatch per direction.
+                let scratch = ["diffuse", "specular"]
+                    .map(|light| irradiance(device, &format!("blur scratch ({light})"), size));
                 passes = passes.then(
-                    bp.bind(device, &gathered[0], &db, &scratch, outputs[0])?
-                        .then(bp.bind(device, &gathered[1], &db, &scratch, outputs[1])?)
-                        .named("B"),
+                    bp.bind_pair(
+                        device,
+                        gathered.each_ref(),
+                        &db,
+                        scratch.each_ref(),
+                        outputs,
+                    )?
+                    .named("B"),
                 );
                 Some(db)
             }

@@ -164,21 +164,33 @@ pub fn run_blur(
     discontinuities: &Image<[u8; 4]>,
     blur: &Blur,
 ) -> Result<Image<[f32; 4]>, InterleaveError> {
-    crate::cpu::check_size(
-        "discontinuity buffer",
-        discontinuities,
-        irradiance.width(),
-        irradiance.height(),
-    )?;
+    let [blurred] = run_blurs(gpu, [irradiance], discontinuities, blur)?;
+    Ok(blurred)
+}
+
+/// Convenience for tests: two images blurred together ([`BlurPass::bind_pair`]).
+pub fn run_blur_pair(
+    gpu: &Gpu,
+    irradiance: [&Image<[f32; 4]>; 2],
+    discontinuities: &Image<[u8; 4]>,
+    blur: &Blur,
+) -> Result<[Image<[f32; 4]>; 2], InterleaveError> {
+    run_blurs(gpu, irradiance, discontinuities, blur)
+}
+
+/// [`run_blur`] of one image or [`run_blur_pair`] of two.
+fn run_blurs<const N: usize>(
+    gpu: &Gpu,
+    irradiance: [&Image<[f32; 4]>; N],
+    discontinuities: &Image<[u8; 4]>,
+    blur: &Blur,
+) -> Result<[Image<[f32; 4]>; N], InterleaveError> {
+    let (w, h) = (irradiance[0].width(), irradiance[0].height());
+    for image in irradiance {
+        crate::cpu::check_size("irradiance", image, w, h)?;
+    }
+    crate::cpu::check_size("discontinuity buffer", discontinuities, w, h)?;
     let pass = BlurPass::new(&gpu.device, blur)?;
-    let (w, h) = (irradiance.width(), irradiance.height());
-    let input = upload_image(
-        &gpu.device,
-        &gpu.queue,
-        "irradiance",
-        &to_f16_texels(irradiance),
-        IRRADIANCE_FORMAT,
-    )?;
     let disc = upload_image(
         &gpu.device,
         &gpu.queue,
@@ -186,13 +198,39 @@ pub fn run_blur(
         discontinuities,
         DISCONTINUITY_FORMAT,
     )?;
-    let scratch = BlurPass::irradiance_texture(&gpu.device, "blur scratch", w, h);
-    let out = BlurPass::irradiance_texture(&gpu.device, "blurred", w, h);
-    submit(gpu, &pass.bind(&gpu.device, &input, &disc, &scratch, &out)?);
-    Ok(
-        download_image::<[half::f16; 4]>(&gpu.device, &gpu.queue, &out)?
-            .map(|p| p.map(half::f16::to_f32)),
-    )
+    let mut inputs = Vec::new();
+    for image in irradiance {
+        let t = to_f16_texels(image);
+        inputs.push(upload_image(
+            &gpu.device,
+            &gpu.queue,
+            "irradiance",
+            &t,
+            IRRADIANCE_FORMAT,
+        )?);
+    }
+    let scratch: [_; N] =
+        std::array::from_fn(|_| BlurPass::irradiance_texture(&gpu.device, "blur scratch", w, h));
+    let out: [_; N] =
+        std::array::from_fn(|_| BlurPass::irradiance_texture(&gpu.device, "blurred", w, h));
+    let passes = pass.bind_images(
+        &gpu.device,
+        &inputs.iter().collect::<Vec<_>>(),
+        &disc,
+        &scratch.each_ref(),
+        &out.each_ref(),
+    )?;
+    submit(gpu, &passes);
+    let mut blurred = Vec::new();
+    for o in &out {
+        blurred.push(
+            download_image::<[half::f16; 4]>(&gpu.device, &gpu.queue, o)?
+                .map(|p| p.map(half::f16::to_f32)),
+        );
+    }
+    Ok(blurred
+        .try_into()
+        .unwrap_or_else(|_| unreachable!("one image per output texture")))
 }
 
 /// How [`run_shading`] reaches the sub-buffers.
