@@ -2,14 +2,14 @@
 # Loop subdivision, then ManyLoDs and adaptive SSAA with whatever time is left, each bench
 # from one executable of this commit (`cargo xtask bench-bins`, stripped, packed in
 # .gpu-bin/bins.tar.xz); fixtures and the level-5 basis-function tables under .gpu-data.
-# `bash docs/bench/logs-2026-12-06/run2.sh`; results in $OUT/results.tgz.
-RESULTS=$OUT; OUT=/tmp/res; mkdir -p $OUT
+# `bash docs/bench/logs-2026-12-06/run2.sh`; results straight under $OUT (they come back even
+# if the call is cut short).
 source docs/bench/device-env.sh
 export SUBDIV_BFT_DIR=$PWD/.gpu-data/bft
 tar xJf .gpu-bin/bins.tar.xz -C .gpu-bin && chmod +x .gpu-bin/*
 nvidia-smi --query-gpu=clocks.sm --format=csv,noheader,nounits -lms 200 > "$OUT/clock.log" &
 sampler=$!
-end=$(( $(date +%s) + 540 ))
+end=$(( $(date +%s) + 480 ))
 for spec in indirect-gpu:230 interleave-gpu:100 subdiv-gpu:120 manylod-gpu:200 ssaa-gpu:200; do
   b=${spec%:*}; limit=${spec#*:}
   left=$(( end - $(date +%s) )); [ $left -lt $limit ] && limit=$left
@@ -22,4 +22,3 @@ done
 echo "SM clock after: $(clock)" >> "$OUT/run.txt"
 kill $sampler
 cat "$OUT/run.txt"; ls "$OUT/reports"
-tar czf "$RESULTS/results.tgz" -C /tmp/res .
