@@ -1,5 +1,8 @@
 # Issue 28, the reports of record of 2026-12-06 (H200): the indirect passes, split/gather and
-# Loop subdivision, then ManyLoDs and adaptive SSAA with whatever time is left, each bench
+# Loop subdivision, then the one-pass kernels with 32×8 and 64×4 workgroups instead of 16×16
+# (interleave-gpu-g32x8/-g64x4: this commit with one_pass.wgsl's workgroup size and its
+# dispatch patched; reports under variants/), then ManyLoDs and adaptive SSAA with whatever
+# time is left, each bench
 # from one executable of this commit (`cargo xtask bench-bins`, stripped, packed in
 # .gpu-bin/bins.tar.xz); fixtures and the level-5 basis-function tables under .gpu-data.
 # `bash docs/bench/logs-2026-12-06/run2.sh`; results straight under $OUT (they come back even
@@ -10,13 +13,14 @@ tar xJf .gpu-bin/bins.tar.xz -C .gpu-bin && chmod +x .gpu-bin/*
 nvidia-smi --query-gpu=clocks.sm --format=csv,noheader,nounits -lms 200 > "$OUT/clock.log" &
 sampler=$!
 end=$(( $(date +%s) + 480 ))
-for spec in indirect-gpu:230 interleave-gpu:100 subdiv-gpu:120 manylod-gpu:200 ssaa-gpu:200; do
+for spec in indirect-gpu:230 interleave-gpu:100 subdiv-gpu:120 interleave-gpu-g32x8:65 interleave-gpu-g64x4:65 manylod-gpu:200 ssaa-gpu:200; do
   b=${spec%:*}; limit=${spec#*:}
   left=$(( end - $(date +%s) )); [ $left -lt $limit ] && limit=$left
   [ $limit -lt 20 ] && { echo "== $b not run: no time left" >> "$OUT/run.txt"; continue; }
   echo "== $b (at most $limit s), SM clock $(clock)" >> "$OUT/run.txt"
   start=$(date +%s)
-  timeout $limit .gpu-bin/$b --bench --out "$OUT/reports" > "$OUT/$b.txt" 2>&1 || echo "$b failed or ran past $limit s" >> "$OUT/run.txt"
+  out="$OUT/reports"; case $b in *-g*) out="$OUT/variants/$b";; esac
+  timeout $limit .gpu-bin/$b --bench --out "$out" > "$OUT/$b.txt" 2>&1 || echo "$b failed or ran past $limit s" >> "$OUT/run.txt"
   echo "   took $(( $(date +%s) - start )) s; $(grep -c . "$OUT/$b.txt") lines; $(grep -h 're-measured' "$OUT/$b.txt" | wc -l) re-measured" >> "$OUT/run.txt"
 done
 echo "SM clock after: $(clock)" >> "$OUT/run.txt"
