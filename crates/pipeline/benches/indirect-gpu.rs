@@ -27,6 +27,9 @@ struct Args {
     common: bench::SceneArgs,
     #[command(flatten)]
     quick: bench::Quick,
+    /// Only 1920×1080 and these VPL counts (comma-separated): a focused comparison.
+    #[arg(long, value_delimiter = ',')]
+    vpls: Vec<usize>,
 }
 
 const SIZES: [(u32, u32); 3] = [(1024, 768), (1920, 1080), (3840, 2160)];
@@ -132,7 +135,10 @@ fn main() -> Result<()> {
     let bounds = scene.bounds();
 
     let q = &args.quick;
-    let (sizes, counts, patterns) = (q.sweep(&SIZES), q.sweep(&VPLS), q.sweep(&PATTERNS));
+    let (mut sizes, mut counts, patterns) = (q.sweep(&SIZES), q.sweep(&VPLS), q.sweep(&PATTERNS));
+    if !args.vpls.is_empty() {
+        (sizes, counts) = (&SIZES[1..2], &args.vpls);
+    }
     let mut rows = Vec::new();
     let mut qualities = Vec::new();
     for (w, h) in sizes.iter().copied().map(bench::size) {
