@@ -36,6 +36,10 @@ struct Args {
     images: Option<PathBuf>,
 }
 
+/// A method of the table: its name, geometric metric, shading metric on or off, resolve and
+/// the scale of its constants.
+type Method = (String, Option<GeometricMetric>, bool, Resolve, f32);
+
 /// Light loop repetitions of the "stalled" column.
 const STALL: u32 = 32;
 
@@ -141,8 +145,7 @@ fn main() -> Result<()> {
     let ms_list: &[u32] = if quick { &[4] } else { &[2, 3, 4] };
     let stalls: &[u32] = if quick { &[1] } else { &[1, STALL] };
     let nd = Some(GeometricMetric::NormalDepth);
-    let mut methods: Vec<(String, Option<GeometricMetric>, bool, Resolve, f32)> =
-        vec![("ND+shading".into(), nd, true, Resolve::Loop, 1.0)];
+    let mut methods: Vec<Method> = vec![("ND+shading".into(), nd, true, Resolve::Loop, 1.0)];
     if !quick {
         methods.push(("ND+shading sorted".into(), nd, true, Resolve::Sorted, 1.0));
         methods.extend(
@@ -185,11 +188,11 @@ fn main() -> Result<()> {
                     let full_ms =
                         time(&gpu, &timer, frames, &|e, t| r.ssaa.encode_full(e, Some(t)))?;
                     let full = r.ssaa.read_output(&gpu.device, &gpu.queue)?;
-                    let mut row = |method: &str,
-                                   ms: Stat,
-                                   image: &Image<[f32; 4]>,
-                                   samples: f64,
-                                   shaded: f64| {
+                    let row = |method: &str,
+                               ms: Stat,
+                               image: &Image<[f32; 4]>,
+                               samples: f64,
+                               shaded: f64| {
                         let q = bench::quality(&full, image);
                         let row = Row {
                             scene: name.clone(),
@@ -215,34 +218,31 @@ fn main() -> Result<()> {
                             row.psnr,
                             row.flip_mean
                         );
-                        rows.push(row);
+                        row
                     };
-                    row("full SSAA", full_ms, &full, 1.0, 1.0);
+                    rows.push(row("full SSAA", full_ms, &full, 1.0, 1.0));
                     let one = f64::from(m * m).recip();
                     let first_ms = time(&gpu, &timer, frames, &|e, t| {
                         r.ssaa.encode_first(e, Some(t))
                     })?;
                     let first = r.ssaa.read_first(&gpu.device, &gpu.queue)?;
-                    row("1 sample", first_ms, &first, one, one);
+                    rows.push(row("1 sample", first_ms, &first, one, one));
                     let fxaa_ms = time(&gpu, &timer, frames, &|e, t| {
                         r.ssaa.encode_first(e, Some(t));
                         r.ssaa.encode_fxaa(e, Some(t));
                     })?;
-                    row(
+                    rows.push(row(
                         "FXAA",
                         fxaa_ms,
                         &r.ssaa.read_output(&gpu.device, &gpu.queue)?,
                         one,
                         one,
-                    );
-                    for (label, metric, shading, resolve, scale) in &methods {
-                        let swept = *scale != 1.0;
-                        if swept && (stall != 1 || w != sizes[0].0) {
-                            continue;
-                        }
+                    ));
+                    // The configuration of a method: its metrics, constants scaled.
+                    let method_config = |(_, metric, shading, resolve, scale): &Method| {
                         let c = config.constants;
                         let sm = adaptive_ssaa::ShadingMetric::default();
-                        let config = SsaaConfig {
+                        SsaaConfig {
                             metric: *metric,
                             constants: adaptive_ssaa::Constants {
                                 mm: c.mm * scale,
@@ -256,15 +256,29 @@ fn main() -> Result<()> {
                             }),
                             resolve: *resolve,
                             ..config
-                        };
-                        r.ssaa.set_config(&gpu.queue, &config)?;
+                        }
+                    };
+                    let first_method = rows.len();
+                    for method in &methods {
+                        let (label, _, _, _, scale) = method;
+                        let swept = *scale != 1.0;
+                        if swept && (stall != 1 || w != sizes[0].0) {
+                            continue;
+                        }
+                        r.ssaa.set_config(&gpu.queue, &method_config(method))?;
                         let ms = time(&gpu, &timer, frames, &|e, t| r.ssaa.encode(e, Some(t)))?;
                         let out = adaptive_ssaa::cpu::Output {
                             image: r.ssaa.read_output(&gpu.device, &gpu.queue)?,
                             first: r.ssaa.read_first(&gpu.device, &gpu.queue)?,
                             counts: r.ssaa.read_counts(&gpu.device, &gpu.queue)?,
                         };
-                        row(label, ms, &out.image, out.sample_fraction(m), out.shaded(m));
+                        rows.push(row(
+                            label,
+                            ms,
+                            &out.image,
+                            out.sample_fraction(m),
+                            out.shaded(m),
+                        ));
                         let pictures = (name == "sponza"
                             && w == 1024
                             && m == 4
@@ -275,6 +289,27 @@ fn main() -> Result<()> {
                             write_pictures(dir, &name, m, &full, &out)?;
                         }
                     }
+                    // Along the scales of the constants of each method.
+                    let method_of = |row: &Row| methods.iter().find(|m| m.0 == row.method);
+                    bench::remeasure_outliers(
+                        &mut rows[first_method..],
+                        |row| {
+                            let family = row.method.split(" c×").next().unwrap_or_default();
+                            (
+                                family.to_owned(),
+                                method_of(row).map_or(1.0, |m| f64::from(m.4)),
+                            )
+                        },
+                        |row| row.ms.median_ms,
+                        |row| format!("{name} {w}×{h} m={m} stall {stall} {}", row.method),
+                        |row| -> Result<()> {
+                            let method = method_of(row).context("the row's method")?;
+                            r.ssaa.set_config(&gpu.queue, &method_config(method))?;
+                            row.ms = time(&gpu, &timer, frames, &|e, t| r.ssaa.encode(e, Some(t)))?;
+                            row.speedup_vs_full = full_ms.median_ms / row.ms.median_ms;
+                            Ok(())
+                        },
+                    )?;
                     r.ssaa.set_config(&gpu.queue, &base)?;
                 }
             }
