@@ -12,7 +12,7 @@
 
 mod common;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use bench::Stat;
 use bench::per_frame_sum;
 use clap::Parser;
@@ -110,6 +110,9 @@ struct Row {
     speedup_vs_brute: Option<f64>,
     /// Mean list length over tiles with a surface (None for brute force).
     mean_list: Option<f64>,
+    /// The brute-force median the speed-up divides, ms.
+    #[serde(skip)]
+    brute_ms: Option<f64>,
 }
 
 #[derive(Serialize)]
@@ -327,6 +330,7 @@ fn light_sweep(
     let mut sweep = Vec::new();
     for (w, h) in sizes.iter().copied().map(bench::size) {
         let mut renderer = GpuRenderer::new(&gpu.device, &gpu.queue, scene, &[], w, h)?;
+        let first_row = sweep.len();
         for &count in counts {
             let lights = scene::scatter_point_lights(scene.bounds(), count, 1);
             renderer.set_lights(&gpu.device, &gpu.queue, &lights)?;
@@ -364,9 +368,31 @@ fn light_sweep(
                     frame_ms,
                     speedup_vs_brute: speedup,
                     mean_list,
+                    brute_ms: brute,
                 });
             }
         }
+        // Along the light counts of each method at this size.
+        bench::remeasure_outliers(
+            &mut sweep[first_row..],
+            |r: &Row| (r.method.clone(), r.lights as f64),
+            |r| r.ms.median_ms,
+            |r| format!("{view} {w}x{h} {} lights {}", r.lights, r.method),
+            |r| -> Result<()> {
+                let (_, method, search) = VARIANTS
+                    .into_iter()
+                    .chain([MOVING])
+                    .find(|v| v.0 == r.method)
+                    .context("the row's method")?;
+                let lights = scene::scatter_point_lights(scene.bounds(), r.lights, 1);
+                renderer.set_lights(&gpu.device, &gpu.queue, &lights)?;
+                let moving = (r.method == MOVING.0).then_some(&lights[..]);
+                (r.ms, r.frame_ms, r.mean_list) =
+                    measure(gpu, &mut renderer, camera, (method, search), frames, moving)?;
+                r.speedup_vs_brute = r.brute_ms.map(|b| b / r.ms.median_ms);
+                Ok(())
+            },
+        )?;
     }
     Ok(sweep)
 }
