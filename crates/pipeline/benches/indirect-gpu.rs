@@ -139,6 +139,9 @@ fn main() -> Result<()> {
     if !args.vpls.is_empty() {
         (sizes, counts) = (&SIZES[1..2], &args.vpls);
     }
+    let time = |renderer: &mut GpuRenderer, setup, set: &vpl::VplSet| {
+        time_indirect(&gpu, renderer, &camera, bounds, setup, set, frames)
+    };
     let mut rows = Vec::new();
     let mut qualities = Vec::new();
     for (w, h) in sizes.iter().copied().map(bench::size) {
@@ -194,15 +197,7 @@ fn main() -> Result<()> {
                     Interleaving::Fused,
                     Interleaving::Split(SplitVariant::Tiled),
                 ] {
-                    let t = time_indirect(
-                        &gpu,
-                        &mut renderer,
-                        &camera,
-                        bounds,
-                        (pattern, interleaving),
-                        &set,
-                        frames,
-                    )?;
+                    let t = time(&mut renderer, (pattern, interleaving), &set)?;
                     let indirect = Stat::of(per_frame_sum(&t, &INDIRECT));
                     let reference_shading = Stat::of(reference_ms.clone());
                     let speedup = reference_shading.median_ms / indirect.median_ms;
@@ -253,15 +248,7 @@ fn main() -> Result<()> {
             let set = vpl::generate_from_primary(&scene, &bvh, count, pattern.count(), 1)?;
             let mut renderer =
                 GpuRenderer::new(&gpu.device, &gpu.queue, &scene, &[], r.width, r.height)?;
-            let t = time_indirect(
-                &gpu,
-                &mut renderer,
-                &camera,
-                bounds,
-                (pattern, interleaving),
-                &set,
-                frames,
-            )?;
+            let t = time(&mut renderer, (pattern, interleaving), &set)?;
             r.indirect = Stat::of(per_frame_sum(&t, &INDIRECT));
             r.speedup = r.reference_shading.median_ms / r.indirect.median_ms;
             r.passes = t.into_iter().map(|(n, v)| (n, Stat::of(v))).collect();
