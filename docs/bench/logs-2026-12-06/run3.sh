@@ -3,7 +3,7 @@
 # commit's stage), then split/gather with the one-pass kernels' 16×16 workgroups (main) and
 # 32×8 / 64×4 ones (interleave-gpu-g32x8/-g64x4: one_pass.wgsl's workgroup size and its
 # dispatch patched). `bash docs/bench/logs-2026-12-06/run3.sh` with the executables packed in
-# .gpu-bin/bins.tar.xz and Sponza under .gpu-data; results straight under $OUT.
+# .gpu-bin/bins.tar.xz and Sponza under .gpu-data (prep.sh); results straight under $OUT.
 source docs/bench/device-env.sh
 tar xJf .gpu-bin/bins.tar.xz -C .gpu-bin && chmod +x .gpu-bin/*
 nvidia-smi --query-gpu=clocks.sm --format=csv,noheader,nounits -lms 200 > "$OUT/clock.log" &
