@@ -1,17 +1,9 @@
+// #import interleave/blur_params.wgsl
 // Edge-aware separable Gaussian blur (Segovia 2006 §4.5, Figure 4), one direction per dispatch.
 // The result is the centre plus the weighted mean of the differences to it, so a constant
 // image stays exactly constant however the sums round. How far a pixel's walk reaches on each
 // side depends on the discontinuity buffer alone, so the `_pair` kernels blur two images
 // (irradiance → blurred, irradiance_b → blurred_b) along one walk in one dispatch.
-
-struct BlurParams {
-    // (1, 0) for the horizontal pass, (0, 1) for the vertical one.
-    direction: vec2<i32>,
-    radius: i32,
-    _pad: i32,
-    // Gaussian weights of taps 0..=radius (radius ≤ 8), four per vector.
-    weights: array<vec4<f32>, 3>,
-}
 
 @group(0) @binding(0) var irradiance: texture_2d<f32>;
 @group(0) @binding(1) var discontinuities: texture_2d<f32>;

@@ -47,22 +47,32 @@ fn depths_differ(a: f32, b: f32) -> bool {
     return max(a, b) > min(a, b) * thresholds.depth_factor;
 }
 
-@compute @workgroup_size(16, 16)
-fn discontinuity(@builtin(global_invocation_id) id: vec3<u32>) {
+// The discontinuity flags of texel p (bit 0: normal test failed, bit 1: depth test failed).
+fn discontinuity_flags(p: vec2<u32>) -> u32 {
     let size = textureDimensions(linear_depth);
-    if any(id.xy >= size) {
-        return;
-    }
-    let z = textureLoad(linear_depth, id.xy, 0).r;
-    let nrm = textureLoad(normals, id.xy, 0).r;
+    let z = textureLoad(linear_depth, p, 0).r;
+    let nrm = textureLoad(normals, p, 0).r;
     var normal_edge = false;
     var depth_edge = false;
     for (var k = 0u; k < 3u; k++) {
-        let q = id.xy + vec2(select(0u, 1u, k != 1u), select(0u, 1u, k != 0u));
+        let q = p + vec2(select(0u, 1u, k != 1u), select(0u, 1u, k != 0u));
         if all(q < size) {
             normal_edge = normal_edge || normals_differ(nrm, textureLoad(normals, q, 0).r);
             depth_edge = depth_edge || depths_differ(z, textureLoad(linear_depth, q, 0).r);
         }
     }
-    textureStore(discontinuities, id.xy, vec4(select(0.0, 1.0, normal_edge), select(0.0, 1.0, depth_edge), 0.0, 1.0));
+    return select(0u, 1u, normal_edge) | select(0u, 2u, depth_edge);
+}
+
+// The discontinuity buffer's texel of `discontinuity_flags`.
+fn discontinuity_texel(flags: u32) -> vec4<f32> {
+    return vec4(f32(flags & 1u), f32(flags >> 1u), 0.0, 1.0);
+}
+
+@compute @workgroup_size(16, 16)
+fn discontinuity(@builtin(global_invocation_id) id: vec3<u32>) {
+    if any(id.xy >= textureDimensions(linear_depth)) {
+        return;
+    }
+    textureStore(discontinuities, id.xy, discontinuity_texel(discontinuity_flags(id.xy)));
 }

@@ -34,8 +34,7 @@ use half::f16;
 use interleave::{
     SplitLayout,
     gpu::{
-        BlurPass, DISCONTINUITY_FORMAT, DiscontinuityPass, IRRADIANCE_FORMAT, Splitter,
-        download_image,
+        DISCONTINUITY_FORMAT, DiscontinuityBlurPass, IRRADIANCE_FORMAT, Splitter, download_image,
     },
 };
 
@@ -85,8 +84,8 @@ pub struct IndirectStage {
     shading: Kernel,
     /// Split/gather passes of the linear depth, normal, albedo and irradiance formats.
     splitters: Option<[Splitter; 4]>,
-    discontinuity: Option<DiscontinuityPass>,
-    blur: Option<BlurPass>,
+    /// The discontinuity buffer and blur, in one dispatch.
+    discontinuity_blur: Option<DiscontinuityBlurPass>,
 }
 
 /// The stage bound to one G-buffer, VPL set and pair of output textures (phase `bind`): the
@@ -150,21 +149,17 @@ impl IndirectStage {
             }
             Interleaving::Fused | Interleaving::Reference => None,
         };
-        let (discontinuity, blur) = match config.applied_blur() {
-            Some(blur) => (
-                Some(DiscontinuityPass::new(device, &config.thresholds)?),
-                Some(BlurPass::new(device, &blur)?),
-            ),
-            None => (None, None),
-        };
+        let discontinuity_blur = config
+            .applied_blur()
+            .map(|blur| DiscontinuityBlurPass::new(device, &config.thresholds, &blur))
+            .transpose()?;
         Ok(Self {
             config: *config,
             layout,
             size,
             shading,
             splitters,
-            discontinuity,
-            blur,
+            discontinuity_blur,
         })
     }
 
@@ -259,7 +254,7 @@ impl IndirectStage {
             Passes::one(name, &self.shading.pipeline, vec![group], workgroups)
         };
         // Without a blur the gathered light is the output; with one, the blur writes it.
-        let gathered = match self.blur {
+        let gathered = match self.discontinuity_blur {
             Some(_) => [
                 irradiance(device, "indirect diffuse", size),
                 irradiance(device, "indirect specular", size),
@@ -309,8 +304,8 @@ impl IndirectStage {
                 (passes, None, gathered[0].clone())
             }
         };
-        let discontinuities = match (&self.discontinuity, &self.blur) {
-            (Some(dbp), Some(bp)) => {
+        let discontinuities = match &self.discontinuity_blur {
+            Some(pass) => {
                 let db = transfer::texture_2d(
                     device,
                     "discontinuity buffer",
@@ -319,26 +314,13 @@ impl IndirectStage {
                     DISCONTINUITY_FORMAT,
                     USAGE,
                 );
-                passes = passes.then(
-                    dbp.bind(device, gbuffer.linear_depth, gbuffer.normal, &db)?
-                        .named("DB"),
-                );
-                // Diffuse and specular along one walk per pixel, in one dispatch per direction.
-                let scratch = ["diffuse", "specular"]
-                    .map(|light| irradiance(device, &format!("blur scratch ({light})"), size));
-                passes = passes.then(
-                    bp.bind_pair(
-                        device,
-                        gathered.each_ref(),
-                        &db,
-                        scratch.each_ref(),
-                        outputs,
-                    )?
-                    .named("B"),
-                );
+                // Diffuse and specular along one walk per pixel.
+                let g = (gbuffer.linear_depth, gbuffer.normal);
+                let fused = pass.bind(device, g, gathered.each_ref(), &db, outputs)?;
+                passes = passes.then(fused.named("DB + B"));
                 Some(db)
             }
-            _ => None,
+            None => None,
         };
         Ok(BoundIndirect {
             passes,

@@ -56,7 +56,9 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
     imports: [gbuffer::SHADERS],
     files: [
         "blur.wgsl",
+        "blur_params.wgsl",
         "discontinuity.wgsl",
+        "discontinuity_blur.wgsl",
         "one_pass.wgsl",
         "pattern.wgsl",
         "shade.wgsl",

@@ -337,6 +337,30 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(6))]
+
+    /// The one-dispatch discontinuity buffer + blur equals the CPU's discontinuity buffer
+    /// exactly and its blur of each image within the blur tolerance, across tile borders
+    /// (sizes not multiples of 16, walks up to radius 8).
+    #[test]
+    fn gpu_discontinuity_blur_equals_cpu(width in 8u32..100, height in 8u32..100, spheres in 1u32..10, seed in any::<u32>()) {
+        let Some(gpu) = gpu::test_device(&interleave::device_needs()) else { return Ok(()) };
+        let (depth, normals) = scene_gbuffer(width, height, spheres);
+        let t = Thresholds::default();
+        let disc = cpu::discontinuity(&depth, &normals, &t).expect("disc");
+        let images = [noise(width, height, seed), noise(width, height, seed ^ 0x9e37_79b9)];
+        for blur in blurs() {
+            let (got_disc, got) = igpu::run_discontinuity_blur(gpu, (&depth, &normals), images.each_ref(), &t, &blur).expect("gpu");
+            prop_assert!(got_disc == disc, "discontinuity buffers differ ({:?})", blur);
+            for (image, got) in images.iter().zip(&got) {
+                let expected = cpu::blur(image, &disc, &blur).expect("cpu");
+                assert_close(&expected, got, BLUR_TOL, &format!("{blur:?} {width}×{height}"));
+            }
+        }
+    }
+}
+
 #[test]
 fn blur_rejects_bad_kernels() {
     for k in [0, 3, 4, 6, 19] {

@@ -10,7 +10,7 @@ use super::{
 };
 use crate::{Blur, BlurVariant, InterleaveError};
 
-/// Uniform block of `blur.wgsl`.
+/// Uniform block of `blur_params.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, bytemuck::Zeroable)]
 struct BlurUniform {
@@ -18,6 +18,39 @@ struct BlurUniform {
     radius: i32,
     _pad: i32,
     weights: [f32; 12],
+}
+
+/// `blur`'s uniform buffer for `direction` ((1, 0) horizontal, (0, 1) vertical).
+pub(super) fn blur_params(
+    device: &wgpu::Device,
+    blur: &Blur,
+    direction: [i32; 2],
+) -> Result<wgpu::Buffer, ::gpu::GpuError> {
+    let mut weights = [0.0; 12];
+    for (w, v) in weights.iter_mut().zip(blur.weights()) {
+        *w = v;
+    }
+    transfer::buffer_init(
+        device,
+        "blur params",
+        bytemuck::bytes_of(&BlurUniform {
+            direction,
+            radius: blur.radius() as i32,
+            _pad: 0,
+            weights,
+        }),
+        wgpu::BufferUsages::UNIFORM,
+    )
+}
+
+/// The blur's bilinear sampler (the fast variant's paired taps).
+pub(super) fn bilinear(device: &wgpu::Device) -> wgpu::Sampler {
+    device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("blur bilinear"),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    })
 }
 
 /// The edge-aware separable Gaussian blur (§4.5): a horizontal and a vertical pass.
@@ -56,30 +89,8 @@ impl BlurPass {
         let pipeline = compute_kernel(device, &module, entry, single, &[]);
         let pair = [&single[..4], &[Binding::Sampler, texture, storage]].concat();
         let pair = compute_kernel(device, &module, &format!("{entry}_pair"), &pair, &[]);
-        let mut weights = [0.0; 12];
-        for (w, v) in weights.iter_mut().zip(blur.weights()) {
-            *w = v;
-        }
-        let params = [[1, 0], [0, 1]].map(|direction| {
-            transfer::buffer_init(
-                device,
-                "blur params",
-                bytemuck::bytes_of(&BlurUniform {
-                    direction,
-                    radius: blur.radius() as i32,
-                    _pad: 0,
-                    weights,
-                }),
-                wgpu::BufferUsages::UNIFORM,
-            )
-        });
-        let [h, v] = params;
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("blur bilinear"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
+        let [h, v] = [[1, 0], [0, 1]].map(|direction| blur_params(device, blur, direction));
+        let sampler = bilinear(device);
         Ok(Self {
             blur: *blur,
             pipeline,

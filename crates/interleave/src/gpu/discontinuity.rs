@@ -10,7 +10,7 @@ use crate::{InterleaveError, Thresholds};
 /// Uniform block of `discontinuity.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, bytemuck::Zeroable)]
-struct ThresholdsUniform {
+pub(super) struct ThresholdsUniform {
     cos_squared: f32,
     cos_positive: u32,
     depth_factor: f32,
@@ -51,7 +51,7 @@ impl DiscontinuityPass {
         })
     }
 
-    fn uniform(t: &Thresholds) -> Result<ThresholdsUniform, InterleaveError> {
+    pub(super) fn uniform(t: &Thresholds) -> Result<ThresholdsUniform, InterleaveError> {
         t.validate()?;
         let (cos_squared, positive) = t.cos_squared();
         Ok(ThresholdsUniform {

@@ -18,7 +18,8 @@
 //! ```
 //!
 //! One module per kernel stage, named after its WGSL file: [`split`] (`one_pass.wgsl`,
-//! `two_pass.wgsl`, `tiled.wgsl` over `texel.wgsl`), [`discontinuity`], [`blur`], [`shade`];
+//! `two_pass.wgsl`, `tiled.wgsl` over `texel.wgsl`), [`discontinuity`], [`blur`],
+//! [`discontinuity_blur`] (both in one dispatch), [`shade`];
 //! [`run`] has the upload → encode → read-back helpers for tests and examples.
 
 use ::gpu::kernel::{self, Binding, Layout, Workgroups};
@@ -26,18 +27,36 @@ use ::gpu::wgpu;
 
 pub mod blur;
 pub mod discontinuity;
+pub mod discontinuity_blur;
 pub mod run;
 pub mod shade;
 pub mod split;
 
 pub use blur::BlurPass;
 pub use discontinuity::DiscontinuityPass;
+pub use discontinuity_blur::DiscontinuityBlurPass;
 pub use run::{
-    Shading, download_image, run_blur, run_blur_pair, run_discontinuity, run_gather, run_shading,
-    run_split, to_f16_texels, upload_depth_normals, upload_image,
+    Shading, download_image, run_blur, run_blur_pair, run_discontinuity, run_discontinuity_blur,
+    run_gather, run_shading, run_split, to_f16_texels, upload_depth_normals, upload_image,
 };
 pub use shade::{SubsetShading, lights_per_subset};
-pub use split::{SPLIT_FORMATS, Splitter, shader_variants, texel_format, texel_specialisation};
+pub use split::{SPLIT_FORMATS, Splitter, texel_format, texel_specialisation};
+
+/// Every shader variant this crate can build: each split/gather file for each format, and the
+/// one-dispatch discontinuity buffer + blur for each valid blur.
+pub fn shader_variants() -> Vec<(&'static str, ::gpu::shader::Specialisation)> {
+    let blurs = (5..=17).step_by(2).flat_map(|kernel| {
+        [crate::BlurVariant::Plain, crate::BlurVariant::Fast]
+            .map(|variant| crate::Blur { kernel, variant })
+    });
+    let fused = blurs.map(|b| {
+        (
+            "discontinuity_blur.wgsl",
+            discontinuity_blur::specialisation(&b),
+        )
+    });
+    split::shader_variants().into_iter().chain(fused).collect()
+}
 
 /// Format of irradiance textures (blur input and output, shading output): filterable and
 /// writable from compute, 16 bits per channel like the paper's (§5.3).

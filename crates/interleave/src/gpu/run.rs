@@ -5,8 +5,8 @@ use bytemuck::Pod;
 use gbuffer::Image;
 
 use super::{
-    BlurPass, DISCONTINUITY_FORMAT, DiscontinuityPass, IRRADIANCE_FORMAT, Passes, Splitter,
-    SubsetShading, USAGE, split::texel_format,
+    BlurPass, DISCONTINUITY_FORMAT, DiscontinuityBlurPass, DiscontinuityPass, IRRADIANCE_FORMAT,
+    Passes, Splitter, SubsetShading, USAGE, split::texel_format,
 };
 use crate::cpu::SubsetLight;
 use crate::{Blur, InterleaveError, SplitLayout, SplitVariant, Thresholds};
@@ -150,6 +150,47 @@ pub fn run_discontinuity(
     );
     submit(gpu, &pass.bind(&gpu.device, &depth, &nrm, &out)?);
     download_image(&gpu.device, &gpu.queue, &out)
+}
+
+/// Convenience for tests: the discontinuity buffer and two images blurred by it in one
+/// dispatch ([`DiscontinuityBlurPass`]).
+pub fn run_discontinuity_blur(
+    gpu: &Gpu,
+    (linear_depth, normals): (&Image<f32>, &Image<u32>),
+    irradiance: [&Image<[f32; 4]>; 2],
+    thresholds: &Thresholds,
+    blur: &Blur,
+) -> Result<(Image<[u8; 4]>, [Image<[f32; 4]>; 2]), InterleaveError> {
+    let (w, h) = (linear_depth.width(), linear_depth.height());
+    let device = &gpu.device;
+    let pass = DiscontinuityBlurPass::new(device, thresholds, blur)?;
+    let gbuffer = upload_depth_normals(device, &gpu.queue, linear_depth, normals)?;
+    let mut images = Vec::new();
+    for image in irradiance {
+        crate::cpu::check_size("irradiance", image, w, h)?;
+        let t = to_f16_texels(image);
+        images.push(upload_image(
+            device,
+            &gpu.queue,
+            "irradiance",
+            &t,
+            IRRADIANCE_FORMAT,
+        )?);
+    }
+    let disc = transfer::texture_2d(device, "discontinuities", w, h, DISCONTINUITY_FORMAT, USAGE);
+    let out: [_; 2] =
+        std::array::from_fn(|_| BlurPass::irradiance_texture(device, "blurred", w, h));
+    let images: [&wgpu::Texture; 2] = [&images[0], &images[1]];
+    let gbuffer = (&gbuffer[0], &gbuffer[1]);
+    submit(
+        gpu,
+        &pass.bind(device, gbuffer, images, &disc, out.each_ref())?,
+    );
+    let [a, b] = out.each_ref().map(|o| {
+        download_image::<[half::f16; 4]>(device, &gpu.queue, o)
+            .map(|i| i.map(|p| p.map(half::f16::to_f32)))
+    });
+    Ok((download_image(device, &gpu.queue, &disc)?, [a?, b?]))
 }
 
 /// Linear RGBA as f16 texels of an [`IRRADIANCE_FORMAT`] texture.

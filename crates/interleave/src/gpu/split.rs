@@ -80,8 +80,8 @@ pub const SPLIT_FORMATS: [wgpu::TextureFormat; 15] = {
     ]
 };
 
-/// Every shader variant this crate can build: each split/gather file for each format.
-pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
+/// Each split/gather file for each format.
+pub(super) fn shader_variants() -> Vec<(&'static str, Specialisation)> {
     ["one_pass.wgsl", "two_pass.wgsl", "tiled.wgsl"]
         .into_iter()
         .flat_map(|file| {
