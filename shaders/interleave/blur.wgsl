@@ -1,17 +1,14 @@
 // #import interleave/blur_params.wgsl
 // Edge-aware separable Gaussian blur (Segovia 2006 §4.5, Figure 4), one direction per dispatch.
 // The result is the centre plus the weighted mean of the differences to it, so a constant
-// image stays exactly constant however the sums round. How far a pixel's walk reaches on each
-// side depends on the discontinuity buffer alone, so the `_pair` kernels blur two images
-// (irradiance → blurred, irradiance_b → blurred_b) along one walk in one dispatch.
+// image stays exactly constant however the sums round. `discontinuity_blur.wgsl` runs the same
+// walks and sums for two images, both directions and the discontinuity buffer in one dispatch.
 
 @group(0) @binding(0) var irradiance: texture_2d<f32>;
 @group(0) @binding(1) var discontinuities: texture_2d<f32>;
 @group(0) @binding(2) var blurred: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(3) var<uniform> params: BlurParams;
 @group(0) @binding(4) var bilinear: sampler;
-@group(0) @binding(5) var irradiance_b: texture_2d<f32>;
-@group(0) @binding(6) var blurred_b: texture_storage_2d<rgba16float, write>;
 
 fn weight(k: i32) -> f32 {
     return params.weights[k / 4][k % 4];
@@ -76,16 +73,6 @@ fn blur_plain(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
-@compute @workgroup_size(16, 16)
-fn blur_plain_pair(@builtin(global_invocation_id) id: vec3<u32>) {
-    let p = vec2<i32>(id.xy);
-    if inside(p) {
-        let reach = reach_plain(p);
-        textureStore(blurred, p, blurred_plain(irradiance, p, reach));
-        textureStore(blurred_b, p, blurred_plain(irradiance_b, p, reach));
-    }
-}
-
 // Fast: taps k and k+1 fetched together at the point between their centres (0.5 texel bias)
 // with bilinear filtering; the discontinuity buffer is sampled at the same point and the walk
 // stops as soon as the filtered value is > 0. An odd last tap is fetched at its centre.
@@ -142,15 +129,5 @@ fn blur_fast(@builtin(global_invocation_id) id: vec3<u32>) {
     let p = vec2<i32>(id.xy);
     if inside(p) {
         textureStore(blurred, p, blurred_fast(irradiance, p, reach_fast(p)));
-    }
-}
-
-@compute @workgroup_size(16, 16)
-fn blur_fast_pair(@builtin(global_invocation_id) id: vec3<u32>) {
-    let p = vec2<i32>(id.xy);
-    if inside(p) {
-        let reach = reach_fast(p);
-        textureStore(blurred, p, blurred_fast(irradiance, p, reach));
-        textureStore(blurred_b, p, blurred_fast(irradiance_b, p, reach));
     }
 }

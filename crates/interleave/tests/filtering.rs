@@ -317,27 +317,6 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(4))]
-
-    /// Two images blurred together in one dispatch per direction come out bit for bit as
-    /// each blurred alone: the walk depends on the discontinuity buffer only.
-    #[test]
-    fn gpu_blur_pair_equals_each_blur(width in 8u32..80, height in 8u32..80, spheres in 1u32..10, seed in any::<u32>()) {
-        let Some(gpu) = gpu::test_device(&interleave::device_needs()) else { return Ok(()) };
-        let (depth, normals) = scene_gbuffer(width, height, spheres);
-        let disc = cpu::discontinuity(&depth, &normals, &Thresholds::default()).expect("disc");
-        let images = [noise(width, height, seed), noise(width, height, seed ^ 0x9e37_79b9)];
-        for blur in blurs() {
-            let pair = igpu::run_blur_pair(gpu, images.each_ref(), &disc, &blur).expect("pair");
-            for (image, got) in images.iter().zip(&pair) {
-                let alone = igpu::run_blur(gpu, image, &disc, &blur).expect("alone");
-                prop_assert!(*got == alone, "{:?} {}×{}", blur, width, height);
-            }
-        }
-    }
-}
-
-proptest! {
     #![proptest_config(ProptestConfig::with_cases(6))]
 
     /// The one-dispatch discontinuity buffer + blur equals the CPU's discontinuity buffer

@@ -57,8 +57,6 @@ pub(super) fn bilinear(device: &wgpu::Device) -> wgpu::Sampler {
 pub struct BlurPass {
     blur: Blur,
     pipeline: (wgpu::ComputePipeline, Layout),
-    /// The kernel blurring two images along one walk ([`BlurPass::bind_pair`]).
-    pair: (wgpu::ComputePipeline, Layout),
     params: [wgpu::Buffer; 2],
     sampler: wgpu::Sampler,
 }
@@ -68,33 +66,28 @@ impl BlurPass {
     pub fn new(device: &wgpu::Device, blur: &Blur) -> Result<Self, InterleaveError> {
         blur.validate()?;
         let module = crate::SHADERS.module(device, "blur.wgsl")?;
-        let storage = Binding::StorageTexture(IRRADIANCE_FORMAT);
         let (texture, entry) = match blur.variant {
             BlurVariant::Plain => (Binding::TextureUnfilterable, "blur_plain"),
             BlurVariant::Fast => (Binding::Texture, "blur_fast"),
         };
-        // irradiance, discontinuities, blurred, params, bilinear (the fast kernels' only);
-        // then irradiance_b, blurred_b (the pair kernels').
-        let single = [
+        // irradiance, discontinuities, blurred, params, bilinear (the fast kernel's only).
+        let bindings = [
             texture,
             texture,
-            storage,
+            Binding::StorageTexture(IRRADIANCE_FORMAT),
             Binding::Uniform,
             Binding::Sampler,
         ];
-        let single = match blur.variant {
-            BlurVariant::Plain => &single[..4],
-            BlurVariant::Fast => &single[..],
+        let bindings = match blur.variant {
+            BlurVariant::Plain => &bindings[..4],
+            BlurVariant::Fast => &bindings[..],
         };
-        let pipeline = compute_kernel(device, &module, entry, single, &[]);
-        let pair = [&single[..4], &[Binding::Sampler, texture, storage]].concat();
-        let pair = compute_kernel(device, &module, &format!("{entry}_pair"), &pair, &[]);
+        let pipeline = compute_kernel(device, &module, entry, bindings, &[]);
         let [h, v] = [[1, 0], [0, 1]].map(|direction| blur_params(device, blur, direction));
         let sampler = bilinear(device);
         Ok(Self {
             blur: *blur,
             pipeline,
-            pair,
             params: [h?, v?],
             sampler,
         })
@@ -120,46 +113,11 @@ impl BlurPass {
         scratch: &wgpu::Texture,
         output: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
-        self.bind_images(
-            device,
-            &[irradiance],
-            discontinuities,
-            &[scratch],
-            &[output],
-        )
-    }
-
-    /// Passes blurring two images guided by the same `discontinuities` in one dispatch per
-    /// direction, each along [`bind`](Self::bind)'s walk (which depends on the discontinuity
-    /// buffer only), so each result equals `bind`'s bit for bit: `irradiance[i]` into
-    /// `output[i]` through `scratch[i]`.
-    pub fn bind_pair(
-        &self,
-        device: &wgpu::Device,
-        irradiance: [&wgpu::Texture; 2],
-        discontinuities: &wgpu::Texture,
-        scratch: [&wgpu::Texture; 2],
-        output: [&wgpu::Texture; 2],
-    ) -> Result<Passes, InterleaveError> {
-        self.bind_images(device, &irradiance, discontinuities, &scratch, &output)
-    }
-
-    /// [`bind`](Self::bind) of one image or [`bind_pair`](Self::bind_pair) of two.
-    pub(crate) fn bind_images(
-        &self,
-        device: &wgpu::Device,
-        irradiance: &[&wgpu::Texture],
-        discontinuities: &wgpu::Texture,
-        scratch: &[&wgpu::Texture],
-        output: &[&wgpu::Texture],
-    ) -> Result<Passes, InterleaveError> {
-        let size = (irradiance[0].width(), irradiance[0].height());
-        for ((irradiance, scratch), output) in irradiance.iter().zip(scratch).zip(output) {
-            kernel::check_texture("irradiance", irradiance, size, IRRADIANCE_FORMAT, READ)?;
-            kernel::check_texture("blur scratch", scratch, size, IRRADIANCE_FORMAT, READ)?;
-            kernel::check_texture("blur scratch", scratch, size, IRRADIANCE_FORMAT, WRITE)?;
-            kernel::check_texture("blur output", output, size, IRRADIANCE_FORMAT, WRITE)?;
-        }
+        let size = (irradiance.width(), irradiance.height());
+        kernel::check_texture("irradiance", irradiance, size, IRRADIANCE_FORMAT, READ)?;
+        kernel::check_texture("blur scratch", scratch, size, IRRADIANCE_FORMAT, READ)?;
+        kernel::check_texture("blur scratch", scratch, size, IRRADIANCE_FORMAT, WRITE)?;
+        kernel::check_texture("blur output", output, size, IRRADIANCE_FORMAT, WRITE)?;
         kernel::check_texture(
             "discontinuity buffer",
             discontinuities,
@@ -169,30 +127,19 @@ impl BlurPass {
         )?;
         let disc = view(discontinuities);
         let [h, v] = &self.params;
-        let one =
-            |name: &str, from: &[&wgpu::Texture], to: &[&wgpu::Texture], params: &wgpu::Buffer| {
-                let (from, to): (Vec<_>, Vec<_>) = (
-                    from.iter().map(|t| view(t)).collect(),
-                    to.iter().map(|t| view(t)).collect(),
-                );
-                let mut resources = vec![
-                    wgpu::BindingResource::TextureView(&from[0]),
-                    wgpu::BindingResource::TextureView(&disc),
-                    wgpu::BindingResource::TextureView(&to[0]),
-                    params.as_entire_binding(),
-                ];
-                if self.blur.variant == BlurVariant::Fast || from.len() == 2 {
-                    resources.push(wgpu::BindingResource::Sampler(&self.sampler));
-                }
-                let pipeline = if let (Some(from_b), Some(to_b)) = (from.get(1), to.get(1)) {
-                    resources.push(wgpu::BindingResource::TextureView(from_b));
-                    resources.push(wgpu::BindingResource::TextureView(to_b));
-                    &self.pair
-                } else {
-                    &self.pipeline
-                };
-                pass(device, name, pipeline, &resources, groups(size, 16))
-            };
+        let one = |name: &str, from: &wgpu::Texture, to: &wgpu::Texture, params: &wgpu::Buffer| {
+            let (from, to) = (view(from), view(to));
+            let mut resources = vec![
+                wgpu::BindingResource::TextureView(&from),
+                wgpu::BindingResource::TextureView(&disc),
+                wgpu::BindingResource::TextureView(&to),
+                params.as_entire_binding(),
+            ];
+            if self.blur.variant == BlurVariant::Fast {
+                resources.push(wgpu::BindingResource::Sampler(&self.sampler));
+            }
+            pass(device, name, &self.pipeline, &resources, groups(size, 16))
+        };
         Ok(one("blur horizontal", irradiance, scratch, h).then(one(
             "blur vertical",
             scratch,

@@ -22,8 +22,8 @@ pub fn specialisation(blur: &Blur) -> Specialisation {
         .set("FAST", blur.variant == BlurVariant::Fast)
 }
 
-/// [`DiscontinuityPass`] then [`BlurPass::bind_pair`](super::BlurPass::bind_pair) in one
-/// dispatch: each workgroup keeps the discontinuities and the horizontally blurred rows of its
+/// [`DiscontinuityPass`] then [`BlurPass`] of two images (along one walk per pixel: it depends
+/// on the discontinuity buffer alone) in one dispatch: each workgroup keeps the discontinuities and the horizontally blurred rows of its
 /// tile in workgroup memory, so neither the scratch textures nor a read of the discontinuity
 /// buffer is needed. The walks are the two-pass ones; in the vertical direction the fast
 /// variant averages its tap pairs exactly (as the CPU twin does) instead of by the sampler.

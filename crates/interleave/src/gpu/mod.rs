@@ -36,8 +36,8 @@ pub use blur::BlurPass;
 pub use discontinuity::DiscontinuityPass;
 pub use discontinuity_blur::DiscontinuityBlurPass;
 pub use run::{
-    Shading, download_image, run_blur, run_blur_pair, run_discontinuity, run_discontinuity_blur,
-    run_gather, run_shading, run_split, to_f16_texels, upload_depth_normals, upload_image,
+    Shading, download_image, run_blur, run_discontinuity, run_discontinuity_blur, run_gather,
+    run_shading, run_split, to_f16_texels, upload_depth_normals, upload_image,
 };
 pub use shade::{SubsetShading, lights_per_subset};
 pub use split::{SPLIT_FORMATS, Splitter, texel_format, texel_specialisation};

@@ -205,73 +205,24 @@ pub fn run_blur(
     discontinuities: &Image<[u8; 4]>,
     blur: &Blur,
 ) -> Result<Image<[f32; 4]>, InterleaveError> {
-    let [blurred] = run_blurs(gpu, [irradiance], discontinuities, blur)?;
-    Ok(blurred)
-}
-
-/// Convenience for tests: two images blurred together ([`BlurPass::bind_pair`]).
-pub fn run_blur_pair(
-    gpu: &Gpu,
-    irradiance: [&Image<[f32; 4]>; 2],
-    discontinuities: &Image<[u8; 4]>,
-    blur: &Blur,
-) -> Result<[Image<[f32; 4]>; 2], InterleaveError> {
-    run_blurs(gpu, irradiance, discontinuities, blur)
-}
-
-/// [`run_blur`] of one image or [`run_blur_pair`] of two.
-fn run_blurs<const N: usize>(
-    gpu: &Gpu,
-    irradiance: [&Image<[f32; 4]>; N],
-    discontinuities: &Image<[u8; 4]>,
-    blur: &Blur,
-) -> Result<[Image<[f32; 4]>; N], InterleaveError> {
-    let (w, h) = (irradiance[0].width(), irradiance[0].height());
-    for image in irradiance {
-        crate::cpu::check_size("irradiance", image, w, h)?;
-    }
+    let (w, h) = (irradiance.width(), irradiance.height());
     crate::cpu::check_size("discontinuity buffer", discontinuities, w, h)?;
-    let pass = BlurPass::new(&gpu.device, blur)?;
+    let device = &gpu.device;
+    let pass = BlurPass::new(device, blur)?;
     let disc = upload_image(
-        &gpu.device,
+        device,
         &gpu.queue,
         "discontinuities",
         discontinuities,
         DISCONTINUITY_FORMAT,
     )?;
-    let mut inputs = Vec::new();
-    for image in irradiance {
-        let t = to_f16_texels(image);
-        inputs.push(upload_image(
-            &gpu.device,
-            &gpu.queue,
-            "irradiance",
-            &t,
-            IRRADIANCE_FORMAT,
-        )?);
-    }
-    let scratch: [_; N] =
-        std::array::from_fn(|_| BlurPass::irradiance_texture(&gpu.device, "blur scratch", w, h));
-    let out: [_; N] =
-        std::array::from_fn(|_| BlurPass::irradiance_texture(&gpu.device, "blurred", w, h));
-    let passes = pass.bind_images(
-        &gpu.device,
-        &inputs.iter().collect::<Vec<_>>(),
-        &disc,
-        &scratch.each_ref(),
-        &out.each_ref(),
-    )?;
-    submit(gpu, &passes);
-    let mut blurred = Vec::new();
-    for o in &out {
-        blurred.push(
-            download_image::<[half::f16; 4]>(&gpu.device, &gpu.queue, o)?
-                .map(|p| p.map(half::f16::to_f32)),
-        );
-    }
-    Ok(blurred
-        .try_into()
-        .unwrap_or_else(|_| unreachable!("one image per output texture")))
+    let t = to_f16_texels(irradiance);
+    let input = upload_image(device, &gpu.queue, "irradiance", &t, IRRADIANCE_FORMAT)?;
+    let scratch = BlurPass::irradiance_texture(device, "blur scratch", w, h);
+    let out = BlurPass::irradiance_texture(device, "blurred", w, h);
+    submit(gpu, &pass.bind(device, &input, &disc, &scratch, &out)?);
+    Ok(download_image::<[half::f16; 4]>(device, &gpu.queue, &out)?
+        .map(|p| p.map(half::f16::to_f32)))
 }
 
 /// How [`run_shading`] reaches the sub-buffers.
