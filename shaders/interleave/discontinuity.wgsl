@@ -47,21 +47,30 @@ fn depths_differ(a: f32, b: f32) -> bool {
     return max(a, b) > min(a, b) * thresholds.depth_factor;
 }
 
-// The discontinuity flags of texel p (bit 0: normal test failed, bit 1: depth test failed).
+// The flags one neighbour (depth qz, normal word qn) raises against a pixel (z, nrm): bit 0
+// when the normal test fails, bit 1 when the depth test does.
+fn edge_flags(z: f32, nrm: u32, qz: f32, qn: u32) -> u32 {
+    return select(0u, 1u, normals_differ(nrm, qn)) | select(0u, 2u, depths_differ(z, qz));
+}
+
+// Offset k (0, 1, 2) of the three positive neighbours: (1, 0), (0, 1), (1, 1).
+fn neighbour(k: u32) -> vec2<u32> {
+    return vec2(select(0u, 1u, k != 1u), select(0u, 1u, k != 0u));
+}
+
+// The discontinuity flags of texel p: `edge_flags` of its neighbours inside the image.
 fn discontinuity_flags(p: vec2<u32>) -> u32 {
     let size = textureDimensions(linear_depth);
     let z = textureLoad(linear_depth, p, 0).r;
     let nrm = textureLoad(normals, p, 0).r;
-    var normal_edge = false;
-    var depth_edge = false;
+    var flags = 0u;
     for (var k = 0u; k < 3u; k++) {
-        let q = p + vec2(select(0u, 1u, k != 1u), select(0u, 1u, k != 0u));
+        let q = p + neighbour(k);
         if all(q < size) {
-            normal_edge = normal_edge || normals_differ(nrm, textureLoad(normals, q, 0).r);
-            depth_edge = depth_edge || depths_differ(z, textureLoad(linear_depth, q, 0).r);
+            flags |= edge_flags(z, nrm, textureLoad(linear_depth, q, 0).r, textureLoad(normals, q, 0).r);
         }
     }
-    return select(0u, 1u, normal_edge) | select(0u, 2u, depth_edge);
+    return flags;
 }
 
 // The discontinuity buffer's texel of `discontinuity_flags`.
