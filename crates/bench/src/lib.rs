@@ -13,9 +13,9 @@ pub mod chart;
 pub mod timing;
 
 pub use timing::{
-    OUTLIER_FACTOR, Remeasurement, WARM_UP_RULE, orbiting_spot, pass_stat, per_frame_sum,
-    remeasure_outliers, scene_labels, time_encoded, time_named, time_recorded, warm_then_time,
-    write_report,
+    OUTLIER_FACTOR, REPEAT_TOLERANCE, Remeasurement, Verdict, WARM_UP_RULE, orbiting_spot,
+    pass_stat, per_frame_sum, remeasure_outliers, scene_labels, time_encoded, time_named,
+    time_recorded, warm_then_time, write_report,
 };
 
 /// Median and minimum of a set of timings.
@@ -319,11 +319,7 @@ fn remeasured_line(r: &[Remeasurement]) -> String {
                 m.first_ms,
                 m.again_ms,
                 m.expected_ms,
-                if m.still_off {
-                    ", **still off: do not trust**"
-                } else {
-                    ""
-                }
+                m.verdict.words()
             )
         })
         .collect();

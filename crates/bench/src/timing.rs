@@ -104,9 +104,46 @@ pub struct Remeasurement {
     pub again_ms: f64,
     /// What its neighbours' trend expects after the re-measurement, ms.
     pub expected_ms: f64,
-    /// Still more than [`OUTLIER_FACTOR`] off the trend after the re-measurement: the report
-    /// flags it rather than trusting it.
-    pub still_off: bool,
+    /// What the re-measurement says about the configuration.
+    pub verdict: Verdict,
+}
+
+/// A re-measured configuration's standing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Measured again, it fits its neighbours' trend: the first measurement was the outlier.
+    Fits,
+    /// Still off the trend, but both measurements agree within [`REPEAT_TOLERANCE`]: the
+    /// configuration itself departs from its neighbours (a different regime, not noise).
+    Repeatable,
+    /// Still off the trend and the two measurements disagree: not to be trusted.
+    Unstable,
+}
+
+/// How far two medians of one configuration may differ and still count as the same
+/// measurement ([`Verdict::Repeatable`]).
+pub const REPEAT_TOLERANCE: f64 = 0.1;
+
+impl Verdict {
+    fn of(first_ms: f64, again_ms: f64, expected_ms: f64) -> Self {
+        if !off_trend(again_ms, expected_ms) {
+            Self::Fits
+        } else if (again_ms / first_ms - 1.0).abs() <= REPEAT_TOLERANCE {
+            Self::Repeatable
+        } else {
+            Self::Unstable
+        }
+    }
+
+    /// How the report words it after the medians (empty where it fits).
+    pub fn words(self) -> &'static str {
+        match self {
+            Self::Fits => "",
+            Self::Repeatable => ", repeatable: off the trend, not noise",
+            Self::Unstable => ", **unstable: do not trust**",
+        }
+    }
 }
 
 /// Per point `(x, ms)` of one sweep, sorted by `x > 0`, what its neighbours expect: the
@@ -138,8 +175,8 @@ fn off_trend(ms: f64, expected: f64) -> bool {
 /// The bench stability rule's re-measurement: `rows` form sweeps (rows of equal `sweep(r).0`,
 /// ordered by the position `sweep(r).1 > 0` along the swept parameter); every row whose
 /// `median` is more than [`OUTLIER_FACTOR`] off the trend through its neighbours is measured
-/// again by `measure_again`, once, and recorded with whether it is still off for the report's
-/// header ([`crate::Header::remeasured`]). In [run-once mode](crate::run_once) the first row
+/// again by `measure_again`, once, and recorded with its [`Verdict`] for the report's header
+/// ([`crate::Header::remeasured`]). In [run-once mode](crate::run_once) the first row
 /// is measured again regardless, so that every benchmark's re-measurement path runs in CI.
 pub fn remeasure_outliers<R, K: PartialEq, E>(
     rows: &mut [R],
@@ -220,7 +257,7 @@ fn remeasure<R, K: PartialEq, E>(
                 first_ms,
                 again_ms,
                 expected_ms,
-                still_off: off_trend(again_ms, expected_ms),
+                verdict: Verdict::of(first_ms, again_ms, expected_ms),
             }
         })
         .collect();
@@ -231,11 +268,7 @@ fn remeasure<R, K: PartialEq, E>(
             r.first_ms,
             r.again_ms,
             r.expected_ms,
-            if r.still_off {
-                " — still off, flagged"
-            } else {
-                ""
-            }
+            r.verdict.words()
         );
     }
     Ok(remeasured)
@@ -399,8 +432,8 @@ mod tests {
     }
 
     /// A sweep with `ms` at x = 1, 2, 4, 8, 16 whose re-measurement returns x, linear, except
-    /// `at_4` at x = 4: the re-measured x values and whether each is still off.
-    fn remeasured(ms: [f64; 5], at_4: f64) -> Vec<(f64, bool)> {
+    /// `at_4` at x = 4: the re-measured x values and their verdicts.
+    fn remeasured(ms: [f64; 5], at_4: f64) -> Vec<(f64, Verdict)> {
         let mut rows: Vec<(f64, f64)> = [1.0, 2.0, 4.0, 8.0, 16.0].into_iter().zip(ms).collect();
         let r = remeasure(
             &mut rows,
@@ -417,19 +450,23 @@ mod tests {
         )
         .unwrap();
         r.iter()
-            .map(|m| (m.configuration[4..].parse().unwrap(), m.still_off))
+            .map(|m| (m.configuration[4..].parse().unwrap(), m.verdict))
             .collect()
     }
 
     #[test]
     fn a_configuration_far_off_its_neighbours_is_measured_again() {
         // Linear in x, but x = 4 measured 3× slow: it and the neighbours whose trend it bends
-        // are measured again; measured right, none is off any more.
+        // are measured again; measured right, every one fits.
         let again = remeasured([1.0, 2.0, 12.0, 8.0, 16.0], 4.0);
-        assert!(again.contains(&(4.0, false)));
-        assert!(again.iter().all(|(_, off)| !off));
-        // Still 3× off when measured again: flagged.
-        assert!(remeasured([1.0, 2.0, 12.0, 8.0, 16.0], 12.0).contains(&(4.0, true)));
+        assert!(again.contains(&(4.0, Verdict::Fits)));
+        assert!(again.iter().all(|(_, v)| *v == Verdict::Fits));
+        // 3× off again, and the same as the first time: repeatable, a property of x = 4.
+        assert!(
+            remeasured([1.0, 2.0, 12.0, 8.0, 16.0], 12.5).contains(&(4.0, Verdict::Repeatable))
+        );
+        // 3× off first, 2× the other way again: unstable.
+        assert!(remeasured([1.0, 2.0, 12.0, 8.0, 16.0], 2.0).contains(&(4.0, Verdict::Unstable)));
         // 1.4× off (within the factor): nothing is measured again.
         assert!(remeasured([1.0, 2.0, 5.6, 8.0, 16.0], 4.0).is_empty());
     }
