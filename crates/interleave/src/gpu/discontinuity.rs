@@ -81,15 +81,7 @@ impl DiscontinuityPass {
         normals: &wgpu::Texture,
         discontinuities: &wgpu::Texture,
     ) -> Result<Passes, InterleaveError> {
-        let size = (linear_depth.width(), linear_depth.height());
-        super::check_gbuffer(linear_depth, normals, size)?;
-        kernel::check_texture(
-            "discontinuity buffer",
-            discontinuities,
-            size,
-            DISCONTINUITY_FORMAT,
-            WRITE,
-        )?;
+        let size = check_targets(linear_depth, normals, discontinuities)?;
         let (d, nrm, out) = (view(linear_depth), view(normals), view(discontinuities));
         Ok(pass(
             device,
@@ -104,4 +96,23 @@ impl DiscontinuityPass {
             groups(size, 16),
         ))
     }
+}
+
+/// Checks the G-buffer's linear depth and normal targets and the discontinuity buffer written
+/// from them (same size); returns the size.
+pub(super) fn check_targets(
+    linear_depth: &wgpu::Texture,
+    normals: &wgpu::Texture,
+    discontinuities: &wgpu::Texture,
+) -> Result<(u32, u32), InterleaveError> {
+    let size = (linear_depth.width(), linear_depth.height());
+    super::check_gbuffer(linear_depth, normals, size)?;
+    kernel::check_texture(
+        "discontinuity buffer",
+        discontinuities,
+        size,
+        DISCONTINUITY_FORMAT,
+        WRITE,
+    )?;
+    Ok(size)
 }

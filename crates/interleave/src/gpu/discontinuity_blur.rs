@@ -89,15 +89,7 @@ impl DiscontinuityBlurPass {
         discontinuities: &wgpu::Texture,
         output: [&wgpu::Texture; 2],
     ) -> Result<Passes, InterleaveError> {
-        let size = (linear_depth.width(), linear_depth.height());
-        super::check_gbuffer(linear_depth, normals, size)?;
-        kernel::check_texture(
-            "discontinuity buffer",
-            discontinuities,
-            size,
-            DISCONTINUITY_FORMAT,
-            WRITE,
-        )?;
+        let size = super::discontinuity::check_targets(linear_depth, normals, discontinuities)?;
         for (irradiance, output) in irradiance.iter().zip(output) {
             kernel::check_texture("irradiance", irradiance, size, IRRADIANCE_FORMAT, READ)?;
             kernel::check_texture("blur output", output, size, IRRADIANCE_FORMAT, WRITE)?;
