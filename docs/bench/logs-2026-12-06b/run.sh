@@ -1,7 +1,7 @@
-# Issue 28, stop 53: benchmarks on the H200 in one call of at most 540 s. Each argument is
+# Issue 28: benchmarks on the H200 in one call of at most 540 s. Each argument is
 # LABEL:SECONDS:PROGRAM [ARGS...] — PROGRAM one of the executables packed in .gpu-bin/bins.tar.xz
-# (docs/bench/logs-2026-12-06/prep.sh, plus indirect-gpu-fused: this stop's one-dispatch
-# DB + blur), run with --bench for at most SECONDS (less if the call's time runs out), its
+# (prep.sh beside this script; the calls of 2026-12-06 also carried indirect-gpu-fused, the first
+# one-dispatch DB + blur, and the executables of 2026-12-06/prep.sh), run with --bench for at most SECONDS (less if the call's time runs out), its
 # report under reports/LABEL, its output in LABEL.txt, the SM clock sampled every 200 ms into
 # clock.log, all packed into $OUT/results.tar after each program (a call returns only a few
 # files, and what is packed comes back if the call is cut short).
