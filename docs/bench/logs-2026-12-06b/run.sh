@@ -1,10 +1,11 @@
 # Issue 28: benchmarks on the H200 in one call of at most 540 s. Each argument is
 # LABEL:SECONDS:PROGRAM [ARGS...] — PROGRAM one of the executables packed in .gpu-bin/bins.tar.xz
-# (prep.sh beside this script; the calls of 2026-12-06 also carried indirect-gpu-fused, the first
-# one-dispatch DB + blur, and the executables of 2026-12-06/prep.sh), run with --bench for at most SECONDS (less if the call's time runs out), its
-# report under reports/LABEL, its output in LABEL.txt, the SM clock sampled every 200 ms into
-# clock.log, all packed into $OUT/results.tar after each program (a call returns only a few
-# files, and what is packed comes back if the call is cut short).
+# by prep.sh beside this script (the calls of 2026-12-06 carried those of
+# ../logs-2026-12-06/prep.sh and indirect-gpu-fused, the first one-dispatch DB + blur), run with
+# --bench for at most SECONDS (less if the call's time runs out): its report under
+# reports/LABEL, its output in LABEL.txt, the SM clock sampled every 200 ms into clock.log, all
+# packed into $OUT/results.tar after each program (a call returns only a few files, and what is
+# packed comes back if the call is cut short).
 source docs/bench/device-env.sh
 export SUBDIV_BFT_DIR=$PWD/.gpu-data/bft
 tar xJf .gpu-bin/bins.tar.xz -C .gpu-bin && chmod +x .gpu-bin/*
