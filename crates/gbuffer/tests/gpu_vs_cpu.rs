@@ -119,20 +119,6 @@ fn pixel_matches(
         && material_ok
 }
 
-fn is_edge(ids: &gbuffer::Image<u32>, x: u32, y: u32) -> bool {
-    let id = ids.get(x, y);
-    (-1i32..=1).any(|dy| {
-        (-1i32..=1).any(|dx| {
-            let (nx, ny) = (x as i32 + dx, y as i32 + dy);
-            nx >= 0
-                && ny >= 0
-                && (nx as u32) < ids.width()
-                && (ny as u32) < ids.height()
-                && ids.get(nx as u32, ny as u32) != id
-        })
-    })
-}
-
 /// Vulkan's least sub-pixel precision (`subPixelPrecisionBits` ≥ 4): a pixel centre this close
 /// to a triangle's edge may be covered or not, whatever the rasterizer.
 const SUBPIXEL: f32 = 1.0 / 16.0;
@@ -198,7 +184,7 @@ fn compare(
             let plane = planes.get(expected.triangle_id.get(x, y) as usize).copied();
             if pixel_matches(scene, (&expected.gbuffer, &actual), x, y, plane) {
                 matched += 1;
-            } else if is_edge(&expected.triangle_id, x, y)
+            } else if common::is_edge(&expected.triangle_id, x, y)
                 || near_an_edge(scene, camera, (w, h), x, y)
             {
                 diff[(y * w + x) as usize] = [255, 255, 0, 255];
@@ -316,7 +302,7 @@ fn normals_in_their_plane_become_the_plane_normal() {
             let facing = if g.dot(camera.eye - p) < 0.0 { -*g } else { *g };
             for (side, gb) in [("CPU", &cpu.gbuffer), ("GPU", &on_gpu)] {
                 let n = normal::unpack_octahedral(gb.normal.get(x, y));
-                if normal::angle_deg(n, facing) > 0.5 && !is_edge(&cpu.triangle_id, x, y) {
+                if normal::angle_deg(n, facing) > 0.5 && !common::is_edge(&cpu.triangle_id, x, y) {
                     off.push((side, x, y));
                 }
             }

@@ -1,12 +1,14 @@
 //! GPU G-buffer creation: a render pipeline writing all targets at once (MRT), the twin of
 //! [`crate::cpu::rasterize`] ([`gbuffer`], shader `shaders/gbuffer/gbuffer.wgsl`); the targets
-//! it writes ([`targets`]); the scene it draws ([`upload`]); test helpers ([`run`]).
+//! it writes ([`targets`]); the scene it draws ([`upload`]); test helpers ([`run`]); the
+//! visibility buffer of a compute rasteriser ([`visibility`]).
 
 pub mod gbuffer;
 pub mod run;
 pub mod targets;
 pub mod textures;
 pub mod upload;
+pub mod visibility;
 
 pub use gbuffer::{FrameUniform, GBufferPass, begin_scene_pass, scene_pipeline, scene_pipelines};
 pub use run::{run, run_with};

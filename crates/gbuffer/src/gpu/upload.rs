@@ -127,7 +127,7 @@ impl GpuScene {
         [&self.positions, &self.attributes]
     }
 
-    /// The index buffer (`u32`, `INDEX | COPY_DST`) and mesh `mesh`'s range in it (first
+    /// The index buffer (`u32`, `INDEX | COPY_DST | STORAGE`) and mesh `mesh`'s range in it (first
     /// index, index count): kernels that rewrite its triangles copy them there.
     pub fn indices(&self, mesh: usize) -> Option<(&wgpu::Buffer, u32, u32)> {
         self.draws
@@ -221,8 +221,9 @@ impl GpuScene {
             device,
             "scene indices",
             bytemuck::cast_slice(&indices),
-            // Kernels may rewrite a mesh's triangles (adaptive subdivision).
-            wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+            // Kernels may rewrite a mesh's triangles (adaptive subdivision) and read them (the
+            // visibility buffer's rasteriser).
+            wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::STORAGE,
         )?;
         let textures = MaterialTextures::upload(device, queue, scene, options)?;
         let material_groups = scene

@@ -99,3 +99,19 @@ pub fn random_camera(seed: u64) -> Camera {
     cam.far = 8.0;
     cam
 }
+
+/// Whether the triangle-id image is not constant over the 3 × 3 neighbourhood of (x, y): a
+/// silhouette or triangle edge, where rasterisers may hand the pixel to a neighbour.
+pub fn is_edge(ids: &gbuffer::Image<u32>, x: u32, y: u32) -> bool {
+    let id = ids.get(x, y);
+    (-1i32..=1).any(|dy| {
+        (-1i32..=1).any(|dx| {
+            let (nx, ny) = (x as i32 + dx, y as i32 + dy);
+            nx >= 0
+                && ny >= 0
+                && (nx as u32) < ids.width()
+                && (ny as u32) < ids.height()
+                && ids.get(nx as u32, ny as u32) != id
+        })
+    })
+}

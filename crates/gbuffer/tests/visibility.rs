@@ -1,0 +1,128 @@
+//! The compute rasteriser's visibility buffer against the CPU rasteriser's triangle ids.
+//!
+//! Rule for pixels allowed to differ (as for the hardware G-buffer, `gpu_vs_cpu.rs`): only
+//! where the CPU's triangle-id image is not constant over the pixel's 3 × 3 neighbourhood (a
+//! silhouette or triangle edge, where the GPU's clip position or depth may come out one rounding
+//! apart from the CPU's); every other pixel must hold the CPU's id, and at least 99.5 % of all
+//! pixels must match.
+
+mod common;
+
+use gbuffer::{
+    Frame, cpu,
+    gpu::{
+        GBufferPass, GpuScene,
+        visibility::{self, NO_TRIANGLE, VisibilityPass},
+    },
+};
+use proptest::prelude::*;
+use scene::{AlphaMode, Camera, Scene};
+
+/// The GPU visibility buffer's ids of `scene` (all materials made opaque) through `camera`.
+fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -> Vec<u32> {
+    let gpass = GBufferPass::new(&gpu.device).expect("pass");
+    let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, scene, &gpass).expect("upload");
+    let pass = VisibilityPass::new(&gpu.device).expect("visibility");
+    let buffer = VisibilityPass::buffer(&gpu.device, w, h).expect("buffer");
+    let vis = pass
+        .bind(
+            &gpu.device,
+            &uploaded,
+            scene,
+            &Frame::new(camera, w, h),
+            &buffer,
+        )
+        .expect("bind");
+    assert!(vis.skipped.is_empty(), "opaque scene: nothing skipped");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    vis.passes.encode(&mut encoder, None);
+    let bytes =
+        ::gpu::transfer::read_after(&gpu.device, &gpu.queue, encoder, &buffer, 0..buffer.size())
+            .expect("read back");
+    visibility::triangle_ids(&bytemuck::pod_collect_to_vec::<u8, u64>(&bytes))
+}
+
+fn opaque(mut scene: Scene) -> Scene {
+    for m in &mut scene.materials {
+        m.alpha_mode = AlphaMode::Opaque;
+    }
+    scene
+}
+
+/// Compares; returns the share of matching pixels, or the first interior mismatch.
+fn compare(scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -> Result<f64, String> {
+    let Some(gpu) = gpu::test_device(&visibility::device_needs()) else {
+        return Ok(1.0);
+    };
+    let expected = cpu::rasterize(scene, camera, w, h)
+        .map_err(|e| e.to_string())?
+        .triangle_id;
+    let got = gpu_ids(gpu, scene, camera, (w, h));
+    let mut matched = 0u32;
+    for y in 0..h {
+        for x in 0..w {
+            let (e, g) = (expected.get(x, y), got[(y * w + x) as usize]);
+            if e == g {
+                matched += 1;
+            } else if !common::is_edge(&expected, x, y) {
+                return Err(format!(
+                    "pixel ({x}, {y}): CPU triangle {e}, visibility buffer {g}"
+                ));
+            }
+        }
+    }
+    Ok(f64::from(matched) / f64::from(w * h))
+}
+
+#[test]
+fn spheres_on_a_plane_match_the_cpu_rasteriser() {
+    let scene = opaque(scene::spheres_on_plane(6));
+    let camera = scene.camera_or_framed();
+    let share = compare(&scene, &camera, (160, 120)).unwrap();
+    assert!(share >= 0.995, "{:.2} % of the pixels match", share * 100.0);
+}
+
+#[test]
+fn a_camera_inside_the_scene_clips_and_matches() {
+    // From between the spheres, close to the plane: triangles cross the near plane and the
+    // guard band, and the plane's triangles cover far more than 64 pixels.
+    let scene = opaque(scene::spheres_on_plane(6));
+    let framed = scene.camera_or_framed();
+    let camera = Camera {
+        eye: framed.target + (framed.eye - framed.target) * 0.15,
+        ..framed
+    };
+    let share = compare(&scene, &camera, (128, 96)).unwrap();
+    assert!(share >= 0.995, "{:.2} % of the pixels match", share * 100.0);
+}
+
+#[test]
+fn an_empty_view_holds_no_triangle() {
+    let Some(gpu) = gpu::test_device(&visibility::device_needs()) else {
+        return;
+    };
+    let scene = opaque(scene::spheres_on_plane(2));
+    let framed = scene.camera_or_framed();
+    // Looking away from everything.
+    let camera = Camera {
+        target: framed.eye + (framed.eye - framed.target),
+        ..framed
+    };
+    assert!(
+        gpu_ids(gpu, &scene, &camera, (32, 24))
+            .iter()
+            .all(|&id| id == NO_TRIANGLE)
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(12))]
+
+    #[test]
+    fn random_scenes_match_the_cpu_rasteriser(seed in 0u64..1_000_000, cam in 0u64..1_000_000, tris in 1usize..40, w in 8u32..96, h in 8u32..96) {
+        let scene = opaque(common::random_scene(seed, tris));
+        let camera = common::random_camera(cam);
+        let share = compare(&scene, &camera, (w, h)).map_err(TestCaseError::fail)?;
+        prop_assert!(share >= 0.995, "{:.2} % of the pixels match", share * 100.0);
+    }
+}
