@@ -84,9 +84,13 @@ struct Facing {
 };
 
 fn facing_normal(normal: vec3<f32>, to_eye: vec3<f32>) -> Facing {
+    return facing_geometric(normal, cross(dpdyFine(to_eye), dpdxFine(to_eye)));
+}
+
+// `facing_normal` with the triangle's geometric normal (not unit) on the camera's side given.
+fn facing_geometric(normal: vec3<f32>, geometric: vec3<f32>) -> Facing {
     let l2 = dot(normal, normal);
     let n = select(vec3<f32>(0.0, 0.0, 1.0), normal * inverseSqrt(l2), l2 > 1e-30);
-    let geometric = cross(dpdyFine(to_eye), dpdxFine(to_eye));
     let g2 = dot(geometric, geometric);
     if g2 <= 1e-30 {
         return Facing(n, false);
@@ -128,16 +132,20 @@ fn surface_fragment(in: VertexOut) -> SurfaceFragment {
     return f;
 }
 
-@fragment
-fn fs_main(in: VertexOut) -> GBufferOut {
-    let m = surface_fragment(in).m;
+// The G-buffer texels of material sample m at view depth `view_depth`.
+fn gbuffer_texels(m: MaterialSample, view_depth: f32) -> GBufferOut {
     var out: GBufferOut;
-    out.linear_depth = in.view_depth;
+    out.linear_depth = view_depth;
     out.normal = pack2x16snorm(encode_octahedral_snorm(m.normal));
     out.albedo = vec4<f32>(m.albedo, clamp(material.specular, 0.0, 1.0));
     out.material = pack_material(m.roughness, m.metallic, material.id);
     out.emission = vec4<f32>(min(m.emission, vec3<f32>(HALF_MAX)), m.occlusion);
     return out;
+}
+
+@fragment
+fn fs_main(in: VertexOut) -> GBufferOut {
+    return gbuffer_texels(surface_fragment(in).m, in.view_depth);
 }
 
 // The depth-only pass of alpha-tested (masked or blended) materials: the same coverage as

@@ -53,6 +53,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "material.wgsl",
         "mips.wgsl",
         "normal_encoding.wgsl",
+        "resolve.wgsl",
         "visibility.wgsl",
     ],
 );

@@ -85,10 +85,11 @@ impl GBufferPass {
         for _ in 0..5 {
             material.extend([Binding::Texture, Binding::Sampler]);
         }
+        // Compute too: the visibility buffer's resolve evaluates the materials.
         let material_layout = Layout::new(
             device,
             "gbuffer material",
-            wgpu::ShaderStages::FRAGMENT,
+            wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
             &material,
         );
         let layout = kernel::pipeline_layout(device, "gbuffer", &[&frame_layout, &material_layout]);

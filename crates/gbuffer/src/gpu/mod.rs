@@ -11,7 +11,7 @@ pub mod upload;
 pub mod visibility;
 
 pub use gbuffer::{FrameUniform, GBufferPass, begin_scene_pass, scene_pipeline, scene_pipelines};
-pub use run::{run, run_with};
+pub use run::{run, run_visibility, run_with};
 pub use targets::{GBufferTargets, GBufferTextures, UploadedGBuffer};
 pub use textures::MaterialTextures;
 pub use upload::{BlendedSurfaces, GpuScene};

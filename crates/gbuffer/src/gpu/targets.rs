@@ -50,7 +50,7 @@ impl GBufferTargets {
             normal: make("gbuffer normal", NORMAL_FORMAT, true),
             albedo: make("gbuffer albedo", ALBEDO_FORMAT, true),
             material: make("gbuffer material", MATERIAL_FORMAT, true),
-            emission: make("gbuffer emission", EMISSION_FORMAT, false),
+            emission: make("gbuffer emission", EMISSION_FORMAT, true),
         })
     }
 

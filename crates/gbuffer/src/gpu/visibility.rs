@@ -12,7 +12,8 @@
 //!
 //! **Scope (first step of issue 29).** Meshes whose material discards fragments by alpha (mask
 //! or blend) are not rasterised here: [`Visibility::skipped`] names them. The device needs
-//! 64-bit integers and 64-bit atomic min ([`FEATURES`]).
+//! 64-bit integers and 64-bit atomic min ([`FEATURES`]), and the resolve ([`ResolvePass`])
+//! five storage textures per stage ([`device_needs`]).
 //!
 //! ```no_run
 //! use gbuffer::{Frame, gpu::{GBufferPass, GpuScene, visibility::{self, VisibilityPass}}};
@@ -44,11 +45,19 @@ use crate::{Frame, GBufferError};
 pub const FEATURES: wgpu::Features =
     wgpu::Features::SHADER_INT64.union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX);
 
-/// The device this module's kernels need.
+/// Storage textures the resolve writes in one stage (the five colour targets; WebGPU's
+/// default limit is 4).
+pub const STORAGE_TEXTURES: u32 = 5;
+
+/// The device this module's kernels need: [`FEATURES`], and [`STORAGE_TEXTURES`] storage
+/// textures per stage.
 pub fn device_needs() -> ::gpu::DeviceNeeds {
     ::gpu::DeviceNeeds {
         features: FEATURES,
-        ..Default::default()
+        limits: wgpu::Limits {
+            max_storage_textures_per_shader_stage: STORAGE_TEXTURES,
+            ..Default::default()
+        },
     }
 }
 
@@ -252,4 +261,177 @@ impl VisibilityPass {
 /// A read-back visibility buffer's triangle ids ([`NO_TRIANGLE`] where none), row-major.
 pub fn triangle_ids(words: &[u64]) -> Vec<u32> {
     words.iter().map(|&w| w as u32).collect()
+}
+
+/// Uniform block `Resolve` of `resolve.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ResolveUniform {
+    mesh_count: u32,
+    material_index: u32,
+    _pad: [u32; 2],
+}
+
+/// `MeshEntry` of `resolve.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct MeshEntry {
+    first_id: u32,
+    base_vertex: u32,
+    first_index: u32,
+    material: u32,
+}
+
+/// The visibility buffer resolved into the G-buffer layout (`resolve.wgsl`): per pixel the
+/// triangle is fetched again, its attributes interpolated with perspective-correct
+/// barycentrics at the pixel centre and their derivatives taken analytically towards the
+/// 2 × 2 quad's other pixels (what `dpdxFine`/`dpdyFine` and the CPU rasteriser take), and its
+/// material evaluated as the G-buffer pass's fragment shader does; one dispatch per material.
+/// It writes the linear depth, normal, albedo, material and emission targets; the hardware
+/// depth target is left alone (the visibility buffer holds z/w in its upper 32 bits).
+pub struct ResolvePass {
+    layout: Layout,
+    material: wgpu::ComputePipeline,
+    background: wgpu::ComputePipeline,
+}
+
+impl ResolvePass {
+    /// Builds the kernels; materials bind as `gpass` binds them. The device must allow
+    /// [`STORAGE_TEXTURES`] storage textures per stage.
+    pub fn new(device: &wgpu::Device, gpass: &super::GBufferPass) -> Result<Self, GBufferError> {
+        let allowed = device.limits().max_storage_textures_per_shader_stage;
+        if allowed < STORAGE_TEXTURES {
+            return Err(GBufferError::InvalidOptions(format!(
+                "the visibility buffer's resolve writes {STORAGE_TEXTURES} storage textures; the device allows {allowed}"
+            )));
+        }
+        let module = crate::SHADERS.module(device, "resolve.wgsl")?;
+        let mut bindings = vec![Binding::Uniform, Binding::Uniform];
+        bindings.extend([Binding::StorageRead; 5]);
+        bindings.extend(
+            [
+                crate::LINEAR_DEPTH_FORMAT,
+                crate::NORMAL_FORMAT,
+                crate::ALBEDO_FORMAT,
+                crate::MATERIAL_FORMAT,
+                crate::EMISSION_FORMAT,
+            ]
+            .map(Binding::StorageTexture),
+        );
+        let layout = Layout::compute(device, "visibility resolve", &bindings);
+        let material = kernel::pipeline(
+            device,
+            &module,
+            "resolve_material",
+            &[&layout, &gpass.material_layout],
+            &[],
+        );
+        let background = kernel::pipeline(device, &module, "resolve_background", &[&layout], &[]);
+        Ok(Self {
+            layout,
+            material,
+            background,
+        })
+    }
+
+    /// The passes resolving `visibility` (written by [`VisibilityPass::bind`]'s passes for the
+    /// same scene and frame) into `targets` (`frame`'s size).
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        uploaded: &GpuScene,
+        scene: &Scene,
+        frame: &Frame,
+        visibility: &wgpu::Buffer,
+        targets: &super::GBufferTargets,
+    ) -> Result<Passes, GBufferError> {
+        let (width, height) = (targets.width, targets.height);
+        if visibility.size() != u64::from(width) * u64::from(height) * 8
+            || (width, height) != (frame.viewport.x as u32, frame.viewport.y as u32)
+        {
+            return Err(GBufferError::InvalidOptions(format!(
+                "a visibility buffer of {} bytes, a frame of {}×{} and targets of {width}×{height} do not match",
+                visibility.size(),
+                frame.viewport.x,
+                frame.viewport.y
+            )));
+        }
+        let frame_buffer = transfer::buffer_init(
+            device,
+            "visibility resolve frame",
+            bytemuck::bytes_of(frame),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let mut entries = Vec::with_capacity(scene.meshes.len());
+        let mut first_id = 0u32;
+        let mut materials: Vec<usize> = Vec::new();
+        for (m, mesh) in scene.meshes.iter().enumerate() {
+            let draw = uploaded.draws.get(m).ok_or_else(|| {
+                GBufferError::InvalidOptions(format!("mesh {m} is not in the uploaded scene"))
+            })?;
+            entries.push(MeshEntry {
+                first_id,
+                base_vertex: draw.base_vertex as u32,
+                first_index: draw.first_index,
+                material: mesh.material,
+            });
+            first_id += mesh.triangle_count() as u32;
+            let material = mesh.material as usize;
+            let opaque = matches!(scene.materials[material].alpha_mode, AlphaMode::Opaque);
+            if opaque && draw.index_count > 0 && !materials.contains(&material) {
+                materials.push(material);
+            }
+        }
+        let meshes = transfer::buffer_init(
+            device,
+            "visibility resolve meshes",
+            bytemuck::cast_slice(&entries),
+            wgpu::BufferUsages::STORAGE,
+        )?;
+        let views = [
+            &targets.linear_depth,
+            &targets.normal,
+            &targets.albedo,
+            &targets.material,
+            &targets.emission,
+        ]
+        .map(|t| t.create_view(&Default::default()));
+        let group = |material_index: u32| -> Result<wgpu::BindGroup, GBufferError> {
+            let uniform = transfer::buffer_init(
+                device,
+                "visibility resolve",
+                bytemuck::bytes_of(&ResolveUniform {
+                    mesh_count: entries.len() as u32,
+                    material_index,
+                    _pad: [0; 2],
+                }),
+                wgpu::BufferUsages::UNIFORM,
+            )?;
+            let mut resources = vec![
+                frame_buffer.as_entire_binding(),
+                uniform.as_entire_binding(),
+                visibility.as_entire_binding(),
+                meshes.as_entire_binding(),
+                uploaded.positions.as_entire_binding(),
+                uploaded.attributes.as_entire_binding(),
+                uploaded.indices.as_entire_binding(),
+            ];
+            resources.extend(views.iter().map(wgpu::BindingResource::TextureView));
+            Ok(self.layout.bind(device, &resources))
+        };
+        let workgroups = Workgroups::covering(width, height, 8);
+        let mut dispatches = vec![Dispatch {
+            pipeline: self.background.clone(),
+            groups: vec![group(0)?],
+            workgroups: workgroups.clone(),
+        }];
+        for m in materials {
+            dispatches.push(Dispatch {
+                pipeline: self.material.clone(),
+                groups: vec![group(m as u32)?, uploaded.material_groups[m].clone()],
+                workgroups: workgroups.clone(),
+            });
+        }
+        Ok(Passes::new().pass("visibility resolve", dispatches))
+    }
 }
