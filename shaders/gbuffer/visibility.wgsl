@@ -9,8 +9,8 @@
 // The split rule: `raster_small` gives each triangle one invocation, which covers the pixels
 // of its bounding box when the box has at most SMALL_PIXELS pixels and no vertex lies outside a
 // clip plane; every other triangle is appended to `deferred`, and `raster_large` gives each
-// deferred triangle a workgroup, which clips it into a fan (one invocation) and covers each fan
-// triangle's box with all its invocations.
+// deferred triangle a workgroup (an indirect dispatch sized by `prepare_large`), which clips it
+// into a fan (one invocation) and covers each fan triangle's box with all its invocations.
 
 struct Raster {
     view_proj: mat4x4<f32>,
@@ -33,6 +33,8 @@ struct Raster {
 @group(0) @binding(3) var<storage, read_write> visibility: array<atomic<u64>>;
 // [0]: how many triangles `raster_small` deferred; then their indices within the mesh.
 @group(0) @binding(4) var<storage, read_write> deferred: array<atomic<u32>>;
+// `raster_large`'s indirect dispatch size, written by `prepare_large`.
+@group(0) @binding(5) var<storage, read_write> large_dispatch: array<u32, 3>;
 
 const SUBPIXEL: i64 = 256li;
 const GUARD_BAND: f32 = 4.0;
@@ -311,6 +313,17 @@ fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
     if i < raster.size.x * raster.size.y {
         atomicStore(&visibility[i], 0xFFFFFFFFFFFFFFFFlu);
     }
+}
+
+// One workgroup per deferred triangle, up to MAX_LARGE_GROUPS (each loops over the rest).
+const MAX_LARGE_GROUPS: u32 = 4096u;
+
+@compute @workgroup_size(1)
+fn prepare_large() {
+    let count = min(atomicLoad(&deferred[0]), arrayLength(&deferred) - 1u);
+    large_dispatch[0] = min(count, MAX_LARGE_GROUPS);
+    large_dispatch[1] = 1u;
+    large_dispatch[2] = 1u;
 }
 
 // No triangle deferred yet (before each mesh's `raster_small`).

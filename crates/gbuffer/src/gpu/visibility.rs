@@ -66,8 +66,6 @@ pub const NO_TRIANGLE: u32 = u32::MAX;
 
 /// How many triangles of one mesh a frame may defer to the workgroup path.
 const DEFERRED: u64 = 1 << 20;
-/// Workgroups of the deferred path (each loops over the deferred triangles).
-const LARGE_GROUPS: u32 = 4096;
 const WORKGROUP: u32 = 64;
 
 /// Uniform block `Raster` of `visibility.wgsl`.
@@ -90,6 +88,7 @@ pub struct VisibilityPass {
     clear: wgpu::ComputePipeline,
     reset: wgpu::ComputePipeline,
     small: wgpu::ComputePipeline,
+    prepare_large: wgpu::ComputePipeline,
     large: wgpu::ComputePipeline,
 }
 
@@ -101,8 +100,9 @@ pub struct Visibility {
     /// Meshes (indices in [`Scene::meshes`]) not rasterised: their material discards fragments
     /// by alpha.
     pub skipped: Vec<usize>,
-    /// The deferred-triangle list the passes share (kept alive with them).
-    _deferred: wgpu::Buffer,
+    /// The deferred-triangle list and indirect dispatch size the passes share (kept alive
+    /// with them).
+    _deferred: [wgpu::Buffer; 2],
 }
 
 impl VisibilityPass {
@@ -124,6 +124,7 @@ impl VisibilityPass {
                 Binding::StorageRead,
                 Binding::Storage,
                 Binding::Storage,
+                Binding::Storage,
             ],
         );
         let pipeline = |entry| kernel::pipeline(device, &module, entry, &[&layout], &[]);
@@ -131,6 +132,7 @@ impl VisibilityPass {
             clear: pipeline("clear"),
             reset: pipeline("reset"),
             small: pipeline("raster_small"),
+            prepare_large: pipeline("prepare_large"),
             large: pipeline("raster_large"),
             layout,
         })
@@ -179,6 +181,12 @@ impl VisibilityPass {
             (DEFERRED + 1) * 4,
             wgpu::BufferUsages::STORAGE,
         )?;
+        let large_dispatch = transfer::buffer(
+            device,
+            "visibility large dispatch",
+            12,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+        )?;
         let group = |uniform: &RasterUniform| -> Result<wgpu::BindGroup, GBufferError> {
             let buffer = transfer::buffer_init(
                 device,
@@ -189,7 +197,14 @@ impl VisibilityPass {
             let (positions, indices) = (&uploaded.positions, &uploaded.indices);
             Ok(self.layout.bind_buffers(
                 device,
-                &[&buffer, positions, indices, visibility, &deferred],
+                &[
+                    &buffer,
+                    positions,
+                    indices,
+                    visibility,
+                    &deferred,
+                    &large_dispatch,
+                ],
             ))
         };
         let dispatch =
@@ -245,15 +260,20 @@ impl VisibilityPass {
                 Workgroups::linear(triangle_count, WORKGROUP),
             ));
             dispatches.push(dispatch(
+                &self.prepare_large,
+                &g,
+                Workgroups::Direct([1, 1, 1]),
+            ));
+            dispatches.push(dispatch(
                 &self.large,
                 &g,
-                Workgroups::Direct([LARGE_GROUPS, 1, 1]),
+                Workgroups::Indirect(large_dispatch.clone(), 0),
             ));
         }
         Ok(Visibility {
             passes: Passes::new().pass("visibility", dispatches),
             skipped,
-            _deferred: deferred,
+            _deferred: [deferred, large_dispatch],
         })
     }
 }
