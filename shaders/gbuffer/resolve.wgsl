@@ -14,12 +14,15 @@ struct Resolve {
     _pad: vec2<u32>,
 }
 
-// A mesh of the scene, in the visibility buffer's id order.
+// A mesh of the scene, in the visibility buffer's id order (`Mesh` of `visibility.wgsl`).
 struct MeshEntry {
     first_id: u32,
     base_vertex: u32,
     first_index: u32,
+    triangle_count: u32,
+    cull_back: u32,
     material: u32,
+    _pad: vec2<u32>,
 }
 
 @group(0) @binding(1) var<uniform> resolve: Resolve;

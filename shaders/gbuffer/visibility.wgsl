@@ -6,41 +6,66 @@
 // of 4w), snapping to 1/256 pixel, integer edge functions with the top-left rule, depth
 // interpolated from the unsnapped positions, back faces of one-sided meshes culled.
 //
-// The split rule: `raster_small` gives each triangle one invocation, which covers the pixels
-// of its bounding box when the box has at most SMALL_PIXELS pixels and no vertex lies outside a
-// clip plane; every other triangle is appended to `deferred`, and `raster_large` gives each
-// deferred triangle a workgroup (an indirect dispatch sized by `prepare_large`), which clips it
-// into a fan (one invocation) and covers each fan triangle's box with all its invocations.
+// Every mesh of the scene in one set of dispatches (`meshes`, in id order). The split rule:
+// `raster_small` gives each triangle one invocation, which covers the pixels of its bounding
+// box when the box has at most SMALL_PIXELS pixels and no vertex lies outside a clip plane;
+// every other triangle is appended to `deferred`. `setup_large` gives each deferred triangle
+// an invocation, which clips it into a fan, stores each fan triangle's setup and appends one
+// work item per TILE × TILE block of its box; `raster_tiles` gives each work item a workgroup,
+// whose invocations cover the block together. `prepare` sizes the indirect dispatches.
 
 struct Raster {
     view_proj: mat4x4<f32>,
     // The image's width and height.
     size: vec2<u32>,
-    // Id of the mesh's first triangle, its triangle count, its first vertex and first index.
-    first_id: u32,
+    // How many entries `meshes` has, and how many triangle ids they span.
+    mesh_count: u32,
     triangle_count: u32,
+}
+
+// A mesh, in id order (`gbuffer::gpu::visibility::MeshEntry`).
+struct Mesh {
+    first_id: u32,
     base_vertex: u32,
     first_index: u32,
+    // Triangles drawn (ids from first_id on); 0 for a mesh left out.
+    triangle_count: u32,
     // 1 where the mesh's material is one-sided: back faces are culled.
     cull_back: u32,
-    _pad: u32,
+    material: u32,
+    _pad: vec2<u32>,
 }
 
 @group(0) @binding(0) var<uniform> raster: Raster;
-// The mesh's positions (x, y, z per vertex) and indices.
-@group(0) @binding(1) var<storage, read> positions: array<f32>;
-@group(0) @binding(2) var<storage, read> indices: array<u32>;
-@group(0) @binding(3) var<storage, read_write> visibility: array<atomic<u64>>;
-// [0]: how many triangles `raster_small` deferred; then their indices within the mesh.
-@group(0) @binding(4) var<storage, read_write> deferred: array<atomic<u32>>;
-// `raster_large`'s indirect dispatch size, written by `prepare_large`.
-@group(0) @binding(5) var<storage, read_write> large_dispatch: array<u32, 3>;
+@group(0) @binding(1) var<storage, read> meshes: array<Mesh>;
+// The scene's positions (x, y, z per vertex) and indices.
+@group(0) @binding(2) var<storage, read> positions: array<f32>;
+@group(0) @binding(3) var<storage, read> indices: array<u32>;
+@group(0) @binding(4) var<storage, read_write> visibility: array<atomic<u64>>;
+// Deferred triangles, fan setups and work items appended, and how many did not fit.
+@group(0) @binding(5) var<storage, read_write> counts: array<atomic<u32>, 4>;
+// The deferred triangles' ids.
+@group(0) @binding(6) var<storage, read_write> deferred: array<u32>;
+@group(0) @binding(7) var<storage, read_write> setups: array<LargeSetup>;
+// (setup, block within its box) per work item.
+@group(0) @binding(8) var<storage, read_write> work: array<vec2<u32>>;
+// `setup_large`'s and `raster_tiles`' indirect dispatch sizes (three words each), bound to
+// `prepare` alone (a buffer read as dispatch sizes cannot be bound for writing there too).
+@group(1) @binding(0) var<storage, read_write> dispatch: array<u32, 6>;
+
+const DEFERRED: u32 = 0u;
+const SETUPS: u32 = 1u;
+const WORK: u32 = 2u;
+const OVERFLOW: u32 = 3u;
 
 const SUBPIXEL: i64 = 256li;
 const GUARD_BAND: f32 = 4.0;
 // The largest bounding box (pixels) one invocation covers.
 const SMALL_PIXELS: i32 = 64;
 const WORKGROUP: u32 = 64u;
+// The side of the blocks `raster_tiles` covers a workgroup each.
+const TILE: i32 = 32;
+const MAX_GROUPS_X: u32 = 32768u;
 // A triangle clipped by six planes has at most nine vertices, so seven fan triangles.
 const MAX_POLYGON: u32 = 9u;
 
@@ -68,9 +93,24 @@ struct Setup {
     bounds: vec4<i32>,
 }
 
-// Clip-space position of vertex k (0, 1, 2) of the mesh's triangle t.
-fn clip_position(t: u32, k: u32) -> vec4<f32> {
-    let v = 3u * (raster.base_vertex + indices[raster.first_index + 3u * t + k]);
+// The mesh holding triangle `id`: the last entry whose first id is ≤ id.
+fn mesh_of(id: u32) -> u32 {
+    var lo = 0u;
+    var hi = raster.mesh_count;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if meshes[mid].first_id <= id {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+// Clip-space position of vertex k (0, 1, 2) of triangle t of `mesh`.
+fn clip_position(mesh: Mesh, t: u32, k: u32) -> vec4<f32> {
+    let v = 3u * (mesh.base_vertex + indices[mesh.first_index + 3u * t + k]);
     return raster.view_proj * vec4(positions[v], positions[v + 1u], positions[v + 2u], 1.0);
 }
 
@@ -107,7 +147,7 @@ fn snap(s: f32) -> i64 {
 
 // `gbuffer::cpu::setup` of clip-space vertices a, b, c: false where the triangle has no area,
 // faces away from the camera on a one-sided mesh, or covers no pixel centre's box.
-fn setup(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, out: ptr<function, Setup>) -> bool {
+fn setup(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, cull_back: bool, out: ptr<function, Setup>) -> bool {
     let size = vec2<f32>(raster.size);
     var clip = array(a, b, c);
     var fx: vec3<i64>;
@@ -121,7 +161,7 @@ fn setup(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, out: ptr<function, Setup>) ->
     }
     let area = edge(fx[0], fy[0], fx[1], fy[1], fx[2], fy[2]);
     // Counter-clockwise on screen (y down: a negative area) is the winding's front.
-    if area == 0li || (raster.cull_back != 0u && area > 0li) {
+    if area == 0li || (cull_back && area > 0li) {
         return false;
     }
     var order = vec3(0u, 1u, 2u);
@@ -190,58 +230,60 @@ fn pixels(b: vec4<i32>) -> i32 {
     return (b.z - b.x + 1) * (b.w - b.y + 1);
 }
 
-fn defer(t: u32) {
-    let at = atomicAdd(&deferred[0], 1u) + 1u;
-    if at < arrayLength(&deferred) {
-        atomicStore(&deferred[at], t);
+// Appends to list `counter` of `capacity` entries: the slot, or none (counted as overflow).
+fn append(counter: u32, capacity: u32) -> u32 {
+    let at = atomicAdd(&counts[counter], 1u);
+    if at >= capacity {
+        atomicAdd(&counts[OVERFLOW], 1u);
     }
+    return at;
 }
 
 @compute @workgroup_size(64)
 fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let t = gid.x + gid.y * groups.x * WORKGROUP;
-    if t >= raster.triangle_count {
+    let id = gid.x + gid.y * groups.x * WORKGROUP;
+    if id >= raster.triangle_count {
         return;
     }
-    let a = clip_position(t, 0u);
-    let b = clip_position(t, 1u);
-    let c = clip_position(t, 2u);
-    if !(inside_planes(a) && inside_planes(b) && inside_planes(c)) {
-        defer(t);
+    let mesh = meshes[mesh_of(id)];
+    let t = id - mesh.first_id;
+    if t >= mesh.triangle_count {
         return;
     }
-    var s: Setup;
-    if !setup(a, b, c, &s) {
-        return;
-    }
-    if pixels(s.bounds) > SMALL_PIXELS {
-        defer(t);
-        return;
-    }
-    let id = raster.first_id + t;
-    for (var py = s.bounds.y; py <= s.bounds.w; py++) {
-        for (var px = s.bounds.x; px <= s.bounds.z; px++) {
-            cover(s, id, px, py);
+    let a = clip_position(mesh, t, 0u);
+    let b = clip_position(mesh, t, 1u);
+    let c = clip_position(mesh, t, 2u);
+    if inside_planes(a) && inside_planes(b) && inside_planes(c) {
+        var s: Setup;
+        if !setup(a, b, c, mesh.cull_back != 0u, &s) {
+            return;
         }
+        if pixels(s.bounds) <= SMALL_PIXELS {
+            for (var py = s.bounds.y; py <= s.bounds.w; py++) {
+                for (var px = s.bounds.x; px <= s.bounds.z; px++) {
+                    cover(s, id, px, py);
+                }
+            }
+            return;
+        }
+    }
+    let at = append(DEFERRED, arrayLength(&deferred));
+    if at < arrayLength(&deferred) {
+        deferred[at] = id;
     }
 }
 
-// `raster_large`'s fan: the clipped polygon's setup triangles.
-var<workgroup> fan: array<Setup, 7>;
-var<workgroup> fan_count: u32;
-// The deferred triangles' count and the id of the one being covered.
-var<workgroup> deferred_count: u32;
-var<workgroup> fan_id: u32;
+// A fan triangle of a deferred triangle, set up, with the id it covers pixels for.
+struct LargeSetup {
+    s: Setup,
+    id: u32,
+}
 
 // Sutherland–Hodgman clipping of a triangle against the six planes, as `gbuffer::cpu`
 // (`clip_polygon`, `ClipVertex::lerp`), into `polygon`; returns its vertex count.
 fn clip_triangle(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, polygon: ptr<function, array<vec4<f32>, 9>>) -> u32 {
     var poly = array<vec4<f32>, 9>(a, b, c, vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
     var n = 3u;
-    if inside_planes(a) && inside_planes(b) && inside_planes(c) {
-        *polygon = poly;
-        return n;
-    }
     for (var k = 0u; k < 6u && n >= 3u; k++) {
         var out: array<vec4<f32>, 9>;
         var m = 0u;
@@ -267,67 +309,89 @@ fn clip_triangle(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, polygon: ptr<function
     return n;
 }
 
+// Blocks of TILE × TILE pixels in the box `b`: across and in all.
+fn blocks(b: vec4<i32>) -> vec2<u32> {
+    let across = u32((b.z - b.x) / TILE + 1);
+    return vec2(across, across * u32((b.w - b.y) / TILE + 1));
+}
+
 @compute @workgroup_size(64)
-fn raster_large(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
-    if lane == 0u {
-        deferred_count = min(atomicLoad(&deferred[0]), arrayLength(&deferred) - 1u);
+fn setup_large(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let d = gid.x + gid.y * groups.x * WORKGROUP;
+    if d >= min(atomicLoad(&counts[DEFERRED]), arrayLength(&deferred)) {
+        return;
     }
-    let count = workgroupUniformLoad(&deferred_count);
-    for (var d = group.x; d < count; d += groups.x) {
-        if lane == 0u {
-            let t = atomicLoad(&deferred[d + 1u]);
-            var polygon: array<vec4<f32>, 9>;
-            let n = clip_triangle(
-                clip_position(t, 0u),
-                clip_position(t, 1u),
-                clip_position(t, 2u),
-                &polygon,
-            );
-            var m = 0u;
-            for (var k = 1u; k + 1u < n; k++) {
-                var s: Setup;
-                if setup(polygon[0], polygon[k], polygon[k + 1u], &s) {
-                    fan[m] = s;
-                    m++;
-                }
-            }
-            fan_count = m;
-            fan_id = raster.first_id + t;
+    let id = deferred[d];
+    let mesh = meshes[mesh_of(id)];
+    let t = id - mesh.first_id;
+    var polygon: array<vec4<f32>, 9>;
+    let n = clip_triangle(clip_position(mesh, t, 0u), clip_position(mesh, t, 1u), clip_position(mesh, t, 2u), &polygon);
+    for (var k = 1u; k + 1u < n; k++) {
+        var s: Setup;
+        if !setup(polygon[0], polygon[k], polygon[k + 1u], mesh.cull_back != 0u, &s) {
+            continue;
         }
-        let m = workgroupUniformLoad(&fan_count);
-        for (var f = 0u; f < m; f++) {
-            let s = fan[f];
-            let width = s.bounds.z - s.bounds.x + 1;
-            for (var i = i32(lane); i < pixels(s.bounds); i += i32(WORKGROUP)) {
-                cover(s, fan_id, s.bounds.x + i % width, s.bounds.y + i / width);
+        let at = append(SETUPS, arrayLength(&setups));
+        if at >= arrayLength(&setups) {
+            return;
+        }
+        setups[at] = LargeSetup(s, id);
+        let count = blocks(s.bounds).y;
+        let first = atomicAdd(&counts[WORK], count);
+        for (var i = 0u; i < count; i++) {
+            if first + i < arrayLength(&work) {
+                work[first + i] = vec2(at, i);
+            } else {
+                atomicAdd(&counts[OVERFLOW], 1u);
             }
         }
-        workgroupBarrier();
     }
 }
 
-// Every pixel to "nothing": the largest depth and id.
+@compute @workgroup_size(64)
+fn raster_tiles(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let item = group.x + group.y * groups.x;
+    if item >= min(atomicLoad(&counts[WORK]), arrayLength(&work)) {
+        return;
+    }
+    let w = work[item];
+    let large = setups[w.x];
+    let b = large.s.bounds;
+    let across = blocks(b).x;
+    let origin = vec2(b.x + i32(w.y % across) * TILE, b.y + i32(w.y / across) * TILE);
+    for (var i = i32(lane); i < TILE * TILE; i += i32(WORKGROUP)) {
+        let p = origin + vec2(i % TILE, i / TILE);
+        if p.x <= b.z && p.y <= b.w {
+            cover(large.s, large.id, p.x, p.y);
+        }
+    }
+}
+
+// Every pixel to "nothing" (the largest depth and id), and no list entries.
 @compute @workgroup_size(64)
 fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = gid.x + gid.y * groups.x * WORKGROUP;
     if i < raster.size.x * raster.size.y {
         atomicStore(&visibility[i], 0xFFFFFFFFFFFFFFFFlu);
     }
+    if i < 4u {
+        atomicStore(&counts[i], 0u);
+    }
 }
 
-// One workgroup per deferred triangle, up to MAX_LARGE_GROUPS (each loops over the rest).
-const MAX_LARGE_GROUPS: u32 = 4096u;
-
+// The indirect dispatch sizes: `setup_large` over the deferred triangles (after
+// `raster_small`), `raster_tiles` over the work items (after `setup_large`).
 @compute @workgroup_size(1)
-fn prepare_large() {
-    let count = min(atomicLoad(&deferred[0]), arrayLength(&deferred) - 1u);
-    large_dispatch[0] = min(count, MAX_LARGE_GROUPS);
-    large_dispatch[1] = 1u;
-    large_dispatch[2] = 1u;
+fn prepare() {
+    let deferred_groups = (min(atomicLoad(&counts[DEFERRED]), arrayLength(&deferred)) + WORKGROUP - 1u) / WORKGROUP;
+    set_dispatch(0u, deferred_groups);
+    set_dispatch(3u, min(atomicLoad(&counts[WORK]), arrayLength(&work)));
 }
 
-// No triangle deferred yet (before each mesh's `raster_small`).
-@compute @workgroup_size(1)
-fn reset() {
-    atomicStore(&deferred[0], 0u);
+// `groups` workgroups as the indirect dispatch size at `dispatch[at..at + 3]`, in rows of at
+// most MAX_GROUPS_X.
+fn set_dispatch(at: u32, groups: u32) {
+    dispatch[at] = min(groups, MAX_GROUPS_X);
+    dispatch[at + 1u] = (groups + MAX_GROUPS_X - 1u) / MAX_GROUPS_X;
+    dispatch[at + 2u] = 1u;
 }

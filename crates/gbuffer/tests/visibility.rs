@@ -39,6 +39,11 @@ fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -
     let bytes =
         ::gpu::transfer::read_after(&gpu.device, &gpu.queue, encoder, &buffer, 0..buffer.size())
             .expect("read back");
+    assert_eq!(
+        vis.overflow(&gpu.device, &gpu.queue).expect("counts"),
+        0,
+        "nothing lost"
+    );
     visibility::triangle_ids(&bytemuck::pod_collect_to_vec::<u8, u64>(&bytes))
 }
 
@@ -113,6 +118,33 @@ fn an_empty_view_holds_no_triangle() {
             .iter()
             .all(|&id| id == NO_TRIANGLE)
     );
+}
+
+/// Lists too small for the deferred triangles lose some and say how many entries did not fit.
+#[test]
+fn overflowing_lists_are_counted() {
+    let Some(gpu) = gpu::test_device(&visibility::device_needs()) else {
+        return;
+    };
+    let scene = opaque(scene::spheres_on_plane(6));
+    let camera = scene.camera_or_framed();
+    let gpass = GBufferPass::new(&gpu.device).expect("pass");
+    let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, &scene, &gpass).expect("upload");
+    let tiny = visibility::Capacity {
+        deferred: 1,
+        setups: 1,
+        blocks: 1,
+    };
+    let pass = VisibilityPass::with_capacity(&gpu.device, tiny).expect("visibility");
+    let buffer = VisibilityPass::buffer(&gpu.device, 160, 120).expect("buffer");
+    let frame = Frame::new(&camera, 160, 120);
+    let vis = pass
+        .bind(&gpu.device, &uploaded, &scene, &frame, &buffer)
+        .expect("bind");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    vis.passes.encode(&mut encoder, None);
+    gpu.queue.submit([encoder.finish()]);
+    assert!(vis.overflow(&gpu.device, &gpu.queue).expect("counts") > 0);
 }
 
 proptest! {

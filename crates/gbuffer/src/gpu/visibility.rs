@@ -5,10 +5,12 @@
 //! ids are the CPU's ([`crate::cpu::Rasterized::triangle_id`]) but for pixels on triangle
 //! edges where the two compute a vertex's clip position or depth one rounding apart.
 //!
-//! **Split rule.** One invocation per triangle covers the pixels of its bounding box when the
-//! box has at most 64 pixels and no vertex lies outside a clip plane (near, far, the 4w guard
-//! band); every other triangle is deferred to a workgroup of 64 invocations, which clips it
-//! into a fan and covers each fan triangle's box together.
+//! **Split rule.** All meshes go through one set of dispatches. One invocation per triangle
+//! covers the pixels of its bounding box when the box has at most 64 pixels and no vertex lies
+//! outside a clip plane (near, far, the 4w guard band); every other triangle is deferred: one
+//! invocation clips it into a fan and cuts each fan triangle's box into 32 × 32 blocks, and a
+//! workgroup of 64 invocations covers each block. Lists that overflow their capacity
+//! ([`Capacity`]) lose triangles; [`Visibility::overflow`] reads how many entries did not fit.
 //!
 //! **Scope (first step of issue 29).** Meshes whose material discards fragments by alpha (mask
 //! or blend) are not rasterised here: [`Visibility::skipped`] names them. The device needs
@@ -64,9 +66,32 @@ pub fn device_needs() -> ::gpu::DeviceNeeds {
 /// The id of a pixel no triangle covers.
 pub const NO_TRIANGLE: u32 = u32::MAX;
 
-/// How many triangles of one mesh a frame may defer to the workgroup path.
-const DEFERRED: u64 = 1 << 20;
 const WORKGROUP: u32 = 64;
+
+/// How many entries the deferred path's lists hold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Capacity {
+    /// Deferred triangles (large or clipped).
+    pub deferred: u32,
+    /// Their fan triangles, set up.
+    pub setups: u32,
+    /// 32 × 32 blocks of the fan triangles' boxes.
+    pub blocks: u32,
+}
+
+impl Default for Capacity {
+    /// 2^20 deferred triangles, 2^16 fan triangles, 2^22 blocks (about 60 MB).
+    fn default() -> Self {
+        Self {
+            deferred: 1 << 20,
+            setups: 1 << 16,
+            blocks: 1 << 22,
+        }
+    }
+}
+
+/// Bytes of one set-up fan triangle (`LargeSetup` of `visibility.wgsl`).
+const SETUP_BYTES: u64 = 192;
 
 /// Uniform block `Raster` of `visibility.wgsl`.
 #[repr(C)]
@@ -74,40 +99,110 @@ const WORKGROUP: u32 = 64;
 struct RasterUniform {
     view_proj: [[f32; 4]; 4],
     size: [u32; 2],
-    first_id: u32,
+    mesh_count: u32,
     triangle_count: u32,
+}
+
+/// A mesh in triangle-id order: `Mesh` of `visibility.wgsl`, `MeshEntry` of `resolve.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct MeshEntry {
+    first_id: u32,
     base_vertex: u32,
     first_index: u32,
+    /// Triangles rasterised (0 for a mesh left out).
+    triangle_count: u32,
     cull_back: u32,
-    _pad: u32,
+    material: u32,
+    _pad: [u32; 2],
+}
+
+/// The scene's meshes in triangle-id order (ids numbered over [`Scene::meshes`] as the CPU
+/// rasteriser numbers them), the meshes left out (alpha-tested materials) and the id count.
+fn mesh_table(
+    uploaded: &GpuScene,
+    scene: &Scene,
+) -> Result<(Vec<MeshEntry>, Vec<usize>, u32), GBufferError> {
+    let mut entries = Vec::with_capacity(scene.meshes.len());
+    let mut skipped = Vec::new();
+    let mut first_id = 0u32;
+    for (m, mesh) in scene.meshes.iter().enumerate() {
+        let draw = uploaded.draws.get(m).ok_or_else(|| {
+            GBufferError::InvalidOptions(format!("mesh {m} is not in the uploaded scene"))
+        })?;
+        let material = &scene.materials[mesh.material as usize];
+        let opaque = matches!(material.alpha_mode, AlphaMode::Opaque);
+        if !opaque {
+            skipped.push(m);
+        }
+        entries.push(MeshEntry {
+            first_id,
+            base_vertex: draw.base_vertex as u32,
+            first_index: draw.first_index,
+            triangle_count: if opaque {
+                (draw.index_count / 3).min(mesh.triangle_count() as u32)
+            } else {
+                0
+            },
+            cull_back: u32::from(!material.double_sided),
+            material: mesh.material,
+            _pad: [0; 2],
+        });
+        first_id += mesh.triangle_count() as u32;
+    }
+    Ok((entries, skipped, first_id))
 }
 
 /// The visibility buffer's kernels (phase `new`).
 pub struct VisibilityPass {
     layout: Layout,
+    /// `prepare`'s groups: the counts and lists it reads (bindings 5, 6 and 8 of group 0),
+    /// the indirect dispatch sizes (group 1).
+    prepare_layouts: [Layout; 2],
+    capacity: Capacity,
     clear: wgpu::ComputePipeline,
-    reset: wgpu::ComputePipeline,
     small: wgpu::ComputePipeline,
-    prepare_large: wgpu::ComputePipeline,
-    large: wgpu::ComputePipeline,
+    prepare: wgpu::ComputePipeline,
+    setup_large: wgpu::ComputePipeline,
+    tiles: wgpu::ComputePipeline,
 }
 
 /// The passes writing one scene's visibility buffer (phase `bind`), and the meshes they leave
 /// out.
 pub struct Visibility {
-    /// Clear, then per mesh: the per-triangle and the deferred rasterisation.
+    /// Clear, the per-triangle rasterisation, the deferred triangles' setup and their blocks.
     pub passes: Passes,
     /// Meshes (indices in [`Scene::meshes`]) not rasterised: their material discards fragments
     /// by alpha.
     pub skipped: Vec<usize>,
-    /// The deferred-triangle list and indirect dispatch size the passes share (kept alive
-    /// with them).
-    _deferred: [wgpu::Buffer; 2],
+    /// Deferred triangles, setups and blocks appended, and entries that did not fit (four
+    /// `u32`s; `COPY_SRC`).
+    pub counts: wgpu::Buffer,
+    /// The lists and dispatch sizes the passes share (kept alive with them).
+    _lists: Vec<wgpu::Buffer>,
+}
+
+impl Visibility {
+    /// How many list entries the last frame could not hold (0 when nothing was lost); waits
+    /// for the GPU.
+    pub fn overflow(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<u32, GBufferError> {
+        let counts: Vec<u32> = transfer::read_pod(device, queue, &self.counts)?;
+        Ok(counts[3])
+    }
 }
 
 impl VisibilityPass {
-    /// Builds the kernels; the device must have [`FEATURES`].
+    /// Builds the kernels with the default [`Capacity`]; the device must have [`FEATURES`].
     pub fn new(device: &wgpu::Device) -> Result<Self, GBufferError> {
+        Self::with_capacity(device, Capacity::default())
+    }
+
+    /// [`VisibilityPass::new`] with the deferred path's lists sized as `capacity` says.
+    pub fn with_capacity(device: &wgpu::Device, capacity: Capacity) -> Result<Self, GBufferError> {
         let missing = FEATURES - device.features();
         if !missing.is_empty() {
             return Err(GBufferError::InvalidOptions(format!(
@@ -115,26 +210,38 @@ impl VisibilityPass {
             )));
         }
         let module = crate::SHADERS.module(device, "visibility.wgsl")?;
-        let layout = Layout::compute(
-            device,
-            "visibility",
-            &[
-                Binding::Uniform,
-                Binding::StorageRead,
-                Binding::StorageRead,
-                Binding::Storage,
-                Binding::Storage,
-                Binding::Storage,
-            ],
-        );
+        let mut bindings = vec![Binding::Uniform];
+        bindings.extend([Binding::StorageRead; 3]);
+        bindings.extend([Binding::Storage; 5]);
+        let layout = Layout::compute(device, "visibility", &bindings);
+        let prepare_layouts = [
+            Layout::compute_numbered(
+                device,
+                "visibility lists",
+                &[
+                    (5, Binding::Storage),
+                    (6, Binding::Storage),
+                    (8, Binding::Storage),
+                ],
+            ),
+            Layout::compute(device, "visibility dispatch", &[Binding::Storage]),
+        ];
         let pipeline = |entry| kernel::pipeline(device, &module, entry, &[&layout], &[]);
         Ok(Self {
             clear: pipeline("clear"),
-            reset: pipeline("reset"),
             small: pipeline("raster_small"),
-            prepare_large: pipeline("prepare_large"),
-            large: pipeline("raster_large"),
+            prepare: kernel::pipeline(
+                device,
+                &module,
+                "prepare",
+                &[&prepare_layouts[0], &prepare_layouts[1]],
+                &[],
+            ),
+            prepare_layouts,
+            setup_large: pipeline("setup_large"),
+            tiles: pipeline("raster_tiles"),
             layout,
+            capacity,
         })
     }
 
@@ -175,105 +282,78 @@ impl VisibilityPass {
                 pixels * 8
             )));
         }
-        let deferred = transfer::buffer(
+        let (entries, skipped, triangle_count) = mesh_table(uploaded, scene)?;
+        let storage = wgpu::BufferUsages::STORAGE;
+        let list =
+            |label, bytes: u64, usage| transfer::buffer(device, label, bytes, storage | usage);
+        let none = wgpu::BufferUsages::empty();
+        let meshes = transfer::buffer_init(
             device,
-            "visibility deferred triangles",
-            (DEFERRED + 1) * 4,
-            wgpu::BufferUsages::STORAGE,
+            "visibility meshes",
+            bytemuck::cast_slice(&entries),
+            storage,
         )?;
-        let large_dispatch = transfer::buffer(
+        let uniform = transfer::buffer_init(
             device,
-            "visibility large dispatch",
-            12,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
-        )?;
-        let group = |uniform: &RasterUniform| -> Result<wgpu::BindGroup, GBufferError> {
-            let buffer = transfer::buffer_init(
-                device,
-                "visibility raster",
-                bytemuck::bytes_of(uniform),
-                wgpu::BufferUsages::UNIFORM,
-            )?;
-            let (positions, indices) = (&uploaded.positions, &uploaded.indices);
-            Ok(self.layout.bind_buffers(
-                device,
-                &[
-                    &buffer,
-                    positions,
-                    indices,
-                    visibility,
-                    &deferred,
-                    &large_dispatch,
-                ],
-            ))
-        };
-        let dispatch =
-            |pipeline: &wgpu::ComputePipeline, group: &wgpu::BindGroup, workgroups| Dispatch {
-                pipeline: pipeline.clone(),
-                groups: vec![group.clone()],
-                workgroups,
-            };
-        let base = RasterUniform {
-            view_proj: frame.view_proj.to_cols_array_2d(),
-            size,
-            first_id: 0,
-            triangle_count: 0,
-            base_vertex: 0,
-            first_index: 0,
-            cull_back: 0,
-            _pad: 0,
-        };
-        let mut dispatches = vec![dispatch(
-            &self.clear,
-            &group(&base)?,
-            Workgroups::linear(pixels as u32, WORKGROUP),
-        )];
-        let mut skipped = Vec::new();
-        let mut first_id = 0u32;
-        for (m, mesh) in scene.meshes.iter().enumerate() {
-            let draw = uploaded.draws.get(m).ok_or_else(|| {
-                GBufferError::InvalidOptions(format!("mesh {m} is not in the uploaded scene"))
-            })?;
-            let material = &scene.materials[mesh.material as usize];
-            let id = first_id;
-            first_id += mesh.triangle_count() as u32;
-            if !matches!(material.alpha_mode, AlphaMode::Opaque) {
-                skipped.push(m);
-                continue;
-            }
-            let triangle_count = draw.index_count / 3;
-            if triangle_count == 0 {
-                continue;
-            }
-            let g = group(&RasterUniform {
-                first_id: id,
+            "visibility raster",
+            bytemuck::bytes_of(&RasterUniform {
+                view_proj: frame.view_proj.to_cols_array_2d(),
+                size,
+                mesh_count: entries.len() as u32,
                 triangle_count,
-                base_vertex: draw.base_vertex as u32,
-                first_index: draw.first_index,
-                cull_back: u32::from(!material.double_sided),
-                ..base
-            })?;
-            dispatches.push(dispatch(&self.reset, &g, Workgroups::Direct([1, 1, 1])));
-            dispatches.push(dispatch(
-                &self.small,
-                &g,
-                Workgroups::linear(triangle_count, WORKGROUP),
-            ));
-            dispatches.push(dispatch(
-                &self.prepare_large,
-                &g,
-                Workgroups::Direct([1, 1, 1]),
-            ));
-            dispatches.push(dispatch(
-                &self.large,
-                &g,
-                Workgroups::Indirect(large_dispatch.clone(), 0),
-            ));
-        }
+            }),
+            wgpu::BufferUsages::UNIFORM,
+        )?;
+        let c = self.capacity;
+        let counts = list("visibility counts", 16, wgpu::BufferUsages::COPY_SRC)?;
+        let dispatch = list("visibility dispatch", 24, wgpu::BufferUsages::INDIRECT)?;
+        let deferred = list("visibility deferred", u64::from(c.deferred) * 4, none)?;
+        let setups = list("visibility setups", u64::from(c.setups) * SETUP_BYTES, none)?;
+        let blocks = list("visibility blocks", u64::from(c.blocks) * 8, none)?;
+        let prepare_groups = vec![
+            self.prepare_layouts[0].bind(
+                device,
+                &[&counts, &deferred, &blocks].map(|b| b.as_entire_binding()),
+            ),
+            self.prepare_layouts[1].bind_buffers(device, &[&dispatch]),
+        ];
+        let group = self.layout.bind_buffers(
+            device,
+            &[
+                &uniform,
+                &meshes,
+                &uploaded.positions,
+                &uploaded.indices,
+                visibility,
+                &counts,
+                &deferred,
+                &setups,
+                &blocks,
+            ],
+        );
+        let one = |pipeline: &wgpu::ComputePipeline, workgroups| Dispatch {
+            pipeline: pipeline.clone(),
+            groups: vec![group.clone()],
+            workgroups,
+        };
+        let prepare = || Dispatch {
+            pipeline: self.prepare.clone(),
+            groups: prepare_groups.clone(),
+            workgroups: Workgroups::Direct([1, 1, 1]),
+        };
+        let dispatches = vec![
+            one(&self.clear, Workgroups::linear(pixels as u32, WORKGROUP)),
+            one(&self.small, Workgroups::linear(triangle_count, WORKGROUP)),
+            prepare(),
+            one(&self.setup_large, Workgroups::Indirect(dispatch.clone(), 0)),
+            prepare(),
+            one(&self.tiles, Workgroups::Indirect(dispatch.clone(), 12)),
+        ];
         Ok(Visibility {
             passes: Passes::new().pass("visibility", dispatches),
             skipped,
-            _deferred: [deferred, large_dispatch],
+            counts,
+            _lists: vec![meshes, uniform, deferred, setups, blocks, dispatch],
         })
     }
 }
@@ -290,16 +370,6 @@ struct ResolveUniform {
     mesh_count: u32,
     material_index: u32,
     _pad: [u32; 2],
-}
-
-/// `MeshEntry` of `resolve.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct MeshEntry {
-    first_id: u32,
-    base_vertex: u32,
-    first_index: u32,
-    material: u32,
 }
 
 /// The visibility buffer resolved into the G-buffer layout (`resolve.wgsl`): per pixel the
@@ -382,24 +452,11 @@ impl ResolvePass {
             bytemuck::bytes_of(frame),
             wgpu::BufferUsages::UNIFORM,
         )?;
-        let mut entries = Vec::with_capacity(scene.meshes.len());
-        let mut first_id = 0u32;
+        let (entries, _, _) = mesh_table(uploaded, scene)?;
         let mut materials: Vec<usize> = Vec::new();
-        for (m, mesh) in scene.meshes.iter().enumerate() {
-            let draw = uploaded.draws.get(m).ok_or_else(|| {
-                GBufferError::InvalidOptions(format!("mesh {m} is not in the uploaded scene"))
-            })?;
-            entries.push(MeshEntry {
-                first_id,
-                base_vertex: draw.base_vertex as u32,
-                first_index: draw.first_index,
-                material: mesh.material,
-            });
-            first_id += mesh.triangle_count() as u32;
-            let material = mesh.material as usize;
-            let opaque = matches!(scene.materials[material].alpha_mode, AlphaMode::Opaque);
-            if opaque && draw.index_count > 0 && !materials.contains(&material) {
-                materials.push(material);
+        for e in entries.iter().filter(|e| e.triangle_count > 0) {
+            if !materials.contains(&(e.material as usize)) {
+                materials.push(e.material as usize);
             }
         }
         let meshes = transfer::buffer_init(
