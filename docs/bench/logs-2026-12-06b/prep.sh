@@ -4,12 +4,13 @@
 # `bash docs/bench/logs-2026-12-06b/prep.sh`, then on the device (carry .gl .gpu-bin .gpu-data):
 #   bash docs/bench/logs-2026-12-06b/run.sh "indirect:40:indirect-gpu --vpls 256,1024" \
 #     "interleave:100:interleave-gpu" "subdiv:50:subdiv-gpu" "manylod:160:manylod-gpu" \
-#     "ssaa:120:ssaa-gpu --quick"
-# (about 330 s of the 540; the call returns $OUT/results.tar with every report and log).
+#     "ssaa:120:ssaa-gpu --quick" "visibility:120:visibility-gpu"
+# (about 450 s of the 540; the call returns $OUT/results.tar with every report and log;
+# visibility-gpu is issue 29's first measurement).
 set -euo pipefail
 bash ../shared/tools/device-prep.sh > /dev/null
 bins=$(mktemp -d)
-cargo bench -p deferred-pipeline --bench indirect-gpu --bench manylod-gpu \
+cargo bench -p deferred-pipeline --bench indirect-gpu --bench manylod-gpu --bench visibility-gpu \
   -p deferred-interleave --bench interleave-gpu -p deferred-subdiv-bft --bench subdiv-gpu \
   -p deferred-adaptive-ssaa --bench ssaa-gpu --no-run --message-format=json 2>/dev/null \
   | python3 -c "import sys, json
