@@ -1,3 +1,4 @@
+// #import gbuffer/frame.wgsl
 // A visibility buffer written by a compute rasteriser (Burns & Hunt 2013): per pixel the
 // nearest triangle's depth and id packed in 64 bits, (depth bits << 32) | id, merged with
 // `atomicMin` — a smaller depth wins and, at equal depths, the smaller id (the first
@@ -15,12 +16,10 @@
 // whose invocations cover the block together. `prepare` sizes the indirect dispatches.
 
 struct Raster {
-    view_proj: mat4x4<f32>,
-    // The image's width and height.
-    size: vec2<u32>,
     // How many entries `meshes` has, and how many triangle ids they span.
     mesh_count: u32,
     triangle_count: u32,
+    _pad: vec2<u32>,
 }
 
 // A mesh, in id order (`gbuffer::gpu::visibility::MeshEntry`).
@@ -36,7 +35,8 @@ struct Mesh {
     _pad: vec2<u32>,
 }
 
-@group(0) @binding(0) var<uniform> raster: Raster;
+// The G-buffer pass's frame (its `view_proj` and `viewport`).
+@group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> meshes: array<Mesh>;
 // The scene's positions (x, y, z per vertex) and indices.
 @group(0) @binding(2) var<storage, read> positions: array<f32>;
@@ -49,6 +49,7 @@ struct Mesh {
 @group(0) @binding(7) var<storage, read_write> setups: array<LargeSetup>;
 // (setup, block within its box) per work item.
 @group(0) @binding(8) var<storage, read_write> work: array<vec2<u32>>;
+@group(0) @binding(9) var<uniform> raster: Raster;
 // `setup_large`'s and `raster_tiles`' indirect dispatch sizes (three words each), bound to
 // `prepare` alone (a buffer read as dispatch sizes cannot be bound for writing there too).
 @group(1) @binding(0) var<storage, read_write> dispatch: array<u32, 6>;
@@ -59,6 +60,10 @@ const WORK: u32 = 2u;
 const OVERFLOW: u32 = 3u;
 
 const SUBPIXEL: i64 = 256li;
+
+fn image_size() -> vec2<u32> {
+    return vec2<u32>(frame.viewport.xy);
+}
 const GUARD_BAND: f32 = 4.0;
 // The largest bounding box (pixels) one invocation covers.
 const SMALL_PIXELS: i32 = 64;
@@ -111,7 +116,7 @@ fn mesh_of(id: u32) -> u32 {
 // Clip-space position of vertex k (0, 1, 2) of triangle t of `mesh`.
 fn clip_position(mesh: Mesh, t: u32, k: u32) -> vec4<f32> {
     let v = 3u * (mesh.base_vertex + indices[mesh.first_index + 3u * t + k]);
-    return raster.view_proj * vec4(positions[v], positions[v + 1u], positions[v + 2u], 1.0);
+    return frame.view_proj * vec4(positions[v], positions[v + 1u], positions[v + 2u], 1.0);
 }
 
 fn inside_planes(c: vec4<f32>) -> bool {
@@ -148,7 +153,7 @@ fn snap(s: f32) -> i64 {
 // `gbuffer::cpu::setup` of clip-space vertices a, b, c: false where the triangle has no area,
 // faces away from the camera on a one-sided mesh, or covers no pixel centre's box.
 fn setup(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, cull_back: bool, out: ptr<function, Setup>) -> bool {
-    let size = vec2<f32>(raster.size);
+    let size = vec2<f32>(image_size());
     var clip = array(a, b, c);
     var fx: vec3<i64>;
     var fy: vec3<i64>;
@@ -185,8 +190,8 @@ fn setup(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, cull_back: bool, out: ptr<fun
     let hi = vec2(max(s.x[0], max(s.x[1], s.x[2])), max(s.y[0], max(s.y[1], s.y[2])));
     let x0 = max(floor_div(lo.x - half + SUBPIXEL - 1li, SUBPIXEL), 0li);
     let y0 = max(floor_div(lo.y - half + SUBPIXEL - 1li, SUBPIXEL), 0li);
-    let x1 = min(floor_div(hi.x - half, SUBPIXEL), i64(raster.size.x) - 1li);
-    let y1 = min(floor_div(hi.y - half, SUBPIXEL), i64(raster.size.y) - 1li);
+    let x1 = min(floor_div(hi.x - half, SUBPIXEL), i64(image_size().x) - 1li);
+    let y1 = min(floor_div(hi.y - half, SUBPIXEL), i64(image_size().y) - 1li);
     if x0 > x1 || y0 > y1 {
         return false;
     }
@@ -223,7 +228,7 @@ fn cover(s: Setup, id: u32, px: i32, py: i32) {
         return;
     }
     let packed = (u64(bitcast<u32>(z)) << 32u) | u64(id);
-    atomicMin(&visibility[u32(py) * raster.size.x + u32(px)], packed);
+    atomicMin(&visibility[u32(py) * image_size().x + u32(px)], packed);
 }
 
 fn pixels(b: vec4<i32>) -> i32 {
@@ -371,7 +376,7 @@ fn raster_tiles(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups
 @compute @workgroup_size(64)
 fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = gid.x + gid.y * groups.x * WORKGROUP;
-    if i < raster.size.x * raster.size.y {
+    if i < image_size().x * image_size().y {
         atomicStore(&visibility[i], 0xFFFFFFFFFFFFFFFFlu);
     }
     if i < 4u {

@@ -24,12 +24,13 @@ fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -
     let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, scene, &gpass).expect("upload");
     let pass = VisibilityPass::new(&gpu.device).expect("visibility");
     let buffer = VisibilityPass::buffer(&gpu.device, w, h).expect("buffer");
+    gpass.write_frame(&gpu.queue, &Frame::new(camera, w, h));
     let vis = pass
         .bind(
             &gpu.device,
-            &uploaded,
-            scene,
-            &Frame::new(camera, w, h),
+            (&uploaded, scene),
+            gpass.frame_buffer(),
+            (w, h),
             &buffer,
         )
         .expect("bind");
@@ -137,9 +138,10 @@ fn overflowing_lists_are_counted() {
     };
     let pass = VisibilityPass::with_capacity(&gpu.device, tiny).expect("visibility");
     let buffer = VisibilityPass::buffer(&gpu.device, 160, 120).expect("buffer");
-    let frame = Frame::new(&camera, 160, 120);
+    gpass.write_frame(&gpu.queue, &Frame::new(&camera, 160, 120));
+    let frame = gpass.frame_buffer();
     let vis = pass
-        .bind(&gpu.device, &uploaded, &scene, &frame, &buffer)
+        .bind(&gpu.device, (&uploaded, &scene), frame, (160, 120), &buffer)
         .expect("bind");
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     vis.passes.encode(&mut encoder, None);

@@ -128,9 +128,21 @@ fn measure(
     })?;
     let targets = GBufferTargets::new(device, w, h)?;
     let buffer = VisibilityPass::buffer(device, w, h)?;
-    let vis = VisibilityPass::new(device)?.bind(device, &uploaded, scene, &frame, &buffer)?;
-    let resolve = ResolvePass::new(device, &gpass)?
-        .bind(device, &uploaded, scene, &frame, &buffer, &targets)?;
+    let frame_buffer = gpass.frame_buffer();
+    let vis = VisibilityPass::new(device)?.bind(
+        device,
+        (&uploaded, scene),
+        frame_buffer,
+        (w, h),
+        &buffer,
+    )?;
+    let resolve = ResolvePass::new(device, &gpass)?.bind(
+        device,
+        (&uploaded, scene),
+        frame_buffer,
+        &buffer,
+        &targets,
+    )?;
     let raster = bench::timing::time_encoded(gpu, &timer, frames, true, &|encoder, timer| {
         vis.passes.encode(encoder, Some(timer))
     })?;

@@ -68,11 +68,23 @@ pub fn run_visibility(
     let pass = GBufferPass::new(device)?;
     let gpu_scene = GpuScene::upload_with(device, &gpu.queue, scene, &pass, options)?;
     let targets = GBufferTargets::new(device, width, height)?;
-    let frame = Frame::new(camera, width, height);
+    pass.write_frame(&gpu.queue, &Frame::new(camera, width, height));
     let buffer = VisibilityPass::buffer(device, width, height)?;
-    let vis = VisibilityPass::new(device)?.bind(device, &gpu_scene, scene, &frame, &buffer)?;
-    let resolve = ResolvePass::new(device, &pass)?
-        .bind(device, &gpu_scene, scene, &frame, &buffer, &targets)?;
+    let frame = pass.frame_buffer();
+    let vis = VisibilityPass::new(device)?.bind(
+        device,
+        (&gpu_scene, scene),
+        frame,
+        (width, height),
+        &buffer,
+    )?;
+    let resolve = ResolvePass::new(device, &pass)?.bind(
+        device,
+        (&gpu_scene, scene),
+        frame,
+        &buffer,
+        &targets,
+    )?;
     let mut encoder = device.create_command_encoder(&Default::default());
     vis.passes.then(resolve).encode(&mut encoder, None);
     let words =

@@ -18,18 +18,20 @@
 //! five storage textures per stage ([`device_needs`]).
 //!
 //! ```no_run
-//! use gbuffer::{Frame, gpu::{GBufferPass, GpuScene, visibility::{self, VisibilityPass}}};
+//! use gbuffer::{Frame, gpu::{GBufferPass, GBufferTargets, GpuScene, visibility::{self, ResolvePass, VisibilityPass}}};
 //! # let gpu = gpu::Gpu::from_env_with(&visibility::device_needs())?;
 //! let scene = scene::spheres_on_plane(4);
-//! let camera = scene.camera_or_framed();
 //! let gpass = GBufferPass::new(&gpu.device)?;
 //! let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, &scene, &gpass)?;
-//! let pass = VisibilityPass::new(&gpu.device)?;
+//! gpass.write_frame(&gpu.queue, &Frame::new(&scene.camera_or_framed(), 640, 480));
 //! let buffer = VisibilityPass::buffer(&gpu.device, 640, 480)?;
-//! let frame = Frame::new(&camera, 640, 480);
-//! let vis = pass.bind(&gpu.device, &uploaded, &scene, &frame, &buffer)?;
+//! let targets = GBufferTargets::new(&gpu.device, 640, 480)?;
+//! let vis = VisibilityPass::new(&gpu.device)?.bind(
+//!     &gpu.device, (&uploaded, &scene), gpass.frame_buffer(), (640, 480), &buffer)?;
+//! let resolve = ResolvePass::new(&gpu.device, &gpass)?.bind(
+//!     &gpu.device, (&uploaded, &scene), gpass.frame_buffer(), &buffer, &targets)?;
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
-//! vis.passes.encode(&mut encoder, None);
+//! vis.passes.then(resolve).encode(&mut encoder, None);
 //! gpu.queue.submit([encoder.finish()]);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -40,7 +42,7 @@ use bytemuck::{Pod, Zeroable};
 use scene::{AlphaMode, Scene};
 
 use super::upload::GpuScene;
-use crate::{Frame, GBufferError};
+use crate::GBufferError;
 
 /// What the kernels need beyond `wgpu::Limits::default()`: 64-bit integers and 64-bit
 /// atomic min/max on storage buffers.
@@ -97,10 +99,25 @@ const SETUP_BYTES: u64 = 192;
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct RasterUniform {
-    view_proj: [[f32; 4]; 4],
-    size: [u32; 2],
     mesh_count: u32,
     triangle_count: u32,
+    _pad: [u32; 2],
+}
+
+/// Checks that `visibility` holds `width × height` pixels.
+fn check_buffer(
+    visibility: &wgpu::Buffer,
+    (width, height): (u32, u32),
+) -> Result<(), GBufferError> {
+    crate::validate_size(width, height)?;
+    let needed = u64::from(width) * u64::from(height) * 8;
+    if visibility.size() != needed {
+        return Err(GBufferError::InvalidOptions(format!(
+            "a visibility buffer of {} bytes for {width}×{height} pixels (needs {needed})",
+            visibility.size()
+        )));
+    }
+    Ok(())
 }
 
 /// A mesh in triangle-id order: `Mesh` of `visibility.wgsl`, `MeshEntry` of `resolve.wgsl`.
@@ -213,6 +230,7 @@ impl VisibilityPass {
         let mut bindings = vec![Binding::Uniform];
         bindings.extend([Binding::StorageRead; 3]);
         bindings.extend([Binding::Storage; 5]);
+        bindings.push(Binding::Uniform);
         let layout = Layout::compute(device, "visibility", &bindings);
         let prepare_layouts = [
             Layout::compute_numbered(
@@ -261,27 +279,20 @@ impl VisibilityPass {
         )?)
     }
 
-    /// The passes writing `visibility` (a [`VisibilityPass::buffer`] of `frame`'s size) for
-    /// `uploaded` (`scene` uploaded) seen through `frame`.
+    /// The passes writing `visibility` (a [`VisibilityPass::buffer`] of `size`) for `uploaded`
+    /// (`scene` uploaded) seen through `frame`, a [`Frame`](crate::Frame) uniform of that size (the G-buffer
+    /// pass's [`GBufferPass::frame_buffer`](super::GBufferPass::frame_buffer): the passes
+    /// follow the camera it is written with).
     pub fn bind(
         &self,
         device: &wgpu::Device,
-        uploaded: &GpuScene,
-        scene: &Scene,
-        frame: &Frame,
+        (uploaded, scene): (&GpuScene, &Scene),
+        frame: &wgpu::Buffer,
+        size: (u32, u32),
         visibility: &wgpu::Buffer,
     ) -> Result<Visibility, GBufferError> {
-        let size = [frame.viewport.x as u32, frame.viewport.y as u32];
-        let pixels = u64::from(size[0]) * u64::from(size[1]);
-        if visibility.size() != pixels * 8 {
-            return Err(GBufferError::InvalidOptions(format!(
-                "a visibility buffer of {} bytes for {}×{} pixels (needs {})",
-                visibility.size(),
-                size[0],
-                size[1],
-                pixels * 8
-            )));
-        }
+        check_buffer(visibility, size)?;
+        let pixels = u64::from(size.0) * u64::from(size.1);
         let (entries, skipped, triangle_count) = mesh_table(uploaded, scene)?;
         let storage = wgpu::BufferUsages::STORAGE;
         let list =
@@ -297,10 +308,9 @@ impl VisibilityPass {
             device,
             "visibility raster",
             bytemuck::bytes_of(&RasterUniform {
-                view_proj: frame.view_proj.to_cols_array_2d(),
-                size,
                 mesh_count: entries.len() as u32,
                 triangle_count,
+                _pad: [0; 2],
             }),
             wgpu::BufferUsages::UNIFORM,
         )?;
@@ -320,7 +330,7 @@ impl VisibilityPass {
         let group = self.layout.bind_buffers(
             device,
             &[
-                &uniform,
+                frame,
                 &meshes,
                 &uploaded.positions,
                 &uploaded.indices,
@@ -329,6 +339,7 @@ impl VisibilityPass {
                 &deferred,
                 &setups,
                 &blocks,
+                &uniform,
             ],
         );
         let one = |pipeline: &wgpu::ComputePipeline, workgroups| Dispatch {
@@ -425,33 +436,17 @@ impl ResolvePass {
     }
 
     /// The passes resolving `visibility` (written by [`VisibilityPass::bind`]'s passes for the
-    /// same scene and frame) into `targets` (`frame`'s size).
+    /// same scene and `frame`, a [`Frame`](crate::Frame) uniform) into `targets` (of the frame's size).
     pub fn bind(
         &self,
         device: &wgpu::Device,
-        uploaded: &GpuScene,
-        scene: &Scene,
-        frame: &Frame,
+        (uploaded, scene): (&GpuScene, &Scene),
+        frame: &wgpu::Buffer,
         visibility: &wgpu::Buffer,
         targets: &super::GBufferTargets,
     ) -> Result<Passes, GBufferError> {
         let (width, height) = (targets.width, targets.height);
-        if visibility.size() != u64::from(width) * u64::from(height) * 8
-            || (width, height) != (frame.viewport.x as u32, frame.viewport.y as u32)
-        {
-            return Err(GBufferError::InvalidOptions(format!(
-                "a visibility buffer of {} bytes, a frame of {}×{} and targets of {width}×{height} do not match",
-                visibility.size(),
-                frame.viewport.x,
-                frame.viewport.y
-            )));
-        }
-        let frame_buffer = transfer::buffer_init(
-            device,
-            "visibility resolve frame",
-            bytemuck::bytes_of(frame),
-            wgpu::BufferUsages::UNIFORM,
-        )?;
+        check_buffer(visibility, (width, height))?;
         let (entries, _, _) = mesh_table(uploaded, scene)?;
         let mut materials: Vec<usize> = Vec::new();
         for e in entries.iter().filter(|e| e.triangle_count > 0) {
@@ -485,7 +480,7 @@ impl ResolvePass {
                 wgpu::BufferUsages::UNIFORM,
             )?;
             let mut resources = vec![
-                frame_buffer.as_entire_binding(),
+                frame.as_entire_binding(),
                 uniform.as_entire_binding(),
                 visibility.as_entire_binding(),
                 meshes.as_entire_binding(),
