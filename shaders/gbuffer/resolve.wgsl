@@ -157,3 +157,21 @@ fn resolve_background(@builtin(global_invocation_id) gid: vec3<u32>) {
 }
 
 const NO_MATERIAL_WORD: u32 = 0xFFFFFFFFu;
+
+// The hardware depth target from the visibility buffer: a viewport-covering triangle whose
+// fragments write the z/w of the visibility buffer's upper word (depth compare `Always`), and
+// are discarded where no triangle is (the target stays cleared to 1).
+@vertex
+fn vs_depth_fullscreen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let corner = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(corner * 2.0 - 1.0, 0.0, 1.0);
+}
+
+@fragment
+fn fs_depth(@builtin(position) pixel: vec4<f32>) -> @builtin(frag_depth) f32 {
+    let v = visibility[u32(pixel.y) * u32(frame.viewport.x) + u32(pixel.x)];
+    if v.x == NO_TRIANGLE {
+        discard;
+    }
+    return bitcast<f32>(v.y);
+}

@@ -147,7 +147,9 @@ impl Layout {
         Self::numbered(device, label, wgpu::ShaderStages::COMPUTE, bindings)
     }
 
-    fn numbered(
+    /// A layout visible to `stages` of the numbered `bindings` (as [`Layout::compute_numbered`]
+    /// for other stages).
+    pub fn numbered(
         device: &wgpu::Device,
         label: &str,
         stages: wgpu::ShaderStages,

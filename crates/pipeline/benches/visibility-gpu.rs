@@ -146,7 +146,7 @@ fn measure(
     let raster = bench::timing::time_encoded(gpu, &timer, frames, true, &|encoder, timer| {
         vis.passes.encode(encoder, Some(timer))
     })?;
-    let both = vis.passes.clone().then(resolve);
+    let both = vis.passes.clone().then(resolve.passes);
     let visibility = bench::timing::time_encoded(gpu, &timer, frames, true, &|encoder, timer| {
         both.encode(encoder, Some(timer))
     })?;

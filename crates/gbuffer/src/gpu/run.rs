@@ -52,8 +52,8 @@ pub fn run_with(
 }
 
 /// Like [`run_with`] through the visibility buffer ([`super::visibility`]): the compute
-/// rasteriser, then the resolve; the read-back G-buffer's depth is the visibility buffer's
-/// (z/w, 1 where no triangle is). Meshes whose material discards by alpha are left out.
+/// rasteriser, the resolve and the depth target drawn from the visibility buffer. Meshes whose
+/// material discards by alpha are left out.
 pub fn run_visibility(
     gpu: &Gpu,
     scene: &Scene,
@@ -61,7 +61,7 @@ pub fn run_visibility(
     (width, height): (u32, u32),
     options: &TextureOptions,
 ) -> Result<GBuffer, GBufferError> {
-    use super::visibility::{NO_TRIANGLE, ResolvePass, VisibilityPass};
+    use super::visibility::{ResolvePass, VisibilityPass};
     crate::validate_size(width, height)?;
     crate::validate_camera(camera)?;
     let device = &gpu.device;
@@ -78,29 +78,12 @@ pub fn run_visibility(
         (width, height),
         &buffer,
     )?;
-    let resolve = ResolvePass::new(device, &pass)?.bind(
-        device,
-        (&gpu_scene, scene),
-        frame,
-        &buffer,
-        &targets,
-    )?;
+    let resolve_pass = ResolvePass::new(device, &pass)?;
+    let resolve = resolve_pass.bind(device, (&gpu_scene, scene), frame, &buffer, &targets)?;
     let mut encoder = device.create_command_encoder(&Default::default());
-    vis.passes.then(resolve).encode(&mut encoder, None);
-    let words =
-        ::gpu::transfer::read_after(device, &gpu.queue, encoder, &buffer, 0..buffer.size())?;
-    let mut gb = targets.read(device, &gpu.queue)?;
-    for (d, w) in gb
-        .depth
-        .pixels_mut()
-        .iter_mut()
-        .zip(bytemuck::pod_collect_to_vec::<u8, u64>(&words))
-    {
-        *d = if w as u32 == NO_TRIANGLE {
-            1.0
-        } else {
-            f32::from_bits((w >> 32) as u32)
-        };
-    }
-    Ok(gb)
+    vis.passes.encode(&mut encoder, None);
+    resolve.passes.encode(&mut encoder, None);
+    resolve_pass.encode_depth(&resolve, &mut encoder, &targets.depth, None);
+    gpu.queue.submit([encoder.finish()]);
+    targets.read(device, &gpu.queue)
 }

@@ -31,7 +31,8 @@
 //! let resolve = ResolvePass::new(&gpu.device, &gpass)?.bind(
 //!     &gpu.device, (&uploaded, &scene), gpass.frame_buffer(), &buffer, &targets)?;
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
-//! vis.passes.then(resolve).encode(&mut encoder, None);
+//! vis.passes.encode(&mut encoder, None);
+//! resolve.passes.encode(&mut encoder, None);
 //! gpu.queue.submit([encoder.finish()]);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -394,6 +395,17 @@ pub struct ResolvePass {
     layout: Layout,
     material: wgpu::ComputePipeline,
     background: wgpu::ComputePipeline,
+    /// The depth target's pass: the frame (binding 0) and the visibility buffer (binding 2).
+    depth_layout: Layout,
+    depth: wgpu::RenderPipeline,
+}
+
+/// [`ResolvePass::bind`]'s result: the compute passes writing the colour targets, and what
+/// [`ResolvePass::encode_depth`] draws the depth target with.
+pub struct Resolve {
+    /// One dispatch for the pixels without a triangle, one per material.
+    pub passes: Passes,
+    depth_group: wgpu::BindGroup,
 }
 
 impl ResolvePass {
@@ -428,11 +440,81 @@ impl ResolvePass {
             &[],
         );
         let background = kernel::pipeline(device, &module, "resolve_background", &[&layout], &[]);
+        let depth_layout = Layout::numbered(
+            device,
+            "visibility depth",
+            wgpu::ShaderStages::FRAGMENT,
+            &[(0, Binding::Uniform), (2, Binding::StorageRead)],
+        );
+        let depth = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("visibility depth"),
+            layout: Some(&kernel::pipeline_layout(
+                device,
+                "visibility depth",
+                &[&depth_layout],
+            )),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_depth_fullscreen"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: crate::DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_depth"),
+                compilation_options: Default::default(),
+                targets: &[],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
         Ok(Self {
             layout,
             material,
             background,
+            depth_layout,
+            depth,
         })
+    }
+
+    /// Records the pass writing `depth` (the G-buffer's [`crate::DEPTH_FORMAT`] target, of the
+    /// visibility buffer's size) from the visibility buffer `resolve` was bound to: z/w where
+    /// a triangle is, 1 elsewhere, for the passes that test against the hardware depth.
+    pub fn encode_depth(
+        &self,
+        resolve: &Resolve,
+        encoder: &mut wgpu::CommandEncoder,
+        depth: &wgpu::Texture,
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) {
+        let view = depth.create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("visibility depth"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.depth);
+        pass.set_bind_group(0, &resolve.depth_group, &[]);
+        pass.draw(0..3, 0..1);
     }
 
     /// The passes resolving `visibility` (written by [`VisibilityPass::bind`]'s passes for the
@@ -444,7 +526,7 @@ impl ResolvePass {
         frame: &wgpu::Buffer,
         visibility: &wgpu::Buffer,
         targets: &super::GBufferTargets,
-    ) -> Result<Passes, GBufferError> {
+    ) -> Result<Resolve, GBufferError> {
         let (width, height) = (targets.width, targets.height);
         check_buffer(visibility, (width, height))?;
         let (entries, _, _) = mesh_table(uploaded, scene)?;
@@ -504,6 +586,12 @@ impl ResolvePass {
                 workgroups: workgroups.clone(),
             });
         }
-        Ok(Passes::new().pass("visibility resolve", dispatches))
+        Ok(Resolve {
+            passes: Passes::new().pass("visibility resolve", dispatches),
+            depth_group: self.depth_layout.bind(
+                device,
+                &[frame.as_entire_binding(), visibility.as_entire_binding()],
+            ),
+        })
     }
 }
