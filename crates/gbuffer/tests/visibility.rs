@@ -28,7 +28,7 @@ fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -
     let vis = pass
         .bind(
             &gpu.device,
-            (&uploaded, scene),
+            &uploaded,
             gpass.frame_buffer(),
             (w, h),
             &buffer,
@@ -141,7 +141,7 @@ fn overflowing_lists_are_counted() {
     gpass.write_frame(&gpu.queue, &Frame::new(&camera, 160, 120));
     let frame = gpass.frame_buffer();
     let vis = pass
-        .bind(&gpu.device, (&uploaded, &scene), frame, (160, 120), &buffer)
+        .bind(&gpu.device, &uploaded, frame, (160, 120), &buffer)
         .expect("bind");
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     vis.passes.encode(&mut encoder, None);

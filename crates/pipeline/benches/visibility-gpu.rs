@@ -129,16 +129,11 @@ fn measure(
     let targets = GBufferTargets::new(device, w, h)?;
     let buffer = VisibilityPass::buffer(device, w, h)?;
     let frame_buffer = gpass.frame_buffer();
-    let vis = VisibilityPass::new(device)?.bind(
-        device,
-        (&uploaded, scene),
-        frame_buffer,
-        (w, h),
-        &buffer,
-    )?;
+    let vis =
+        VisibilityPass::new(device)?.bind(device, &uploaded, frame_buffer, (w, h), &buffer)?;
     let resolve = ResolvePass::new(device, &gpass)?.bind(
         device,
-        (&uploaded, scene),
+        &uploaded,
         frame_buffer,
         &buffer,
         &targets,

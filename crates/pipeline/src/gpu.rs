@@ -7,7 +7,10 @@ use ::gpu::{PassTimer, transfer};
 use adaptive_ssaa::SsaaConfig;
 use gbuffer::{
     Frame, Image, TextureOptions,
-    gpu::{BlendedSurfaces, GBufferPass, GBufferTargets, GpuScene},
+    gpu::{
+        BlendedSurfaces, GBufferPass, GBufferTargets, GpuScene,
+        visibility::{Resolve, ResolvePass, Visibility, VisibilityPass},
+    },
 };
 use glam::{Vec3, Vec4};
 use scene::{Camera, Light, Scene};
@@ -157,6 +160,8 @@ pub struct GpuRenderer {
     animation: Option<Animation>,
     supersampling: Option<Supersampling>,
     subdivision: Option<SubdivisionStage>,
+    /// The G-buffer through the visibility buffer ([`GpuRenderer::set_visibility`]).
+    visibility: Option<VisibilityStage>,
     ssao: Option<SsaoStage>,
     /// The ambient radiance of the composition (the buffer's w says whether SSAO is on).
     ambient_radiance: Vec3,
@@ -192,6 +197,97 @@ fn exclusions(
         return Ok(());
     };
     Err(ShadingError::Incompatible(format!("{clash}; switch one off first")).into())
+}
+
+/// The G-buffer through the compute rasteriser's visibility buffer and its resolve
+/// ([`GpuRenderer::set_visibility`]), bound to the frame's targets.
+struct VisibilityStage {
+    raster: VisibilityPass,
+    resolve: ResolvePass,
+    buffer: wgpu::Buffer,
+    bound: (Visibility, Resolve),
+}
+
+impl VisibilityStage {
+    fn new(
+        device: &wgpu::Device,
+        gbuffer_pass: &GBufferPass,
+        scene: &GpuScene,
+        targets: &GBufferTargets,
+    ) -> Result<Self, RenderError> {
+        let raster = VisibilityPass::new(device)?;
+        let resolve = ResolvePass::new(device, gbuffer_pass)?;
+        let (buffer, bound) =
+            Self::bind(device, (&raster, &resolve), gbuffer_pass, scene, targets)?;
+        Ok(Self {
+            raster,
+            resolve,
+            buffer,
+            bound,
+        })
+    }
+
+    fn bind(
+        device: &wgpu::Device,
+        (raster, resolve): (&VisibilityPass, &ResolvePass),
+        gbuffer_pass: &GBufferPass,
+        scene: &GpuScene,
+        targets: &GBufferTargets,
+    ) -> Result<(wgpu::Buffer, (Visibility, Resolve)), RenderError> {
+        let size = (targets.width, targets.height);
+        let buffer = VisibilityPass::buffer(device, size.0, size.1)?;
+        let frame = gbuffer_pass.frame_buffer();
+        let vis = raster.bind(device, scene, frame, size, &buffer)?;
+        if !vis.skipped.is_empty() {
+            return Err(RenderError::Visibility(format!(
+                "meshes {:?} have alpha-tested or blended materials, which the visibility buffer does not rasterise yet",
+                vis.skipped
+            )));
+        }
+        let resolved = resolve.bind(device, scene, frame, &buffer, targets)?;
+        Ok((buffer, (vis, resolved)))
+    }
+
+    fn rebind(
+        &mut self,
+        device: &wgpu::Device,
+        gbuffer_pass: &GBufferPass,
+        scene: &GpuScene,
+        targets: &GBufferTargets,
+    ) -> Result<(), RenderError> {
+        let pair = (&self.raster, &self.resolve);
+        (self.buffer, self.bound) = Self::bind(device, pair, gbuffer_pass, scene, targets)?;
+        Ok(())
+    }
+
+    fn encode(&self, encoder: &mut wgpu::CommandEncoder, depth: &wgpu::Texture, timer: &PassTimer) {
+        let (vis, resolved) = &self.bound;
+        vis.passes.encode(encoder, Some(timer));
+        resolved.passes.encode(encoder, Some(timer));
+        self.resolve.encode_depth(
+            resolved,
+            encoder,
+            depth,
+            timer.render_pass("visibility depth"),
+        );
+    }
+}
+
+/// The methods that draw the scene again test depth `Equal` against the hardware
+/// rasteriser's own depth, which the visibility buffer's may differ from by a rounding.
+fn visibility_exclusion(method: ShadingMethod, visibility: bool) -> Result<(), RenderError> {
+    if visibility
+        && matches!(
+            method,
+            ShadingMethod::ForwardPlus | ShadingMethod::LightPrePass
+        )
+    {
+        return Err(ShadingError::Incompatible(format!(
+            "{method} and the visibility-buffer G-buffer exclude each other: {method} draws the scene again and tests depth Equal against the hardware rasteriser's; switch one off first"
+        ))
+        .into());
+    }
+    Ok(())
 }
 
 /// Forward+ as the renderer holds it: the forward pass and its binding to the culling pass's
@@ -460,6 +556,7 @@ impl GpuRenderer {
             animation: None,
             supersampling: None,
             subdivision: None,
+            visibility: None,
             ssao: None,
             ambient_radiance: crate::DEFAULT_AMBIENT,
             no_ssao,
@@ -728,6 +825,7 @@ impl GpuRenderer {
             return Ok(());
         }
         exclusions(config.method, self.blended, self.supersampling.is_some())?;
+        visibility_exclusion(config.method, self.visibility.is_some())?;
         let shading = LightShading::new(device, config)?;
         let forward = self.forward_stage(device, config, self.blended)?;
         let prepass = if config.method == ShadingMethod::LightPrePass {
@@ -1135,6 +1233,31 @@ impl GpuRenderer {
         Ok(())
     }
 
+    /// Draws the G-buffer through the compute rasteriser's visibility buffer and its resolve
+    /// (`gbuffer::gpu::visibility`: the same G-buffer within the hardware pass's tolerances,
+    /// and the depth target drawn from it), or, with `false`, through the hardware z-prepass
+    /// and G-buffer pass (the default). The device needs
+    /// `gbuffer::gpu::visibility::device_needs()`; scenes with alpha-tested or blended
+    /// materials, Forward+ and the light pre-pass are refused with an error that says why.
+    /// Timed as the passes "visibility", "visibility resolve" and "visibility depth".
+    pub fn set_visibility(&mut self, device: &wgpu::Device, on: bool) -> Result<(), RenderError> {
+        if !on {
+            self.visibility = None;
+            return Ok(());
+        }
+        visibility_exclusion(self.shading.config().method, true)?;
+        let stage =
+            VisibilityStage::new(device, &self.gbuffer_pass, &self.scene, &self.sized.targets)?;
+        self.visibility = Some(stage);
+        Ok(())
+    }
+
+    /// Whether the G-buffer is drawn through the visibility buffer
+    /// ([`GpuRenderer::set_visibility`]).
+    pub fn visibility(&self) -> bool {
+        self.visibility.is_some()
+    }
+
     /// Subdivides the meshes of `plan` every frame (`Some`: this renderer was made from the
     /// scene [`crate::subdivision::prepare`] returned with `plan`): the control meshes are no
     /// longer drawn; after the skinning, each is gathered into M⁰, its limit surface evaluated
@@ -1157,6 +1280,10 @@ impl GpuRenderer {
             self.scene.draw_indirect(mesh, args.clone());
         }
         self.subdivision = Some(stage);
+        // The hidden control meshes leave the visibility buffer's mesh table.
+        if let Some(v) = &mut self.visibility {
+            v.rebind(device, &self.gbuffer_pass, &self.scene, &self.sized.targets)?;
+        }
         self.set_subdivision_view(queue)
     }
 
@@ -1338,6 +1465,9 @@ impl GpuRenderer {
     ) -> Result<(), RenderError> {
         let sized = SizedTargets::new(device, width, height)?;
         self.sized = sized;
+        if let Some(v) = &mut self.visibility {
+            v.rebind(device, &self.gbuffer_pass, &self.scene, &self.sized.targets)?;
+        }
         if let Some(Indirect { config, set, .. }) = self.indirect.take() {
             self.set_indirect(device, &config, &set)?;
         }
@@ -1799,15 +1929,18 @@ impl GpuRenderer {
         if let Some(s) = &self.subdivision {
             s.encode(encoder, &self.timer);
         }
-        // The z-prepass path: 1.3× faster than the single MRT pass on Sponza on an H100
-        // (docs/bench), and the same G-buffer.
-        self.gbuffer_pass.encode_with_prepass(
-            encoder,
-            &self.scene,
-            &self.sized.targets,
-            self.timer.render_pass("z-prepass"),
-            self.timer.render_pass("gbuffer"),
-        );
+        match &self.visibility {
+            Some(v) => v.encode(encoder, &self.sized.targets.depth, &self.timer),
+            // The z-prepass path: 1.3× faster than the single MRT pass on Sponza on an H100
+            // (docs/bench), and the same G-buffer.
+            None => self.gbuffer_pass.encode_with_prepass(
+                encoder,
+                &self.scene,
+                &self.sized.targets,
+                self.timer.render_pass("z-prepass"),
+                self.timer.render_pass("gbuffer"),
+            ),
+        }
         if let Some(s) = &self.ssao {
             s.kernels.encode(&s.bound, encoder, Some(&self.timer));
         }

@@ -103,6 +103,10 @@ pub enum RenderError {
     /// The animation cannot be bound (a rig that does not fit the uploaded scene).
     #[error("animation: {0}")]
     Animation(String),
+    /// The G-buffer cannot be drawn through the visibility buffer (what the scene or the
+    /// other stages need that it does not do yet).
+    #[error("visibility buffer: {0}")]
+    Visibility(String),
     /// VPLs were given to a renderer without an indirect stage.
     #[error("the renderer has no indirect light: set one (set_indirect) before its VPLs")]
     NoIndirect,

@@ -71,15 +71,10 @@ pub fn run_visibility(
     pass.write_frame(&gpu.queue, &Frame::new(camera, width, height));
     let buffer = VisibilityPass::buffer(device, width, height)?;
     let frame = pass.frame_buffer();
-    let vis = VisibilityPass::new(device)?.bind(
-        device,
-        (&gpu_scene, scene),
-        frame,
-        (width, height),
-        &buffer,
-    )?;
+    let vis =
+        VisibilityPass::new(device)?.bind(device, &gpu_scene, frame, (width, height), &buffer)?;
     let resolve_pass = ResolvePass::new(device, &pass)?;
-    let resolve = resolve_pass.bind(device, (&gpu_scene, scene), frame, &buffer, &targets)?;
+    let resolve = resolve_pass.bind(device, &gpu_scene, frame, &buffer, &targets)?;
     let mut encoder = device.create_command_encoder(&Default::default());
     vis.passes.encode(&mut encoder, None);
     resolve.passes.encode(&mut encoder, None);

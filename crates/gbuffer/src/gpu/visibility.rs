@@ -29,7 +29,7 @@
 //! let vis = VisibilityPass::new(&gpu.device)?.bind(
 //!     &gpu.device, (&uploaded, &scene), gpass.frame_buffer(), (640, 480), &buffer)?;
 //! let resolve = ResolvePass::new(&gpu.device, &gpass)?.bind(
-//!     &gpu.device, (&uploaded, &scene), gpass.frame_buffer(), &buffer, &targets)?;
+//!     &gpu.device, &uploaded, gpass.frame_buffer(), &buffer, &targets)?;
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
 //! vis.passes.encode(&mut encoder, None);
 //! resolve.passes.encode(&mut encoder, None);
@@ -40,7 +40,6 @@
 use ::gpu::kernel::{self, Binding, Dispatch, Layout, Passes, Workgroups};
 use ::gpu::{transfer, wgpu};
 use bytemuck::{Pod, Zeroable};
-use scene::{AlphaMode, Scene};
 
 use super::upload::GpuScene;
 use crate::GBufferError;
@@ -135,40 +134,34 @@ struct MeshEntry {
     _pad: [u32; 2],
 }
 
-/// The scene's meshes in triangle-id order (ids numbered over [`Scene::meshes`] as the CPU
-/// rasteriser numbers them), the meshes left out (alpha-tested materials) and the id count.
-fn mesh_table(
-    uploaded: &GpuScene,
-    scene: &Scene,
-) -> Result<(Vec<MeshEntry>, Vec<usize>, u32), GBufferError> {
-    let mut entries = Vec::with_capacity(scene.meshes.len());
+/// The uploaded scene's meshes in triangle-id order (ids numbered over the meshes' index
+/// slots, as the CPU rasteriser numbers [`Scene::meshes`]' triangles), the meshes left out
+/// (their material discards fragments by alpha) and the id count.
+fn mesh_table(uploaded: &GpuScene) -> (Vec<MeshEntry>, Vec<usize>, u32) {
+    let mut entries = Vec::with_capacity(uploaded.draws.len());
     let mut skipped = Vec::new();
     let mut first_id = 0u32;
-    for (m, mesh) in scene.meshes.iter().enumerate() {
-        let draw = uploaded.draws.get(m).ok_or_else(|| {
-            GBufferError::InvalidOptions(format!("mesh {m} is not in the uploaded scene"))
-        })?;
-        let material = &scene.materials[mesh.material as usize];
-        let opaque = matches!(material.alpha_mode, AlphaMode::Opaque);
-        if !opaque {
+    for (m, draw) in uploaded.draws.iter().enumerate() {
+        let triangles = draw.index_count / 3;
+        if draw.state.alpha_tested && triangles > 0 {
             skipped.push(m);
         }
         entries.push(MeshEntry {
             first_id,
             base_vertex: draw.base_vertex as u32,
             first_index: draw.first_index,
-            triangle_count: if opaque {
-                (draw.index_count / 3).min(mesh.triangle_count() as u32)
-            } else {
+            triangle_count: if draw.state.alpha_tested {
                 0
+            } else {
+                triangles
             },
-            cull_back: u32::from(!material.double_sided),
-            material: mesh.material,
+            cull_back: u32::from(draw.state.cull),
+            material: draw.material as u32,
             _pad: [0; 2],
         });
-        first_id += mesh.triangle_count() as u32;
+        first_id += triangles;
     }
-    Ok((entries, skipped, first_id))
+    (entries, skipped, first_id)
 }
 
 /// The visibility buffer's kernels (phase `new`).
@@ -190,8 +183,8 @@ pub struct VisibilityPass {
 pub struct Visibility {
     /// Clear, the per-triangle rasterisation, the deferred triangles' setup and their blocks.
     pub passes: Passes,
-    /// Meshes (indices in [`Scene::meshes`]) not rasterised: their material discards fragments
-    /// by alpha.
+    /// Meshes (indices in the uploaded scene's meshes) not rasterised: their material discards
+    /// fragments by alpha.
     pub skipped: Vec<usize>,
     /// Deferred triangles, setups and blocks appended, and entries that did not fit (four
     /// `u32`s; `COPY_SRC`).
@@ -280,21 +273,21 @@ impl VisibilityPass {
         )?)
     }
 
-    /// The passes writing `visibility` (a [`VisibilityPass::buffer`] of `size`) for `uploaded`
-    /// (`scene` uploaded) seen through `frame`, a [`Frame`](crate::Frame) uniform of that size (the G-buffer
+    /// The passes writing `visibility` (a [`VisibilityPass::buffer`] of `size`) for the
+    /// `uploaded` scene seen through `frame`, a [`Frame`](crate::Frame) uniform of that size (the G-buffer
     /// pass's [`GBufferPass::frame_buffer`](super::GBufferPass::frame_buffer): the passes
     /// follow the camera it is written with).
     pub fn bind(
         &self,
         device: &wgpu::Device,
-        (uploaded, scene): (&GpuScene, &Scene),
+        uploaded: &GpuScene,
         frame: &wgpu::Buffer,
         size: (u32, u32),
         visibility: &wgpu::Buffer,
     ) -> Result<Visibility, GBufferError> {
         check_buffer(visibility, size)?;
         let pixels = u64::from(size.0) * u64::from(size.1);
-        let (entries, skipped, triangle_count) = mesh_table(uploaded, scene)?;
+        let (entries, skipped, triangle_count) = mesh_table(uploaded);
         let storage = wgpu::BufferUsages::STORAGE;
         let list =
             |label, bytes: u64, usage| transfer::buffer(device, label, bytes, storage | usage);
@@ -522,14 +515,14 @@ impl ResolvePass {
     pub fn bind(
         &self,
         device: &wgpu::Device,
-        (uploaded, scene): (&GpuScene, &Scene),
+        uploaded: &GpuScene,
         frame: &wgpu::Buffer,
         visibility: &wgpu::Buffer,
         targets: &super::GBufferTargets,
     ) -> Result<Resolve, GBufferError> {
         let (width, height) = (targets.width, targets.height);
         check_buffer(visibility, (width, height))?;
-        let (entries, _, _) = mesh_table(uploaded, scene)?;
+        let (entries, _, _) = mesh_table(uploaded);
         let mut materials: Vec<usize> = Vec::new();
         for e in entries.iter().filter(|e| e.triangle_count > 0) {
             if !materials.contains(&(e.material as usize)) {
