@@ -244,6 +244,12 @@ struct Args {
     /// With --reflections: 2^LOG2 surfels sampled on the scene.
     #[arg(long, value_name = "LOG2", default_value_t = 18, requires = "reflections", value_parser = clap::value_parser!(u32).range(4..=24))]
     reflection_points: u32,
+    /// Draw the G-buffer through the compute rasteriser's visibility buffer and its resolve
+    /// (GPU; `gbuffer::gpu::visibility`) instead of the hardware z-prepass and G-buffer pass.
+    /// Needs 64-bit atomics; scenes with alpha-tested or blended materials, Forward+ and the
+    /// light pre-pass are refused.
+    #[arg(long)]
+    visibility: bool,
     /// Screen-space ambient occlusion of the ambient and indirect light (GPU): `filter` (eq. 7.1),
     /// `crytek`, `vo` (volumetric obscurance), `hbao` or `gtao`, over the k×k kernel, or with
     /// `-separable` (e.g. `filter-separable`, Holländer 2013 annex 7.2: two 1D passes).
@@ -1070,6 +1076,9 @@ fn run() -> Result<()> {
     if args.near_field && args.cpu {
         bail!("--near-field runs on the GPU only (no --cpu)");
     }
+    if args.visibility && args.cpu {
+        bail!("--visibility runs on the GPU only (no --cpu)");
+    }
     let gpu = if args.cpu {
         None
     } else {
@@ -1596,6 +1605,7 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
     renderer.set_output(d, Some(setup.output))?;
     renderer.set_shading(d, q, &setup.shading)?;
     renderer.set_blended(d, q, args.blend)?;
+    renderer.set_visibility(d, args.visibility)?;
     renderer.set_shadows(d, q, setup.shadow_config.as_ref())?;
     if let Some(tile) = args.manylod_shadows {
         let config = ShadowConfig {
@@ -2260,6 +2270,16 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
             match args.frames {
                 Some(n) => format!(", {n} frames at {} fps", args.fps),
                 None => format!(", at {} s", args.time),
+            }
+        );
+    }
+    if !args.cpu {
+        println!(
+            "gbuffer: {}",
+            if args.visibility {
+                "visibility buffer (compute rasteriser, resolve, depth drawn from it)"
+            } else {
+                "hardware rasteriser (z-prepass, then the G-buffer pass)"
             }
         );
     }

@@ -95,7 +95,10 @@ pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::FLOAT32_FILTERABLE)
     .union(wgpu::Features::TEXTURE_FORMAT_16BIT_NORM)
     .union(wgpu::Features::FLOAT32_BLENDABLE)
-    .union(wgpu::Features::DEPTH_CLIP_CONTROL);
+    .union(wgpu::Features::DEPTH_CLIP_CONTROL)
+    // The visibility buffer's compute rasteriser (`gbuffer::gpu::visibility`).
+    .union(wgpu::Features::SHADER_INT64)
+    .union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX);
 
 impl Gpu {
     /// Chooses an adapter from the environment and creates its device.
