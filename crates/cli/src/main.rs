@@ -2273,7 +2273,7 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
             }
         );
     }
-    if !args.cpu {
+    if device.starts_with("GPU") {
         println!(
             "gbuffer: {}",
             if args.visibility {
