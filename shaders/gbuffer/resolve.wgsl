@@ -1,4 +1,5 @@
 // #import gbuffer/gbuffer.wgsl
+// #import gbuffer/meshes.wgsl
 // The visibility buffer resolved into the G-buffer layout (Burns & Hunt 2013): per pixel, the
 // triangle its id names is fetched again, its attributes are interpolated at the pixel centre
 // with perspective-correct barycentrics and their derivatives taken analytically at the
@@ -8,27 +9,16 @@
 // where no triangle is.
 
 struct Resolve {
-    // How many entries `meshes` has, and the material this dispatch resolves.
-    mesh_count: u32,
+    // The material this dispatch resolves.
     material_index: u32,
-    _pad: vec2<u32>,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
-// A mesh of the scene, in the visibility buffer's id order (`Mesh` of `visibility.wgsl`).
-struct MeshEntry {
-    first_id: u32,
-    base_vertex: u32,
-    first_index: u32,
-    triangle_count: u32,
-    cull_back: u32,
-    material: u32,
-    _pad: vec2<u32>,
-}
-
-@group(0) @binding(1) var<uniform> resolve: Resolve;
 // (depth bits << 32) | id per pixel, as two words: id, depth bits.
 @group(0) @binding(2) var<storage, read> visibility: array<vec2<u32>>;
-@group(0) @binding(3) var<storage, read> meshes: array<MeshEntry>;
+@group(0) @binding(3) var<uniform> resolve: Resolve;
 @group(0) @binding(4) var<storage, read> positions: array<f32>;
 // `gbuffer::gpu::GpuAttributes`: normal (3), uv0 (2), uv1 (2), tangent (4), colour (4).
 @group(0) @binding(5) var<storage, read> attributes: array<f32>;
@@ -41,21 +31,6 @@ struct MeshEntry {
 
 const NO_TRIANGLE: u32 = 0xFFFFFFFFu;
 const ATTRIBUTE_FLOATS: u32 = 15u;
-
-// The mesh holding triangle `id`: the last entry whose first id is ≤ id.
-fn mesh_of(id: u32) -> u32 {
-    var lo = 0u;
-    var hi = resolve.mesh_count;
-    while hi - lo > 1u {
-        let mid = (lo + hi) / 2u;
-        if meshes[mid].first_id <= id {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo;
-}
 
 fn world_position(v: u32) -> vec3<f32> {
     return vec3(positions[3u * v], positions[3u * v + 1u], positions[3u * v + 2u]);

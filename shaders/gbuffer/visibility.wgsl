@@ -1,4 +1,5 @@
 // #import gbuffer/frame.wgsl
+// #import gbuffer/meshes.wgsl
 // A visibility buffer written by a compute rasteriser (Burns & Hunt 2013): per pixel the
 // nearest triangle's depth and id packed in 64 bits, (depth bits << 32) | id, merged with
 // `atomicMin` — a smaller depth wins and, at equal depths, the smaller id (the first
@@ -16,28 +17,15 @@
 // whose invocations cover the block together. `prepare` sizes the indirect dispatches.
 
 struct Raster {
-    // How many entries `meshes` has, and how many triangle ids they span.
-    mesh_count: u32,
+    // How many triangle ids the meshes span.
     triangle_count: u32,
-    _pad: vec2<u32>,
-}
-
-// A mesh, in id order (`gbuffer::gpu::visibility::MeshEntry`).
-struct Mesh {
-    first_id: u32,
-    base_vertex: u32,
-    first_index: u32,
-    // Triangles drawn (ids from first_id on); 0 for a mesh left out.
-    triangle_count: u32,
-    // 1 where the mesh's material is one-sided: back faces are culled.
-    cull_back: u32,
-    material: u32,
-    _pad: vec2<u32>,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // The G-buffer pass's frame (its `view_proj` and `viewport`).
 @group(0) @binding(0) var<uniform> frame: Frame;
-@group(0) @binding(1) var<storage, read> meshes: array<Mesh>;
 // The scene's positions (x, y, z per vertex) and indices.
 @group(0) @binding(2) var<storage, read> positions: array<f32>;
 @group(0) @binding(3) var<storage, read> indices: array<u32>;
@@ -96,21 +84,6 @@ struct Setup {
     z: vec3<f32>,
     // Inclusive pixel bounds clamped to the image: x0, y0, x1, y1.
     bounds: vec4<i32>,
-}
-
-// The mesh holding triangle `id`: the last entry whose first id is ≤ id.
-fn mesh_of(id: u32) -> u32 {
-    var lo = 0u;
-    var hi = raster.mesh_count;
-    while hi - lo > 1u {
-        let mid = (lo + hi) / 2u;
-        if meshes[mid].first_id <= id {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    return lo;
 }
 
 // Clip-space position of vertex k (0, 1, 2) of triangle t of `mesh`.

@@ -51,6 +51,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "frame.wgsl",
         "gbuffer.wgsl",
         "material.wgsl",
+        "meshes.wgsl",
         "mips.wgsl",
         "normal_encoding.wgsl",
         "resolve.wgsl",

@@ -27,7 +27,7 @@
 //! let buffer = VisibilityPass::buffer(&gpu.device, 640, 480)?;
 //! let targets = GBufferTargets::new(&gpu.device, 640, 480)?;
 //! let vis = VisibilityPass::new(&gpu.device)?.bind(
-//!     &gpu.device, (&uploaded, &scene), gpass.frame_buffer(), (640, 480), &buffer)?;
+//!     &gpu.device, &uploaded, gpass.frame_buffer(), (640, 480), &buffer)?;
 //! let resolve = ResolvePass::new(&gpu.device, &gpass)?.bind(
 //!     &gpu.device, &uploaded, gpass.frame_buffer(), &buffer, &targets)?;
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -99,9 +99,8 @@ const SETUP_BYTES: u64 = 192;
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct RasterUniform {
-    mesh_count: u32,
     triangle_count: u32,
-    _pad: [u32; 2],
+    _pad: [u32; 3],
 }
 
 /// Checks that `visibility` holds `width × height` pixels.
@@ -120,7 +119,7 @@ fn check_buffer(
     Ok(())
 }
 
-/// A mesh in triangle-id order: `Mesh` of `visibility.wgsl`, `MeshEntry` of `resolve.wgsl`.
+/// A mesh in triangle-id order: `Mesh` of `meshes.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct MeshEntry {
@@ -302,9 +301,8 @@ impl VisibilityPass {
             device,
             "visibility raster",
             bytemuck::bytes_of(&RasterUniform {
-                mesh_count: entries.len() as u32,
                 triangle_count,
-                _pad: [0; 2],
+                _pad: [0; 3],
             }),
             wgpu::BufferUsages::UNIFORM,
         )?;
@@ -372,9 +370,8 @@ pub fn triangle_ids(words: &[u64]) -> Vec<u32> {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct ResolveUniform {
-    mesh_count: u32,
     material_index: u32,
-    _pad: [u32; 2],
+    _pad: [u32; 3],
 }
 
 /// The visibility buffer resolved into the G-buffer layout (`resolve.wgsl`): per pixel the
@@ -412,8 +409,10 @@ impl ResolvePass {
             )));
         }
         let module = crate::SHADERS.module(device, "resolve.wgsl")?;
-        let mut bindings = vec![Binding::Uniform, Binding::Uniform];
-        bindings.extend([Binding::StorageRead; 5]);
+        // Frame, meshes, visibility, the material's uniform, positions, attributes, indices.
+        let mut bindings = vec![Binding::Uniform, Binding::StorageRead, Binding::StorageRead];
+        bindings.push(Binding::Uniform);
+        bindings.extend([Binding::StorageRead; 3]);
         bindings.extend(
             [
                 crate::LINEAR_DEPTH_FORMAT,
@@ -548,17 +547,16 @@ impl ResolvePass {
                 device,
                 "visibility resolve",
                 bytemuck::bytes_of(&ResolveUniform {
-                    mesh_count: entries.len() as u32,
                     material_index,
-                    _pad: [0; 2],
+                    _pad: [0; 3],
                 }),
                 wgpu::BufferUsages::UNIFORM,
             )?;
             let mut resources = vec![
                 frame.as_entire_binding(),
-                uniform.as_entire_binding(),
-                visibility.as_entire_binding(),
                 meshes.as_entire_binding(),
+                visibility.as_entire_binding(),
+                uniform.as_entire_binding(),
                 uploaded.positions.as_entire_binding(),
                 uploaded.attributes.as_entire_binding(),
                 uploaded.indices.as_entire_binding(),
