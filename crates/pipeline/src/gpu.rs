@@ -200,12 +200,22 @@ fn exclusions(
 }
 
 /// The G-buffer through the compute rasteriser's visibility buffer and its resolve
-/// ([`GpuRenderer::set_visibility`]), bound to the frame's targets.
+/// ([`GpuRenderer::set_visibility`]), bound to the frame's targets and, with supersampling, to
+/// the supersampled G-buffer's.
 struct VisibilityStage {
     raster: VisibilityPass,
     resolve: ResolvePass,
-    buffer: wgpu::Buffer,
-    bound: (Visibility, Resolve),
+    main: BoundVisibility,
+    ss: Option<BoundVisibility>,
+}
+
+/// The visibility path bound to one G-buffer: its visibility buffer, passes and the name of
+/// its depth pass.
+struct BoundVisibility {
+    _buffer: wgpu::Buffer,
+    vis: Visibility,
+    resolved: Resolve,
+    depth_pass: &'static str,
 }
 
 impl VisibilityStage {
@@ -217,58 +227,88 @@ impl VisibilityStage {
     ) -> Result<Self, RenderError> {
         let raster = VisibilityPass::new(device)?;
         let resolve = ResolvePass::new(device, gbuffer_pass)?;
-        let (buffer, bound) =
-            Self::bind(device, (&raster, &resolve), gbuffer_pass, scene, targets)?;
+        let main = Self::bind(
+            device,
+            (&raster, &resolve),
+            (gbuffer_pass.frame_buffer(), targets),
+            scene,
+            "",
+        )?;
         Ok(Self {
             raster,
             resolve,
-            buffer,
-            bound,
+            main,
+            ss: None,
         })
     }
 
+    /// The path bound to `targets` seen through `frame`; its passes' names start with `prefix`.
     fn bind(
         device: &wgpu::Device,
         (raster, resolve): (&VisibilityPass, &ResolvePass),
-        gbuffer_pass: &GBufferPass,
+        (frame, targets): (&wgpu::Buffer, &GBufferTargets),
         scene: &GpuScene,
-        targets: &GBufferTargets,
-    ) -> Result<(wgpu::Buffer, (Visibility, Resolve)), RenderError> {
+        prefix: &'static str,
+    ) -> Result<BoundVisibility, RenderError> {
         let size = (targets.width, targets.height);
         let buffer = VisibilityPass::buffer(device, size.0, size.1)?;
-        let frame = gbuffer_pass.frame_buffer();
-        let vis = raster.bind(device, scene, frame, size, &buffer)?;
+        let mut vis = raster.bind(device, scene, frame, size, &buffer)?;
         if !vis.skipped.is_empty() {
             return Err(RenderError::Visibility(format!(
                 "meshes {:?} have alpha-tested or blended materials, which the visibility buffer does not rasterise yet",
                 vis.skipped
             )));
         }
-        let resolved = resolve.bind(device, scene, frame, &buffer, targets)?;
-        Ok((buffer, (vis, resolved)))
+        let mut resolved = resolve.bind(device, scene, frame, &buffer, targets)?;
+        if !prefix.is_empty() {
+            vis.passes = vis.passes.named(&format!("{prefix}visibility"));
+            resolved.passes = resolved
+                .passes
+                .named(&format!("{prefix}visibility resolve"));
+        }
+        Ok(BoundVisibility {
+            _buffer: buffer,
+            vis,
+            resolved,
+            depth_pass: if prefix.is_empty() {
+                "visibility depth"
+            } else {
+                "ss visibility depth"
+            },
+        })
     }
 
+    /// Binds again to the frame's targets and to the supersampled G-buffer (`ss`), if any.
     fn rebind(
         &mut self,
         device: &wgpu::Device,
-        gbuffer_pass: &GBufferPass,
-        scene: &GpuScene,
+        (gbuffer_pass, scene): (&GBufferPass, &GpuScene),
         targets: &GBufferTargets,
+        ss: Option<(&wgpu::Buffer, &GBufferTargets)>,
     ) -> Result<(), RenderError> {
         let pair = (&self.raster, &self.resolve);
-        (self.buffer, self.bound) = Self::bind(device, pair, gbuffer_pass, scene, targets)?;
+        let frame = gbuffer_pass.frame_buffer();
+        self.main = Self::bind(device, pair, (frame, targets), scene, "")?;
+        self.ss = ss
+            .map(|g| Self::bind(device, pair, g, scene, "ss "))
+            .transpose()?;
         Ok(())
     }
 
-    fn encode(&self, encoder: &mut wgpu::CommandEncoder, depth: &wgpu::Texture, timer: &PassTimer) {
-        let (vis, resolved) = &self.bound;
-        vis.passes.encode(encoder, Some(timer));
-        resolved.passes.encode(encoder, Some(timer));
+    fn encode(
+        &self,
+        bound: &BoundVisibility,
+        encoder: &mut wgpu::CommandEncoder,
+        depth: &wgpu::Texture,
+        timer: &PassTimer,
+    ) {
+        bound.vis.passes.encode(encoder, Some(timer));
+        bound.resolved.passes.encode(encoder, Some(timer));
         self.resolve.encode_depth(
-            resolved,
+            &bound.resolved,
             encoder,
             depth,
-            timer.render_pass("visibility depth"),
+            timer.render_pass(bound.depth_pass),
         );
     }
 }
@@ -638,6 +678,7 @@ impl GpuRenderer {
             let kernels = Some(s.into_kernels());
             self.supersampling = Some(self.new_supersampling(device, queue, &config, kernels)?);
         }
+        self.rebind_visibility(device)?;
         if let Some(s) = self.ssao.take() {
             let kernels = Some(s.kernels);
             self.ssao = Some(self.new_ssao(device, kernels, &s.config, s.estimator)?);
@@ -781,6 +822,7 @@ impl GpuRenderer {
             Some(config) => Some(self.new_supersampling(device, queue, config, None)?),
             None => None,
         };
+        self.rebind_visibility(device)?;
         self.bind_shadow_lookup(device)?;
         self.bind_composition(device);
         // The pixels sample at their first samples with supersampling, at their centres without.
@@ -1236,10 +1278,12 @@ impl GpuRenderer {
     /// Draws the G-buffer through the compute rasteriser's visibility buffer and its resolve
     /// (`gbuffer::gpu::visibility`: the same G-buffer within the hardware pass's tolerances,
     /// and the depth target drawn from it), or, with `false`, through the hardware z-prepass
-    /// and G-buffer pass (the default). The device needs
+    /// and G-buffer pass (the default); with supersampling, its supersampled G-buffer too. The
+    /// device needs
     /// `gbuffer::gpu::visibility::device_needs()`; scenes with alpha-tested or blended
     /// materials, Forward+ and the light pre-pass are refused with an error that says why.
-    /// Timed as the passes "visibility", "visibility resolve" and "visibility depth".
+    /// Timed as the passes "visibility", "visibility resolve" and "visibility depth" (and the
+    /// same with "ss " for the supersampled G-buffer).
     pub fn set_visibility(&mut self, device: &wgpu::Device, on: bool) -> Result<(), RenderError> {
         if !on {
             self.visibility = None;
@@ -1249,6 +1293,25 @@ impl GpuRenderer {
         let stage =
             VisibilityStage::new(device, &self.gbuffer_pass, &self.scene, &self.sized.targets)?;
         self.visibility = Some(stage);
+        let bound = self.rebind_visibility(device);
+        if bound.is_err() {
+            self.visibility = None;
+        }
+        bound
+    }
+
+    /// Binds the visibility path again to the frame's targets and to the supersampled
+    /// G-buffer's (after a resize, new supersampling or hidden meshes).
+    fn rebind_visibility(&mut self, device: &wgpu::Device) -> Result<(), RenderError> {
+        if let Some(v) = &mut self.visibility {
+            let ss = self.supersampling.as_ref().map(Supersampling::gbuffer);
+            v.rebind(
+                device,
+                (&self.gbuffer_pass, &self.scene),
+                &self.sized.targets,
+                ss,
+            )?;
+        }
         Ok(())
     }
 
@@ -1281,9 +1344,7 @@ impl GpuRenderer {
         }
         self.subdivision = Some(stage);
         // The hidden control meshes leave the visibility buffer's mesh table.
-        if let Some(v) = &mut self.visibility {
-            v.rebind(device, &self.gbuffer_pass, &self.scene, &self.sized.targets)?;
-        }
+        self.rebind_visibility(device)?;
         self.set_subdivision_view(queue)
     }
 
@@ -1465,9 +1526,6 @@ impl GpuRenderer {
     ) -> Result<(), RenderError> {
         let sized = SizedTargets::new(device, width, height)?;
         self.sized = sized;
-        if let Some(v) = &mut self.visibility {
-            v.rebind(device, &self.gbuffer_pass, &self.scene, &self.sized.targets)?;
-        }
         if let Some(Indirect { config, set, .. }) = self.indirect.take() {
             self.set_indirect(device, &config, &set)?;
         }
@@ -1930,7 +1988,7 @@ impl GpuRenderer {
             s.encode(encoder, &self.timer);
         }
         match &self.visibility {
-            Some(v) => v.encode(encoder, &self.sized.targets.depth, &self.timer),
+            Some(v) => v.encode(&v.main, encoder, &self.sized.targets.depth, &self.timer),
             // The z-prepass path: 1.3× faster than the single MRT pass on Sponza on an H100
             // (docs/bench), and the same G-buffer.
             None => self.gbuffer_pass.encode_with_prepass(
@@ -1945,7 +2003,14 @@ impl GpuRenderer {
             s.kernels.encode(&s.bound, encoder, Some(&self.timer));
         }
         if let Some(s) = &self.supersampling {
-            s.encode_gbuffer(encoder, &self.gbuffer_pass, &self.scene, &self.timer);
+            match self
+                .visibility
+                .as_ref()
+                .and_then(|v| Some((v, v.ss.as_ref()?)))
+            {
+                Some((v, bound)) => v.encode(bound, encoder, &s.gbuffer().1.depth, &self.timer),
+                None => s.encode_gbuffer(encoder, &self.gbuffer_pass, &self.scene, &self.timer),
+            }
         }
         if let Some(shadows) = &mut self.vpl_shadows
             && self.indirect.is_some()

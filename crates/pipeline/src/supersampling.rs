@@ -327,6 +327,11 @@ impl Supersampling {
         self.evaluation.set_far(queue, camera.far);
     }
 
+    /// The supersampled G-buffer's frame uniform and targets (what the visibility path binds).
+    pub(crate) fn gbuffer(&self) -> (&wgpu::Buffer, &GBufferTargets) {
+        (self.frame.buffer(), &self.targets)
+    }
+
     /// Records the supersampled G-buffer (z-prepass, G-buffer).
     pub(crate) fn encode_gbuffer(
         &self,
