@@ -350,14 +350,8 @@ impl Options {
     /// The GPU to measure on ([`Gpu::from_env`]), printed; a software adapter is refused
     /// without `--allow-software` ([`require_hardware`]).
     pub fn gpu(&self) -> anyhow::Result<Gpu> {
-        self.gpu_with(&gpu::DeviceNeeds::default())
-    }
-
-    /// [`Options::gpu`] with a device that has `needs` (features and limits beyond the
-    /// defaults).
-    pub fn gpu_with(&self, needs: &gpu::DeviceNeeds) -> anyhow::Result<Gpu> {
         clock_before();
-        let gpu = Gpu::from_env_with(needs)?;
+        let gpu = Gpu::from_env()?;
         println!("adapter: {}", gpu.describe());
         require_hardware(&gpu, self.allow_software)?;
         Ok(gpu)

@@ -13,7 +13,7 @@ use gbuffer::{
     Frame,
     gpu::{
         GBufferPass, GBufferTargets, GpuScene,
-        visibility::{self, ResolvePass, VisibilityPass},
+        visibility::{ResolvePass, VisibilityPass},
     },
 };
 use gpu::{Gpu, PassTimer};
@@ -180,7 +180,8 @@ fn measure(
 
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
-    let gpu = args.options.gpu_with(&visibility::device_needs())?;
+    // The adapter's limits and optional features: the visibility passes say what is missing.
+    let gpu = args.options.gpu()?;
     let frames = args.options.frames(20);
     let (sponza, sponza_camera) = bench::fixture("sponza/dabrovic/sponza.gltf")?;
     let sponza = opaque(sponza);
