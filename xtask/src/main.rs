@@ -364,7 +364,9 @@ fn package_check() -> Result<()> {
         manifest.push_str(&format!("{name} = \"{version}\"\n"));
     }
     // The workspace's release profile, so the third-party builds in its target folder are reused.
-    manifest.push_str("\n[profile.release]\ndebug = \"line-tables-only\"\n");
+    manifest.push_str(
+        "\n[profile.release]\ndebug = \"line-tables-only\"\n\n[profile.release.package.\"*\"]\ndebug = false\n",
+    );
     manifest.push_str("\n[patch.crates-io]\n");
     for name in PACKAGE_CLOSURE {
         manifest.push_str(&format!(
