@@ -10,7 +10,10 @@ struct Mesh {
     // 1 where the mesh's material is one-sided: back faces are culled.
     cull_back: u32,
     material: u32,
-    _pad: vec2<u32>,
+    // The resolve's index of the material (dense over the materials drawn); none for a mesh
+    // left out.
+    slot: u32,
+    _pad: u32,
 }
 
 @group(0) @binding(1) var<storage, read> meshes: array<Mesh>;

@@ -4,16 +4,22 @@
 // triangle its id names is fetched again, its attributes are interpolated at the pixel centre
 // with perspective-correct barycentrics and their derivatives taken analytically at the
 // neighbour of the 2 × 2 quad (as `dpdxFine`/`dpdyFine` and `gbuffer::cpu` take them), and
-// the material is evaluated as `fs_main` evaluates it. One dispatch per material (its bind
-// group is group 1, as in the G-buffer pass); `resolve_background` writes the cleared texels
-// where no triangle is.
+// the material is evaluated as `fs_main` evaluates it.
+//
+// Pixels are classified once per frame, by 8 × 8 tile: `classify_count` counts the tiles each
+// material slot (a material some mesh draws, `Mesh::slot`) appears in and writes the cleared
+// texels where no triangle is, `classify_scan` places each slot's tile list and sizes its
+// indirect dispatch, `classify_write` fills the lists. Then one dispatch per material (its
+// bind group is group 1, as in the G-buffer pass) covers the tiles of its list alone.
 
 struct Resolve {
-    // The material this dispatch resolves.
-    material_index: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // The material slot this dispatch resolves.
+    slot: u32,
+    // How many slots there are.
+    slots: u32,
+    // Tiles across the image.
+    tiles_x: u32,
+    _pad: u32,
 }
 
 // (depth bits << 32) | id per pixel, as two words: id, depth bits.
@@ -28,8 +34,21 @@ struct Resolve {
 @group(0) @binding(9) var albedo_out: texture_storage_2d<rgba8unorm, write>;
 @group(0) @binding(10) var material_out: texture_storage_2d<r32uint, write>;
 @group(0) @binding(11) var emission_out: texture_storage_2d<rgba16float, write>;
+// Per slot three words: the tiles it appears in (counted), the tiles listed so far (after
+// `classify_write`: its list's length), the first entry of its list in `tiles`.
+@group(0) @binding(12) var<storage, read_write> classes: array<atomic<u32>>;
+// The tiles (x + y · tiles_x) of each slot's list.
+@group(0) @binding(13) var<storage, read_write> tiles: array<u32>;
+// Each slot's dispatch size (three words), bound to `classify_scan` alone (a buffer read as
+// dispatch sizes cannot be bound for writing there too; group 1 is the material's elsewhere,
+// whose bindings end at 10).
+@group(1) @binding(11) var<storage, read_write> dispatch: array<u32>;
 
 const NO_TRIANGLE: u32 = 0xFFFFFFFFu;
+const NO_SLOT: u32 = 0xFFFFFFFFu;
+const TILE: u32 = 8u;
+// Workgroups across a slot's dispatch (tile k of its list is workgroup (k % MAX_X, k / MAX_X)).
+const MAX_X: u32 = 32768u;
 const ATTRIBUTE_FLOATS: u32 = 15u;
 
 fn world_position(v: u32) -> vec3<f32> {
@@ -69,18 +88,98 @@ fn store(p: vec2<u32>, out: GBufferOut) {
     textureStore(emission_out, p, out.emission);
 }
 
-@compute @workgroup_size(8, 8)
-fn resolve_material(@builtin(global_invocation_id) gid: vec3<u32>) {
+// The material slot of the pixel at p (NO_SLOT outside the image or where no triangle is).
+fn pixel_slot(p: vec2<u32>) -> u32 {
     let size = vec2<u32>(frame.viewport.xy);
-    if any(gid.xy >= size) {
+    if any(p >= size) {
+        return NO_SLOT;
+    }
+    let id = visibility[p.y * size.x + p.x].x;
+    if id == NO_TRIANGLE {
+        return NO_SLOT;
+    }
+    return meshes[mesh_of(id)].slot;
+}
+
+var<workgroup> tile_slots: array<u32, 64>;
+
+// Whether `slot` (of invocation `lane` of the tile's workgroup) is a slot and no invocation
+// before `lane` has it: each slot of the tile is counted once. Every invocation calls it.
+fn first_in_tile(lane: u32, slot: u32) -> bool {
+    tile_slots[lane] = slot;
+    workgroupBarrier();
+    if slot == NO_SLOT {
+        return false;
+    }
+    for (var j = 0u; j < lane; j++) {
+        if tile_slots[j] == slot {
+            return false;
+        }
+    }
+    return true;
+}
+
+@compute @workgroup_size(8, 8)
+fn classify_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let slot = pixel_slot(gid.xy);
+    let size = vec2<u32>(frame.viewport.xy);
+    if slot == NO_SLOT && all(gid.xy < size) {
+        var out: GBufferOut;
+        out.linear_depth = 0.0;
+        out.normal = 0u;
+        out.albedo = vec4(0.0);
+        out.material = NO_MATERIAL_WORD;
+        out.emission = vec4(0.0);
+        store(gid.xy, out);
+    }
+    if first_in_tile(lane, slot) {
+        atomicAdd(&classes[3u * slot], 1u);
+    }
+}
+
+// Places the slots' lists one after the other and sizes their dispatches; leaves the counts
+// at zero for the next frame.
+@compute @workgroup_size(1)
+fn classify_scan() {
+    var first = 0u;
+    for (var s = 0u; s < resolve.slots; s++) {
+        let n = atomicExchange(&classes[3u * s], 0u);
+        atomicStore(&classes[3u * s + 1u], 0u);
+        atomicStore(&classes[3u * s + 2u], first);
+        dispatch[3u * s] = min(n, MAX_X);
+        dispatch[3u * s + 1u] = (n + MAX_X - 1u) / MAX_X;
+        dispatch[3u * s + 2u] = 1u;
+        first += n;
+    }
+}
+
+@compute @workgroup_size(8, 8)
+fn classify_write(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let slot = pixel_slot(gid.xy);
+    if first_in_tile(lane, slot) {
+        let k = atomicAdd(&classes[3u * slot + 1u], 1u);
+        tiles[atomicLoad(&classes[3u * slot + 2u]) + k] = group.x + group.y * resolve.tiles_x;
+    }
+}
+
+@compute @workgroup_size(8, 8)
+fn resolve_material(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let entry = group.x + group.y * MAX_X;
+    if entry >= atomicLoad(&classes[3u * resolve.slot + 1u]) {
         return;
     }
-    let id = visibility[gid.y * size.x + gid.x].x;
+    let tile = tiles[atomicLoad(&classes[3u * resolve.slot + 2u]) + entry];
+    let pixel = vec2(tile % resolve.tiles_x, tile / resolve.tiles_x) * TILE + local.xy;
+    let size = vec2<u32>(frame.viewport.xy);
+    if any(pixel >= size) {
+        return;
+    }
+    let id = visibility[pixel.y * size.x + pixel.x].x;
     if id == NO_TRIANGLE {
         return;
     }
     let mesh = meshes[mesh_of(id)];
-    if mesh.material != resolve.material_index {
+    if mesh.slot != resolve.slot {
         return;
     }
     let t = id - mesh.first_id;
@@ -92,12 +191,12 @@ fn resolve_material(@builtin(global_invocation_id) gid: vec3<u32>) {
         world[k] = world_position(v[k]);
         clip[k] = frame.view_proj * vec4(world[k], 1.0);
     }
-    let c = vec2<f32>(gid.xy) + 0.5;
+    let c = vec2<f32>(pixel) + 0.5;
     let l = barycentrics(clip, c);
     let view_depth = l.x * clip[0].w + l.y * clip[1].w + l.z * clip[2].w;
     // The derivatives over the texture footprint, towards the quad's other pixel.
     let footprint = max(frame.sampling.z, 1.0);
-    let step = vec2(select(-1.0, 1.0, gid.x % 2u == 0u), select(-1.0, 1.0, gid.y % 2u == 0u));
+    let step = vec2(select(-1.0, 1.0, pixel.x % 2u == 0u), select(-1.0, 1.0, pixel.y % 2u == 0u));
     let uv = interpolate(v, l, 3u);
     let uv_dx = (interpolate(v, barycentrics(clip, c + vec2(step.x, 0.0)), 3u) - uv) * step.x * footprint;
     let uv_dy = (interpolate(v, barycentrics(clip, c + vec2(0.0, step.y)), 3u) - uv) * step.y * footprint;
@@ -113,22 +212,7 @@ fn resolve_material(@builtin(global_invocation_id) gid: vec3<u32>) {
     );
     let facing = facing_geometric(normal, geometric);
     let at = SurfaceAttributes(uv, uv_dx, uv_dy, facing.normal, facing.back_face, interpolate(v, l, 7u), interpolate(v, l, 11u));
-    store(gid.xy, gbuffer_texels(evaluate_material(at), view_depth));
-}
-
-@compute @workgroup_size(8, 8)
-fn resolve_background(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let size = vec2<u32>(frame.viewport.xy);
-    if any(gid.xy >= size) || visibility[gid.y * size.x + gid.x].x != NO_TRIANGLE {
-        return;
-    }
-    var out: GBufferOut;
-    out.linear_depth = 0.0;
-    out.normal = 0u;
-    out.albedo = vec4(0.0);
-    out.material = NO_MATERIAL_WORD;
-    out.emission = vec4(0.0);
-    store(gid.xy, out);
+    store(pixel, gbuffer_texels(evaluate_material(at), view_depth));
 }
 
 const NO_MATERIAL_WORD: u32 = 0xFFFFFFFFu;

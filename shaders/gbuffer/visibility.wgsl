@@ -259,8 +259,13 @@ struct LargeSetup {
 
 // Sutherland–Hodgman clipping of a triangle against the six planes, as `gbuffer::cpu`
 // (`clip_polygon`, `ClipVertex::lerp`), into `polygon`; returns its vertex count.
+// A triangle inside every plane comes back as it is (what the loop would give, without it).
 fn clip_triangle(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, polygon: ptr<function, array<vec4<f32>, 9>>) -> u32 {
     var poly = array<vec4<f32>, 9>(a, b, c, vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
+    if inside_planes(a) && inside_planes(b) && inside_planes(c) {
+        *polygon = poly;
+        return 3u;
+    }
     var n = 3u;
     for (var k = 0u; k < 6u && n >= 3u; k++) {
         var out: array<vec4<f32>, 9>;

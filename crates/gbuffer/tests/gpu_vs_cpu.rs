@@ -397,6 +397,25 @@ fn visibility_buffer_resolves_to_the_cpu_gbuffer() {
         let camera = s.camera_or_framed();
         compare_path(Path::Visibility, name, &s, &camera, size).unwrap_or_else(|e| panic!("{e}"));
     }
+    // The ground fills the view: one material in all 200 × 175 tiles, more than a row of its
+    // dispatch holds (32 768 workgroups).
+    let looking_down = scene::Camera {
+        eye: glam::Vec3::new(8.0, 2.0, 8.0),
+        target: glam::Vec3::new(8.0, 0.0, 8.0),
+        up: glam::Vec3::NEG_Z,
+        fov_y: 50f32.to_radians(),
+        near: 0.1,
+        far: 10.0,
+    };
+    let ground = opaque(scene::checkerboard());
+    compare_path(
+        Path::Visibility,
+        "visibility ground",
+        &ground,
+        &looking_down,
+        (1600, 1400),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     for (seed, cam) in [(7, 4242), (11, 99), (12345, 777)] {
         let s = opaque(common::random_scene(seed, 30));
         let camera = common::random_camera(cam);

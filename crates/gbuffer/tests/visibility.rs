@@ -121,6 +121,109 @@ fn an_empty_view_holds_no_triangle() {
     );
 }
 
+/// A closed grid of `n × n` cells over `[-half, half]²` moved by `offset`, in the plane z = 0,
+/// facing +z, its inner vertices jittered by up to `jitter` of a cell, each cell cut along an
+/// alternating diagonal.
+fn grid(n: u32, half: f32, offset: glam::Vec2, jitter: f32) -> Scene {
+    let mut state = u64::from(n);
+    let mut random = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1);
+        ((state >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 2.0 * jitter
+    };
+    let cell = 2.0 * half / n as f32;
+    let mut mesh = scene::Mesh {
+        name: "grid".into(),
+        ..Default::default()
+    };
+    for j in 0..=n {
+        for i in 0..=n {
+            let inner = |k| k > 0 && k < n;
+            let (dx, dy) = (random(), random());
+            let x = -half + cell * (i as f32 + if inner(i) { dx } else { 0.0 }) + offset.x;
+            let y = -half + cell * (j as f32 + if inner(j) { dy } else { 0.0 }) + offset.y;
+            mesh.positions.push(glam::Vec3::new(x, y, 0.0));
+            mesh.normals.push(glam::Vec3::Z);
+            mesh.uvs.push(glam::Vec2::new(x, y));
+        }
+    }
+    let v = |i: u32, j: u32| j * (n + 1) + i;
+    for j in 0..n {
+        for i in 0..n {
+            let (a, b, c, d) = (v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1));
+            if (i + j) % 2 == 0 {
+                mesh.indices.extend([a, b, c, a, c, d]);
+            } else {
+                mesh.indices.extend([a, b, d, b, c, d]);
+            }
+        }
+    }
+    let mut scene = Scene::default();
+    scene.materials.push(scene::Material::default());
+    scene.meshes.push(mesh);
+    scene
+}
+
+/// Watertightness: a closed grid filling the view leaves no pixel uncovered, whether its
+/// triangles take the per-triangle path (cells of ~2 pixels) or the deferred blocks (~30).
+#[test]
+fn closed_jittered_grids_leave_no_hole() {
+    let Some(gpu) = gpu::test_device(&visibility::device_needs()) else {
+        return;
+    };
+    let camera = Camera {
+        fov_y: 45f32.to_radians(),
+        ..Camera::look_at(glam::Vec3::new(0.3, -0.4, 3.0), glam::Vec3::ZERO)
+    };
+    for n in [96, 8] {
+        let mesh = grid(n, 2.0, glam::Vec2::ZERO, 0.3);
+        let holes = gpu_ids(gpu, &mesh, &camera, (128, 96))
+            .iter()
+            .filter(|&&id| id == NO_TRIANGLE)
+            .count();
+        assert_eq!(holes, 0, "{n} × {n} grid: {holes} pixels uncovered");
+        let share = compare(&mesh, &camera, (128, 96)).unwrap();
+        assert!(share >= 0.995, "{:.2} % of the pixels match", share * 100.0);
+    }
+}
+
+/// Every pixel once: a grid whose vertices snap to pixel centres (16 pixels per unit, lines
+/// half a pixel off the image centre), so that every edge, diagonals included, runs through
+/// pixel centres and the top-left rule alone decides who owns them. A pixel covered twice
+/// would hold the smaller id of the two; the CPU's owner must hold it, everywhere.
+#[test]
+fn shared_edges_through_pixel_centres_go_to_one_triangle() {
+    let Some(gpu) = gpu::test_device(&visibility::device_needs()) else {
+        return;
+    };
+    // 90° vertical field of view at distance 3 over 96 rows: 16 pixels per unit at z = 0.
+    let camera = Camera {
+        fov_y: 90f32.to_radians(),
+        ..Camera::look_at(glam::Vec3::new(0.0, 0.0, 3.0), glam::Vec3::ZERO)
+    };
+    let (w, h) = (128, 96);
+    let half_pixel = glam::Vec2::new(1.0, -1.0) / 32.0;
+    // Cells of 4 pixels (the per-triangle path) and of 32 (the deferred blocks).
+    for (n, half) in [(40, 5.0), (5, 5.0)] {
+        let mesh = grid(n, half, half_pixel, 0.0);
+        let expected = cpu::rasterize(&mesh, &camera, w, h)
+            .expect("cpu")
+            .triangle_id;
+        let ids = gpu_ids(gpu, &mesh, &camera, (w, h));
+        let differ: Vec<(u32, u32)> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| expected.get(x, y) != ids[(y * w + x) as usize])
+            .collect();
+        assert!(
+            differ.is_empty(),
+            "{n} × {n} grid: {} pixels hold another triangle than the CPU's, e.g. {:?}",
+            differ.len(),
+            differ.first()
+        );
+    }
+}
+
 /// Lists too small for the deferred triangles lose some and say how many entries did not fit.
 #[test]
 fn overflowing_lists_are_counted() {

@@ -131,13 +131,8 @@ fn measure(
     let frame_buffer = gpass.frame_buffer();
     let vis =
         VisibilityPass::new(device)?.bind(device, &uploaded, frame_buffer, (w, h), &buffer)?;
-    let resolve = ResolvePass::new(device, &gpass)?.bind(
-        device,
-        &uploaded,
-        frame_buffer,
-        &buffer,
-        &targets,
-    )?;
+    let resolve =
+        ResolvePass::new(device, &gpass)?.bind(device, &uploaded, frame_buffer, &vis, &targets)?;
     let raster = bench::timing::time_encoded(gpu, &timer, frames, true, &|encoder, timer| {
         vis.passes.encode(encoder, Some(timer))
     })?;

@@ -212,7 +212,6 @@ struct VisibilityStage {
 /// The visibility path bound to one G-buffer: its visibility buffer, passes and the name of
 /// its depth pass.
 struct BoundVisibility {
-    _buffer: wgpu::Buffer,
     vis: Visibility,
     resolved: Resolve,
     depth_pass: &'static str,
@@ -259,7 +258,7 @@ impl VisibilityStage {
                 vis.skipped
             )));
         }
-        let mut resolved = resolve.bind(device, scene, frame, &buffer, targets)?;
+        let mut resolved = resolve.bind(device, scene, frame, &vis, targets)?;
         if !prefix.is_empty() {
             vis.passes = vis.passes.named(&format!("{prefix}visibility"));
             resolved.passes = resolved
@@ -267,7 +266,6 @@ impl VisibilityStage {
                 .named(&format!("{prefix}visibility resolve"));
         }
         Ok(BoundVisibility {
-            _buffer: buffer,
             vis,
             resolved,
             depth_pass: if prefix.is_empty() {

@@ -74,7 +74,7 @@ pub fn run_visibility(
     let vis =
         VisibilityPass::new(device)?.bind(device, &gpu_scene, frame, (width, height), &buffer)?;
     let resolve_pass = ResolvePass::new(device, &pass)?;
-    let resolve = resolve_pass.bind(device, &gpu_scene, frame, &buffer, &targets)?;
+    let resolve = resolve_pass.bind(device, &gpu_scene, frame, &vis, &targets)?;
     let mut encoder = device.create_command_encoder(&Default::default());
     vis.passes.encode(&mut encoder, None);
     resolve.passes.encode(&mut encoder, None);

@@ -29,7 +29,7 @@
 //! let vis = VisibilityPass::new(&gpu.device)?.bind(
 //!     &gpu.device, &uploaded, gpass.frame_buffer(), (640, 480), &buffer)?;
 //! let resolve = ResolvePass::new(&gpu.device, &gpass)?.bind(
-//!     &gpu.device, &uploaded, gpass.frame_buffer(), &buffer, &targets)?;
+//!     &gpu.device, &uploaded, gpass.frame_buffer(), &vis, &targets)?;
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
 //! vis.passes.encode(&mut encoder, None);
 //! resolve.passes.encode(&mut encoder, None);
@@ -130,21 +130,44 @@ struct MeshEntry {
     triangle_count: u32,
     cull_back: u32,
     material: u32,
-    _pad: [u32; 2],
+    /// The resolve's index of `material` ([`Visibility::materials`]); `NO_SLOT` for a mesh
+    /// left out.
+    slot: u32,
+    _pad: u32,
 }
 
+const NO_SLOT: u32 = u32::MAX;
+
 /// The uploaded scene's meshes in triangle-id order (ids numbered over the meshes' index
-/// slots, as the CPU rasteriser numbers [`Scene::meshes`]' triangles), the meshes left out
-/// (their material discards fragments by alpha) and the id count.
-fn mesh_table(uploaded: &GpuScene) -> (Vec<MeshEntry>, Vec<usize>, u32) {
+/// slots, as the CPU rasteriser numbers [`Scene::meshes`]' triangles).
+struct MeshTable {
+    entries: Vec<MeshEntry>,
+    /// Meshes left out: their material discards fragments by alpha.
+    skipped: Vec<usize>,
+    /// The materials the other meshes draw, in slot order.
+    materials: Vec<usize>,
+    /// Triangle ids spanned.
+    triangle_count: u32,
+}
+
+fn mesh_table(uploaded: &GpuScene) -> MeshTable {
     let mut entries = Vec::with_capacity(uploaded.draws.len());
     let mut skipped = Vec::new();
+    let mut materials: Vec<usize> = Vec::new();
     let mut first_id = 0u32;
     for (m, draw) in uploaded.draws.iter().enumerate() {
         let triangles = draw.index_count / 3;
         if draw.state.alpha_tested && triangles > 0 {
             skipped.push(m);
         }
+        let slot = if draw.state.alpha_tested || triangles == 0 {
+            NO_SLOT
+        } else if let Some(s) = materials.iter().position(|&k| k == draw.material) {
+            s as u32
+        } else {
+            materials.push(draw.material);
+            materials.len() as u32 - 1
+        };
         entries.push(MeshEntry {
             first_id,
             base_vertex: draw.base_vertex as u32,
@@ -156,11 +179,17 @@ fn mesh_table(uploaded: &GpuScene) -> (Vec<MeshEntry>, Vec<usize>, u32) {
             },
             cull_back: u32::from(draw.state.cull),
             material: draw.material as u32,
-            _pad: [0; 2],
+            slot,
+            _pad: 0,
         });
         first_id += triangles;
     }
-    (entries, skipped, first_id)
+    MeshTable {
+        entries,
+        skipped,
+        materials,
+        triangle_count: first_id,
+    }
 }
 
 /// The visibility buffer's kernels (phase `new`).
@@ -188,6 +217,13 @@ pub struct Visibility {
     /// Deferred triangles, setups and blocks appended, and entries that did not fit (four
     /// `u32`s; `COPY_SRC`).
     pub counts: wgpu::Buffer,
+    /// The materials drawn (indices in the uploaded scene's materials), in the resolve's
+    /// slot order.
+    pub materials: Vec<usize>,
+    /// The buffer written and its size, the mesh table: what [`ResolvePass::bind`] reads.
+    buffer: wgpu::Buffer,
+    size: (u32, u32),
+    meshes: wgpu::Buffer,
     /// The lists and dispatch sizes the passes share (kept alive with them).
     _lists: Vec<wgpu::Buffer>,
 }
@@ -286,7 +322,8 @@ impl VisibilityPass {
     ) -> Result<Visibility, GBufferError> {
         check_buffer(visibility, size)?;
         let pixels = u64::from(size.0) * u64::from(size.1);
-        let (entries, skipped, triangle_count) = mesh_table(uploaded);
+        let table = mesh_table(uploaded);
+        let triangle_count = table.triangle_count;
         let storage = wgpu::BufferUsages::STORAGE;
         let list =
             |label, bytes: u64, usage| transfer::buffer(device, label, bytes, storage | usage);
@@ -294,7 +331,7 @@ impl VisibilityPass {
         let meshes = transfer::buffer_init(
             device,
             "visibility meshes",
-            bytemuck::cast_slice(&entries),
+            bytemuck::cast_slice(&table.entries),
             storage,
         )?;
         let uniform = transfer::buffer_init(
@@ -306,7 +343,15 @@ impl VisibilityPass {
             }),
             wgpu::BufferUsages::UNIFORM,
         )?;
-        let c = self.capacity;
+        // No list needs more entries than the scene can append: each triangle is deferred at
+        // most once, clips into at most seven fan triangles, each covering at most the image.
+        let image_blocks = u64::from(size.0.div_ceil(32)) * u64::from(size.1.div_ceil(32));
+        let fan = u64::from(triangle_count.max(1)) * 7;
+        let c = Capacity {
+            deferred: self.capacity.deferred.min(triangle_count.max(1)),
+            setups: u64::from(self.capacity.setups).min(fan) as u32,
+            blocks: u64::from(self.capacity.blocks).min(fan.saturating_mul(image_blocks)) as u32,
+        };
         let counts = list("visibility counts", 16, wgpu::BufferUsages::COPY_SRC)?;
         let dispatch = list("visibility dispatch", 24, wgpu::BufferUsages::INDIRECT)?;
         let deferred = list("visibility deferred", u64::from(c.deferred) * 4, none)?;
@@ -354,9 +399,13 @@ impl VisibilityPass {
         ];
         Ok(Visibility {
             passes: Passes::new().pass("visibility", dispatches),
-            skipped,
+            skipped: table.skipped,
             counts,
-            _lists: vec![meshes, uniform, deferred, setups, blocks, dispatch],
+            materials: table.materials,
+            buffer: visibility.clone(),
+            size,
+            meshes,
+            _lists: vec![uniform, deferred, setups, blocks, dispatch],
         })
     }
 }
@@ -370,21 +419,31 @@ pub fn triangle_ids(words: &[u64]) -> Vec<u32> {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct ResolveUniform {
-    material_index: u32,
-    _pad: [u32; 3],
+    slot: u32,
+    slots: u32,
+    tiles_x: u32,
+    _pad: u32,
 }
+
+/// The side of the tiles the resolve classifies pixels by.
+const RESOLVE_TILE: u32 = 8;
 
 /// The visibility buffer resolved into the G-buffer layout (`resolve.wgsl`): per pixel the
 /// triangle is fetched again, its attributes interpolated with perspective-correct
 /// barycentrics at the pixel centre and their derivatives taken analytically towards the
 /// 2 × 2 quad's other pixels (what `dpdxFine`/`dpdyFine` and the CPU rasteriser take), and its
-/// material evaluated as the G-buffer pass's fragment shader does; one dispatch per material.
-/// It writes the linear depth, normal, albedo, material and emission targets; the hardware
-/// depth target is left alone (the visibility buffer holds z/w in its upper 32 bits).
+/// material evaluated as the G-buffer pass's fragment shader does. Pixels are classified once
+/// by 8 × 8 tile (a list of tiles per material, on the GPU); then one indirect dispatch per
+/// material covers its tiles alone. It writes the linear depth, normal, albedo, material and
+/// emission targets; the hardware depth target is drawn by [`ResolvePass::encode_depth`].
 pub struct ResolvePass {
     layout: Layout,
+    /// `classify_scan`'s second group: the dispatch sizes (binding 11).
+    dispatch_layout: Layout,
     material: wgpu::ComputePipeline,
-    background: wgpu::ComputePipeline,
+    classify_count: wgpu::ComputePipeline,
+    classify_scan: wgpu::ComputePipeline,
+    classify_write: wgpu::ComputePipeline,
     /// The depth target's pass: the frame (binding 0) and the visibility buffer (binding 2).
     depth_layout: Layout,
     depth: wgpu::RenderPipeline,
@@ -393,7 +452,7 @@ pub struct ResolvePass {
 /// [`ResolvePass::bind`]'s result: the compute passes writing the colour targets, and what
 /// [`ResolvePass::encode_depth`] draws the depth target with.
 pub struct Resolve {
-    /// One dispatch for the pixels without a triangle, one per material.
+    /// The classification (three dispatches), then one dispatch per material.
     pub passes: Passes,
     depth_group: wgpu::BindGroup,
 }
@@ -409,7 +468,8 @@ impl ResolvePass {
             )));
         }
         let module = crate::SHADERS.module(device, "resolve.wgsl")?;
-        // Frame, meshes, visibility, the material's uniform, positions, attributes, indices.
+        // Frame, meshes, visibility, the slot's uniform, positions, attributes, indices, the
+        // five targets, the classes and the tile lists.
         let mut bindings = vec![Binding::Uniform, Binding::StorageRead, Binding::StorageRead];
         bindings.push(Binding::Uniform);
         bindings.extend([Binding::StorageRead; 3]);
@@ -423,7 +483,14 @@ impl ResolvePass {
             ]
             .map(Binding::StorageTexture),
         );
+        bindings.extend([Binding::Storage; 2]);
         let layout = Layout::compute(device, "visibility resolve", &bindings);
+        let dispatch_layout = Layout::compute_numbered(
+            device,
+            "visibility resolve dispatch",
+            &[(11, Binding::Storage)],
+        );
+        let classify = |entry| kernel::pipeline(device, &module, entry, &[&layout], &[]);
         let material = kernel::pipeline(
             device,
             &module,
@@ -431,7 +498,15 @@ impl ResolvePass {
             &[&layout, &gpass.material_layout],
             &[],
         );
-        let background = kernel::pipeline(device, &module, "resolve_background", &[&layout], &[]);
+        let classify_count = classify("classify_count");
+        let classify_write = classify("classify_write");
+        let classify_scan = kernel::pipeline(
+            device,
+            &module,
+            "classify_scan",
+            &[&layout, &dispatch_layout],
+            &[],
+        );
         let depth_layout = Layout::numbered(
             device,
             "visibility depth",
@@ -471,8 +546,11 @@ impl ResolvePass {
         });
         Ok(Self {
             layout,
+            dispatch_layout,
             material,
-            background,
+            classify_count,
+            classify_scan,
+            classify_write,
             depth_layout,
             depth,
         })
@@ -509,30 +587,42 @@ impl ResolvePass {
         pass.draw(0..3, 0..1);
     }
 
-    /// The passes resolving `visibility` (written by [`VisibilityPass::bind`]'s passes for the
-    /// same scene and `frame`, a [`Frame`](crate::Frame) uniform) into `targets` (of the frame's size).
+    /// The passes resolving the visibility buffer `visibility`'s passes write (for the same
+    /// `uploaded` scene and `frame`, a [`Frame`](crate::Frame) uniform) into `targets` (of its
+    /// size).
     pub fn bind(
         &self,
         device: &wgpu::Device,
         uploaded: &GpuScene,
         frame: &wgpu::Buffer,
-        visibility: &wgpu::Buffer,
+        visibility: &Visibility,
         targets: &super::GBufferTargets,
     ) -> Result<Resolve, GBufferError> {
         let (width, height) = (targets.width, targets.height);
-        check_buffer(visibility, (width, height))?;
-        let (entries, _, _) = mesh_table(uploaded);
-        let mut materials: Vec<usize> = Vec::new();
-        for e in entries.iter().filter(|e| e.triangle_count > 0) {
-            if !materials.contains(&(e.material as usize)) {
-                materials.push(e.material as usize);
-            }
+        if visibility.size != (width, height) {
+            return Err(GBufferError::InvalidOptions(format!(
+                "G-buffer targets of {width}×{height} for a visibility buffer of {}×{}",
+                visibility.size.0, visibility.size.1
+            )));
         }
-        let meshes = transfer::buffer_init(
+        let slots = visibility.materials.len() as u32;
+        let tiles_x = width.div_ceil(RESOLVE_TILE);
+        let tile_count = u64::from(tiles_x) * u64::from(height.div_ceil(RESOLVE_TILE));
+        // A tile holds at most one entry per slot, and at most 64 slots (one per pixel).
+        let entries = tile_count * u64::from(slots.clamp(1, RESOLVE_TILE * RESOLVE_TILE));
+        let storage = wgpu::BufferUsages::STORAGE;
+        let classes = transfer::buffer(
             device,
-            "visibility resolve meshes",
-            bytemuck::cast_slice(&entries),
-            wgpu::BufferUsages::STORAGE,
+            "visibility resolve classes",
+            u64::from(slots.max(1)) * 12,
+            storage,
+        )?;
+        let tiles = transfer::buffer(device, "visibility resolve tiles", entries * 4, storage)?;
+        let dispatch = transfer::buffer(
+            device,
+            "visibility resolve dispatch",
+            u64::from(slots.max(1)) * 12,
+            storage | wgpu::BufferUsages::INDIRECT,
         )?;
         let views = [
             &targets.linear_depth,
@@ -542,46 +632,70 @@ impl ResolvePass {
             &targets.emission,
         ]
         .map(|t| t.create_view(&Default::default()));
-        let group = |material_index: u32| -> Result<wgpu::BindGroup, GBufferError> {
+        let group = |slot: u32| -> Result<wgpu::BindGroup, GBufferError> {
             let uniform = transfer::buffer_init(
                 device,
                 "visibility resolve",
                 bytemuck::bytes_of(&ResolveUniform {
-                    material_index,
-                    _pad: [0; 3],
+                    slot,
+                    slots,
+                    tiles_x,
+                    _pad: 0,
                 }),
                 wgpu::BufferUsages::UNIFORM,
             )?;
             let mut resources = vec![
                 frame.as_entire_binding(),
-                meshes.as_entire_binding(),
-                visibility.as_entire_binding(),
+                visibility.meshes.as_entire_binding(),
+                visibility.buffer.as_entire_binding(),
                 uniform.as_entire_binding(),
                 uploaded.positions.as_entire_binding(),
                 uploaded.attributes.as_entire_binding(),
                 uploaded.indices.as_entire_binding(),
             ];
             resources.extend(views.iter().map(wgpu::BindingResource::TextureView));
+            resources.extend([classes.as_entire_binding(), tiles.as_entire_binding()]);
             Ok(self.layout.bind(device, &resources))
         };
-        let workgroups = Workgroups::covering(width, height, 8);
-        let mut dispatches = vec![Dispatch {
-            pipeline: self.background.clone(),
-            groups: vec![group(0)?],
-            workgroups: workgroups.clone(),
-        }];
-        for m in materials {
+        let first = group(0)?;
+        let covering = Workgroups::covering(width, height, RESOLVE_TILE);
+        let on_first = |pipeline: &wgpu::ComputePipeline, groups, workgroups| Dispatch {
+            pipeline: pipeline.clone(),
+            groups,
+            workgroups,
+        };
+        let mut dispatches = vec![
+            on_first(&self.classify_count, vec![first.clone()], covering.clone()),
+            on_first(
+                &self.classify_scan,
+                vec![
+                    first.clone(),
+                    self.dispatch_layout.bind_buffers(device, &[&dispatch]),
+                ],
+                Workgroups::Direct([1, 1, 1]),
+            ),
+            on_first(&self.classify_write, vec![first.clone()], covering),
+        ];
+        for (slot, &m) in visibility.materials.iter().enumerate() {
+            let bound = if slot == 0 {
+                first.clone()
+            } else {
+                group(slot as u32)?
+            };
             dispatches.push(Dispatch {
                 pipeline: self.material.clone(),
-                groups: vec![group(m as u32)?, uploaded.material_groups[m].clone()],
-                workgroups: workgroups.clone(),
+                groups: vec![bound, uploaded.material_groups[m].clone()],
+                workgroups: Workgroups::Indirect(dispatch.clone(), slot as u64 * 12),
             });
         }
         Ok(Resolve {
             passes: Passes::new().pass("visibility resolve", dispatches),
             depth_group: self.depth_layout.bind(
                 device,
-                &[frame.as_entire_binding(), visibility.as_entire_binding()],
+                &[
+                    frame.as_entire_binding(),
+                    visibility.buffer.as_entire_binding(),
+                ],
             ),
         })
     }
