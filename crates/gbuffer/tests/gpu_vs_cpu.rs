@@ -400,9 +400,9 @@ fn visibility_buffer_resolves_to_the_cpu_gbuffer() {
     // The ground fills the view: one material in all 200 × 175 tiles, more than a row of its
     // dispatch holds (32 768 workgroups).
     let looking_down = scene::Camera {
-        eye: glam::Vec3::new(8.0, 2.0, 8.0),
-        target: glam::Vec3::new(8.0, 0.0, 8.0),
-        up: glam::Vec3::NEG_Z,
+        eye: Vec3::new(8.0, 2.0, 8.0),
+        target: Vec3::new(8.0, 0.0, 8.0),
+        up: Vec3::NEG_Z,
         fov_y: 50f32.to_radians(),
         near: 0.1,
         far: 10.0,

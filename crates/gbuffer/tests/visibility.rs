@@ -183,7 +183,7 @@ fn closed_jittered_grids_leave_no_hole() {
             .filter(|&&id| id == NO_TRIANGLE)
             .count();
         assert_eq!(holes, 0, "{n} × {n} grid: {holes} pixels uncovered");
-        let share = compare(&mesh, &camera, (128, 96)).unwrap();
+        let share = compare(&mesh, &camera, (128, 96)).expect("compare");
         assert!(share >= 0.995, "{:.2} % of the pixels match", share * 100.0);
     }
 }
