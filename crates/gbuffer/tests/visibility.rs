@@ -22,7 +22,7 @@ use scene::{AlphaMode, Camera, Scene};
 fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -> Vec<u32> {
     let gpass = GBufferPass::new(&gpu.device).expect("pass");
     let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, scene, &gpass).expect("upload");
-    let pass = VisibilityPass::new(&gpu.device).expect("visibility");
+    let pass = VisibilityPass::new(&gpu.device, &gpass).expect("visibility");
     let buffer = VisibilityPass::buffer(&gpu.device, w, h).expect("buffer");
     gpass.write_frame(&gpu.queue, &Frame::new(camera, w, h));
     let vis = pass
@@ -34,7 +34,7 @@ fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -
             &buffer,
         )
         .expect("bind");
-    assert!(vis.skipped.is_empty(), "opaque scene: nothing skipped");
+    assert!(vis.alpha_tested.is_empty(), "opaque scene");
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     vis.passes.encode(&mut encoder, None);
     let bytes =
@@ -239,7 +239,7 @@ fn overflowing_lists_are_counted() {
         setups: 1,
         blocks: 1,
     };
-    let pass = VisibilityPass::with_capacity(&gpu.device, tiny).expect("visibility");
+    let pass = VisibilityPass::with_capacity(&gpu.device, &gpass, tiny).expect("visibility");
     let buffer = VisibilityPass::buffer(&gpu.device, 160, 120).expect("buffer");
     gpass.write_frame(&gpu.queue, &Frame::new(&camera, 160, 120));
     let frame = gpass.frame_buffer();

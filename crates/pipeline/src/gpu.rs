@@ -215,6 +215,7 @@ struct BoundVisibility {
     vis: Visibility,
     resolved: Resolve,
     depth_pass: &'static str,
+    alpha_pass: &'static str,
 }
 
 impl VisibilityStage {
@@ -224,7 +225,7 @@ impl VisibilityStage {
         scene: &GpuScene,
         targets: &GBufferTargets,
     ) -> Result<Self, RenderError> {
-        let raster = VisibilityPass::new(device)?;
+        let raster = VisibilityPass::new(device, gbuffer_pass)?;
         let resolve = ResolvePass::new(device, gbuffer_pass)?;
         let main = Self::bind(
             device,
@@ -252,12 +253,6 @@ impl VisibilityStage {
         let size = (targets.width, targets.height);
         let buffer = VisibilityPass::buffer(device, size.0, size.1)?;
         let mut vis = raster.bind(device, scene, frame, size, &buffer)?;
-        if !vis.skipped.is_empty() {
-            return Err(RenderError::Visibility(format!(
-                "meshes {:?} have alpha-tested or blended materials, which the visibility buffer does not rasterise yet",
-                vis.skipped
-            )));
-        }
         let mut resolved = resolve.bind(device, scene, frame, &vis, targets)?;
         if !prefix.is_empty() {
             vis.passes = vis.passes.named(&format!("{prefix}visibility"));
@@ -272,6 +267,11 @@ impl VisibilityStage {
                 "visibility depth"
             } else {
                 "ss visibility depth"
+            },
+            alpha_pass: if prefix.is_empty() {
+                "visibility alpha-tested"
+            } else {
+                "ss visibility alpha-tested"
             },
         })
     }
@@ -301,6 +301,12 @@ impl VisibilityStage {
         timer: &PassTimer,
     ) {
         bound.vis.passes.encode(encoder, Some(timer));
+        if !bound.vis.alpha_tested.is_empty() {
+            bound
+                .vis
+                .encode_alpha(encoder, depth, timer.render_pass(bound.alpha_pass))
+                .expect("the G-buffer's depth target has its visibility buffer's size");
+        }
         bound.resolved.passes.encode(encoder, Some(timer));
         self.resolve.encode_depth(
             &bound.resolved,

@@ -71,12 +71,18 @@ pub fn run_visibility(
     pass.write_frame(&gpu.queue, &Frame::new(camera, width, height));
     let buffer = VisibilityPass::buffer(device, width, height)?;
     let frame = pass.frame_buffer();
-    let vis =
-        VisibilityPass::new(device)?.bind(device, &gpu_scene, frame, (width, height), &buffer)?;
+    let vis = VisibilityPass::new(device, &pass)?.bind(
+        device,
+        &gpu_scene,
+        frame,
+        (width, height),
+        &buffer,
+    )?;
     let resolve_pass = ResolvePass::new(device, &pass)?;
     let resolve = resolve_pass.bind(device, &gpu_scene, frame, &vis, &targets)?;
     let mut encoder = device.create_command_encoder(&Default::default());
     vis.passes.encode(&mut encoder, None);
+    vis.encode_alpha(&mut encoder, &targets.depth, None)?;
     resolve.passes.encode(&mut encoder, None);
     resolve_pass.encode_depth(&resolve, &mut encoder, &targets.depth, None);
     gpu.queue.submit([encoder.finish()]);

@@ -12,10 +12,14 @@
 //! workgroup of 64 invocations covers each block. Lists that overflow their capacity
 //! ([`Capacity`]) lose triangles; [`Visibility::overflow`] reads how many entries did not fit.
 //!
-//! **Scope (first step of issue 29).** Meshes whose material discards fragments by alpha (mask
-//! or blend) are not rasterised here: [`Visibility::skipped`] names them. The device needs
-//! 64-bit integers and 64-bit atomic min ([`FEATURES`]), and the resolve ([`ResolvePass`])
-//! five storage textures per stage ([`device_needs`]).
+//! **Alpha-tested meshes** (masked, or blended and dithered): their coverage depends on a
+//! texture lookup, so the hardware rasteriser draws them into the same buffer, each fragment
+//! the G-buffer pass would keep merging its depth and id with the same `atomicMin`
+//! ([`Visibility::encode_alpha`], `visibility_alpha.wgsl`). Blended meshes the scene draws
+//! forward ([`BlendedSurfaces::Forward`](super::BlendedSurfaces)) are left out, as the
+//! G-buffer pass leaves them out. The device needs 64-bit integers and 64-bit atomic min
+//! ([`FEATURES`]), and the resolve ([`ResolvePass`]) five storage textures per stage
+//! ([`device_needs`]).
 //!
 //! ```no_run
 //! use gbuffer::{Frame, gpu::{GBufferPass, GBufferTargets, GpuScene, visibility::{self, ResolvePass, VisibilityPass}}};
@@ -26,12 +30,13 @@
 //! gpass.write_frame(&gpu.queue, &Frame::new(&scene.camera_or_framed(), 640, 480));
 //! let buffer = VisibilityPass::buffer(&gpu.device, 640, 480)?;
 //! let targets = GBufferTargets::new(&gpu.device, 640, 480)?;
-//! let vis = VisibilityPass::new(&gpu.device)?.bind(
+//! let vis = VisibilityPass::new(&gpu.device, &gpass)?.bind(
 //!     &gpu.device, &uploaded, gpass.frame_buffer(), (640, 480), &buffer)?;
 //! let resolve = ResolvePass::new(&gpu.device, &gpass)?.bind(
 //!     &gpu.device, &uploaded, gpass.frame_buffer(), &vis, &targets)?;
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
 //! vis.passes.encode(&mut encoder, None);
+//! vis.encode_alpha(&mut encoder, &targets.depth, None)?;
 //! resolve.passes.encode(&mut encoder, None);
 //! gpu.queue.submit([encoder.finish()]);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -142,8 +147,8 @@ const NO_SLOT: u32 = u32::MAX;
 /// slots, as the CPU rasteriser numbers [`Scene::meshes`]' triangles).
 struct MeshTable {
     entries: Vec<MeshEntry>,
-    /// Meshes left out: their material discards fragments by alpha.
-    skipped: Vec<usize>,
+    /// Meshes drawn by the hardware rasteriser: their material discards fragments by alpha.
+    alpha_tested: Vec<usize>,
     /// The materials the other meshes draw, in slot order.
     materials: Vec<usize>,
     /// Triangle ids spanned.
@@ -152,15 +157,18 @@ struct MeshTable {
 
 fn mesh_table(uploaded: &GpuScene) -> MeshTable {
     let mut entries = Vec::with_capacity(uploaded.draws.len());
-    let mut skipped = Vec::new();
+    let mut alpha_tested = Vec::new();
     let mut materials: Vec<usize> = Vec::new();
     let mut first_id = 0u32;
+    let forward = uploaded.blended() == super::BlendedSurfaces::Forward;
     for (m, draw) in uploaded.draws.iter().enumerate() {
         let triangles = draw.index_count / 3;
-        if draw.state.alpha_tested && triangles > 0 {
-            skipped.push(m);
+        // As the G-buffer pass draws: blended meshes drawn forward are not in the G-buffer.
+        let drawn = triangles > 0 && !(forward && draw.state.blended);
+        if drawn && draw.state.alpha_tested {
+            alpha_tested.push(m);
         }
-        let slot = if draw.state.alpha_tested || triangles == 0 {
+        let slot = if !drawn {
             NO_SLOT
         } else if let Some(s) = materials.iter().position(|&k| k == draw.material) {
             s as u32
@@ -172,10 +180,10 @@ fn mesh_table(uploaded: &GpuScene) -> MeshTable {
             first_id,
             base_vertex: draw.base_vertex as u32,
             first_index: draw.first_index,
-            triangle_count: if draw.state.alpha_tested {
-                0
-            } else {
+            triangle_count: if drawn && !draw.state.alpha_tested {
                 triangles
+            } else {
+                0
             },
             cull_back: u32::from(draw.state.cull),
             material: draw.material as u32,
@@ -186,7 +194,7 @@ fn mesh_table(uploaded: &GpuScene) -> MeshTable {
     }
     MeshTable {
         entries,
-        skipped,
+        alpha_tested,
         materials,
         triangle_count: first_id,
     }
@@ -204,6 +212,21 @@ pub struct VisibilityPass {
     prepare: wgpu::ComputePipeline,
     setup_large: wgpu::ComputePipeline,
     tiles: wgpu::ComputePipeline,
+    /// The alpha-tested meshes' draw: frame, meshes, positions, attributes and indices (group
+    /// 0), the visibility buffer (group 2); the material is group 1.
+    alpha_layouts: [Layout; 2],
+    /// Two-sided, one-sided (back faces culled).
+    alpha: [wgpu::RenderPipeline; 2],
+}
+
+/// The alpha-tested meshes' draws of one binding.
+struct AlphaDraws {
+    pipelines: [wgpu::RenderPipeline; 2],
+    /// Groups 0 and 2.
+    groups: [wgpu::BindGroup; 2],
+    /// Per mesh: its index slots, its index (the instance drawn), its material's group, and
+    /// whether it is one-sided.
+    draws: Vec<(std::ops::Range<u32>, u32, wgpu::BindGroup, bool)>,
 }
 
 /// The passes writing one scene's visibility buffer (phase `bind`), and the meshes they leave
@@ -211,9 +234,9 @@ pub struct VisibilityPass {
 pub struct Visibility {
     /// Clear, the per-triangle rasterisation, the deferred triangles' setup and their blocks.
     pub passes: Passes,
-    /// Meshes (indices in the uploaded scene's meshes) not rasterised: their material discards
-    /// fragments by alpha.
-    pub skipped: Vec<usize>,
+    /// Meshes (indices in the uploaded scene's meshes) [`Visibility::encode_alpha`] draws with
+    /// the hardware rasteriser: their material discards fragments by alpha.
+    pub alpha_tested: Vec<usize>,
     /// Deferred triangles, setups and blocks appended, and entries that did not fit (four
     /// `u32`s; `COPY_SRC`).
     pub counts: wgpu::Buffer,
@@ -224,6 +247,7 @@ pub struct Visibility {
     buffer: wgpu::Buffer,
     size: (u32, u32),
     meshes: wgpu::Buffer,
+    alpha: Option<AlphaDraws>,
     /// The lists and dispatch sizes the passes share (kept alive with them).
     _lists: Vec<wgpu::Buffer>,
 }
@@ -239,16 +263,68 @@ impl Visibility {
         let counts: Vec<u32> = transfer::read_pod(device, queue, &self.counts)?;
         Ok(counts[3])
     }
+
+    /// Records the hardware rasteriser's pass drawing the [alpha-tested
+    /// meshes](Visibility::alpha_tested) into the visibility buffer, after [`Visibility::passes`]
+    /// and before the resolve; nothing when there are none. `depth` (a
+    /// [`crate::DEPTH_FORMAT`] texture of the visibility buffer's size, e.g. the G-buffer's
+    /// depth target) is only the pass's attachment: it is cleared and not stored.
+    pub fn encode_alpha(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        depth: &wgpu::Texture,
+        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+    ) -> Result<(), GBufferError> {
+        let Some(alpha) = &self.alpha else {
+            return Ok(());
+        };
+        ::gpu::kernel::check_texture(
+            "the alpha-tested draw's depth attachment",
+            depth,
+            self.size,
+            crate::DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )?;
+        let view = depth.create_view(&Default::default());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("visibility (alpha-tested)"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timestamps,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &alpha.groups[0], &[]);
+        pass.set_bind_group(2, &alpha.groups[1], &[]);
+        for (slots, mesh, material, one_sided) in &alpha.draws {
+            pass.set_pipeline(&alpha.pipelines[usize::from(*one_sided)]);
+            pass.set_bind_group(1, material, &[]);
+            pass.draw(slots.clone(), *mesh..*mesh + 1);
+        }
+        Ok(())
+    }
 }
 
 impl VisibilityPass {
-    /// Builds the kernels with the default [`Capacity`]; the device must have [`FEATURES`].
-    pub fn new(device: &wgpu::Device) -> Result<Self, GBufferError> {
-        Self::with_capacity(device, Capacity::default())
+    /// Builds the kernels with the default [`Capacity`]; materials bind as `gpass` binds them
+    /// (the alpha-tested meshes' draw). The device must have [`FEATURES`].
+    pub fn new(device: &wgpu::Device, gpass: &super::GBufferPass) -> Result<Self, GBufferError> {
+        Self::with_capacity(device, gpass, Capacity::default())
     }
 
     /// [`VisibilityPass::new`] with the deferred path's lists sized as `capacity` says.
-    pub fn with_capacity(device: &wgpu::Device, capacity: Capacity) -> Result<Self, GBufferError> {
+    pub fn with_capacity(
+        device: &wgpu::Device,
+        gpass: &super::GBufferPass,
+        capacity: Capacity,
+    ) -> Result<Self, GBufferError> {
         let missing = FEATURES - device.features();
         if !missing.is_empty() {
             return Err(GBufferError::InvalidOptions(format!(
@@ -274,7 +350,69 @@ impl VisibilityPass {
             Layout::compute(device, "visibility dispatch", &[Binding::Storage]),
         ];
         let pipeline = |entry| kernel::pipeline(device, &module, entry, &[&layout], &[]);
+        let alpha_module = crate::SHADERS.module(device, "visibility_alpha.wgsl")?;
+        let alpha_layouts = [
+            Layout::numbered(
+                device,
+                "visibility alpha",
+                wgpu::ShaderStages::VERTEX_FRAGMENT,
+                &[
+                    (0, Binding::Uniform),
+                    (1, Binding::StorageRead),
+                    (2, Binding::StorageRead),
+                    (3, Binding::StorageRead),
+                    (4, Binding::StorageRead),
+                ],
+            ),
+            Layout::numbered(
+                device,
+                "visibility alpha buffer",
+                wgpu::ShaderStages::FRAGMENT,
+                &[(0, Binding::Storage)],
+            ),
+        ];
+        let alpha_layout = kernel::pipeline_layout(
+            device,
+            "visibility alpha",
+            &[&alpha_layouts[0], &gpass.material_layout, &alpha_layouts[1]],
+        );
+        let alpha = [None, Some(wgpu::Face::Back)].map(|cull_mode| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("visibility alpha"),
+                layout: Some(&alpha_layout),
+                vertex: wgpu::VertexState {
+                    module: &alpha_module,
+                    entry_point: Some("vs_alpha"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                // The G-buffer pass's winding and culling.
+                primitive: wgpu::PrimitiveState {
+                    front_face: wgpu::FrontFace::Ccw,
+                    cull_mode,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: crate::DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Always),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &alpha_module,
+                    entry_point: Some("fs_alpha"),
+                    compilation_options: Default::default(),
+                    targets: &[],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        });
         Ok(Self {
+            alpha_layouts,
+            alpha,
             clear: pipeline("clear"),
             small: pipeline("raster_small"),
             prepare: kernel::pipeline(
@@ -397,9 +535,39 @@ impl VisibilityPass {
             prepare(),
             one(&self.tiles, Workgroups::Indirect(dispatch.clone(), 12)),
         ];
+        let alpha = (!table.alpha_tested.is_empty()).then(|| AlphaDraws {
+            pipelines: self.alpha.clone(),
+            groups: [
+                self.alpha_layouts[0].bind_buffers(
+                    device,
+                    &[
+                        frame,
+                        &meshes,
+                        &uploaded.positions,
+                        &uploaded.attributes,
+                        &uploaded.indices,
+                    ],
+                ),
+                self.alpha_layouts[1].bind_buffers(device, &[visibility]),
+            ],
+            draws: table
+                .alpha_tested
+                .iter()
+                .map(|&m| {
+                    let d = &uploaded.draws[m];
+                    (
+                        d.first_index..d.first_index + d.index_count,
+                        m as u32,
+                        uploaded.material_groups[d.material].clone(),
+                        d.state.cull,
+                    )
+                })
+                .collect(),
+        });
         Ok(Visibility {
             passes: Passes::new().pass("visibility", dispatches),
-            skipped: table.skipped,
+            alpha_tested: table.alpha_tested,
+            alpha,
             counts,
             materials: table.materials,
             buffer: visibility.clone(),
