@@ -1,9 +1,11 @@
 // #import gbuffer/frame.wgsl
 // #import gbuffer/meshes.wgsl
+// #import gbuffer/visibility_word.wgsl
 // A visibility buffer written by a compute rasteriser (Burns & Hunt 2013): per pixel the
-// nearest triangle's depth and id packed in 64 bits, (depth bits << 32) | id, merged with
-// `atomicMin` — a smaller depth wins and, at equal depths, the smaller id (the first
-// submitted), which is the CPU rasteriser's depth test `Less` in submission order. The twin of
+// nearest triangle's depth and id packed in 64 bits, (depth bits << 32) | id, merged as one
+// `atomicMin` (or two 32-bit passes, `visibility_word.wgsl`) — a smaller depth wins and, at
+// equal depths, the smaller id (the first submitted), which is the CPU rasteriser's depth test
+// `Less` in submission order. The twin of
 // `gbuffer::cpu::rasterize`'s coverage and depth: the same clip planes (near, far, a guard band
 // of 4w), snapping to 1/256 pixel, integer edge functions with the top-left rule, depth
 // interpolated from the unsnapped positions, back faces of one-sided meshes culled.
@@ -29,7 +31,6 @@ struct Raster {
 // The scene's positions (x, y, z per vertex) and indices.
 @group(0) @binding(2) var<storage, read> positions: array<f32>;
 @group(0) @binding(3) var<storage, read> indices: array<u32>;
-@group(0) @binding(4) var<storage, read_write> visibility: array<atomic<u64>>;
 // Deferred triangles, fan setups and work items appended, and how many did not fit.
 @group(0) @binding(5) var<storage, read_write> counts: array<atomic<u32>, 4>;
 // The deferred triangles' ids.
@@ -200,8 +201,7 @@ fn cover(s: Setup, id: u32, px: i32, py: i32) {
     if !(z >= 0.0 && z < 1.0) {
         return;
     }
-    let packed = (u64(bitcast<u32>(z)) << 32u) | u64(id);
-    atomicMin(&visibility[u32(py) * image_size().x + u32(px)], packed);
+    merge(u32(py) * image_size().x + u32(px), z, id);
 }
 
 fn pixels(b: vec4<i32>) -> i32 {
@@ -244,6 +244,10 @@ fn raster_small(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_work
             }
             return;
         }
+    }
+    // The narrow merge's id pass covers the deferred triangles from the depth pass's lists.
+    if ID_PASS {
+        return;
     }
     let at = append(DEFERRED, arrayLength(&deferred));
     if at < arrayLength(&deferred) {
@@ -354,8 +358,8 @@ fn raster_tiles(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups
 @compute @workgroup_size(64)
 fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = gid.x + gid.y * groups.x * WORKGROUP;
-    if i < image_size().x * image_size().y {
-        atomicStore(&visibility[i], 0xFFFFFFFFFFFFFFFFlu);
+    if i < arrayLength(&visibility) {
+        clear_word(i);
     }
     if i < 4u {
         atomicStore(&counts[i], 0u);

@@ -1,18 +1,19 @@
 // #import gbuffer/gbuffer.wgsl
 // #import gbuffer/meshes.wgsl
+// #import gbuffer/visibility_word.wgsl
 // The visibility buffer's alpha-tested meshes (masked, or blended and dithered), drawn by the
 // hardware rasteriser: their coverage depends on the material's alpha, a texture lookup with
 // derivatives the compute rasteriser does not take. Each fragment the G-buffer pass would keep
-// (`surface_fragment`'s alpha test) merges (z/w bits << 32) | triangle id into the visibility
-// buffer with the compute rasteriser's `atomicMin`. Vertices are pulled from the scene's
+// (`surface_fragment`'s alpha test) merges its z/w and triangle id into the visibility buffer
+// as the compute rasteriser merges them (`visibility_word.wgsl`: in the narrow variant the
+// draw runs twice, once per pass). Vertices are pulled from the scene's
 // buffers, so the fragment knows its triangle: mesh m is drawn as instance m over its index
 // slots (`draw(first_index..first_index + index_count, m..m + 1)`).
 
 @group(0) @binding(2) var<storage, read> positions: array<f32>;
 // `gbuffer::gpu::GpuAttributes`: normal (3), uv0 (2), uv1 (2), tangent (4), colour (4).
 @group(0) @binding(3) var<storage, read> attributes: array<f32>;
-@group(0) @binding(4) var<storage, read> indices: array<u32>;
-@group(2) @binding(0) var<storage, read_write> visibility: array<atomic<u64>>;
+@group(0) @binding(5) var<storage, read> indices: array<u32>;
 
 const ATTRIBUTE_FLOATS: u32 = 15u;
 
@@ -47,6 +48,5 @@ fn fs_alpha(in: AlphaVertex) {
         discard;
     }
     let pixel = vec2<u32>(in.clip.xy);
-    let packed = (u64(bitcast<u32>(in.clip.z)) << 32u) | u64(in.id);
-    atomicMin(&visibility[pixel.y * u32(frame.viewport.x) + pixel.x], packed);
+    merge(pixel.y * u32(frame.viewport.x) + pixel.x, in.clip.z, in.id);
 }

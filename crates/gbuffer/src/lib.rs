@@ -57,6 +57,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "resolve.wgsl",
         "visibility.wgsl",
         "visibility_alpha.wgsl",
+        "visibility_word.wgsl",
     ],
 );
 

@@ -10,7 +10,7 @@ mod common;
 
 use gbuffer::{
     GBuffer, cpu,
-    gpu::{run, run_visibility, run_with},
+    gpu::{run, run_visibility, run_with, visibility::Atomics},
     normal,
 };
 use glam::Vec3;
@@ -163,8 +163,8 @@ fn near_an_edge(
 enum Path {
     /// The G-buffer render pass (hardware rasteriser).
     Hardware,
-    /// The compute rasteriser's visibility buffer, then its resolve.
-    Visibility,
+    /// The compute rasteriser's visibility buffer merged as it says, then its resolve.
+    Visibility(Atomics),
 }
 
 /// Compares the hardware G-buffer; on failure writes expected/actual/difference images and
@@ -189,7 +189,7 @@ fn compare_path(
 ) -> Result<(), String> {
     let needs = match path {
         Path::Hardware => gbuffer::device_needs(),
-        Path::Visibility => gbuffer::gpu::visibility::device_needs(),
+        Path::Visibility(_) => gbuffer::gpu::visibility::device_needs(),
     };
     let Some(gpu) = gpu::test_device(&needs) else {
         return Ok(());
@@ -201,7 +201,7 @@ fn compare_path(
         cpu::rasterize_with(scene, camera, (w, h), &options).map_err(|e| e.to_string())?;
     let actual = match path {
         Path::Hardware => run_with(gpu, scene, camera, (w, h), false, &options),
-        Path::Visibility => run_visibility(gpu, scene, camera, (w, h), &options),
+        Path::Visibility(atomics) => run_visibility(gpu, scene, camera, (w, h), &options, atomics),
     }
     .map_err(|e| e.to_string())?;
     let (mut matched, mut bad_interior) = (0u32, Vec::new());
@@ -388,8 +388,20 @@ fn visibility_buffer_resolves_to_the_cpu_gbuffer() {
         ("visibility gallery", scene::material_gallery(), (240, 160)),
     ] {
         let camera = s.camera_or_framed();
-        compare_path(Path::Visibility, name, &s, &camera, size).unwrap_or_else(|e| panic!("{e}"));
+        compare_path(Path::Visibility(Atomics::Wide), name, &s, &camera, size)
+            .unwrap_or_else(|e| panic!("{e}"));
     }
+    // The 32-bit fallback's buffer is the 64-bit one's (`tests/visibility.rs`); resolved here
+    // once, alpha-tested draw included.
+    let gallery = scene::material_gallery();
+    compare_path(
+        Path::Visibility(Atomics::Narrow),
+        "visibility gallery 32-bit",
+        &gallery,
+        &gallery.camera_or_framed(),
+        (240, 160),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     // The ground fills the view: one material in all 200 × 175 tiles, more than a row of its
     // dispatch holds (32 768 workgroups).
     let looking_down = scene::Camera {
@@ -402,7 +414,7 @@ fn visibility_buffer_resolves_to_the_cpu_gbuffer() {
     };
     let ground = scene::checkerboard();
     compare_path(
-        Path::Visibility,
+        Path::Visibility(Atomics::Wide),
         "visibility ground",
         &ground,
         &looking_down,
@@ -412,8 +424,14 @@ fn visibility_buffer_resolves_to_the_cpu_gbuffer() {
     for (seed, cam) in [(7, 4242), (11, 99), (12345, 777)] {
         let s = common::random_scene(seed, 30);
         let camera = common::random_camera(cam);
-        compare_path(Path::Visibility, "visibility random", &s, &camera, (96, 72))
-            .unwrap_or_else(|e| panic!("seed {seed} cam {cam}: {e}"));
+        compare_path(
+            Path::Visibility(Atomics::Wide),
+            "visibility random",
+            &s,
+            &camera,
+            (96, 72),
+        )
+        .unwrap_or_else(|e| panic!("seed {seed} cam {cam}: {e}"));
     }
 }
 

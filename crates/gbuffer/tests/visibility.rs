@@ -12,18 +12,46 @@ use gbuffer::{
     Frame, cpu,
     gpu::{
         GBufferPass, GpuScene,
-        visibility::{self, NO_TRIANGLE, VisibilityPass},
+        visibility::{self, Atomics, Capacity, NO_TRIANGLE, VisibilityPass},
     },
 };
 use proptest::prelude::*;
 use scene::{AlphaMode, Camera, Scene};
 
-/// The GPU visibility buffer's ids of `scene` (all materials made opaque) through `camera`.
-fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -> Vec<u32> {
+/// The GPU visibility buffer's ids of the opaque `scene` through `camera`.
+fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, size: (u32, u32)) -> Vec<u32> {
+    let vis = gpu_words(gpu, scene, camera, size, Atomics::best(&gpu.device));
+    visibility::triangle_ids(&vis)
+}
+
+/// The GPU visibility buffer's words of `scene` through `camera`, merged as `atomics` says
+/// (alpha-tested meshes drawn with a depth attachment of their own).
+fn gpu_words(
+    gpu: &gpu::Gpu,
+    scene: &Scene,
+    camera: &Camera,
+    (w, h): (u32, u32),
+    atomics: Atomics,
+) -> Vec<u64> {
     let gpass = GBufferPass::new(&gpu.device).expect("pass");
     let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, scene, &gpass).expect("upload");
-    let pass = VisibilityPass::new(&gpu.device, &gpass).expect("visibility");
+    let pass = VisibilityPass::with(&gpu.device, &gpass, Capacity::default(), atomics)
+        .expect("visibility");
     let buffer = VisibilityPass::buffer(&gpu.device, w, h).expect("buffer");
+    let depth = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("alpha-tested draw's attachment"),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: gbuffer::DEPTH_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
     gpass.write_frame(&gpu.queue, &Frame::new(camera, w, h));
     let vis = pass
         .bind(
@@ -34,9 +62,9 @@ fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -
             &buffer,
         )
         .expect("bind");
-    assert!(vis.alpha_tested.is_empty(), "opaque scene");
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    vis.passes.encode(&mut encoder, None);
+    vis.encode(&mut encoder, Some(&depth), None)
+        .expect("encode");
     let bytes =
         ::gpu::transfer::read_after(&gpu.device, &gpu.queue, encoder, &buffer, 0..buffer.size())
             .expect("read back");
@@ -45,7 +73,7 @@ fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -
         0,
         "nothing lost"
     );
-    visibility::triangle_ids(&bytemuck::pod_collect_to_vec::<u8, u64>(&bytes))
+    bytemuck::pod_collect_to_vec::<u8, u64>(&bytes)
 }
 
 fn opaque(mut scene: Scene) -> Scene {
@@ -224,6 +252,48 @@ fn shared_edges_through_pixel_centres_go_to_one_triangle() {
     }
 }
 
+/// The 32-bit fallback (depths by 32-bit `atomicMin`, then the ids at those depths) writes the
+/// 64-bit merge's buffer bit for bit: random scenes and cameras (depth ties included where
+/// triangles share edges), the camera among the spheres (clipped and deferred triangles), and
+/// the material gallery with its masked and dithered blended spheres (the alpha-tested draw,
+/// twice).
+#[test]
+fn the_32_bit_fallback_writes_the_64_bit_buffer() {
+    let Some(gpu) = gpu::test_device(&visibility::device_needs()) else {
+        return;
+    };
+    if Atomics::best(&gpu.device) != Atomics::Wide {
+        eprintln!("no 64-bit atomics on this adapter: nothing to compare the fallback with");
+        return;
+    }
+    let spheres = opaque(scene::spheres_on_plane(6));
+    let framed = spheres.camera_or_framed();
+    let inside = Camera {
+        eye: framed.target + (framed.eye - framed.target) * 0.15,
+        ..framed
+    };
+    let gallery = scene::material_gallery();
+    let mut cases = vec![
+        (spheres.clone(), inside, (128, 96)),
+        (gallery.clone(), gallery.camera_or_framed(), (160, 120)),
+    ];
+    for seed in [3, 17, 2024] {
+        cases.push((
+            opaque(common::random_scene(seed, 40)),
+            common::random_camera(seed * 7919),
+            (96, 72),
+        ));
+    }
+    for (k, (scene, camera, size)) in cases.iter().enumerate() {
+        let wide = gpu_words(gpu, scene, camera, *size, Atomics::Wide);
+        let narrow = gpu_words(gpu, scene, camera, *size, Atomics::Narrow);
+        let covered = wide.iter().filter(|&&w| w as u32 != NO_TRIANGLE).count();
+        assert!(covered > 0, "case {k}: nothing drawn");
+        let differ = wide.iter().zip(&narrow).filter(|(a, b)| a != b).count();
+        assert_eq!(differ, 0, "case {k}: {differ} words differ");
+    }
+}
+
 /// Lists too small for the deferred triangles lose some and say how many entries did not fit.
 #[test]
 fn overflowing_lists_are_counted() {
@@ -234,12 +304,13 @@ fn overflowing_lists_are_counted() {
     let camera = scene.camera_or_framed();
     let gpass = GBufferPass::new(&gpu.device).expect("pass");
     let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, &scene, &gpass).expect("upload");
-    let tiny = visibility::Capacity {
+    let tiny = Capacity {
         deferred: 1,
         setups: 1,
         blocks: 1,
     };
-    let pass = VisibilityPass::with_capacity(&gpu.device, &gpass, tiny).expect("visibility");
+    let pass = VisibilityPass::with(&gpu.device, &gpass, tiny, Atomics::best(&gpu.device))
+        .expect("visibility");
     let buffer = VisibilityPass::buffer(&gpu.device, 160, 120).expect("buffer");
     gpass.write_frame(&gpu.queue, &Frame::new(&camera, 160, 120));
     let frame = gpass.frame_buffer();
@@ -247,7 +318,7 @@ fn overflowing_lists_are_counted() {
         .bind(&gpu.device, &uploaded, frame, (160, 120), &buffer)
         .expect("bind");
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    vis.passes.encode(&mut encoder, None);
+    vis.encode(&mut encoder, None, None).expect("encode");
     gpu.queue.submit([encoder.finish()]);
     assert!(vis.overflow(&gpu.device, &gpu.queue).expect("counts") > 0);
 }

@@ -155,11 +155,22 @@ impl Layout {
         stages: wgpu::ShaderStages,
         bindings: &[(u32, Binding)],
     ) -> Self {
+        let staged: Vec<_> = bindings.iter().map(|&(n, b)| (n, stages, b)).collect();
+        Self::staged(device, label, &staged)
+    }
+
+    /// A layout of numbered bindings each visible to its own stages (e.g. a buffer the
+    /// vertex stage reads beside one only the fragment stage may write).
+    pub fn staged(
+        device: &wgpu::Device,
+        label: &str,
+        bindings: &[(u32, wgpu::ShaderStages, Binding)],
+    ) -> Self {
         let entries: Vec<_> = bindings
             .iter()
-            .map(|&(binding, b)| wgpu::BindGroupLayoutEntry {
+            .map(|&(binding, visibility, b)| wgpu::BindGroupLayoutEntry {
                 binding,
-                visibility: stages,
+                visibility,
                 ty: b.ty(),
                 count: None,
             })
@@ -169,7 +180,7 @@ impl Layout {
                 label: Some(label),
                 entries: &entries,
             }),
-            bindings: bindings.to_vec(),
+            bindings: bindings.iter().map(|&(n, _, b)| (n, b)).collect(),
             label: label.to_owned(),
         }
     }

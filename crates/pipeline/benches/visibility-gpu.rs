@@ -13,7 +13,7 @@ use gbuffer::{
     Frame,
     gpu::{
         GBufferPass, GBufferTargets, GpuScene,
-        visibility::{ResolvePass, VisibilityPass},
+        visibility::{Atomics, Capacity, ResolvePass, VisibilityPass},
     },
 };
 use gpu::{Gpu, PassTimer};
@@ -38,8 +38,10 @@ struct Row {
     triangles: usize,
     /// Z-prepass + G-buffer pass.
     hardware: Stat,
-    /// The compute rasteriser alone.
+    /// The compute rasteriser (with the alpha-tested draw), 64-bit atomics.
     raster: Stat,
+    /// The same with the 32-bit fallback's two passes (`Atomics::Narrow`).
+    raster_narrow: Stat,
     /// Rasteriser + resolve.
     visibility: Stat,
     /// Hardware ÷ visibility (medians).
@@ -122,30 +124,33 @@ fn measure(
     let targets = GBufferTargets::new(device, w, h)?;
     let buffer = VisibilityPass::buffer(device, w, h)?;
     let frame_buffer = gpass.frame_buffer();
-    let vis = VisibilityPass::new(device, &gpass)?.bind(
-        device,
-        &uploaded,
-        frame_buffer,
-        (w, h),
-        &buffer,
-    )?;
-    // The alpha-tested meshes' draw, after the compute passes (its depth attachment is only
-    // cleared: the G-buffer's depth target, of the right size by construction).
-    let alpha = |encoder: &mut wgpu::CommandEncoder, timer: &PassTimer| {
-        if !vis.alpha_tested.is_empty() {
-            vis.encode_alpha(encoder, &targets.depth, timer.render_pass("alpha-tested"))
-                .expect("depth target of the visibility buffer's size");
-        }
+    let bind = |atomics| -> Result<_> {
+        Ok(
+            VisibilityPass::with(device, &gpass, Capacity::default(), atomics)?.bind(
+                device,
+                &uploaded,
+                frame_buffer,
+                (w, h),
+                &buffer,
+            )?,
+        )
     };
+    let (vis, narrow) = (bind(Atomics::Wide)?, bind(Atomics::Narrow)?);
+    // The depth attachment of the alpha-tested draw (cleared, not stored): the G-buffer's.
+    let depth = Some(&targets.depth);
+    let raster_with = |vis: &gbuffer::gpu::visibility::Visibility| {
+        bench::timing::time_encoded(gpu, &timer, frames, true, &|encoder, timer| {
+            vis.encode(encoder, depth, Some(timer))
+                .expect("depth target of the visibility buffer's size");
+        })
+    };
+    let raster_narrow = raster_with(&narrow)?;
+    let raster = raster_with(&vis)?;
     let resolve =
         ResolvePass::new(device, &gpass)?.bind(device, &uploaded, frame_buffer, &vis, &targets)?;
-    let raster = bench::timing::time_encoded(gpu, &timer, frames, true, &|encoder, timer| {
-        vis.passes.encode(encoder, Some(timer));
-        alpha(encoder, timer);
-    })?;
     let visibility = bench::timing::time_encoded(gpu, &timer, frames, true, &|encoder, timer| {
-        vis.passes.encode(encoder, Some(timer));
-        alpha(encoder, timer);
+        vis.encode(encoder, depth, Some(timer))
+            .expect("depth target of the visibility buffer's size");
         resolve.passes.encode(encoder, Some(timer));
     })?;
     let (a, b) = (
@@ -168,13 +173,15 @@ fn measure(
         agreement: same as f64 / f64::from(w * h),
         hardware,
         raster,
+        raster_narrow,
         visibility,
     };
     println!(
-        "{name} {w}x{h}: hardware {:.3} ms, visibility {:.3} ms (raster {:.3}), ×{:.2}, material words agree on {:.2} %",
+        "{name} {w}x{h}: hardware {:.3} ms, visibility {:.3} ms (raster {:.3}, 32-bit {:.3}), ×{:.2}, material words agree on {:.2} %",
         row.hardware.median_ms,
         row.visibility.median_ms,
         row.raster.median_ms,
+        row.raster_narrow.median_ms,
         row.speedup,
         row.agreement * 100.0
     );
@@ -217,13 +224,14 @@ fn main() -> Result<()> {
          compute rasteriser (`gbuffer::gpu::visibility`, 64-bit atomicMin of depth and id) + \
          the hardware draw of alpha-tested meshes into it + the resolve into the same G-buffer \
          targets (pixels classified by 8×8 tile, one indirect dispatch per material); raster = \
-         the rasteriser with the alpha-tested draw. Same scene, camera and run. \
+         the rasteriser with the alpha-tested draw; 32-bit = the same with the fallback's two \
+         passes of 32-bit atomics (`Atomics::Narrow`). Same scene, camera and run. \
          Agreement: pixels whose material word (roughness, metallic, material id) both wrote \
-         alike.\n\n| scene | size | triangles | hardware ms | visibility ms | raster ms | × | agreement |\n|---|---|---|---|---|---|---|---|\n",
+         alike.\n\n| scene | size | triangles | hardware ms | visibility ms | raster ms | 32-bit raster ms | × | agreement |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &rows {
         md.push_str(&format!(
-            "| {} | {}×{} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} % |\n",
+            "| {} | {}×{} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} % |\n",
             r.scene,
             r.width,
             r.height,
@@ -231,6 +239,7 @@ fn main() -> Result<()> {
             r.hardware.median_ms,
             r.visibility.median_ms,
             r.raster.median_ms,
+            r.raster_narrow.median_ms,
             r.speedup,
             r.agreement * 100.0
         ));

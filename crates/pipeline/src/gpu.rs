@@ -215,7 +215,6 @@ struct BoundVisibility {
     vis: Visibility,
     resolved: Resolve,
     depth_pass: &'static str,
-    alpha_pass: &'static str,
 }
 
 impl VisibilityStage {
@@ -252,10 +251,11 @@ impl VisibilityStage {
     ) -> Result<BoundVisibility, RenderError> {
         let size = (targets.width, targets.height);
         let buffer = VisibilityPass::buffer(device, size.0, size.1)?;
-        let mut vis = raster.bind(device, scene, frame, size, &buffer)?;
+        let vis = raster
+            .bind(device, scene, frame, size, &buffer)?
+            .named(prefix);
         let mut resolved = resolve.bind(device, scene, frame, &vis, targets)?;
         if !prefix.is_empty() {
-            vis.passes = vis.passes.named(&format!("{prefix}visibility"));
             resolved.passes = resolved
                 .passes
                 .named(&format!("{prefix}visibility resolve"));
@@ -267,11 +267,6 @@ impl VisibilityStage {
                 "visibility depth"
             } else {
                 "ss visibility depth"
-            },
-            alpha_pass: if prefix.is_empty() {
-                "visibility alpha-tested"
-            } else {
-                "ss visibility alpha-tested"
             },
         })
     }
@@ -300,13 +295,10 @@ impl VisibilityStage {
         depth: &wgpu::Texture,
         timer: &PassTimer,
     ) {
-        bound.vis.passes.encode(encoder, Some(timer));
-        if !bound.vis.alpha_tested.is_empty() {
-            bound
-                .vis
-                .encode_alpha(encoder, depth, timer.render_pass(bound.alpha_pass))
-                .expect("the G-buffer's depth target has its visibility buffer's size");
-        }
+        bound
+            .vis
+            .encode(encoder, Some(depth), Some(timer))
+            .expect("the G-buffer's depth target has its visibility buffer's size");
         bound.resolved.passes.encode(encoder, Some(timer));
         self.resolve.encode_depth(
             &bound.resolved,

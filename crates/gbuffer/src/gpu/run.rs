@@ -51,17 +51,18 @@ pub fn run_with(
     targets.read(&gpu.device, &gpu.queue)
 }
 
-/// Like [`run_with`] through the visibility buffer ([`super::visibility`]): the compute
-/// rasteriser, the resolve and the depth target drawn from the visibility buffer. Meshes whose
-/// material discards by alpha are left out.
+/// Like [`run_with`] through the visibility buffer ([`super::visibility`]) with pixels merged
+/// as `atomics` says: the compute rasteriser (alpha-tested meshes by the hardware draw into
+/// it), the resolve and the depth target drawn from the visibility buffer.
 pub fn run_visibility(
     gpu: &Gpu,
     scene: &Scene,
     camera: &Camera,
     (width, height): (u32, u32),
     options: &TextureOptions,
+    atomics: super::visibility::Atomics,
 ) -> Result<GBuffer, GBufferError> {
-    use super::visibility::{ResolvePass, VisibilityPass};
+    use super::visibility::{Capacity, ResolvePass, VisibilityPass};
     crate::validate_size(width, height)?;
     crate::validate_camera(camera)?;
     let device = &gpu.device;
@@ -71,7 +72,7 @@ pub fn run_visibility(
     pass.write_frame(&gpu.queue, &Frame::new(camera, width, height));
     let buffer = VisibilityPass::buffer(device, width, height)?;
     let frame = pass.frame_buffer();
-    let vis = VisibilityPass::new(device, &pass)?.bind(
+    let vis = VisibilityPass::with(device, &pass, Capacity::default(), atomics)?.bind(
         device,
         &gpu_scene,
         frame,
@@ -81,8 +82,7 @@ pub fn run_visibility(
     let resolve_pass = ResolvePass::new(device, &pass)?;
     let resolve = resolve_pass.bind(device, &gpu_scene, frame, &vis, &targets)?;
     let mut encoder = device.create_command_encoder(&Default::default());
-    vis.passes.encode(&mut encoder, None);
-    vis.encode_alpha(&mut encoder, &targets.depth, None)?;
+    vis.encode(&mut encoder, Some(&targets.depth), None)?;
     resolve.passes.encode(&mut encoder, None);
     resolve_pass.encode_depth(&resolve, &mut encoder, &targets.depth, None);
     gpu.queue.submit([encoder.finish()]);

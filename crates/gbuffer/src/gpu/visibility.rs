@@ -1,6 +1,8 @@
 //! A visibility buffer written by a compute rasteriser (Burns & Hunt 2013): per pixel the
 //! nearest triangle's depth and id in 64 bits, `(depth bits << 32) | id`, merged with 64-bit
-//! `atomicMin` (`visibility.wgsl`). Coverage and depth are [`crate::cpu::rasterize`]'s — same
+//! `atomicMin`, or in two passes of 32-bit `atomicMin` on devices without it ([`Atomics`]:
+//! the same buffer, bit for bit, at twice the coverage work; `visibility.wgsl`,
+//! `visibility_word.wgsl`). Coverage and depth are [`crate::cpu::rasterize`]'s — same
 //! clip planes, snapping, top-left rule and depth test in submission order — so its triangle
 //! ids are the CPU's ([`crate::cpu::Rasterized::triangle_id`]) but for pixels on triangle
 //! edges where the two compute a vertex's clip position or depth one rounding apart.
@@ -14,12 +16,12 @@
 //!
 //! **Alpha-tested meshes** (masked, or blended and dithered): their coverage depends on a
 //! texture lookup, so the hardware rasteriser draws them into the same buffer, each fragment
-//! the G-buffer pass would keep merging its depth and id with the same `atomicMin`
-//! ([`Visibility::encode_alpha`], `visibility_alpha.wgsl`). Blended meshes the scene draws
+//! the G-buffer pass would keep merging its depth and id the same way
+//! ([`Visibility::encode`], `visibility_alpha.wgsl`). Blended meshes the scene draws
 //! forward ([`BlendedSurfaces::Forward`](super::BlendedSurfaces)) are left out, as the
-//! G-buffer pass leaves them out. The device needs 64-bit integers and 64-bit atomic min
-//! ([`FEATURES`]), and the resolve ([`ResolvePass`]) five storage textures per stage
-//! ([`device_needs`]).
+//! G-buffer pass leaves them out. The device needs 64-bit integers ([`FEATURES`]; 64-bit
+//! atomic min, [`WIDE_FEATURES`], where it has them), and the resolve ([`ResolvePass`]) five
+//! storage textures per stage ([`device_needs`]).
 //!
 //! ```no_run
 //! use gbuffer::{Frame, gpu::{GBufferPass, GBufferTargets, GpuScene, visibility::{self, ResolvePass, VisibilityPass}}};
@@ -35,24 +37,26 @@
 //! let resolve = ResolvePass::new(&gpu.device, &gpass)?.bind(
 //!     &gpu.device, &uploaded, gpass.frame_buffer(), &vis, &targets)?;
 //! let mut encoder = gpu.device.create_command_encoder(&Default::default());
-//! vis.passes.encode(&mut encoder, None);
-//! vis.encode_alpha(&mut encoder, &targets.depth, None)?;
+//! vis.encode(&mut encoder, Some(&targets.depth), None)?;
 //! resolve.passes.encode(&mut encoder, None);
 //! gpu.queue.submit([encoder.finish()]);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 use ::gpu::kernel::{self, Binding, Dispatch, Layout, Passes, Workgroups};
-use ::gpu::{transfer, wgpu};
+use ::gpu::shader::Specialisation;
+use ::gpu::{PassTimer, transfer, wgpu};
 use bytemuck::{Pod, Zeroable};
 
 use super::upload::GpuScene;
 use crate::GBufferError;
 
-/// What the kernels need beyond `wgpu::Limits::default()`: 64-bit integers and 64-bit
-/// atomic min/max on storage buffers.
-pub const FEATURES: wgpu::Features =
-    wgpu::Features::SHADER_INT64.union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX);
+/// What the kernels need beyond `wgpu::Limits::default()`: 64-bit integers (the edge
+/// functions of 1/256-pixel positions in the 4w guard band need up to 47 bits).
+pub const FEATURES: wgpu::Features = wgpu::Features::SHADER_INT64;
+
+/// What [`Atomics::Wide`] needs beyond [`FEATURES`]: 64-bit atomic min on storage buffers.
+pub const WIDE_FEATURES: wgpu::Features = wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX;
 
 /// Storage textures the resolve writes in one stage (the five colour targets; WebGPU's
 /// default limit is 4).
@@ -200,42 +204,106 @@ fn mesh_table(uploaded: &GpuScene) -> MeshTable {
     }
 }
 
+/// How covered pixels are merged into the visibility buffer (`visibility_word.wgsl`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Atomics {
+    /// One 64-bit `atomicMin` of (depth bits << 32) | id per covered pixel: needs
+    /// `SHADER_INT64_ATOMIC_MIN_MAX`.
+    Wide,
+    /// Two passes over the same coverage with 32-bit `atomicMin`, on the depth word, then on
+    /// the id word where the depth is the one the first pass left: the same buffer bit for
+    /// bit (no precision is given up) at twice the coverage work.
+    Narrow,
+}
+
+impl Atomics {
+    /// [`Atomics::Wide`] where the device has 64-bit atomic min, else [`Atomics::Narrow`].
+    pub fn best(device: &wgpu::Device) -> Self {
+        if device.features().contains(WIDE_FEATURES) {
+            Self::Wide
+        } else {
+            Self::Narrow
+        }
+    }
+
+    /// The shader variant: the depth pass (or the only one), or the narrow id pass.
+    fn specialisation(self, id_pass: bool) -> Specialisation {
+        match self {
+            Self::Wide => Specialisation::default(),
+            Self::Narrow => Specialisation::default()
+                .set("VisibilityWord", "atomic<u32>")
+                .set("VisibilityValue", "u32")
+                .set("WIDE_ATOMICS", "false")
+                .set("ID_PASS", id_pass),
+        }
+    }
+}
+
+/// Every variant of the shaders the kernels build (for validation without a GPU): the
+/// rasteriser and the alpha-tested draw, wide, and narrow in both passes.
+pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
+    let variants = [
+        Atomics::Wide.specialisation(false),
+        Atomics::Narrow.specialisation(false),
+        Atomics::Narrow.specialisation(true),
+    ];
+    ["visibility.wgsl", "visibility_alpha.wgsl"]
+        .into_iter()
+        .flat_map(|file| variants.iter().map(move |v| (file, v.clone())))
+        .collect()
+}
+
+/// One variant's pipelines: the compute rasteriser's and the alpha-tested draw's.
+struct Pipelines {
+    small: wgpu::ComputePipeline,
+    tiles: wgpu::ComputePipeline,
+    /// Two-sided, one-sided (back faces culled).
+    alpha: [wgpu::RenderPipeline; 2],
+}
+
 /// The visibility buffer's kernels (phase `new`).
 pub struct VisibilityPass {
     layout: Layout,
     /// `prepare`'s groups: the counts and lists it reads (bindings 5, 6 and 8 of group 0),
     /// the indirect dispatch sizes (group 1).
     prepare_layouts: [Layout; 2],
+    /// The alpha-tested draw's group 0: frame, meshes, positions, attributes, the visibility
+    /// buffer (fragment stage), indices; the material is group 1.
+    alpha_layout: Layout,
     capacity: Capacity,
+    atomics: Atomics,
     clear: wgpu::ComputePipeline,
-    small: wgpu::ComputePipeline,
     prepare: wgpu::ComputePipeline,
     setup_large: wgpu::ComputePipeline,
-    tiles: wgpu::ComputePipeline,
-    /// The alpha-tested meshes' draw: frame, meshes, positions, attributes and indices (group
-    /// 0), the visibility buffer (group 2); the material is group 1.
-    alpha_layouts: [Layout; 2],
-    /// Two-sided, one-sided (back faces culled).
-    alpha: [wgpu::RenderPipeline; 2],
+    /// The wide merge's or the narrow depth pass's.
+    first: Pipelines,
+    /// The narrow id pass's.
+    ids: Option<Pipelines>,
 }
 
 /// The alpha-tested meshes' draws of one binding.
 struct AlphaDraws {
-    pipelines: [wgpu::RenderPipeline; 2],
-    /// Groups 0 and 2.
-    groups: [wgpu::BindGroup; 2],
+    group: wgpu::BindGroup,
     /// Per mesh: its index slots, its index (the instance drawn), its material's group, and
     /// whether it is one-sided.
     draws: Vec<(std::ops::Range<u32>, u32, wgpu::BindGroup, bool)>,
 }
 
-/// The passes writing one scene's visibility buffer (phase `bind`), and the meshes they leave
-/// out.
+/// The passes writing one scene's visibility buffer (phase `bind`); recorded by
+/// [`Visibility::encode`].
 pub struct Visibility {
-    /// Clear, the per-triangle rasterisation, the deferred triangles' setup and their blocks.
-    pub passes: Passes,
-    /// Meshes (indices in the uploaded scene's meshes) [`Visibility::encode_alpha`] draws with
-    /// the hardware rasteriser: their material discards fragments by alpha.
+    /// Clear, the per-triangle rasterisation, the deferred triangles' setup and their blocks
+    /// (the narrow merge's depth pass).
+    passes: Passes,
+    /// The narrow merge's id pass: per triangle again, and the depth pass's blocks.
+    id_passes: Option<Passes>,
+    alpha: Option<AlphaDraws>,
+    /// The alpha-tested draw's pipelines, per pass.
+    alpha_pipelines: Vec<[wgpu::RenderPipeline; 2]>,
+    /// What the timed passes' names start with.
+    prefix: String,
+    /// Meshes (indices in the uploaded scene's meshes) drawn with the hardware rasteriser:
+    /// their material discards fragments by alpha.
     pub alpha_tested: Vec<usize>,
     /// Deferred triangles, setups and blocks appended, and entries that did not fit (four
     /// `u32`s; `COPY_SRC`).
@@ -247,7 +315,6 @@ pub struct Visibility {
     buffer: wgpu::Buffer,
     size: (u32, u32),
     meshes: wgpu::Buffer,
-    alpha: Option<AlphaDraws>,
     /// The lists and dispatch sizes the passes share (kept alive with them).
     _lists: Vec<wgpu::Buffer>,
 }
@@ -264,74 +331,139 @@ impl Visibility {
         Ok(counts[3])
     }
 
-    /// Records the hardware rasteriser's pass drawing the [alpha-tested
-    /// meshes](Visibility::alpha_tested) into the visibility buffer, after [`Visibility::passes`]
-    /// and before the resolve; nothing when there are none. `depth` (a
-    /// [`crate::DEPTH_FORMAT`] texture of the visibility buffer's size, e.g. the G-buffer's
-    /// depth target) is only the pass's attachment: it is cleared and not stored.
-    pub fn encode_alpha(
+    /// These passes timed under names starting with `prefix` (`"ss "`: `ss visibility`, …).
+    pub fn named(mut self, prefix: &str) -> Self {
+        prefix.clone_into(&mut self.prefix);
+        self
+    }
+
+    /// The names the passes are timed under, in order: `visibility`, `visibility alpha-tested`
+    /// (with alpha-tested meshes), and for the narrow merge `visibility ids`, `visibility
+    /// alpha-tested ids`.
+    pub fn pass_names(&self) -> Vec<String> {
+        let p = &self.prefix;
+        let alpha = self.alpha.is_some();
+        let mut names = vec![format!("{p}visibility")];
+        if alpha {
+            names.push(format!("{p}visibility alpha-tested"));
+        }
+        if self.id_passes.is_some() {
+            names.push(format!("{p}visibility ids"));
+            if alpha {
+                names.push(format!("{p}visibility alpha-tested ids"));
+            }
+        }
+        names
+    }
+
+    /// Records the frame's visibility buffer: the compute passes and, with alpha-tested meshes,
+    /// the hardware rasteriser's draw of them, whose depth attachment `depth` (a
+    /// [`crate::DEPTH_FORMAT`] render target of the buffer's size, e.g. the G-buffer's depth
+    /// target) is cleared and not stored; then the narrow merge's id passes. Fails, recording
+    /// nothing, when alpha-tested meshes have no fitting `depth`.
+    pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        depth: &wgpu::Texture,
-        timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+        depth: Option<&wgpu::Texture>,
+        timer: Option<&PassTimer>,
     ) -> Result<(), GBufferError> {
-        let Some(alpha) = &self.alpha else {
-            return Ok(());
+        let attachment = match (&self.alpha, depth) {
+            (None, _) => None,
+            (Some(_), None) => {
+                return Err(GBufferError::InvalidOptions(format!(
+                    "meshes {:?} are alpha-tested: their draw into the visibility buffer needs a depth attachment",
+                    self.alpha_tested
+                )));
+            }
+            (Some(_), Some(depth)) => {
+                ::gpu::kernel::check_texture(
+                    "the alpha-tested draw's depth attachment",
+                    depth,
+                    self.size,
+                    crate::DEPTH_FORMAT,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT,
+                )?;
+                Some(depth.create_view(&Default::default()))
+            }
         };
-        ::gpu::kernel::check_texture(
-            "the alpha-tested draw's depth attachment",
-            depth,
-            self.size,
-            crate::DEPTH_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        )?;
-        let view = depth.create_view(&Default::default());
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("visibility (alpha-tested)"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timestamps,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_bind_group(0, &alpha.groups[0], &[]);
-        pass.set_bind_group(2, &alpha.groups[1], &[]);
-        for (slots, mesh, material, one_sided) in &alpha.draws {
-            pass.set_pipeline(&alpha.pipelines[usize::from(*one_sided)]);
-            pass.set_bind_group(1, material, &[]);
-            pass.draw(slots.clone(), *mesh..*mesh + 1);
+        let names = self.pass_names();
+        let mut names = names.iter();
+        let mut next = || names.next().map_or("", String::as_str);
+        let phases = std::iter::once(&self.passes).chain(&self.id_passes);
+        for (passes, pipelines) in phases.zip(&self.alpha_pipelines) {
+            passes.clone().named(next()).encode(encoder, timer);
+            if let (Some(alpha), Some(view)) = (&self.alpha, &attachment) {
+                let name = next();
+                draw_alpha(
+                    encoder,
+                    alpha,
+                    pipelines,
+                    view,
+                    timer.and_then(|t| t.render_pass(name)),
+                );
+            }
         }
         Ok(())
     }
 }
 
+/// The hardware rasteriser's pass drawing the alpha-tested meshes into the visibility buffer.
+fn draw_alpha(
+    encoder: &mut wgpu::CommandEncoder,
+    alpha: &AlphaDraws,
+    pipelines: &[wgpu::RenderPipeline; 2],
+    depth: &wgpu::TextureView,
+    timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) {
+    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("visibility alpha-tested"),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Discard,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: timestamps,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_bind_group(0, &alpha.group, &[]);
+    for (slots, mesh, material, one_sided) in &alpha.draws {
+        pass.set_pipeline(&pipelines[usize::from(*one_sided)]);
+        pass.set_bind_group(1, material, &[]);
+        pass.draw(slots.clone(), *mesh..*mesh + 1);
+    }
+}
+
 impl VisibilityPass {
-    /// Builds the kernels with the default [`Capacity`]; materials bind as `gpass` binds them
-    /// (the alpha-tested meshes' draw). The device must have [`FEATURES`].
+    /// Builds the kernels with the default [`Capacity`] and the [best](Atomics::best) merge;
+    /// materials bind as `gpass` binds them (the alpha-tested meshes' draw). The device must
+    /// have [`FEATURES`].
     pub fn new(device: &wgpu::Device, gpass: &super::GBufferPass) -> Result<Self, GBufferError> {
-        Self::with_capacity(device, gpass, Capacity::default())
+        Self::with(device, gpass, Capacity::default(), Atomics::best(device))
     }
 
-    /// [`VisibilityPass::new`] with the deferred path's lists sized as `capacity` says.
-    pub fn with_capacity(
+    /// [`VisibilityPass::new`] with the deferred path's lists sized as `capacity` says and
+    /// pixels merged as `atomics` says ([`Atomics::Wide`] needs [`WIDE_FEATURES`]).
+    pub fn with(
         device: &wgpu::Device,
         gpass: &super::GBufferPass,
         capacity: Capacity,
+        atomics: Atomics,
     ) -> Result<Self, GBufferError> {
-        let missing = FEATURES - device.features();
+        let needed = match atomics {
+            Atomics::Wide => FEATURES | WIDE_FEATURES,
+            Atomics::Narrow => FEATURES,
+        };
+        let missing = needed - device.features();
         if !missing.is_empty() {
             return Err(GBufferError::InvalidOptions(format!(
-                "the visibility buffer needs device features {missing:?}"
+                "the visibility buffer ({atomics:?} atomics) needs device features {missing:?}"
             )));
         }
-        let module = crate::SHADERS.module(device, "visibility.wgsl")?;
         let mut bindings = vec![Binding::Uniform];
         bindings.extend([Binding::StorageRead; 3]);
         bindings.extend([Binding::Storage; 5]);
@@ -349,85 +481,72 @@ impl VisibilityPass {
             ),
             Layout::compute(device, "visibility dispatch", &[Binding::Storage]),
         ];
-        let pipeline = |entry| kernel::pipeline(device, &module, entry, &[&layout], &[]);
-        let alpha_module = crate::SHADERS.module(device, "visibility_alpha.wgsl")?;
-        let alpha_layouts = [
-            Layout::numbered(
-                device,
-                "visibility alpha",
-                wgpu::ShaderStages::VERTEX_FRAGMENT,
-                &[
-                    (0, Binding::Uniform),
-                    (1, Binding::StorageRead),
-                    (2, Binding::StorageRead),
-                    (3, Binding::StorageRead),
-                    (4, Binding::StorageRead),
-                ],
-            ),
-            Layout::numbered(
-                device,
-                "visibility alpha buffer",
-                wgpu::ShaderStages::FRAGMENT,
-                &[(0, Binding::Storage)],
-            ),
-        ];
-        let alpha_layout = kernel::pipeline_layout(
+        let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
+        let vertex = wgpu::ShaderStages::VERTEX;
+        let alpha_layout = Layout::staged(
             device,
             "visibility alpha",
-            &[&alpha_layouts[0], &gpass.material_layout, &alpha_layouts[1]],
+            &[
+                (0, both, Binding::Uniform),
+                (1, vertex, Binding::StorageRead),
+                (2, vertex, Binding::StorageRead),
+                (3, vertex, Binding::StorageRead),
+                (4, wgpu::ShaderStages::FRAGMENT, Binding::Storage),
+                (5, vertex, Binding::StorageRead),
+            ],
         );
-        let alpha = [None, Some(wgpu::Face::Back)].map(|cull_mode| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("visibility alpha"),
-                layout: Some(&alpha_layout),
-                vertex: wgpu::VertexState {
-                    module: &alpha_module,
-                    entry_point: Some("vs_alpha"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                // The G-buffer pass's winding and culling.
-                primitive: wgpu::PrimitiveState {
-                    front_face: wgpu::FrontFace::Ccw,
-                    cull_mode,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: crate::DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Always),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &alpha_module,
-                    entry_point: Some("fs_alpha"),
-                    compilation_options: Default::default(),
-                    targets: &[],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        });
+        let alpha_pipeline_layout = kernel::pipeline_layout(
+            device,
+            "visibility alpha",
+            &[&alpha_layout, &gpass.material_layout],
+        );
+        let module = |id_pass| {
+            crate::SHADERS.module_with(device, "visibility.wgsl", &atomics.specialisation(id_pass))
+        };
+        let pipelines = |id_pass| -> Result<(wgpu::ShaderModule, Pipelines), GBufferError> {
+            let compute = module(id_pass)?;
+            let alpha = crate::SHADERS.module_with(
+                device,
+                "visibility_alpha.wgsl",
+                &atomics.specialisation(id_pass),
+            )?;
+            let pipeline = |entry| kernel::pipeline(device, &compute, entry, &[&layout], &[]);
+            let built = Pipelines {
+                small: pipeline("raster_small"),
+                tiles: pipeline("raster_tiles"),
+                alpha: [None, Some(wgpu::Face::Back)]
+                    .map(|cull| alpha_pipeline(device, &alpha_pipeline_layout, &alpha, cull)),
+            };
+            Ok((compute, built))
+        };
+        let (first_module, first) = pipelines(false)?;
+        let ids = match atomics {
+            Atomics::Wide => None,
+            Atomics::Narrow => Some(pipelines(true)?.1),
+        };
         Ok(Self {
-            alpha_layouts,
-            alpha,
-            clear: pipeline("clear"),
-            small: pipeline("raster_small"),
+            clear: kernel::pipeline(device, &first_module, "clear", &[&layout], &[]),
+            setup_large: kernel::pipeline(device, &first_module, "setup_large", &[&layout], &[]),
             prepare: kernel::pipeline(
                 device,
-                &module,
+                &first_module,
                 "prepare",
                 &[&prepare_layouts[0], &prepare_layouts[1]],
                 &[],
             ),
             prepare_layouts,
-            setup_large: pipeline("setup_large"),
-            tiles: pipeline("raster_tiles"),
+            alpha_layout,
             layout,
             capacity,
+            atomics,
+            first,
+            ids,
         })
+    }
+
+    /// How this pass merges covered pixels.
+    pub fn atomics(&self) -> Atomics {
+        self.atomics
     }
 
     /// A visibility buffer for `width × height` pixels (8 bytes each, row-major; `STORAGE |
@@ -459,7 +578,6 @@ impl VisibilityPass {
         visibility: &wgpu::Buffer,
     ) -> Result<Visibility, GBufferError> {
         check_buffer(visibility, size)?;
-        let pixels = u64::from(size.0) * u64::from(size.1);
         let table = mesh_table(uploaded);
         let triangle_count = table.triangle_count;
         let storage = wgpu::BufferUsages::STORAGE;
@@ -527,29 +645,36 @@ impl VisibilityPass {
             groups: prepare_groups.clone(),
             workgroups: Workgroups::Direct([1, 1, 1]),
         };
+        let per_triangle = Workgroups::linear(triangle_count, WORKGROUP);
+        let tiles = Workgroups::Indirect(dispatch.clone(), 12);
+        // One 64-bit word per pixel, as two 32-bit words for the narrow merge.
+        let words = (visibility.size() / 8) as u32 * if self.ids.is_some() { 2 } else { 1 };
         let dispatches = vec![
-            one(&self.clear, Workgroups::linear(pixels as u32, WORKGROUP)),
-            one(&self.small, Workgroups::linear(triangle_count, WORKGROUP)),
+            one(&self.clear, Workgroups::linear(words, WORKGROUP)),
+            one(&self.first.small, per_triangle.clone()),
             prepare(),
             one(&self.setup_large, Workgroups::Indirect(dispatch.clone(), 0)),
             prepare(),
-            one(&self.tiles, Workgroups::Indirect(dispatch.clone(), 12)),
+            one(&self.first.tiles, tiles.clone()),
         ];
+        let id_passes = self.ids.as_ref().map(|ids| {
+            Passes::new().pass(
+                "visibility ids",
+                vec![one(&ids.small, per_triangle), one(&ids.tiles, tiles)],
+            )
+        });
         let alpha = (!table.alpha_tested.is_empty()).then(|| AlphaDraws {
-            pipelines: self.alpha.clone(),
-            groups: [
-                self.alpha_layouts[0].bind_buffers(
-                    device,
-                    &[
-                        frame,
-                        &meshes,
-                        &uploaded.positions,
-                        &uploaded.attributes,
-                        &uploaded.indices,
-                    ],
-                ),
-                self.alpha_layouts[1].bind_buffers(device, &[visibility]),
-            ],
+            group: self.alpha_layout.bind_buffers(
+                device,
+                &[
+                    frame,
+                    &meshes,
+                    &uploaded.positions,
+                    &uploaded.attributes,
+                    visibility,
+                    &uploaded.indices,
+                ],
+            ),
             draws: table
                 .alpha_tested
                 .iter()
@@ -566,8 +691,14 @@ impl VisibilityPass {
         });
         Ok(Visibility {
             passes: Passes::new().pass("visibility", dispatches),
-            alpha_tested: table.alpha_tested,
+            id_passes,
             alpha,
+            alpha_pipelines: std::iter::once(&self.first)
+                .chain(&self.ids)
+                .map(|p| p.alpha.clone())
+                .collect(),
+            prefix: String::new(),
+            alpha_tested: table.alpha_tested,
             counts,
             materials: table.materials,
             buffer: visibility.clone(),
@@ -576,6 +707,47 @@ impl VisibilityPass {
             _lists: vec![uniform, deferred, setups, blocks, dispatch],
         })
     }
+}
+
+/// The alpha-tested meshes' render pipeline (`visibility_alpha.wgsl`) culling `cull`: the
+/// G-buffer pass's winding, no colour target, a depth attachment neither tested nor written.
+fn alpha_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    cull_mode: Option<wgpu::Face>,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("visibility alpha"),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_alpha"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState {
+            front_face: wgpu::FrontFace::Ccw,
+            cull_mode,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: crate::DEPTH_FORMAT,
+            depth_write_enabled: Some(false),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_alpha"),
+            compilation_options: Default::default(),
+            targets: &[],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
 }
 
 /// A read-back visibility buffer's triangle ids ([`NO_TRIANGLE`] where none), row-major.
