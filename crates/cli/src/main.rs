@@ -245,11 +245,12 @@ struct Args {
     #[arg(long, value_name = "LOG2", default_value_t = 18, requires = "reflections", value_parser = clap::value_parser!(u32).range(4..=24))]
     reflection_points: u32,
     /// Draw the G-buffer through the compute rasteriser's visibility buffer and its resolve
-    /// (GPU; `gbuffer::gpu::visibility`) instead of the hardware z-prepass and G-buffer pass.
-    /// Needs 64-bit atomics; scenes with alpha-tested or blended materials, Forward+ and the
-    /// light pre-pass are refused.
-    #[arg(long)]
-    visibility: bool,
+    /// (GPU; `gbuffer::gpu::visibility`) instead of the hardware z-prepass and G-buffer pass;
+    /// `--visibility=auto` measures both from the first camera and keeps the faster (the
+    /// summary's `gbuffer:` line gives both times). Needs 64-bit integers (64-bit atomics are
+    /// used where the device has them); Forward+ and the light pre-pass are refused.
+    #[arg(long, value_enum, value_name = "MODE", num_args = 0..=1, require_equals = true, default_missing_value = "on")]
+    visibility: Option<VisibilityMode>,
     /// Screen-space ambient occlusion of the ambient and indirect light (GPU): `filter` (eq. 7.1),
     /// `crytek`, `vo` (volumetric obscurance), `hbao` or `gtao`, over the k×k kernel, or with
     /// `-separable` (e.g. `filter-separable`, Holländer 2013 annex 7.2: two 1D passes).
@@ -1076,7 +1077,7 @@ fn run() -> Result<()> {
     if args.near_field && args.cpu {
         bail!("--near-field runs on the GPU only (no --cpu)");
     }
-    if args.visibility && args.cpu {
+    if args.visibility.is_some() && args.cpu {
         bail!("--visibility runs on the GPU only (no --cpu)");
     }
     let gpu = if args.cpu {
@@ -1103,13 +1104,14 @@ fn run() -> Result<()> {
              those shadows in the first frame's pose (ManyLoD and ISM refit every frame)"
         );
     }
-    let (device, rendered, display, stages, gbuffer) = match &gpu {
+    let (device, rendered, display, stages, gbuffer, gbuffer_path) = match &gpu {
         Some(gpu) => {
             let (d, q) = (&gpu.device, &gpu.queue);
-            let mut renderer = gpu_renderer(&args, gpu, &setup)?;
+            let (mut renderer, gbuffer_path) = gpu_renderer(&args, gpu, &setup)?;
             if let Some(frames) = args.frames {
                 let seq = Sequence::new(&args, frames, &setup.camera)?;
-                print_setup(&args, &setup, &format!("GPU {}", gpu.describe()));
+                let device = format!("GPU {}", gpu.describe());
+                print_setup(&args, &setup, &device, Some(&gbuffer_path));
                 return gpu_sequence(&args, gpu, &mut renderer, &setup, seq);
             }
             let (camera, ambient) = (setup.camera, setup.ambient);
@@ -1162,6 +1164,7 @@ fn run() -> Result<()> {
                 display,
                 stages,
                 gbuffer,
+                Some(gbuffer_path),
             )
         }
         None => {
@@ -1188,7 +1191,7 @@ fn run() -> Result<()> {
             let device = "CPU (reference path, rayon)";
             if let Some(frames) = args.frames {
                 let seq = Sequence::new(&args, frames, &setup.camera)?;
-                print_setup(&args, &setup, device);
+                print_setup(&args, &setup, device, None);
                 return cpu_sequence(&args, &setup, seq);
             }
             let (rendered, stages) = cpu_frame(
@@ -1226,7 +1229,7 @@ fn run() -> Result<()> {
                 .transpose()?
                 .map(|r| r.gbuffer);
             let display = setup.output.apply(&rendered.image);
-            (device.to_owned(), rendered, display, stages, gbuffer)
+            (device.to_owned(), rendered, display, stages, gbuffer, None)
         }
     };
 
@@ -1238,7 +1241,7 @@ fn run() -> Result<()> {
     if let Some(gb) = &gbuffer {
         dump_stages(&args.out, gb, stages.as_ref())?;
     }
-    print_setup(&args, &setup, &device);
+    print_setup(&args, &setup, &device, gbuffer_path.as_deref());
     println!("wrote:   {} and {}", png.display(), exr.display());
     println!();
     print_table(&rendered.timings, f64::from(width) * f64::from(height));
@@ -1582,7 +1585,12 @@ fn animation_clip(args: &Args, scene: &Scene) -> Result<Option<usize>> {
 }
 
 /// The GPU renderer with every stage the arguments ask for.
-fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::gpu::GpuRenderer> {
+/// The GPU renderer `args` ask for, and how it draws the G-buffer (the summary's `gbuffer:`).
+fn gpu_renderer(
+    args: &Args,
+    gpu: &gpu::Gpu,
+    setup: &Setup,
+) -> Result<(pipeline::gpu::GpuRenderer, String)> {
     let (d, q) = (&gpu.device, &gpu.queue);
     let mut renderer = pipeline::gpu::GpuRenderer::new_with(
         d,
@@ -1605,7 +1613,7 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
     renderer.set_output(d, Some(setup.output))?;
     renderer.set_shading(d, q, &setup.shading)?;
     renderer.set_blended(d, q, args.blend)?;
-    renderer.set_visibility(d, args.visibility)?;
+    renderer.set_visibility(d, args.visibility == Some(VisibilityMode::On))?;
     renderer.set_shadows(d, q, setup.shadow_config.as_ref())?;
     if let Some(tile) = args.manylod_shadows {
         let config = ShadowConfig {
@@ -1652,7 +1660,17 @@ fn gpu_renderer(args: &Args, gpu: &gpu::Gpu, setup: &Setup) -> Result<pipeline::
         renderer.set_ssao(d, q, Some((&config, estimator)))?;
     }
     renderer.set_ambient(q, setup.ambient);
-    Ok(renderer)
+    let gbuffer = match args.visibility {
+        Some(VisibilityMode::Auto) => renderer
+            .choose_gbuffer_path(d, q, &setup.camera, 5)
+            .context("--visibility=auto")?
+            .to_string(),
+        Some(VisibilityMode::On) => {
+            "visibility buffer (compute rasteriser, resolve, depth drawn from it)".into()
+        }
+        None => "hardware rasteriser (z-prepass, then the G-buffer pass)".into(),
+    };
+    Ok((renderer, gbuffer))
 }
 
 /// `--ssao METHOD [--ssao-kernel K --ssao-radius R]` (checked).
@@ -2234,7 +2252,8 @@ fn cpu_sequence(args: &Args, setup: &Setup, mut seq: Sequence) -> Result<()> {
 }
 
 /// Prints the device, scene, light accumulation and indirect light of the render.
-fn print_setup(args: &Args, setup: &Setup, device: &str) {
+/// The summary of the run's setup; `gbuffer`: how the GPU draws the G-buffer (none on the CPU).
+fn print_setup(args: &Args, setup: &Setup, device: &str, gbuffer: Option<&str>) {
     let (width, height) = args.size;
     let shading = &setup.shading;
     if let Some(recipe) = &args.recipe {
@@ -2273,15 +2292,8 @@ fn print_setup(args: &Args, setup: &Setup, device: &str) {
             }
         );
     }
-    if device.starts_with("GPU") {
-        println!(
-            "gbuffer: {}",
-            if args.visibility {
-                "visibility buffer (compute rasteriser, resolve, depth drawn from it)"
-            } else {
-                "hardware rasteriser (z-prepass, then the G-buffer pass)"
-            }
-        );
+    if let Some(gbuffer) = gbuffer {
+        println!("gbuffer: {gbuffer}");
     }
     println!(
         "shading: {}{}{}",
@@ -2525,6 +2537,15 @@ fn dump_stages(
         irradiance("indirect-specular-blurred", sp)?;
     }
     Ok(())
+}
+
+/// `--visibility` modes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum VisibilityMode {
+    /// The visibility buffer.
+    On,
+    /// The faster of the visibility buffer and the hardware rasteriser, measured.
+    Auto,
 }
 
 /// `--vpl-shadows` modes.

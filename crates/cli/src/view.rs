@@ -601,7 +601,7 @@ struct Live {
 impl Live {
     fn build(args: Args, gpu: &gpu::Gpu) -> Result<Self> {
         let setup = crate::prepare(&args)?;
-        let mut renderer = crate::gpu_renderer(&args, gpu, &setup)?;
+        let (mut renderer, _) = crate::gpu_renderer(&args, gpu, &setup)?;
         let animated = setup.scene.rig.is_some();
         if animated {
             renderer.set_animation(&gpu.device, &gpu.queue, setup.scene.rig.as_ref())?;

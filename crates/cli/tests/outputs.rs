@@ -147,6 +147,51 @@ fn exact_shadows_by_rays_render_on_the_gpu_and_are_refused_on_the_cpu() {
     assert!(out.join("render.png").is_file() && !out.join("vpl-shadow-atlas.png").exists());
 }
 
+/// `--visibility` draws the G-buffer through the visibility buffer and says so;
+/// `--visibility=auto` measures both paths and names the one it kept with both times; both are
+/// refused with `--cpu`.
+#[test]
+fn the_visibility_buffer_is_chosen_or_measured() {
+    let out = out_folder("visibility-cpu");
+    let run = deferred(&out, &["--visibility"]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("--visibility"),
+        "{stderr}"
+    );
+    let needs = pipeline::device_needs().and(&gbuffer::gpu::visibility::device_needs());
+    let Some(gpu) = gpu::test_device(&needs) else {
+        return;
+    };
+    let out = out_folder("visibility");
+    let run = deferred_on_gpu(&out, &["--visibility"]);
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(stdout.contains("gbuffer: visibility buffer"), "{stdout}");
+    if !gpu.has_timestamps() {
+        return;
+    }
+    let run = deferred_on_gpu(&out, &["--visibility=auto"]);
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("gbuffer:"))
+        .unwrap_or_else(|| panic!("no gbuffer line: {stdout}"));
+    assert!(
+        line.contains("chosen: visibility buffer") && line.contains(" ms, hardware "),
+        "{line}"
+    );
+}
+
 /// Supersampling is a stage of the frame: with VPLs, a light-count heatmap of the sample
 /// tiles, the per-pass table with the supersampled passes, and the sample counts.
 #[test]

@@ -199,6 +199,38 @@ fn exclusions(
     Err(ShadingError::Incompatible(format!("{clash}; switch one off first")).into())
 }
 
+/// What [`GpuRenderer::choose_gbuffer_path`] measured and kept.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GBufferChoice {
+    /// The hardware path's median GPU time (z-prepass + G-buffer pass), ms.
+    pub hardware_ms: f64,
+    /// The visibility path's (rasteriser, resolve, depth), ms; why it cannot run, instead.
+    pub visibility_ms: Result<f64, String>,
+    /// Whether the visibility path was kept (the faster).
+    pub visibility: bool,
+}
+
+impl std::fmt::Display for GBufferChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let kept = if self.visibility {
+            "visibility buffer"
+        } else {
+            "hardware rasteriser"
+        };
+        match &self.visibility_ms {
+            Ok(v) => write!(
+                f,
+                "{kept} (chosen: visibility buffer {v:.3} ms, hardware {:.3} ms)",
+                self.hardware_ms
+            ),
+            Err(why) => write!(
+                f,
+                "{kept} (chosen: the visibility buffer cannot run: {why})"
+            ),
+        }
+    }
+}
+
 /// The G-buffer through the compute rasteriser's visibility buffer and its resolve
 /// ([`GpuRenderer::set_visibility`]), bound to the frame's targets and, with supersampling, to
 /// the supersampled G-buffer's.
@@ -1273,13 +1305,14 @@ impl GpuRenderer {
 
     /// Draws the G-buffer through the compute rasteriser's visibility buffer and its resolve
     /// (`gbuffer::gpu::visibility`: the same G-buffer within the hardware pass's tolerances,
-    /// and the depth target drawn from it), or, with `false`, through the hardware z-prepass
-    /// and G-buffer pass (the default); with supersampling, its supersampled G-buffer too. The
-    /// device needs
-    /// `gbuffer::gpu::visibility::device_needs()`; scenes with alpha-tested or blended
-    /// materials, Forward+ and the light pre-pass are refused with an error that says why.
-    /// Timed as the passes "visibility", "visibility resolve" and "visibility depth" (and the
-    /// same with "ss " for the supersampled G-buffer).
+    /// and the depth target drawn from it; alpha-tested meshes drawn into it by the hardware
+    /// rasteriser), or, with `false`, through the hardware z-prepass and G-buffer pass (the
+    /// default); with supersampling, its supersampled G-buffer too. The device needs
+    /// `gbuffer::gpu::visibility::device_needs()`; Forward+ and the light pre-pass are refused
+    /// with an error that says why. Timed as the passes "visibility" (and "visibility
+    /// alpha-tested", "visibility ids" …), "visibility resolve" and "visibility depth" (and the
+    /// same with "ss " for the supersampled G-buffer). [`GpuRenderer::choose_gbuffer_path`]
+    /// picks the faster of the two by measuring them.
     pub fn set_visibility(&mut self, device: &wgpu::Device, on: bool) -> Result<(), RenderError> {
         if !on {
             self.visibility = None;
@@ -1315,6 +1348,76 @@ impl GpuRenderer {
     /// ([`GpuRenderer::set_visibility`]).
     pub fn visibility(&self) -> bool {
         self.visibility.is_some()
+    }
+
+    /// Measures the G-buffer's two paths from `camera` over `frames` frames each (median GPU
+    /// time of their passes, the supersampled G-buffer's included) and keeps the faster: the
+    /// visibility buffer ([`GpuRenderer::set_visibility`]) or the hardware rasteriser. The
+    /// visibility path is skipped, with the reason, where it cannot run (a missing device
+    /// feature, Forward+, the light pre-pass). Needs timestamp queries; renders `2 × frames`
+    /// frames and leaves the camera set.
+    pub fn choose_gbuffer_path(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        camera: &Camera,
+        frames: u32,
+    ) -> Result<GBufferChoice, RenderError> {
+        if !self.timer.enabled() {
+            return Err(RenderError::Visibility(
+                "choosing the G-buffer path measures both: the device has no timestamp queries"
+                    .into(),
+            ));
+        }
+        self.set_camera(queue, camera)?;
+        self.set_visibility(device, false)?;
+        let hardware_ms = self.median_ms(device, queue, frames.max(1), |name| {
+            matches!(
+                name,
+                "z-prepass" | "gbuffer" | "ss z-prepass" | "ss gbuffer"
+            )
+        })?;
+        let visibility_ms = match self.set_visibility(device, true) {
+            Ok(()) => Ok(self.median_ms(device, queue, frames.max(1), |name| {
+                name.starts_with("visibility") || name.starts_with("ss visibility")
+            })?),
+            Err(e) => Err(e.to_string()),
+        };
+        let visibility = matches!(visibility_ms, Ok(ms) if ms < hardware_ms);
+        if !visibility {
+            self.set_visibility(device, false)?;
+        }
+        Ok(GBufferChoice {
+            hardware_ms,
+            visibility_ms,
+            visibility,
+        })
+    }
+
+    /// The median over `frames` frames of the summed GPU time of the passes `counted` names.
+    fn median_ms(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frames: u32,
+        counted: impl Fn(&str) -> bool,
+    ) -> Result<f64, RenderError> {
+        let mut times = Vec::with_capacity(frames as usize);
+        for _ in 0..frames {
+            let mut encoder = device.create_command_encoder(&Default::default());
+            self.encode(&mut encoder);
+            queue.submit([encoder.finish()]);
+            let timings = self.timings(device, queue)?;
+            times.push(
+                timings
+                    .iter()
+                    .filter(|t| counted(&t.name))
+                    .map(|t| t.ms)
+                    .sum::<f64>(),
+            );
+        }
+        times.sort_by(f64::total_cmp);
+        Ok(times[times.len() / 2])
     }
 
     /// Subdivides the meshes of `plan` every frame (`Some`: this renderer was made from the

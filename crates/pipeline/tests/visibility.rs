@@ -114,6 +114,68 @@ fn the_supersampled_gbuffer_goes_through_the_visibility_buffer() {
     }
 }
 
+/// `choose_gbuffer_path` times both paths and keeps the faster, and says why where the
+/// visibility path cannot run (Forward+ draws the scene again).
+#[test]
+fn the_faster_gbuffer_path_is_kept() {
+    let Some(gpu) = device() else { return };
+    let s = scene::cornell_box();
+    let camera = s.camera_or_framed();
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let mut renderer = GpuRenderer::new(d, q, &s, &s.lights, 64, 48).expect("renderer");
+    if !gpu.has_timestamps() {
+        let e = renderer
+            .choose_gbuffer_path(d, q, &camera, 3)
+            .expect_err("no timestamps");
+        assert!(e.to_string().contains("timestamp"), "{e}");
+        return;
+    }
+    let choice = renderer
+        .choose_gbuffer_path(d, q, &camera, 3)
+        .expect("choice");
+    let visibility_ms = *choice
+        .visibility_ms
+        .as_ref()
+        .expect("the visibility path runs");
+    assert!(
+        choice.hardware_ms > 0.0 && visibility_ms > 0.0,
+        "{choice:?}"
+    );
+    assert_eq!(choice.visibility, visibility_ms < choice.hardware_ms);
+    assert_eq!(
+        renderer.visibility(),
+        choice.visibility,
+        "the kept path is set"
+    );
+    renderer
+        .render(d, q, &camera, Vec3::splat(0.05))
+        .expect("a frame on the kept path");
+
+    let forward = ShadingConfig {
+        method: ShadingMethod::ForwardPlus,
+        ..ShadingConfig::default()
+    };
+    renderer.set_shading(d, q, &forward).ok();
+    if renderer.visibility() {
+        // Forward+ is refused while the visibility path is on: switch it off first.
+        renderer.set_visibility(d, false).expect("off");
+        renderer.set_shading(d, q, &forward).expect("Forward+");
+    }
+    let choice = renderer
+        .choose_gbuffer_path(d, q, &camera, 3)
+        .expect("choice");
+    let why = choice
+        .visibility_ms
+        .as_ref()
+        .expect_err("Forward+ excludes it");
+    assert!(why.contains("exclude each other"), "{why}");
+    assert!(!choice.visibility && !renderer.visibility());
+    assert!(
+        choice.to_string().starts_with("hardware rasteriser"),
+        "{choice}"
+    );
+}
+
 #[test]
 fn redrawing_methods_are_refused() {
     let Some(gpu) = device() else { return };
