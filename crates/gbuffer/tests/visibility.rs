@@ -294,6 +294,55 @@ fn the_32_bit_fallback_writes_the_64_bit_buffer() {
     }
 }
 
+/// The passes' timing names: per merge pass the compute passes, then the alpha-tested draw
+/// where there are alpha-tested meshes, each under the given prefix.
+#[test]
+fn passes_are_named_per_merge_pass() {
+    let Some(gpu) = gpu::test_device(&visibility::device_needs()) else {
+        return;
+    };
+    let gpass = GBufferPass::new(&gpu.device).expect("pass");
+    let buffer = VisibilityPass::buffer(&gpu.device, 32, 24).expect("buffer");
+    for (scene, alpha) in [
+        (scene::material_gallery(), true),
+        (opaque(scene::material_gallery()), false),
+    ] {
+        let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, &scene, &gpass).expect("upload");
+        for atomics in [Atomics::Wide, Atomics::Narrow] {
+            if atomics == Atomics::Wide && Atomics::best(&gpu.device) != Atomics::Wide {
+                continue;
+            }
+            let pass = VisibilityPass::with(&gpu.device, &gpass, Capacity::default(), atomics)
+                .expect("visibility");
+            let vis = pass
+                .bind(
+                    &gpu.device,
+                    &uploaded,
+                    gpass.frame_buffer(),
+                    (32, 24),
+                    &buffer,
+                )
+                .expect("bind")
+                .named("ss ");
+            let mut expected = vec!["ss visibility"];
+            if alpha {
+                expected.push("ss visibility alpha-tested");
+            }
+            if atomics == Atomics::Narrow {
+                expected.push("ss visibility ids");
+                if alpha {
+                    expected.push("ss visibility alpha-tested ids");
+                }
+            }
+            assert_eq!(
+                vis.pass_names(),
+                expected,
+                "{atomics:?}, alpha-tested {alpha}"
+            );
+        }
+    }
+}
+
 /// Lists too small for the deferred triangles lose some and say how many entries did not fit.
 #[test]
 fn overflowing_lists_are_counted() {

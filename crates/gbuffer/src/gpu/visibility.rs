@@ -300,8 +300,8 @@ pub struct Visibility {
     alpha: Option<AlphaDraws>,
     /// The alpha-tested draw's pipelines, per pass.
     alpha_pipelines: Vec<[wgpu::RenderPipeline; 2]>,
-    /// What the timed passes' names start with.
-    prefix: String,
+    /// The names the passes are timed under ([`Visibility::pass_names`]).
+    names: Vec<String>,
     /// Meshes (indices in the uploaded scene's meshes) drawn with the hardware rasteriser:
     /// their material discards fragments by alpha.
     pub alpha_tested: Vec<usize>,
@@ -333,27 +333,22 @@ impl Visibility {
 
     /// These passes timed under names starting with `prefix` (`"ss "`: `ss visibility`, …).
     pub fn named(mut self, prefix: &str) -> Self {
-        prefix.clone_into(&mut self.prefix);
+        for name in &mut self.names {
+            name.insert_str(0, prefix);
+        }
+        self.passes = self.passes.named(&self.names[0]);
+        if let Some(ids) = self.id_passes.take() {
+            let at = if self.alpha.is_some() { 2 } else { 1 };
+            self.id_passes = Some(ids.named(&self.names[at]));
+        }
         self
     }
 
     /// The names the passes are timed under, in order: `visibility`, `visibility alpha-tested`
     /// (with alpha-tested meshes), and for the narrow merge `visibility ids`, `visibility
-    /// alpha-tested ids`.
-    pub fn pass_names(&self) -> Vec<String> {
-        let p = &self.prefix;
-        let alpha = self.alpha.is_some();
-        let mut names = vec![format!("{p}visibility")];
-        if alpha {
-            names.push(format!("{p}visibility alpha-tested"));
-        }
-        if self.id_passes.is_some() {
-            names.push(format!("{p}visibility ids"));
-            if alpha {
-                names.push(format!("{p}visibility alpha-tested ids"));
-            }
-        }
-        names
+    /// alpha-tested ids` ([`Visibility::named`] puts a prefix before each).
+    pub fn pass_names(&self) -> &[String] {
+        &self.names
     }
 
     /// Records the frame's visibility buffer: the compute passes and, with alpha-tested meshes,
@@ -386,14 +381,14 @@ impl Visibility {
                 Some(depth.create_view(&Default::default()))
             }
         };
-        let names = self.pass_names();
-        let mut names = names.iter();
-        let mut next = || names.next().map_or("", String::as_str);
+        // Each phase's compute passes carry their name; its alpha-tested draw's follows it.
+        let mut alpha_names = self.names.iter().skip(1).step_by(2);
         let phases = std::iter::once(&self.passes).chain(&self.id_passes);
         for (passes, pipelines) in phases.zip(&self.alpha_pipelines) {
-            passes.clone().named(next()).encode(encoder, timer);
-            if let (Some(alpha), Some(view)) = (&self.alpha, &attachment) {
-                let name = next();
+            passes.encode(encoder, timer);
+            if let (Some(alpha), Some(view), Some(name)) =
+                (&self.alpha, &attachment, alpha_names.next())
+            {
                 draw_alpha(
                     encoder,
                     alpha,
@@ -405,6 +400,20 @@ impl Visibility {
         }
         Ok(())
     }
+}
+
+/// The passes' names: `visibility`, then the alpha-tested draw's (`alpha`), and the narrow
+/// merge's id passes and their draw (`narrow`).
+fn pass_names(alpha: bool, narrow: bool) -> Vec<String> {
+    let phases: &[&str] = if narrow { &["", " ids"] } else { &[""] };
+    phases
+        .iter()
+        .flat_map(|phase| {
+            let compute = format!("visibility{phase}");
+            let draw = alpha.then(|| format!("visibility alpha-tested{phase}"));
+            std::iter::once(compute).chain(draw)
+        })
+        .collect()
 }
 
 /// The hardware rasteriser's pass drawing the alpha-tested meshes into the visibility buffer.
@@ -697,7 +706,7 @@ impl VisibilityPass {
                 .chain(&self.ids)
                 .map(|p| p.alpha.clone())
                 .collect(),
-            prefix: String::new(),
+            names: pass_names(!table.alpha_tested.is_empty(), self.ids.is_some()),
             alpha_tested: table.alpha_tested,
             counts,
             materials: table.materials,
