@@ -1122,6 +1122,9 @@ fn run() -> Result<()> {
             if renderer.check_reflections(d, q)? {
                 eprintln!("note: the reflection maps' cut lists grew to hold the cut");
             }
+            if renderer.check_visibility(d, q)? {
+                eprintln!("note: the visibility buffer's lists grew to hold every triangle");
+            }
             let rendered = renderer.render(d, q, &camera, ambient)?;
             let display = pipeline::gpu::read_display(
                 d,
@@ -2180,6 +2183,9 @@ fn gpu_sequence(
         }
         if renderer.check_reflections(d, q)? {
             eprintln!("note: the reflection maps' cut lists grew to hold frame {k}'s cut");
+        }
+        if renderer.check_visibility(d, q)? {
+            eprintln!("note: the visibility buffer's lists grew to hold frame {k}'s triangles");
         }
         if warmed < args.warm_up {
             warmed += 1;

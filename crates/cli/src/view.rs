@@ -1347,6 +1347,9 @@ impl Viewer {
         if live.renderer.check_reflections(d, q)? {
             self.message = Some("the reflection maps' cut lists grew to hold the cut".into());
         }
+        if live.renderer.check_visibility(d, q)? {
+            self.message = Some("the visibility buffer's lists grew to hold every triangle".into());
+        }
         if self.timings.len() == TIMING_HISTORY {
             self.timings.pop_front();
         }

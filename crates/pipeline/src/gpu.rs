@@ -9,7 +9,7 @@ use gbuffer::{
     Frame, Image, TextureOptions,
     gpu::{
         BlendedSurfaces, GBufferPass, GBufferTargets, GpuScene,
-        visibility::{Resolve, ResolvePass, Visibility, VisibilityPass},
+        visibility::{Atomics, Capacity, Resolve, ResolvePass, Visibility, VisibilityPass},
     },
 };
 use glam::{Vec3, Vec4};
@@ -255,8 +255,10 @@ impl VisibilityStage {
         gbuffer_pass: &GBufferPass,
         scene: &GpuScene,
         targets: &GBufferTargets,
+        capacity: Capacity,
     ) -> Result<Self, RenderError> {
-        let raster = VisibilityPass::new(device, gbuffer_pass)?;
+        let atomics = Atomics::best(device);
+        let raster = VisibilityPass::with(device, gbuffer_pass, capacity, atomics)?;
         let resolve = ResolvePass::new(device, gbuffer_pass)?;
         let main = Self::bind(
             device,
@@ -1318,9 +1320,24 @@ impl GpuRenderer {
             self.visibility = None;
             return Ok(());
         }
+        self.set_visibility_with(device, Capacity::default())
+    }
+
+    /// [`GpuRenderer::set_visibility`] on, its deferred triangles' lists of `capacity` at most
+    /// (grown by [`GpuRenderer::check_visibility`] when a frame overflows them).
+    pub fn set_visibility_with(
+        &mut self,
+        device: &wgpu::Device,
+        capacity: Capacity,
+    ) -> Result<(), RenderError> {
         visibility_exclusion(self.shading.config().method, true)?;
-        let stage =
-            VisibilityStage::new(device, &self.gbuffer_pass, &self.scene, &self.sized.targets)?;
+        let stage = VisibilityStage::new(
+            device,
+            &self.gbuffer_pass,
+            &self.scene,
+            &self.sized.targets,
+            capacity,
+        )?;
         self.visibility = Some(stage);
         let bound = self.rebind_visibility(device);
         if bound.is_err() {
@@ -1348,6 +1365,36 @@ impl GpuRenderer {
     /// ([`GpuRenderer::set_visibility`]).
     pub fn visibility(&self) -> bool {
         self.visibility.is_some()
+    }
+
+    /// Checks that the last frame's visibility buffer lost no triangle to its lists (reads back
+    /// four counters per bound G-buffer). When it did, the lists grow fourfold (at most the
+    /// device's largest binding) and the answer is `true`: render the frame again. An error when
+    /// even the largest lists are too small; `false` without the visibility path.
+    pub fn check_visibility(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<bool, RenderError> {
+        let Some(v) = &mut self.visibility else {
+            return Ok(false);
+        };
+        let mut lost = v.main.vis.overflow(device, queue)?;
+        if let Some(ss) = &v.ss {
+            lost += ss.vis.overflow(device, queue)?;
+        }
+        if lost == 0 {
+            return Ok(false);
+        }
+        let Some(grown) = v.raster.capacity().grown(device) else {
+            return Err(RenderError::Visibility(format!(
+                "{lost} list entries did not fit in the visibility buffer's largest lists ({:?}): lower the resolution or the triangle count",
+                v.raster.capacity()
+            )));
+        };
+        v.raster = VisibilityPass::with(device, &self.gbuffer_pass, grown, v.raster.atomics())?;
+        self.rebind_visibility(device)?;
+        Ok(true)
     }
 
     /// Measures the G-buffer's two paths from `camera` over `frames` frames each (median GPU

@@ -176,6 +176,44 @@ fn the_faster_gbuffer_path_is_kept() {
     );
 }
 
+/// Lists too small for a frame's deferred triangles lose some: `check_visibility` says so and
+/// grows them, until the frame is the hardware path's again.
+#[test]
+fn overflowing_lists_grow_until_every_triangle_is_drawn() {
+    let Some(gpu) = device() else { return };
+    let s = scene::cornell_box();
+    let camera = s.camera_or_framed();
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let mut renderer = GpuRenderer::new(d, q, &s, &s.lights, 96, 72).expect("renderer");
+    let hardware = renderer
+        .render(d, q, &camera, Vec3::splat(0.05))
+        .expect("hardware frame");
+    let tiny = visibility::Capacity {
+        deferred: 1,
+        setups: 1,
+        blocks: 1,
+    };
+    renderer.set_visibility_with(d, tiny).expect("visibility");
+    let mut grown = 0;
+    loop {
+        let frame = renderer
+            .render(d, q, &camera, Vec3::splat(0.05))
+            .expect("visibility frame");
+        if !renderer.check_visibility(d, q).expect("check") {
+            let db = psnr(&hardware.image, &frame.image);
+            assert!(db >= 40.0, "after {grown} growths: PSNR {db:.1} dB");
+            break;
+        }
+        if grown == 0 {
+            let db = psnr(&hardware.image, &frame.image);
+            assert!(db < 30.0, "triangles lost, yet PSNR {db:.1} dB");
+        }
+        grown += 1;
+        assert!(grown <= 10, "still overflowing after {grown} growths");
+    }
+    assert!(grown > 0, "the tiny lists overflowed");
+}
+
 #[test]
 fn redrawing_methods_are_refused() {
     let Some(gpu) = device() else { return };

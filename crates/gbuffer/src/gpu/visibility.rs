@@ -101,6 +101,22 @@ impl Default for Capacity {
     }
 }
 
+impl Capacity {
+    /// Four times the entries of each list, within `device`'s largest storage binding; none
+    /// when every list is already at that limit.
+    pub fn grown(self, device: &wgpu::Device) -> Option<Self> {
+        let limits = device.limits();
+        let largest = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        let grow = |entries: u32, bytes: u64| (u64::from(entries) * 4).min(largest / bytes) as u32;
+        let grown = Self {
+            deferred: grow(self.deferred, 4),
+            setups: grow(self.setups, SETUP_BYTES),
+            blocks: grow(self.blocks, 8),
+        };
+        (grown != self).then_some(grown)
+    }
+}
+
 /// Bytes of one set-up fan triangle (`LargeSetup` of `visibility.wgsl`).
 const SETUP_BYTES: u64 = 192;
 
@@ -556,6 +572,12 @@ impl VisibilityPass {
     /// How this pass merges covered pixels.
     pub fn atomics(&self) -> Atomics {
         self.atomics
+    }
+
+    /// The deferred path's list capacities (at most: [`VisibilityPass::bind`] sizes them to
+    /// what the scene can append).
+    pub fn capacity(&self) -> Capacity {
+        self.capacity
     }
 
     /// A visibility buffer for `width × height` pixels (8 bytes each, row-major; `STORAGE |
