@@ -106,7 +106,9 @@ impl Capacity {
     /// when every list is already at that limit.
     pub fn grown(self, device: &wgpu::Device) -> Option<Self> {
         let limits = device.limits();
-        let largest = u64::from(limits.max_storage_buffer_binding_size).min(limits.max_buffer_size);
+        let largest = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
         let grow = |entries: u32, bytes: u64| (u64::from(entries) * 4).min(largest / bytes) as u32;
         let grown = Self {
             deferred: grow(self.deferred, 4),
