@@ -48,7 +48,10 @@ const SETUPS: u32 = 1u;
 const WORK: u32 = 2u;
 const OVERFLOW: u32 = 3u;
 
-const SUBPIXEL: i64 = 256li;
+const SUBPIXEL: i32 = 256;
+// The snapped extent (1/SUBPIXEL pixels) up to which a triangle's edge functions fit in 32 bits:
+// two products of at most 2^14 · 2^14 each. Larger triangles take the exact 64-bit sign.
+const COMPACT_EXTENT: i32 = 16384;
 
 fn image_size() -> vec2<u32> {
     return vec2<u32>(frame.viewport.xy);
@@ -74,17 +77,21 @@ const PLANES = array(
 );
 
 // A triangle ready for scan conversion (`gbuffer::cpu::SetupTriangle`, positively oriented).
+// Snapped positions stay within 2^24 (the 4w guard band of an image of at most 16 384 pixels
+// a side), so they and their differences fit 32 bits; their products need up to 51.
 struct Setup {
     // Snapped framebuffer positions in 1/SUBPIXEL pixels, y down.
-    x: vec3<i64>,
-    y: vec3<i64>,
+    x: vec3<i32>,
+    y: vec3<i32>,
     // 1 where the edge opposite vertex i is a top or left edge.
-    top_left: vec3<i64>,
+    top_left: vec3<i32>,
     // Unsnapped framebuffer positions (pixels) and NDC depths.
     screen: array<vec2<f32>, 3>,
     z: vec3<f32>,
     // Inclusive pixel bounds clamped to the image: x0, y0, x1, y1.
     bounds: vec4<i32>,
+    // 1 where the snapped extent is at most COMPACT_EXTENT both ways.
+    compact: u32,
 }
 
 // Clip-space position of vertex k (0, 1, 2) of triangle t of `mesh`.
@@ -103,25 +110,61 @@ fn inside_planes(c: vec4<f32>) -> bool {
 }
 
 // Floor division (`i64::div_euclid` for a positive divisor).
-fn floor_div(a: i64, b: i64) -> i64 {
+fn floor_div(a: i32, b: i32) -> i32 {
     let q = a / b;
-    return select(q, q - 1li, a % b != 0li && a < 0li);
+    return select(q, q - 1, a % b != 0 && a < 0);
 }
 
-fn edge(ax: i64, ay: i64, bx: i64, by: i64, px: i64, py: i64) -> i64 {
-    return (bx - ax) * (py - ay) - (by - ay) * (px - ax);
+// The product of a and b as a 64-bit two's complement (low word, high word), from 16-bit
+// halves: exact, with 32-bit integers only.
+fn wide_product(a: i32, b: i32) -> vec2<u32> {
+    let ua = u32(abs(a));
+    let ub = u32(abs(b));
+    let low = (ua & 0xFFFFu) * (ub & 0xFFFFu);
+    let cross0 = (ua & 0xFFFFu) * (ub >> 16u);
+    let cross1 = (ua >> 16u) * (ub & 0xFFFFu);
+    let middle = (low >> 16u) + (cross0 & 0xFFFFu) + (cross1 & 0xFFFFu);
+    let lo = (low & 0xFFFFu) | (middle << 16u);
+    let hi = (ua >> 16u) * (ub >> 16u) + (cross0 >> 16u) + (cross1 >> 16u) + (middle >> 16u);
+    if (a < 0) == (b < 0) {
+        return vec2(lo, hi);
+    }
+    // −(hi, lo): the complement plus one, carried into the high word.
+    let neg_lo = ~lo + 1u;
+    return vec2(neg_lo, ~hi + select(0u, 1u, neg_lo == 0u));
 }
 
-fn is_top_left(ax: i64, ay: i64, bx: i64, by: i64) -> i64 {
+// The sign (−1, 0, 1) of a · b − c · d, exact for any 32-bit operands' products.
+fn wide_sign(a: i32, b: i32, c: i32, d: i32) -> i32 {
+    let p = wide_product(a, b);
+    let q = wide_product(c, d);
+    let lo = p.x - q.x;
+    let hi = p.y - q.y - select(0u, 1u, p.x < q.x);
+    if bitcast<i32>(hi) < 0 {
+        return -1;
+    }
+    return select(1, 0, hi == 0u && lo == 0u);
+}
+
+// The sign of the edge function of a→b at p, (b − a) × (p − a): in 32 bits for a compact
+// triangle, else exactly in 64.
+fn edge_sign(ax: i32, ay: i32, bx: i32, by: i32, px: i32, py: i32, compact: bool) -> i32 {
+    if compact {
+        return sign((bx - ax) * (py - ay) - (by - ay) * (px - ax));
+    }
+    return wide_sign(bx - ax, py - ay, by - ay, px - ax);
+}
+
+fn is_top_left(ax: i32, ay: i32, bx: i32, by: i32) -> i32 {
     let dx = bx - ax;
     let dy = by - ay;
-    return select(0li, 1li, dy < 0li || (dy == 0li && dx > 0li));
+    return select(0, 1, dy < 0 || (dy == 0 && dx > 0));
 }
 
-fn snap(s: f32) -> i64 {
+fn snap(s: f32) -> i32 {
     // Rust's `f32::round`: halves away from zero (WGSL's `round` takes them to even).
     let v = s * 256.0;
-    return i64(sign(v) * floor(abs(v) + 0.5));
+    return i32(sign(v) * floor(abs(v) + 0.5));
 }
 
 // `gbuffer::cpu::setup` of clip-space vertices a, b, c: false where the triangle has no area,
@@ -129,8 +172,8 @@ fn snap(s: f32) -> i64 {
 fn setup(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, cull_back: bool, out: ptr<function, Setup>) -> bool {
     let size = vec2<f32>(image_size());
     var clip = array(a, b, c);
-    var fx: vec3<i64>;
-    var fy: vec3<i64>;
+    var fx: vec3<i32>;
+    var fy: vec3<i32>;
     var screen: array<vec2<f32>, 3>;
     for (var i = 0u; i < 3u; i++) {
         let ndc = clip[i].xyz / clip[i].w;
@@ -138,16 +181,19 @@ fn setup(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, cull_back: bool, out: ptr<fun
         fx[i] = snap(screen[i].x);
         fy[i] = snap(screen[i].y);
     }
-    let area = edge(fx[0], fy[0], fx[1], fy[1], fx[2], fy[2]);
+    let extent = max(max(fx[0], max(fx[1], fx[2])) - min(fx[0], min(fx[1], fx[2])), max(fy[0], max(fy[1], fy[2])) - min(fy[0], min(fy[1], fy[2])));
+    let compact = extent <= COMPACT_EXTENT;
+    let area = edge_sign(fx[0], fy[0], fx[1], fy[1], fx[2], fy[2], compact);
     // Counter-clockwise on screen (y down: a negative area) is the winding's front.
-    if area == 0li || (cull_back && area > 0li) {
+    if area == 0 || (cull_back && area > 0) {
         return false;
     }
     var order = vec3(0u, 1u, 2u);
-    if area < 0li {
+    if area < 0 {
         order = vec3(0u, 2u, 1u);
     }
     var s: Setup;
+    s.compact = select(0u, 1u, compact);
     for (var i = 0u; i < 3u; i++) {
         s.x[i] = fx[order[i]];
         s.y[i] = fy[order[i]];
@@ -159,17 +205,17 @@ fn setup(a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, cull_back: bool, out: ptr<fun
         let k = (i + 2u) % 3u;
         s.top_left[i] = is_top_left(s.x[j], s.y[j], s.x[k], s.y[k]);
     }
-    let half = SUBPIXEL / 2li;
+    let half = SUBPIXEL / 2;
     let lo = vec2(min(s.x[0], min(s.x[1], s.x[2])), min(s.y[0], min(s.y[1], s.y[2])));
     let hi = vec2(max(s.x[0], max(s.x[1], s.x[2])), max(s.y[0], max(s.y[1], s.y[2])));
-    let x0 = max(floor_div(lo.x - half + SUBPIXEL - 1li, SUBPIXEL), 0li);
-    let y0 = max(floor_div(lo.y - half + SUBPIXEL - 1li, SUBPIXEL), 0li);
-    let x1 = min(floor_div(hi.x - half, SUBPIXEL), i64(image_size().x) - 1li);
-    let y1 = min(floor_div(hi.y - half, SUBPIXEL), i64(image_size().y) - 1li);
+    let x0 = max(floor_div(lo.x - half + SUBPIXEL - 1, SUBPIXEL), 0);
+    let y0 = max(floor_div(lo.y - half + SUBPIXEL - 1, SUBPIXEL), 0);
+    let x1 = min(floor_div(hi.x - half, SUBPIXEL), i32(image_size().x) - 1);
+    let y1 = min(floor_div(hi.y - half, SUBPIXEL), i32(image_size().y) - 1);
     if x0 > x1 || y0 > y1 {
         return false;
     }
-    s.bounds = vec4(i32(x0), i32(y0), i32(x1), i32(y1));
+    s.bounds = vec4(x0, y0, x1, y1);
     *out = s;
     return true;
 }
@@ -181,12 +227,16 @@ fn edge_f(a: vec2<f32>, b: vec2<f32>, p: vec2<f32>) -> f32 {
 // Pixel (px, py) against triangle `id`: covered (top-left rule) and in front of what the
 // visibility buffer holds, it is merged in.
 fn cover(s: Setup, id: u32, px: i32, py: i32) {
-    let x = i64(px) * SUBPIXEL + SUBPIXEL / 2li;
-    let y = i64(py) * SUBPIXEL + SUBPIXEL / 2li;
-    let e0 = edge(s.x[1], s.y[1], s.x[2], s.y[2], x, y);
-    let e1 = edge(s.x[2], s.y[2], s.x[0], s.y[0], x, y);
-    let e2 = edge(s.x[0], s.y[0], s.x[1], s.y[1], x, y);
-    if e0 + s.top_left[0] <= 0li || e1 + s.top_left[1] <= 0li || e2 + s.top_left[2] <= 0li {
+    let x = px * SUBPIXEL + SUBPIXEL / 2;
+    let y = py * SUBPIXEL + SUBPIXEL / 2;
+    let compact = s.compact != 0u;
+    // Inside each edge: the edge function positive, or zero on a top or left edge.
+    let e = vec3(
+        edge_sign(s.x[1], s.y[1], s.x[2], s.y[2], x, y, compact),
+        edge_sign(s.x[2], s.y[2], s.x[0], s.y[0], x, y, compact),
+        edge_sign(s.x[0], s.y[0], s.x[1], s.y[1], x, y, compact),
+    );
+    if any(e + s.top_left <= vec3(0)) {
         return;
     }
     // Depth from barycentrics of the unsnapped positions, as the CPU's plane equations.

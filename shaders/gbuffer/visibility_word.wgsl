@@ -10,11 +10,14 @@
 //   smallest id among the fragments at exactly that depth. The same result, bit for bit (no
 //   precision is given up), at twice the coverage work.
 // A branch's conversions through `VisibilityValue` type-check in both variants; the other
-// variant's branch is dead (a constant condition).
+// variant's branch is dead (a constant condition). The narrow variant has no 64-bit type at
+// all: it runs on devices without 64-bit integers.
 
 alias VisibilityWord = atomic<u64>;
 alias VisibilityValue = u64;
 const WIDE_ATOMICS: bool = true;
+// Where the depth goes in a packed word (0 in the narrow variant, whose branch is dead).
+const DEPTH_SHIFT: u32 = 32u;
 // The narrow merge's second pass (ids at the depths the first one left).
 const ID_PASS: bool = false;
 
@@ -23,7 +26,7 @@ const ID_PASS: bool = false;
 fn merge(pixel: u32, z: f32, id: u32) {
     let depth = bitcast<u32>(z);
     if WIDE_ATOMICS {
-        atomicMin(&visibility[pixel], VisibilityValue((u64(depth) << 32u) | u64(id)));
+        atomicMin(&visibility[pixel], (VisibilityValue(depth) << DEPTH_SHIFT) | VisibilityValue(id));
     } else if !ID_PASS {
         atomicMin(&visibility[2u * pixel + 1u], VisibilityValue(depth));
     } else if atomicLoad(&visibility[2u * pixel + 1u]) == VisibilityValue(depth) {

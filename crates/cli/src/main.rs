@@ -247,8 +247,8 @@ struct Args {
     /// Draw the G-buffer through the compute rasteriser's visibility buffer and its resolve
     /// (GPU; `gbuffer::gpu::visibility`) instead of the hardware z-prepass and G-buffer pass;
     /// `--visibility=auto` measures both from the first camera and keeps the faster (the
-    /// summary's `gbuffer:` line gives both times). Needs 64-bit integers (64-bit atomics are
-    /// used where the device has them); Forward+ and the light pre-pass are refused.
+    /// summary's `gbuffer:` line gives both times). Runs on any device (64-bit atomics where it
+    /// has them, else two passes of 32-bit ones); Forward+ and the light pre-pass are refused.
     #[arg(long, value_enum, value_name = "MODE", num_args = 0..=1, require_equals = true, default_missing_value = "on")]
     visibility: Option<VisibilityMode>,
     /// Screen-space ambient occlusion of the ambient and indirect light (GPU): `filter` (eq. 7.1),

@@ -19,9 +19,10 @@
 //! the G-buffer pass would keep merging its depth and id the same way
 //! ([`Visibility::encode`], `visibility_alpha.wgsl`). Blended meshes the scene draws
 //! forward ([`BlendedSurfaces::Forward`](super::BlendedSurfaces)) are left out, as the
-//! G-buffer pass leaves them out. The device needs 64-bit integers ([`FEATURES`]; 64-bit
-//! atomic min, [`WIDE_FEATURES`], where it has them), and the resolve ([`ResolvePass`]) five
-//! storage textures per stage ([`device_needs`]).
+//! G-buffer pass leaves them out. The device needs no feature ([`FEATURES`]: the edge
+//! functions' products are exact in pairs of 32-bit words; 64-bit atomics, [`WIDE_FEATURES`],
+//! are used where it has them), and the resolve ([`ResolvePass`]) five storage textures per
+//! stage ([`device_needs`]).
 //!
 //! ```no_run
 //! use gbuffer::{Frame, gpu::{GBufferPass, GBufferTargets, GpuScene, visibility::{self, ResolvePass, VisibilityPass}}};
@@ -51,12 +52,13 @@ use bytemuck::{Pod, Zeroable};
 use super::upload::GpuScene;
 use crate::GBufferError;
 
-/// What the kernels need beyond `wgpu::Limits::default()`: 64-bit integers (the edge
-/// functions of 1/256-pixel positions in the 4w guard band need up to 47 bits).
-pub const FEATURES: wgpu::Features = wgpu::Features::SHADER_INT64;
+/// What the kernels need of a device's features: none (the edge functions' 64-bit products
+/// are taken exactly in 32-bit words, and [`Atomics::Narrow`] merges with 32-bit atomics).
+pub const FEATURES: wgpu::Features = wgpu::Features::empty();
 
-/// What [`Atomics::Wide`] needs beyond [`FEATURES`]: 64-bit atomic min on storage buffers.
-pub const WIDE_FEATURES: wgpu::Features = wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX;
+/// What [`Atomics::Wide`] needs: 64-bit integers and 64-bit atomic min on storage buffers.
+pub const WIDE_FEATURES: wgpu::Features =
+    wgpu::Features::SHADER_INT64.union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX);
 
 /// Storage textures the resolve writes in one stage (the five colour targets; WebGPU's
 /// default limit is 4).
@@ -119,8 +121,9 @@ impl Capacity {
     }
 }
 
-/// Bytes of one set-up fan triangle (`LargeSetup` of `visibility.wgsl`).
-const SETUP_BYTES: u64 = 192;
+/// Bytes of one set-up fan triangle (`LargeSetup` of `visibility.wgsl`: its `Setup` of 128
+/// bytes and the id, rounded to the 16-byte alignment).
+const SETUP_BYTES: u64 = 144;
 
 /// Uniform block `Raster` of `visibility.wgsl`.
 #[repr(C)]
@@ -252,6 +255,7 @@ impl Atomics {
                 .set("VisibilityWord", "atomic<u32>")
                 .set("VisibilityValue", "u32")
                 .set("WIDE_ATOMICS", "false")
+                .set("DEPTH_SHIFT", "0u")
                 .set("ID_PASS", id_pass),
         }
     }
