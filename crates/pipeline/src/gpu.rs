@@ -1451,10 +1451,7 @@ impl GpuRenderer {
     ) -> Result<f64, RenderError> {
         let mut times = Vec::with_capacity(frames as usize);
         for _ in 0..frames {
-            let mut encoder = device.create_command_encoder(&Default::default());
-            self.encode(&mut encoder);
-            queue.submit([encoder.finish()]);
-            let timings = self.timings(device, queue)?;
+            let timings = self.run_timed(device, queue)?;
             times.push(
                 timings
                     .iter()
@@ -2299,6 +2296,15 @@ impl GpuRenderer {
     ) -> Result<Vec<PassTiming>, RenderError> {
         self.set_camera(queue, camera)?;
         self.set_ambient(queue, ambient);
+        self.run_timed(device, queue)
+    }
+
+    /// Records and submits one frame as set, and reports the GPU time of each pass.
+    fn run_timed(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<PassTiming>, RenderError> {
         let mut encoder = device.create_command_encoder(&Default::default());
         self.encode(&mut encoder);
         queue.submit([encoder.finish()]);

@@ -337,8 +337,6 @@ pub struct Visibility {
     buffer: wgpu::Buffer,
     size: (u32, u32),
     meshes: wgpu::Buffer,
-    /// The lists and dispatch sizes the passes share (kept alive with them).
-    _lists: Vec<wgpu::Buffer>,
 }
 
 impl Visibility {
@@ -741,7 +739,6 @@ impl VisibilityPass {
             buffer: visibility.clone(),
             size,
             meshes,
-            _lists: vec![uniform, deferred, setups, blocks, dispatch],
         })
     }
 }
