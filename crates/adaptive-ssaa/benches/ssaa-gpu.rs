@@ -2,7 +2,8 @@
 //! measured in the same run — the set-ups of Tables 4.1 and 4.2: Sponza (with the built-in
 //! checker texture on its untextured materials) and the textured DamagedHelmet, 1024×768 and
 //! 1920×1080, m = 2, 3, 4, every geometric metric alone and ND + shading metric (loop and
-//! sorted resolve), plus one sample per pixel and FXAA. Times are GPU times of the shading
+//! sorted resolve), plus one sample per pixel, FXAA and SMAA 1x (the `smaa` crate, same device
+//! and frame: [`smaa`]). Times are GPU times of the shading
 //! passes after the shared supersampled G-buffer (reported apart), with the light loop run once
 //! ("real-time") and 32 times per sample ("stalled"). MSE/PSNR (sRGB, [0, 1]) and FLIP are
 //! measured against full supersampling. Writes `adaptive-ssaa-<adapter>-<date>.{md,json}`.
@@ -19,6 +20,8 @@ use glam::Vec3;
 use gpu::{Gpu, PassTimer};
 use scene::{Light, Scene};
 use serde::Serialize;
+
+mod smaa;
 
 /// Benchmarks adaptive supersampling against full supersampling, one sample and FXAA.
 #[derive(Parser, Debug)]
@@ -69,6 +72,9 @@ struct Report {
     frames: u32,
     stall: u32,
     gbuffer: Vec<(String, u32, u32, u32, Stat)>,
+    /// Per scene, size and m: the bracket of [`smaa::Smaa::time`] around an empty submission,
+    /// with the one-sample shading (the floor under the SMAA rows).
+    smaa_floor: Vec<(String, u32, u32, u32, Stat)>,
     rows: Vec<Row>,
 }
 
@@ -161,6 +167,7 @@ fn main() -> Result<()> {
     );
     let mut rows = Vec::new();
     let mut gbuffer_times = Vec::new();
+    let mut smaa_floor = Vec::new();
     for (name, scene, camera) in scenes(quick)? {
         let lights = lights(&scene)?;
         for (w, h) in sizes.iter().copied().map(bench::size) {
@@ -238,6 +245,19 @@ fn main() -> Result<()> {
                         one,
                         one,
                     ));
+                    let mut smaa = smaa::Smaa::new(&gpu, &r.ssaa, w, h);
+                    let mut smaa_time = |on: bool| -> Result<Stat> {
+                        Ok(Stat::of(bench::warm_then_time(frames, || {
+                            smaa.time(&gpu, &r.ssaa, &timer, on)
+                        })?))
+                    };
+                    if stall == 1 {
+                        smaa_floor.push((name.clone(), w, h, m, smaa_time(false)?));
+                    }
+                    // Last, so that the output holds SMAA's image.
+                    let smaa_ms = smaa_time(true)?;
+                    let smaa_image = smaa.read(&gpu)?;
+                    rows.push(row("SMAA 1x", smaa_ms, &smaa_image, one, one));
                     // The configuration of a method: its metrics, constants scaled.
                     let method_config = |(_, metric, shading, resolve, scale): &Method| {
                         let c = config.constants;
@@ -286,7 +306,7 @@ fn main() -> Result<()> {
                             && label == "ND+shading")
                             || (quick && label == "ND+shading");
                         if let (Some(dir), true) = (&args.images, pictures) {
-                            write_pictures(dir, &name, m, &full, &out)?;
+                            write_pictures(dir, &name, m, &full, &out, &smaa_image)?;
                         }
                     }
                     // Along the scales of the constants of each method.
@@ -328,6 +348,16 @@ fn main() -> Result<()> {
     for (s, w, h, m, g) in &gbuffer_times {
         md.push_str(&format!("| {s} | {w}×{h} | {m} | {:.3} |\n", g.median_ms));
     }
+    md.push_str(
+        "\nSMAA 1x: the `smaa` crate 0.21 on `S` (8-bit sRGB targets); it submits its own passes, so \
+         its time is bracketed by timestamps in the submissions before and after it, a full \
+         supersampling pass keeping the GPU busy meanwhile. The same bracket around an empty \
+         submission (with the one-sample shading, as in the SMAA rows):\n\n\
+         | scene | size | m | ms |\n|---|---|---|---|\n",
+    );
+    for (s, w, h, m, f) in &smaa_floor {
+        md.push_str(&format!("| {s} | {w}×{h} | {m} | {:.3} |\n", f.median_ms));
+    }
     md.push_str("\n## Shading\n\n| scene | size | m | method | ms | ×full | stalled ms | ×full | MSE ×1e-4 | PSNR dB | FLIP | samples % | shaded % |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for r in rows.iter().filter(|r| r.stall == 1) {
         let stalled = rows.iter().find(|s| {
@@ -354,6 +384,7 @@ fn main() -> Result<()> {
         frames: frames,
         stall: STALL,
         gbuffer: gbuffer_times,
+        smaa_floor,
         rows,
     };
     args.options
@@ -366,6 +397,7 @@ fn write_pictures(
     m: u32,
     full: &Image<[f32; 4]>,
     out: &adaptive_ssaa::cpu::Output,
+    smaa: &Image<[f32; 4]>,
 ) -> Result<()> {
     std::fs::create_dir_all(dir)?;
     let p = |what: &str| dir.join(format!("ssaa-{name}-{what}.png"));
@@ -375,6 +407,8 @@ fn write_pictures(
     adaptive_ssaa::cpu::sample_heatmap(&out.counts, m * m).write_png(&p("samples"))?;
     error_heatmap(&out.image, full, 0.25)?.write_png(&p("error-adaptive"))?;
     error_heatmap(&out.first, full, 0.25)?.write_png(&p("error-one-sample"))?;
+    smaa.write_png(&p("smaa"))?;
+    error_heatmap(smaa, full, 0.25)?.write_png(&p("error-smaa"))?;
     println!("wrote pictures to {}", dir.display());
     Ok(())
 }
