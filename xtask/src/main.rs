@@ -1,8 +1,9 @@
 //! Project tasks.
 //!
 //! - `cargo xtask test [ARGS]`: makes sure a Vulkan driver exists (installs Mesa's software
-//!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found) and Xvfb (for
-//!   the viewer's tests, with the X libraries winit loads), then runs the
+//!   Vulkan, Debian package `mesa-vulkan-drivers`, with apt when none is found), Xvfb (for
+//!   the viewer's tests, with the X libraries winit loads) and what OpenSubdiv's C++ build
+//!   needs (`deferred-peers`: cmake, g++, libclang-dev), then runs the
 //!   whole test suite in release mode (`cargo test --workspace --release [ARGS]`), runs every
 //!   benchmark once (`cargo test --bench "*"`: the GPU benches' run-once mode at reduced sizes on
 //!   any adapter, criterion's test mode), builds every example, and runs every `*-embed`
@@ -10,7 +11,10 @@
 //!   plus the crate's stated needs).
 //! - `cargo xtask bench [ARGS]`: runs every GPU benchmark (the `*-gpu` bench targets beside
 //!   their crates, on the `deferred-bench` harness; reports under docs/bench/) with `ARGS`,
-//!   then the CPU criterion benches.
+//!   then the CPU criterion benches. `peers-gpu` builds OpenSubdiv (CMake, g++ and libclang,
+//!   installed with apt when missing, as for `test`) and calls MeshLab and Open3D through Python
+//!   (pip-installed from `crates/peers/requirements.txt` when they do not import; without them
+//!   it reports them as not run).
 //! - `cargo xtask bench-bins [DIR]`: builds every GPU benchmark and copies its executable to
 //!   `DIR/<name>` (default `.gpu-bin`), to carry to a machine without Rust (the lent GPU).
 //!   Start them there with `--bench` (without it they run once at reduced sizes, as in tests).
@@ -112,6 +116,63 @@ fn ensure_xvfb() -> Result<()> {
     Ok(())
 }
 
+/// What building OpenSubdiv's C++ (the `deferred-peers` crate, through opensubdiv-petite-sys)
+/// needs: CMake, a C++ compiler, and libclang for its bindings.
+fn ensure_opensubdiv_tools() -> Result<()> {
+    let libclang = || {
+        Command::new("ldconfig").arg("-p").output().is_ok_and(|o| {
+            String::from_utf8_lossy(&o.stdout).lines().any(|l| {
+                l.trim_start().starts_with("libclang-") || l.trim_start().starts_with("libclang.so")
+            })
+        })
+    };
+    if on_path("cmake") && on_path("c++") && libclang() {
+        return Ok(());
+    }
+    eprintln!(
+        "xtask: installing what OpenSubdiv's build needs (cmake, g++, libclang-dev) with apt"
+    );
+    apt_install(&["cmake", "g++", "libclang-dev"])?;
+    if !(on_path("cmake") && on_path("c++") && libclang()) {
+        bail!("cmake, g++ and libclang-dev installed, but cmake, c++ or libclang is still missing");
+    }
+    Ok(())
+}
+
+/// The Python libraries `peers-gpu` compares with (MeshLab, Open3D;
+/// `crates/peers/requirements.txt`), installed with pip for the user where they do not import.
+/// Best effort: without them (no pip, no network) the benchmark says they did not run.
+fn ensure_python_peers() {
+    let imports = || {
+        Command::new("python3")
+            .args(["-c", "import pymeshlab, open3d"])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if imports() {
+        return;
+    }
+    let requirements = workspace_root().join("crates/peers/requirements.txt");
+    // Open3D's wheel loads libusb.
+    if let Err(e) = apt_install(&["libusb-1.0-0"]) {
+        eprintln!("xtask: libusb-1.0-0 (for Open3D) not installed: {e:#}");
+    }
+    eprintln!(
+        "xtask: installing the Python peers of peers-gpu ({}) with pip",
+        requirements.display()
+    );
+    let installed = Command::new("python3")
+        .args(["-m", "pip", "install", "--user", "-q", "-r"])
+        .arg(&requirements)
+        .status()
+        .is_ok_and(|s| s.success());
+    if !installed || !imports() {
+        eprintln!(
+            "xtask: pymeshlab/open3d are not importable; peers-gpu will report them as not run"
+        );
+    }
+}
+
 /// `apt-get install` of `packages` (through sudo when not root).
 fn apt_install(packages: &[&str]) -> Result<()> {
     let root = Command::new("id")
@@ -148,6 +209,7 @@ fn main() -> Result<()> {
         "test" => {
             ensure_vulkan()?;
             ensure_xvfb()?;
+            ensure_opensubdiv_tools()?;
             run(cargo()
                 .args(["test", "--workspace", "--release"])
                 .args(&rest))?;
@@ -166,6 +228,8 @@ fn main() -> Result<()> {
             Ok(())
         }
         "bench" => {
+            ensure_opensubdiv_tools()?;
+            ensure_python_peers();
             // `cargo bench` runs each program in its package's folder: the reports go to the
             // workspace's docs/bench unless --out says otherwise.
             let out = workspace_root().join("docs/bench");
@@ -191,6 +255,7 @@ fn main() -> Result<()> {
             run(criterion.args(["--", "--quick"]))
         }
         "bench-bins" => {
+            ensure_opensubdiv_tools()?;
             let dir = PathBuf::from(rest.first().map_or(".gpu-bin", String::as_str));
             bench_bins(&dir)
         }

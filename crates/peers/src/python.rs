@@ -56,7 +56,6 @@ for _ in range(runs):
         times.append((time.perf_counter() - start) * 1e3)
         vertices = ms.current_mesh().vertex_matrix()
         faces = ms.current_mesh().face_matrix()
-        version = lib.__version__ if hasattr(lib, "__version__") else "?"
     else:
         mesh = lib.io.read_triangle_mesh(obj)
         start = time.perf_counter()
@@ -64,9 +63,9 @@ for _ in range(runs):
         times.append((time.perf_counter() - start) * 1e3)
         vertices = numpy.asarray(fine.vertices)
         faces = numpy.asarray(fine.triangles)
-        version = lib.__version__
 numpy.asarray(vertices[numpy.unique(faces)], dtype="<f8").tofile(out)
-print(json.dumps({"version": str(version), "ms": times}))
+from importlib.metadata import version
+print(json.dumps({"version": version(module), "ms": times}))
 "#;
 
 /// What running a peer gave.
