@@ -187,7 +187,7 @@ impl GpuEvaluator {
     /// Uploads `refinement`'s stencil table and the `control` positions; an `Err` where a table
     /// is larger than one storage binding of the device may be.
     pub fn bind(&self, refinement: &Refinement, control: &[[f32; 3]]) -> Result<GpuRefinement> {
-        let limit = u64::from(self.device.limits().max_storage_buffer_binding_size);
+        let limit = self.device.limits().max_storage_buffer_binding_size;
         let t = &refinement.table;
         for (what, count) in [
             ("indices", t.control_indices().len()),
