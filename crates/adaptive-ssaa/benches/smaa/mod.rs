@@ -95,20 +95,14 @@ impl Smaa {
                 resource: ssaa.first().as_entire_binding(),
             }],
         });
-        let output = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("smaa output"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
+        let output = gpu::transfer::texture_2d(
+            device,
+            "smaa output",
+            width,
+            height,
+            FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
         let output_view = output.create_view(&Default::default());
         Self {
             target,
