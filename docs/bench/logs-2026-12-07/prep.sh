@@ -2,7 +2,11 @@
 # (.gl), the benchmark executables of HEAD stripped and packed in .gpu-bin/bins.tar.xz (those of
 # ../logs-2026-12-06b/prep.sh plus peers-gpu), the fixtures (CesiumMan added) and the level-5
 # basis-function tables under .gpu-data. Then on the device (carry .gl .gpu-bin .gpu-data):
-#   bash docs/bench/logs-2026-12-06b/run.sh "LABEL:SECONDS:PROGRAM ARGS" ...
+#   ldconfig -p | grep -q libstdc++.so.6 || export LD_LIBRARY_PATH=$PWD/.gpu-bin/lib
+#   bash docs/bench/logs-2026-12-06b/run.sh "visibility:170:visibility-gpu" \
+#     "indirect:40:indirect-gpu --vpls 256,1024" "ssaa:100:ssaa-gpu --quick" \
+#     "peers:100:peers-gpu --meshes spot,cesium-man,fandisk --levels 3,5 --cpu-runs 1 --python-level 0"
+# (no call of 2026-12-07 got a machine: every start failed until the device time was spent).
 set -euo pipefail
 bash ../shared/tools/device-prep.sh > /dev/null
 bins=$(mktemp -d)
@@ -16,10 +20,14 @@ for l in sys.stdin:
         print(d['target']['name'], d['executable'])" | while read -r name exe; do
   [ "$name" = bft ] || { cp "$exe" "$bins/$name"; strip "$bins/$name"; }
 done
-mkdir -p .gpu-bin && rm -f .gpu-bin/* && tar cJf .gpu-bin/bins.tar.xz -C "$bins" . && rm -r "$bins"
-rm -rf .gpu-data && mkdir -p .gpu-data/fixtures/gltf .gpu-data/bft
-cp -r ../shared/fixtures/{sponza,subdiv,stanford} .gpu-data/fixtures/
-cp -r ../shared/fixtures/gltf/DamagedHelmet .gpu-data/fixtures/gltf/
+mkdir -p .gpu-bin && rm -rf .gpu-bin/* && tar cJf .gpu-bin/bins.tar.xz -C "$bins" . && rm -r "$bins"
+# peers-gpu links OpenSubdiv's C++ runtime; used on the device only where it has none.
+mkdir -p .gpu-bin/lib && cp "$(g++ -print-file-name=libstdc++.so.6)" .gpu-bin/lib/
+# The call carries at most 64 MiB with the working tree: no DamagedHelmet (ssaa-gpu --quick
+# renders Sponza only) and the bunny alone of the Stanford models.
+rm -rf .gpu-data && mkdir -p .gpu-data/fixtures/stanford .gpu-data/bft
+cp -r ../shared/fixtures/{sponza,subdiv} .gpu-data/fixtures/
+cp ../shared/fixtures/stanford/stanford-bunny.obj .gpu-data/fixtures/stanford/
 mkdir -p .gpu-data/fixtures/animated && cp -r ../shared/fixtures/animated/CesiumMan .gpu-data/fixtures/animated/
 cargo xtask bft --level 5 -o .gpu-data/bft/loop-l5-v18.bft
 git rev-parse HEAD > .gpu-bin/built-from
