@@ -9,11 +9,12 @@
 //!   CPU (rayon, all threads), and the recursive CPU reference;
 //! - MeshLab (`pymeshlab`) and Open3D (`open3d`) Loop on the CPU, where Python imports them.
 //!
-//! Positions of the vertices triangles use are compared as point sets, as fractions of the control mesh's bounding-box
-//! diagonal: OpenSubdiv's refined vertices against our recursive reference (and its GPU
-//! evaluator against its CPU one), and our GPU limit positions against OpenSubdiv's level
-//! projected to the limit by Loop's limit mask (OpenSubdiv's C API in `opensubdiv-petite` has no
-//! limit of refined vertices). OpenSubdiv's stencils give refined positions only; ours give limit
+//! Positions of the vertices triangles use are compared as point sets, as fractions of the
+//! control mesh's bounding-box diagonal: OpenSubdiv's refined vertices against our recursive
+//! reference (and its GPU evaluator against its CPU one), and our GPU limit positions against
+//! OpenSubdiv's level projected to the limit by Loop's limit mask (OpenSubdiv's C API in
+//! `opensubdiv-petite` has no limit of refined vertices); our CPU twin's where our GPU path
+//! cannot hold the level. OpenSubdiv's stencils give refined positions only; ours give limit
 //! positions and normals — the GPU ratio compares the evaluation a renderer runs per frame for
 //! each. Writes `peers-<adapter>-<date>.{md,json}`.
 

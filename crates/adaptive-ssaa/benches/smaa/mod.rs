@@ -114,9 +114,10 @@ impl Smaa {
     }
 
     /// One frame: full supersampling (untimed, it keeps the GPU busy), `S` shaded (timed), `S`
-    /// drawn into SMAA's colour target (timed), then — with `smaa` — SMAA's own submission, else
-    /// an empty one (`S` drawn into the output instead), and an empty timed pass. Returns the ms of `S`'s shading plus the bracket
-    /// between the end of the drawing of `S` and the begin of the empty pass.
+    /// drawn into SMAA's colour target (timed), then — with `smaa` — SMAA's own submission,
+    /// else an empty one (`S` drawn into the output instead), and an empty timed pass. Returns
+    /// the ms of `S`'s shading plus the bracket from the end of the drawing of `S` to the begin
+    /// of the empty pass.
     pub fn time(&mut self, gpu: &Gpu, ssaa: &Ssaa, timer: &PassTimer, smaa: bool) -> Result<f64> {
         let (device, queue) = (&gpu.device, &gpu.queue);
         let frame = smaa.then(|| self.target.start_frame(device, queue, &self.output_view));
