@@ -23,7 +23,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use bench::Stat;
 use clap::Parser;
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use gpu::PassTimer;
 use peers::opensubdiv::{GpuEvaluator, Refinement};
 use peers::python::{self, Outcome};
@@ -138,10 +138,6 @@ fn wall<T>(runs: u32, mut f: impl FnMut() -> Result<T>) -> Result<(f64, T)> {
     Ok((Stat::of(times).median_ms, last.context("no run")?))
 }
 
-fn dvec3s(points: &[[f32; 3]]) -> Vec<DVec3> {
-    points.iter().map(|&p| Vec3::from(p).as_dvec3()).collect()
-}
-
 fn main() -> Result<()> {
     let args = Args::parse_from(bench::args());
     let gpu = args.options.gpu()?;
@@ -168,28 +164,29 @@ fn main() -> Result<()> {
             _ => 5,
         };
         let diagonal = mesh.diagonal();
-        let control: Vec<[f32; 3]> = mesh.positions_f32().iter().map(|p| p.to_array()).collect();
+        let positions = mesh.positions_f32();
+        let control: Vec<[f32; 3]> = positions.iter().map(|p| p.to_array()).collect();
         let start = Instant::now();
         let sub = Subdivider::new(&mesh.topology, &bft)?;
         let g = GpuSubdivider::new(&gpu.device, &sub, &bft)?;
         let ours_setup_ms = start.elapsed().as_secs_f64() * 1e3;
-        g.set_positions(&gpu.queue, &mesh.positions_f32())?;
+        g.set_positions(&gpu.queue, &positions)?;
         let obj = scratch.join(format!("{name}.obj"));
-        let indices: Vec<u32> = mesh.topology.triangles.iter().flatten().copied().collect();
+        let indices = flat(&mesh.topology.triangles);
         std::fs::write(
             &obj,
-            subdiv_bft::obj::ObjMesh::write(&mesh.positions_f32(), None, &indices),
+            subdiv_bft::obj::ObjMesh::write(&positions, None, &indices),
         )?;
         for level in (1..=top).filter(|l| args.levels.is_empty() || args.levels.contains(l)) {
             let osd = Refinement::new(&mesh, level)?;
             let (osd_cpu_ms, osd_positions) = wall(cpu_runs, || osd.evaluate_cpu(&control))?;
             let osd_triangles = osd.triangles()?;
-            let osd_positions = dvec3s(&osd_positions);
+            let osd_positions = peers::dvec3s(&osd_positions);
             let (osd_gpu_stat, osd_gpu_positions) =
                 match osd_gpu.as_ref().map(|e| (e, e.bind(&osd, &control))) {
                     Ok((e, Ok(bound))) => {
                         let times = bench::warm_then_time(frames, || e.evaluate(&bound))?;
-                        (Ok(Stat::of(times)), Some(dvec3s(&e.read(&bound)?)))
+                        (Ok(Stat::of(times)), Some(peers::dvec3s(&e.read(&bound)?)))
                     }
                     Ok((_, Err(why))) => (Err(format!("{why:#}")), None),
                     Err(why) => (Err(why.clone()), None),
@@ -205,22 +202,15 @@ fn main() -> Result<()> {
                 }
                 Err(why) => Err(why),
             };
-            let (ours_cpu_bft_ms, ours_cpu) = wall(cpu_runs, || {
-                Ok(sub.evaluate_cpu(&bft, &mesh.positions_f32(), level)?)
-            })?;
+            let (ours_cpu_bft_ms, ours_cpu) =
+                wall(cpu_runs, || Ok(sub.evaluate_cpu(&bft, &positions, level)?))?;
             let ours = ours_gpu.as_ref().map_or(&ours_cpu, |(_, refined)| refined);
             let ours_positions: Vec<DVec3> = ours.positions.iter().map(|p| p.as_dvec3()).collect();
             let (ours_cpu_recursive_ms, reference) = wall(cpu_runs, || Ok(mesh.subdivide(level)?))?;
             // Distances beyond a thousandth of the diagonal read as infinite.
             let reach = 1e-3 * diagonal;
             let relative = |d: f64| d / diagonal;
-            let reference_indices: Vec<u32> = reference
-                .topology
-                .triangles
-                .iter()
-                .flatten()
-                .copied()
-                .collect();
+            let reference_indices = flat(&reference.topology.triangles);
             let reference_surface = peers::surface_points(&reference.positions, &reference_indices);
             let osd_surface = peers::surface_points(&osd_positions, &osd_triangles);
             let osd_vs_reference =
@@ -321,6 +311,11 @@ fn main() -> Result<()> {
     };
     args.options
         .write_report(&report.header, "peers-", &report, &md)
+}
+
+/// Three indices per triangle, in order.
+fn flat(triangles: &[[u32; 3]]) -> Vec<u32> {
+    triangles.iter().flatten().copied().collect()
 }
 
 fn triangles(indices: &[u32]) -> Vec<[u32; 3]> {

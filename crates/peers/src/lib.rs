@@ -6,7 +6,12 @@
 pub mod opensubdiv;
 pub mod python;
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
+
+/// `f32` triples (OpenSubdiv's and the GPU's positions) as `f64` points for [`hausdorff`].
+pub fn dvec3s(points: &[[f32; 3]]) -> Vec<DVec3> {
+    points.iter().map(|&p| Vec3::from(p).as_dvec3()).collect()
+}
 
 /// The largest distance from a point of `a` to its nearest point of `b`, where it is below
 /// `reach`; `f64::INFINITY` if some point of `a` has no point of `b` within `reach` (or `b` is

@@ -17,10 +17,6 @@ fn spot() -> Option<TriMesh> {
     Some(obj.into_mesh().expect("spot mesh"))
 }
 
-fn dvec3s(points: &[[f32; 3]]) -> Vec<DVec3> {
-    points.iter().map(|&p| Vec3::from(p).as_dvec3()).collect()
-}
-
 /// OpenSubdiv's refined vertices are our recursive reference's, as point sets; its level
 /// projected to the limit is our basis-function tables' output.
 #[test]
@@ -37,7 +33,7 @@ fn opensubdiv_refines_as_our_reference_and_tables() {
     let sub = Subdivider::new(&mesh.topology, &bft).expect("subdivider");
     for level in 1..=2 {
         let osd = Refinement::new(&mesh, level).expect("OpenSubdiv");
-        let refined = dvec3s(&osd.evaluate_cpu(&control).expect("evaluate"));
+        let refined = peers::dvec3s(&osd.evaluate_cpu(&control).expect("evaluate"));
         let triangles = osd.triangles().expect("triangles");
         let reference = mesh.subdivide(level).expect("reference");
         assert_eq!(
@@ -72,7 +68,7 @@ fn opensubdiv_refines_as_our_reference_and_tables() {
     }
     // A wrong refinement is seen: one level off.
     let osd = Refinement::new(&mesh, 1).expect("OpenSubdiv");
-    let refined = dvec3s(&osd.evaluate_cpu(&control).expect("evaluate"));
+    let refined = peers::dvec3s(&osd.evaluate_cpu(&control).expect("evaluate"));
     let two = mesh.subdivide(2).expect("reference");
     assert!(peers::hausdorff(&refined, &two.positions, 1e-3 * d) / d > TOLERANCE);
 }
