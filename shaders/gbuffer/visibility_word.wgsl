@@ -1,5 +1,5 @@
 // The visibility buffer's words and the merge of one covered pixel, shared by the compute
-// rasteriser (`visibility.wgsl`) and the alpha-tested draw (`visibility_alpha.wgsl`).
+// rasteriser (`visibility.wgsl`) and the hardware rasteriser's draw (`visibility_hardware.wgsl`).
 //
 // Per pixel 64 bits, (depth bits << 32) | id: the id in the low word, z/w's bits (a
 // non-negative float, ordered as its bits) in the high one. Two ways to merge, chosen by

@@ -246,8 +246,9 @@ struct Args {
     reflection_points: u32,
     /// Draw the G-buffer through the compute rasteriser's visibility buffer and its resolve
     /// (GPU; `gbuffer::gpu::visibility`) instead of the hardware z-prepass and G-buffer pass;
-    /// `--visibility=auto` measures both from the first camera and keeps the faster (the
-    /// summary's `gbuffer:` line gives both times). Runs on any device (64-bit atomics where it
+    /// `--visibility=auto` measures both from the first camera, the visibility buffer per
+    /// split (meshes of large triangles drawn into it by the hardware rasteriser), and keeps the
+    /// fastest (the summary's `gbuffer:` line gives every time). Runs on any device (64-bit atomics where it
     /// has them, else two passes of 32-bit ones); Forward+ and the light pre-pass are refused.
     #[arg(long, value_enum, value_name = "MODE", num_args = 0..=1, require_equals = true, default_missing_value = "on")]
     visibility: Option<VisibilityMode>,

@@ -63,10 +63,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .count();
     let elsewhere = differs.iter().filter(|&&d| d).count() - one_step;
     println!(
-        "material gallery {width}×{height} on {} ({:?} atomics, alpha-tested meshes {:?}): material words equal to the CPU rasteriser's on {:.2} % of the pixels; {one_step} differ by one roughness or metallic step, {elsewhere} hold another material or none",
+        "material gallery {width}×{height} on {} ({:?} atomics, meshes drawn by the hardware rasteriser {:?}): material words equal to the CPU rasteriser's on {:.2} % of the pixels; {one_step} differ by one roughness or metallic step, {elsewhere} hold another material or none",
         adapter.get_info().name,
         pass.atomics(),
-        vis.alpha_tested,
+        vis.hardware,
         agree * 100.0
     );
     assert!(pass.atomics() == Atomics::best(&device));

@@ -56,7 +56,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "normal_encoding.wgsl",
         "resolve.wgsl",
         "visibility.wgsl",
-        "visibility_alpha.wgsl",
+        "visibility_hardware.wgsl",
         "visibility_word.wgsl",
     ],
 );

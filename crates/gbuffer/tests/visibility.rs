@@ -18,20 +18,29 @@ use gbuffer::{
 use proptest::prelude::*;
 use scene::{AlphaMode, Camera, Scene};
 
-/// The GPU visibility buffer's ids of the opaque `scene` through `camera`.
-fn gpu_ids(gpu: &gpu::Gpu, scene: &Scene, camera: &Camera, size: (u32, u32)) -> Vec<u32> {
-    let vis = gpu_words(gpu, scene, camera, size, Atomics::best(&gpu.device));
+/// The GPU visibility buffer's ids of the opaque `scene` through `camera`, the meshes
+/// `hardware` drawn by the hardware rasteriser.
+fn gpu_ids(
+    gpu: &gpu::Gpu,
+    scene: &Scene,
+    camera: &Camera,
+    size: (u32, u32),
+    hardware: &[usize],
+) -> Vec<u32> {
+    let atomics = Atomics::best(&gpu.device);
+    let vis = gpu_words(gpu, scene, camera, size, (atomics, hardware));
     visibility::triangle_ids(&vis)
 }
 
-/// The GPU visibility buffer's words of `scene` through `camera`, merged as `atomics` says
-/// (alpha-tested meshes drawn with a depth attachment of their own).
+/// The GPU visibility buffer's words of `scene` through `camera`, merged as `atomics` says,
+/// the meshes `hardware` and the alpha-tested ones drawn by the hardware rasteriser with a
+/// depth attachment of their own.
 fn gpu_words(
     gpu: &gpu::Gpu,
     scene: &Scene,
     camera: &Camera,
     (w, h): (u32, u32),
-    atomics: Atomics,
+    (atomics, hardware): (Atomics, &[usize]),
 ) -> Vec<u64> {
     let gpass = GBufferPass::new(&gpu.device).expect("pass");
     let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, scene, &gpass).expect("upload");
@@ -54,12 +63,13 @@ fn gpu_words(
     });
     gpass.write_frame(&gpu.queue, &Frame::new(camera, w, h));
     let vis = pass
-        .bind(
+        .bind_split(
             &gpu.device,
             &uploaded,
             gpass.frame_buffer(),
             (w, h),
             &buffer,
+            hardware,
         )
         .expect("bind");
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -83,15 +93,21 @@ fn opaque(mut scene: Scene) -> Scene {
     scene
 }
 
-/// Compares; returns the share of matching pixels, or the first interior mismatch.
-fn compare(scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -> Result<f64, String> {
+/// Compares, the meshes `hardware` drawn by the hardware rasteriser; returns the share of
+/// matching pixels, or the first interior mismatch.
+fn compare(
+    scene: &Scene,
+    camera: &Camera,
+    (w, h): (u32, u32),
+    hardware: &[usize],
+) -> Result<f64, String> {
     let Some(gpu) = gpu::test_device(&visibility::device_needs()) else {
         return Ok(1.0);
     };
     let expected = cpu::rasterize(scene, camera, w, h)
         .map_err(|e| e.to_string())?
         .triangle_id;
-    let got = gpu_ids(gpu, scene, camera, (w, h));
+    let got = gpu_ids(gpu, scene, camera, (w, h), hardware);
     let mut matched = 0u32;
     for y in 0..h {
         for x in 0..w {
@@ -112,7 +128,7 @@ fn compare(scene: &Scene, camera: &Camera, (w, h): (u32, u32)) -> Result<f64, St
 fn spheres_on_a_plane_match_the_cpu_rasteriser() {
     let scene = opaque(scene::spheres_on_plane(6));
     let camera = scene.camera_or_framed();
-    let share = compare(&scene, &camera, (160, 120)).unwrap();
+    let share = compare(&scene, &camera, (160, 120), &[]).unwrap();
     assert!(share >= 0.995, "{:.2} % of the pixels match", share * 100.0);
 }
 
@@ -126,7 +142,7 @@ fn a_camera_inside_the_scene_clips_and_matches() {
         eye: framed.target + (framed.eye - framed.target) * 0.15,
         ..framed
     };
-    let share = compare(&scene, &camera, (128, 96)).unwrap();
+    let share = compare(&scene, &camera, (128, 96), &[]).unwrap();
     assert!(share >= 0.995, "{:.2} % of the pixels match", share * 100.0);
 }
 
@@ -143,10 +159,98 @@ fn an_empty_view_holds_no_triangle() {
         ..framed
     };
     assert!(
-        gpu_ids(gpu, &scene, &camera, (32, 24))
+        gpu_ids(gpu, &scene, &camera, (32, 24), &[])
             .iter()
             .all(|&id| id == NO_TRIANGLE)
     );
+}
+
+/// Meshes drawn into the buffer by the hardware rasteriser (`bind_split`) hold the CPU's ids
+/// as the compute rasteriser's do: the ground alone, every other mesh, all of them; from the
+/// framed camera and from among the spheres (triangles crossing the near plane).
+#[test]
+fn a_split_between_the_rasterisers_matches_the_cpu_rasteriser() {
+    let scene = opaque(scene::spheres_on_plane(6));
+    let framed = scene.camera_or_framed();
+    let inside = Camera {
+        eye: framed.target + (framed.eye - framed.target) * 0.15,
+        ..framed
+    };
+    let all: Vec<usize> = (0..scene.meshes.len()).collect();
+    let odd: Vec<usize> = all.iter().copied().filter(|m| m % 2 == 1).collect();
+    for camera in [framed, inside] {
+        for hardware in [&[0][..], &odd, &all] {
+            let share = compare(&scene, &camera, (128, 96), hardware).unwrap();
+            assert!(
+                share >= 0.995,
+                "meshes {hardware:?} by the hardware rasteriser: {:.2} % of the pixels match",
+                share * 100.0
+            );
+        }
+    }
+}
+
+#[test]
+fn a_split_naming_a_missing_mesh_is_refused() {
+    let Some(gpu) = gpu::test_device(&visibility::device_needs()) else {
+        return;
+    };
+    let scene = opaque(scene::spheres_on_plane(2));
+    let gpass = GBufferPass::new(&gpu.device).expect("pass");
+    let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, &scene, &gpass).expect("upload");
+    let pass = VisibilityPass::new(&gpu.device, &gpass).expect("visibility");
+    let buffer = VisibilityPass::buffer(&gpu.device, 16, 16).expect("buffer");
+    let meshes = scene.meshes.len();
+    let err = pass
+        .bind_split(
+            &gpu.device,
+            &uploaded,
+            gpass.frame_buffer(),
+            (16, 16),
+            &buffer,
+            &[0, meshes],
+        )
+        .map(|_| ())
+        .expect_err("a mesh past the scene's");
+    let text = err.to_string();
+    assert!(
+        text.contains(&format!("mesh {meshes}")) && text.contains(&format!("{meshes} meshes")),
+        "{text}"
+    );
+}
+
+/// The estimate that ranks meshes for the split, against geometry: through a 90° vertical
+/// field of view at distance 3 over 96 rows (16 pixels per unit at z = 0), a 4 × 4 grid of
+/// half size 2 covers a 64 × 64-pixel square with 32 triangles, 128 pixels each; a single cell
+/// larger than the view covers the 128 × 96 image with 2 triangles; a grid moved off the
+/// image, nothing.
+#[test]
+fn pixels_per_triangle_measures_the_screen_box() {
+    let Some(gpu) = gpu::test_device(&visibility::device_needs()) else {
+        return;
+    };
+    let camera = Camera {
+        fov_y: 90f32.to_radians(),
+        ..Camera::look_at(glam::Vec3::new(0.0, 0.0, 3.0), glam::Vec3::ZERO)
+    };
+    let mut scene = grid(4, 2.0, glam::Vec2::ZERO, 0.0);
+    for (n, half, offset) in [
+        (1, 10.0, glam::Vec2::ZERO),
+        (4, 2.0, glam::Vec2::new(20.0, 0.0)),
+    ] {
+        scene.meshes.extend(grid(n, half, offset, 0.0).meshes);
+    }
+    let gpass = GBufferPass::new(&gpu.device).expect("pass");
+    let uploaded = GpuScene::upload(&gpu.device, &gpu.queue, &scene, &gpass).expect("upload");
+    let got = uploaded.pixels_per_triangle(&Frame::new(&camera, 128, 96));
+    let expected = [128.0, 128.0 * 96.0 / 2.0, 0.0];
+    assert_eq!(got.len(), 3);
+    for (g, e) in got.iter().zip(expected) {
+        assert!(
+            (g - e).abs() <= 1e-3 * e.max(1.0),
+            "{got:?} against {expected:?}"
+        );
+    }
 }
 
 /// A closed grid of `n × n` cells over `[-half, half]²` moved by `offset`, in the plane z = 0,
@@ -206,12 +310,12 @@ fn closed_jittered_grids_leave_no_hole() {
     };
     for n in [96, 8] {
         let mesh = grid(n, 2.0, glam::Vec2::ZERO, 0.3);
-        let holes = gpu_ids(gpu, &mesh, &camera, (128, 96))
+        let holes = gpu_ids(gpu, &mesh, &camera, (128, 96), &[])
             .iter()
             .filter(|&&id| id == NO_TRIANGLE)
             .count();
         assert_eq!(holes, 0, "{n} × {n} grid: {holes} pixels uncovered");
-        let share = compare(&mesh, &camera, (128, 96)).expect("compare");
+        let share = compare(&mesh, &camera, (128, 96), &[]).expect("compare");
         assert!(share >= 0.995, "{:.2} % of the pixels match", share * 100.0);
     }
 }
@@ -238,7 +342,7 @@ fn shared_edges_through_pixel_centres_go_to_one_triangle() {
         let expected = cpu::rasterize(&mesh, &camera, w, h)
             .expect("cpu")
             .triangle_id;
-        let ids = gpu_ids(gpu, &mesh, &camera, (w, h));
+        let ids = gpu_ids(gpu, &mesh, &camera, (w, h), &[]);
         let differ: Vec<(u32, u32)> = (0..h)
             .flat_map(|y| (0..w).map(move |x| (x, y)))
             .filter(|&(x, y)| expected.get(x, y) != ids[(y * w + x) as usize])
@@ -285,8 +389,8 @@ fn the_32_bit_fallback_writes_the_64_bit_buffer() {
         ));
     }
     for (k, (scene, camera, size)) in cases.iter().enumerate() {
-        let wide = gpu_words(gpu, scene, camera, *size, Atomics::Wide);
-        let narrow = gpu_words(gpu, scene, camera, *size, Atomics::Narrow);
+        let wide = gpu_words(gpu, scene, camera, *size, (Atomics::Wide, &[]));
+        let narrow = gpu_words(gpu, scene, camera, *size, (Atomics::Narrow, &[]));
         let covered = wide.iter().filter(|&&w| w as u32 != NO_TRIANGLE).count();
         assert!(covered > 0, "case {k}: nothing drawn");
         let differ = wide.iter().zip(&narrow).filter(|(a, b)| a != b).count();
@@ -326,12 +430,12 @@ fn passes_are_named_per_merge_pass() {
                 .named("ss ");
             let mut expected = vec!["ss visibility"];
             if alpha {
-                expected.push("ss visibility alpha-tested");
+                expected.push("ss visibility hardware");
             }
             if atomics == Atomics::Narrow {
                 expected.push("ss visibility ids");
                 if alpha {
-                    expected.push("ss visibility alpha-tested ids");
+                    expected.push("ss visibility hardware ids");
                 }
             }
             assert_eq!(
@@ -379,7 +483,7 @@ proptest! {
     fn random_scenes_match_the_cpu_rasteriser(seed in 0u64..1_000_000, cam in 0u64..1_000_000, tris in 1usize..40, w in 8u32..96, h in 8u32..96) {
         let scene = opaque(common::random_scene(seed, tris));
         let camera = common::random_camera(cam);
-        let share = compare(&scene, &camera, (w, h)).map_err(TestCaseError::fail)?;
+        let share = compare(&scene, &camera, (w, h), &[]).map_err(TestCaseError::fail)?;
         prop_assert!(share >= 0.995, "{:.2} % of the pixels match", share * 100.0);
     }
 }

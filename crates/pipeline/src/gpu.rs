@@ -199,15 +199,44 @@ fn exclusions(
     Err(ShadingError::Incompatible(format!("{clash}; switch one off first")).into())
 }
 
+/// The pixels per triangle ([`GpuScene::pixels_per_triangle`]) above which
+/// [`GpuRenderer::choose_gbuffer_path`] tries drawing meshes with the hardware rasteriser into
+/// the visibility buffer, from none (infinity) to every mesh on screen (0).
+pub const SPLIT_PIXELS: [f32; 8] = [f32::INFINITY, 4096.0, 1024.0, 256.0, 64.0, 16.0, 4.0, 0.0];
+
+/// One sharing of the visibility buffer's meshes between the two rasterisers, measured by
+/// [`GpuRenderer::choose_gbuffer_path`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct VisibilitySplit {
+    /// Meshes whose triangles cover more pixels than this on average went to the hardware
+    /// rasteriser (one of [`SPLIT_PIXELS`]).
+    pub above_pixels: f32,
+    /// Those meshes ([`GpuRenderer::set_visibility_split`]; alpha-tested ones go there
+    /// anyway and are not listed).
+    pub hardware_meshes: Vec<usize>,
+    /// The visibility path's median GPU time (rasterisers, resolve, depth), ms.
+    pub ms: f64,
+}
+
 /// What [`GpuRenderer::choose_gbuffer_path`] measured and kept.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GBufferChoice {
     /// The hardware path's median GPU time (z-prepass + G-buffer pass), ms.
     pub hardware_ms: f64,
-    /// The visibility path's (rasteriser, resolve, depth), ms; why it cannot run, instead.
+    /// The visibility path's fastest split's time, ms; why it cannot run, instead.
     pub visibility_ms: Result<f64, String>,
-    /// Whether the visibility path was kept (the faster).
+    /// Every split of the visibility path measured, in the order tried (fewest meshes by the
+    /// hardware rasteriser first; empty where it cannot run).
+    pub splits: Vec<VisibilitySplit>,
+    /// Whether the visibility path was kept (its fastest split beat the hardware path).
     pub visibility: bool,
+}
+
+impl GBufferChoice {
+    /// The fastest split measured.
+    pub fn fastest_split(&self) -> Option<&VisibilitySplit> {
+        self.splits.iter().min_by(|a, b| a.ms.total_cmp(&b.ms))
+    }
 }
 
 impl std::fmt::Display for GBufferChoice {
@@ -217,17 +246,34 @@ impl std::fmt::Display for GBufferChoice {
         } else {
             "hardware rasteriser"
         };
-        match &self.visibility_ms {
-            Ok(v) => write!(
-                f,
-                "{kept} (chosen: visibility buffer {v:.3} ms, hardware {:.3} ms)",
-                self.hardware_ms
-            ),
-            Err(why) => write!(
+        let (Ok(ms), Some(fastest)) = (&self.visibility_ms, self.fastest_split()) else {
+            let why = self.visibility_ms.as_ref().err().map_or("", String::as_str);
+            return write!(
                 f,
                 "{kept} (chosen: the visibility buffer cannot run: {why})"
+            );
+        };
+        let meshes = match fastest.hardware_meshes.len() {
+            0 => "all meshes by the compute rasteriser".to_string(),
+            n => format!(
+                "{n} meshes of > {} px per triangle by the hardware rasteriser",
+                fastest.above_pixels
             ),
-        }
+        };
+        let tried: Vec<String> = self
+            .splits
+            .iter()
+            .map(|s| match s.above_pixels {
+                p if p.is_finite() => format!("> {p} px: {:.3}", s.ms),
+                _ => format!("none: {:.3}", s.ms),
+            })
+            .collect();
+        write!(
+            f,
+            "{kept} (chosen: visibility buffer {ms:.3} ms with {meshes}, hardware {:.3} ms; splits tried, ms: {})",
+            self.hardware_ms,
+            tried.join(", ")
+        )
     }
 }
 
@@ -237,6 +283,9 @@ impl std::fmt::Display for GBufferChoice {
 struct VisibilityStage {
     raster: VisibilityPass,
     resolve: ResolvePass,
+    /// Meshes drawn by the hardware rasteriser besides the alpha-tested ones
+    /// ([`GpuRenderer::set_visibility_split`]).
+    hardware_meshes: Vec<usize>,
     main: BoundVisibility,
     ss: Option<BoundVisibility>,
 }
@@ -262,7 +311,7 @@ impl VisibilityStage {
         let resolve = ResolvePass::new(device, gbuffer_pass)?;
         let main = Self::bind(
             device,
-            (&raster, &resolve),
+            (&raster, &resolve, &[]),
             (gbuffer_pass.frame_buffer(), targets),
             scene,
             "",
@@ -270,15 +319,17 @@ impl VisibilityStage {
         Ok(Self {
             raster,
             resolve,
+            hardware_meshes: Vec::new(),
             main,
             ss: None,
         })
     }
 
-    /// The path bound to `targets` seen through `frame`; its passes' names start with `prefix`.
+    /// The path bound to `targets` seen through `frame`, the meshes `hardware` drawn by the
+    /// hardware rasteriser; its passes' names start with `prefix`.
     fn bind(
         device: &wgpu::Device,
-        (raster, resolve): (&VisibilityPass, &ResolvePass),
+        (raster, resolve, hardware): (&VisibilityPass, &ResolvePass, &[usize]),
         (frame, targets): (&wgpu::Buffer, &GBufferTargets),
         scene: &GpuScene,
         prefix: &'static str,
@@ -286,7 +337,7 @@ impl VisibilityStage {
         let size = (targets.width, targets.height);
         let buffer = VisibilityPass::buffer(device, size.0, size.1)?;
         let vis = raster
-            .bind(device, scene, frame, size, &buffer)?
+            .bind_split(device, scene, frame, size, &buffer, hardware)?
             .named(prefix);
         let mut resolved = resolve.bind(device, scene, frame, &vis, targets)?;
         if !prefix.is_empty() {
@@ -313,7 +364,7 @@ impl VisibilityStage {
         targets: &GBufferTargets,
         ss: Option<(&wgpu::Buffer, &GBufferTargets)>,
     ) -> Result<(), RenderError> {
-        let pair = (&self.raster, &self.resolve);
+        let pair = (&self.raster, &self.resolve, self.hardware_meshes.as_slice());
         let frame = gbuffer_pass.frame_buffer();
         self.main = Self::bind(device, pair, (frame, targets), scene, "")?;
         self.ss = ss
@@ -1367,6 +1418,41 @@ impl GpuRenderer {
         self.visibility.is_some()
     }
 
+    /// Draws the meshes `hardware` (indices in the scene's meshes) into the visibility buffer
+    /// with the hardware rasteriser instead of the compute rasteriser (alpha-tested meshes are
+    /// drawn so anyway): meshes of large triangles, which it covers faster
+    /// (`gbuffer::gpu::visibility::VisibilityPass::bind_split`). Needs the visibility path on
+    /// ([`GpuRenderer::set_visibility`]); an index past the scene's meshes is refused and the
+    /// split left as it was. [`GpuRenderer::choose_gbuffer_path`] measures where to split.
+    pub fn set_visibility_split(
+        &mut self,
+        device: &wgpu::Device,
+        hardware: &[usize],
+    ) -> Result<(), RenderError> {
+        let Some(v) = &mut self.visibility else {
+            return Err(RenderError::Visibility(
+                "the visibility buffer's split between the rasterisers needs the visibility path on (set_visibility)".into(),
+            ));
+        };
+        let before = std::mem::replace(&mut v.hardware_meshes, hardware.to_vec());
+        let bound = self.rebind_visibility(device);
+        if bound.is_err() {
+            if let Some(v) = &mut self.visibility {
+                v.hardware_meshes = before;
+            }
+            self.rebind_visibility(device)?;
+        }
+        bound
+    }
+
+    /// The meshes the visibility path draws with the hardware rasteriser: the alpha-tested
+    /// ones and those of [`GpuRenderer::set_visibility_split`] (`None` without the path).
+    pub fn visibility_hardware_meshes(&self) -> Option<&[usize]> {
+        self.visibility
+            .as_ref()
+            .map(|v| v.main.vis.hardware.as_slice())
+    }
+
     /// Checks that the last frame's visibility buffer lost no triangle to its lists (reads back
     /// four counters per bound G-buffer). When it did, the lists grow fourfold (at most the
     /// device's largest binding) and the answer is `true`: render the frame again. An error when
@@ -1400,9 +1486,14 @@ impl GpuRenderer {
     /// Measures the G-buffer's two paths from `camera` over `frames` frames each (median GPU
     /// time of their passes, the supersampled G-buffer's included) and keeps the faster: the
     /// visibility buffer ([`GpuRenderer::set_visibility`]) or the hardware rasteriser. The
-    /// visibility path is skipped, with the reason, where it cannot run (a missing device
-    /// feature, Forward+, the light pre-pass). Needs timestamp queries; renders `2 × frames`
-    /// frames and leaves the camera set.
+    /// visibility path is measured per mesh split ([`VisibilitySplit`]): for each of
+    /// [`SPLIT_PIXELS`], the meshes whose triangles cover more pixels on average
+    /// ([`GpuScene::pixels_per_triangle`] from `camera`) drawn by the hardware rasteriser
+    /// into the buffer, the others by the compute rasteriser (a split equal to the one before
+    /// is not measured again); its fastest split is kept. The visibility path is skipped,
+    /// with the reason, where it cannot run (a missing device feature, Forward+, the light
+    /// pre-pass). Needs timestamp queries; renders `frames` frames per path and split and
+    /// leaves the camera set.
     pub fn choose_gbuffer_path(
         &mut self,
         device: &wgpu::Device,
@@ -1424,10 +1515,41 @@ impl GpuRenderer {
                 "z-prepass" | "gbuffer" | "ss z-prepass" | "ss gbuffer"
             )
         })?;
+        let mut splits: Vec<VisibilitySplit> = Vec::new();
         let visibility_ms = match self.set_visibility(device, true) {
-            Ok(()) => Ok(self.median_ms(device, queue, frames.max(1), |name| {
-                name.starts_with("visibility") || name.starts_with("ss visibility")
-            })?),
+            Ok(()) => {
+                let (width, height) = self.size();
+                let pixels = self
+                    .scene
+                    .pixels_per_triangle(&Frame::new(camera, width, height));
+                for above_pixels in SPLIT_PIXELS {
+                    let hardware_meshes: Vec<usize> = (0..pixels.len())
+                        .filter(|&m| pixels[m] > above_pixels)
+                        .collect();
+                    if splits
+                        .last()
+                        .is_some_and(|s| s.hardware_meshes == hardware_meshes)
+                    {
+                        continue;
+                    }
+                    self.set_visibility_split(device, &hardware_meshes)?;
+                    let ms = self.median_ms(device, queue, frames.max(1), |name| {
+                        name.starts_with("visibility") || name.starts_with("ss visibility")
+                    })?;
+                    splits.push(VisibilitySplit {
+                        above_pixels,
+                        hardware_meshes,
+                        ms,
+                    });
+                }
+                // The first split is always measured.
+                let fastest = splits.iter().min_by(|a, b| a.ms.total_cmp(&b.ms));
+                let (ms, meshes) = fastest.map_or((f64::INFINITY, Vec::new()), |s| {
+                    (s.ms, s.hardware_meshes.clone())
+                });
+                self.set_visibility_split(device, &meshes)?;
+                Ok(ms)
+            }
             Err(e) => Err(e.to_string()),
         };
         let visibility = matches!(visibility_ms, Ok(ms) if ms < hardware_ms);
@@ -1437,6 +1559,7 @@ impl GpuRenderer {
         Ok(GBufferChoice {
             hardware_ms,
             visibility_ms,
+            splits,
             visibility,
         })
     }

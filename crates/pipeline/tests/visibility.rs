@@ -55,7 +55,7 @@ fn the_same_frame(gpu: &gpu::Gpu, s: &scene::Scene, alpha: bool) {
             assert!(names.contains(&pass), "{pass} not timed: {names:?}");
         }
         assert_eq!(
-            names.contains(&"visibility alpha-tested"),
+            names.contains(&"visibility hardware"),
             alpha,
             "the alpha-tested draw: {names:?}"
         );
@@ -142,6 +142,35 @@ fn the_faster_gbuffer_path_is_kept() {
         "{choice:?}"
     );
     assert_eq!(choice.visibility, visibility_ms < choice.hardware_ms);
+    // Each split measured once, from none of the meshes by the hardware rasteriser to more;
+    // the fastest is the visibility path's time, and is the split kept.
+    assert!(
+        choice.splits[0].hardware_meshes.is_empty(),
+        "{:?}",
+        choice.splits
+    );
+    for pair in choice.splits.windows(2) {
+        assert!(
+            pair[1].above_pixels < pair[0].above_pixels
+                && pair[1].hardware_meshes.len() > pair[0].hardware_meshes.len()
+                && pair[0]
+                    .hardware_meshes
+                    .iter()
+                    .all(|m| pair[1].hardware_meshes.contains(m)),
+            "{:?}",
+            choice.splits
+        );
+    }
+    eprintln!("{choice}");
+    let fastest = choice.fastest_split().expect("a split");
+    assert_eq!(fastest.ms, visibility_ms);
+    assert!(choice.to_string().contains("splits tried"), "{choice}");
+    if choice.visibility {
+        assert_eq!(
+            renderer.visibility_hardware_meshes(),
+            Some(fastest.hardware_meshes.as_slice())
+        );
+    }
     assert_eq!(
         renderer.visibility(),
         choice.visibility,
@@ -212,6 +241,49 @@ fn overflowing_lists_grow_until_every_triangle_is_drawn() {
         assert!(grown <= 10, "still overflowing after {grown} growths");
     }
     assert!(grown > 0, "the tiny lists overflowed");
+}
+
+/// Meshes handed to the hardware rasteriser (`set_visibility_split`) draw into the visibility
+/// buffer, timed as such, and the frame stays the hardware path's; the split needs the path
+/// on, and one naming a missing mesh is refused, the split before kept.
+#[test]
+fn a_split_between_the_rasterisers_renders_the_hardware_frame() {
+    let Some(gpu) = device() else { return };
+    let s = scene::cornell_box();
+    let camera = s.camera_or_framed();
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let mut renderer = GpuRenderer::new(d, q, &s, &s.lights, 96, 72).expect("renderer");
+    let even: Vec<usize> = (0..s.meshes.len()).step_by(2).collect();
+    let e = renderer
+        .set_visibility_split(d, &even)
+        .expect_err("the path is off");
+    assert!(e.to_string().contains("set_visibility"), "{e}");
+    let hardware = renderer
+        .render(d, q, &camera, Vec3::splat(0.05))
+        .expect("hardware frame");
+    renderer.set_visibility(d, true).expect("visibility");
+    renderer.set_visibility_split(d, &even).expect("split");
+    assert_eq!(renderer.visibility_hardware_meshes(), Some(even.as_slice()));
+    let split = renderer
+        .render(d, q, &camera, Vec3::splat(0.05))
+        .expect("split frame");
+    let db = psnr(&hardware.image, &split.image);
+    assert!(db >= 40.0, "PSNR {db:.1} dB between the two paths");
+    if gpu.has_timestamps() {
+        let names: Vec<&str> = split.timings.iter().map(|t| t.name.as_str()).collect();
+        for pass in ["visibility", "visibility hardware", "visibility resolve"] {
+            assert!(names.contains(&pass), "{pass} not timed: {names:?}");
+        }
+    }
+    let missing = s.meshes.len();
+    let e = renderer
+        .set_visibility_split(d, &[missing])
+        .expect_err("no such mesh");
+    assert!(e.to_string().contains(&format!("mesh {missing}")), "{e}");
+    assert_eq!(renderer.visibility_hardware_meshes(), Some(even.as_slice()));
+    renderer
+        .render(d, q, &camera, Vec3::splat(0.05))
+        .expect("a frame with the split kept");
 }
 
 #[test]

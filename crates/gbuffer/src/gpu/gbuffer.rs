@@ -186,8 +186,8 @@ impl GBufferPass {
     ) {
         let mut order: Vec<&Draw> = scene.draws.iter().filter(|d| d.state.blended).collect();
         order.sort_by(|a, b| {
-            eye.distance_squared(b.center)
-                .total_cmp(&eye.distance_squared(a.center))
+            eye.distance_squared(b.center())
+                .total_cmp(&eye.distance_squared(a.center()))
         });
         self.draw_each(pass, &self.frame, scene, order, |s| {
             pipelines[usize::from(s.cull)]

@@ -64,8 +64,9 @@ pub(super) struct Draw {
     pub(super) base_vertex: i32,
     pub(super) material: usize,
     pub(super) state: DrawState,
-    /// The centre of the mesh's bounding box at upload (the order of blended draws).
-    pub(super) center: glam::Vec3,
+    /// The mesh's bounding box at upload, lower and upper corner (the order of blended
+    /// draws, [`GpuScene::pixels_per_triangle`]).
+    pub(super) bounds: [glam::Vec3; 2],
     /// `DrawIndexedIndirect` arguments the G-buffer passes draw this mesh with instead
     /// ([`GpuScene::draw_indirect`]).
     pub(super) indirect: Option<wgpu::Buffer>,
@@ -155,6 +156,46 @@ impl GpuScene {
         }
     }
 
+    /// Per mesh (in [`Scene::meshes`]' order), the pixels its triangles cover on average seen
+    /// through `frame`: the screen rectangle of its bounding box at upload, clipped to the
+    /// viewport, over its triangle count (a whole viewport where the box reaches behind the
+    /// eye; 0 for a hidden mesh). An estimate, first of all for ranking meshes — large
+    /// triangles suit the hardware rasteriser, small ones the compute rasteriser — that
+    /// ignores occlusion and the mesh's shape within its box; the box of meshes a kernel moves
+    /// (skinning, subdivision) is the one at upload.
+    pub fn pixels_per_triangle(&self, frame: &crate::Frame) -> Vec<f32> {
+        let (width, height) = (frame.viewport.x, frame.viewport.y);
+        self.draws
+            .iter()
+            .map(|d| {
+                let triangles = d.index_count / 3;
+                if triangles == 0 {
+                    return 0.0;
+                }
+                let [lo, hi] = d.bounds;
+                let mut screen = [glam::Vec2::splat(f32::MAX), glam::Vec2::splat(f32::MIN)];
+                for corner in 0..8 {
+                    let p = glam::Vec3::select(
+                        glam::BVec3::new(corner & 1 != 0, corner & 2 != 0, corner & 4 != 0),
+                        hi,
+                        lo,
+                    );
+                    let clip = frame.view_proj * p.extend(1.0);
+                    if clip.w <= 0.0 {
+                        return width * height / triangles as f32;
+                    }
+                    let ndc = glam::Vec2::new(clip.x, clip.y) / clip.w;
+                    screen[0] = screen[0].min(ndc);
+                    screen[1] = screen[1].max(ndc);
+                }
+                let lo = (screen[0].max(glam::Vec2::NEG_ONE) + 1.0) * 0.5;
+                let hi = (screen[1].min(glam::Vec2::ONE) + 1.0) * 0.5;
+                let extent = (hi - lo).max(glam::Vec2::ZERO) * glam::Vec2::new(width, height);
+                extent.x * extent.y / triangles as f32
+            })
+            .collect()
+    }
+
     /// The first vertex of mesh `mesh` (its index in [`Scene::meshes`]) in the vertex buffers.
     pub fn base_vertex(&self, mesh: usize) -> Option<u32> {
         self.draws.get(mesh).map(|d| d.base_vertex as u32)
@@ -196,7 +237,7 @@ impl GpuScene {
                     alpha_tested: material.alpha_mode != AlphaMode::Opaque,
                     blended: material.alpha_mode == AlphaMode::Blend,
                 },
-                center: box_center(&m.positions),
+                bounds: bounding_box(&m.positions),
                 indirect: None,
             });
             indices.extend_from_slice(&m.indices);
@@ -259,13 +300,20 @@ impl GpuScene {
     }
 }
 
-/// The centre of the bounding box of `points` (the origin for none).
-fn box_center(points: &[glam::Vec3]) -> glam::Vec3 {
+/// The lower and upper corner of the bounding box of `points` (the origin for none).
+fn bounding_box(points: &[glam::Vec3]) -> [glam::Vec3; 2] {
     let Some(&first) = points.first() else {
-        return glam::Vec3::ZERO;
+        return [glam::Vec3::ZERO; 2];
     };
     let (lo, hi) = points
         .iter()
         .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-    (lo + hi) * 0.5
+    [lo, hi]
+}
+
+impl Draw {
+    /// The centre of the mesh's bounding box at upload.
+    pub(super) fn center(&self) -> glam::Vec3 {
+        (self.bounds[0] + self.bounds[1]) * 0.5
+    }
 }

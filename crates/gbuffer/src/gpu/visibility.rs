@@ -14,10 +14,13 @@
 //! workgroup of 64 invocations covers each block. Lists that overflow their capacity
 //! ([`Capacity`]) lose triangles; [`Visibility::overflow`] reads how many entries did not fit.
 //!
-//! **Alpha-tested meshes** (masked, or blended and dithered): their coverage depends on a
-//! texture lookup, so the hardware rasteriser draws them into the same buffer, each fragment
-//! the G-buffer pass would keep merging its depth and id the same way
-//! ([`Visibility::encode`], `visibility_alpha.wgsl`). Blended meshes the scene draws
+//! **Meshes drawn by the hardware rasteriser.** Alpha-tested meshes (masked, or blended and
+//! dithered): their coverage depends on a texture lookup, so the hardware rasteriser draws them
+//! into the same buffer, each fragment the G-buffer pass would keep merging its depth and id
+//! the same way ([`Visibility::encode`], `visibility_hardware.wgsl`). Any other mesh can be
+//! drawn so too ([`VisibilityPass::bind_split`]): meshes of large triangles, which the
+//! hardware rasteriser covers faster than the deferred path's blocks
+//! ([`GpuScene::pixels_per_triangle`] ranks them; the renderer measures where to split). Blended meshes the scene draws
 //! forward ([`BlendedSurfaces::Forward`](super::BlendedSurfaces)) are left out, as the
 //! G-buffer pass leaves them out. The device needs no feature ([`FEATURES`]: the edge
 //! functions' products are exact in pairs of 32-bit words; 64-bit atomics, [`WIDE_FEATURES`],
@@ -172,17 +175,18 @@ const NO_SLOT: u32 = u32::MAX;
 /// slots, as the CPU rasteriser numbers [`Scene::meshes`]' triangles).
 struct MeshTable {
     entries: Vec<MeshEntry>,
-    /// Meshes drawn by the hardware rasteriser: their material discards fragments by alpha.
-    alpha_tested: Vec<usize>,
+    /// Meshes drawn by the hardware rasteriser: those whose material discards fragments by
+    /// alpha, and those asked for.
+    hardware: Vec<usize>,
     /// The materials the other meshes draw, in slot order.
     materials: Vec<usize>,
     /// Triangle ids spanned.
     triangle_count: u32,
 }
 
-fn mesh_table(uploaded: &GpuScene) -> MeshTable {
+fn mesh_table(uploaded: &GpuScene, asked: &[usize]) -> MeshTable {
     let mut entries = Vec::with_capacity(uploaded.draws.len());
-    let mut alpha_tested = Vec::new();
+    let mut hardware = Vec::new();
     let mut materials: Vec<usize> = Vec::new();
     let mut first_id = 0u32;
     let forward = uploaded.blended() == super::BlendedSurfaces::Forward;
@@ -190,8 +194,9 @@ fn mesh_table(uploaded: &GpuScene) -> MeshTable {
         let triangles = draw.index_count / 3;
         // As the G-buffer pass draws: blended meshes drawn forward are not in the G-buffer.
         let drawn = triangles > 0 && !(forward && draw.state.blended);
-        if drawn && draw.state.alpha_tested {
-            alpha_tested.push(m);
+        let by_hardware = drawn && (draw.state.alpha_tested || asked.contains(&m));
+        if by_hardware {
+            hardware.push(m);
         }
         let slot = if !drawn {
             NO_SLOT
@@ -205,11 +210,7 @@ fn mesh_table(uploaded: &GpuScene) -> MeshTable {
             first_id,
             base_vertex: draw.base_vertex as u32,
             first_index: draw.first_index,
-            triangle_count: if drawn && !draw.state.alpha_tested {
-                triangles
-            } else {
-                0
-            },
+            triangle_count: if drawn && !by_hardware { triangles } else { 0 },
             cull_back: u32::from(draw.state.cull),
             material: draw.material as u32,
             slot,
@@ -219,7 +220,7 @@ fn mesh_table(uploaded: &GpuScene) -> MeshTable {
     }
     MeshTable {
         entries,
-        alpha_tested,
+        hardware,
         materials,
         triangle_count: first_id,
     }
@@ -262,25 +263,25 @@ impl Atomics {
 }
 
 /// Every variant of the shaders the kernels build (for validation without a GPU): the
-/// rasteriser and the alpha-tested draw, wide, and narrow in both passes.
+/// rasteriser and the hardware rasteriser's draw, wide, and narrow in both passes.
 pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
     let variants = [
         Atomics::Wide.specialisation(false),
         Atomics::Narrow.specialisation(false),
         Atomics::Narrow.specialisation(true),
     ];
-    ["visibility.wgsl", "visibility_alpha.wgsl"]
+    ["visibility.wgsl", "visibility_hardware.wgsl"]
         .into_iter()
         .flat_map(|file| variants.iter().map(move |v| (file, v.clone())))
         .collect()
 }
 
-/// One variant's pipelines: the compute rasteriser's and the alpha-tested draw's.
+/// One variant's pipelines: the compute rasteriser's and the hardware rasteriser's draw's.
 struct Pipelines {
     small: wgpu::ComputePipeline,
     tiles: wgpu::ComputePipeline,
     /// Two-sided, one-sided (back faces culled).
-    alpha: [wgpu::RenderPipeline; 2],
+    hardware: [wgpu::RenderPipeline; 2],
 }
 
 /// The visibility buffer's kernels (phase `new`).
@@ -289,9 +290,9 @@ pub struct VisibilityPass {
     /// `prepare`'s groups: the counts and lists it reads (bindings 5, 6 and 8 of group 0),
     /// the indirect dispatch sizes (group 1).
     prepare_layouts: [Layout; 2],
-    /// The alpha-tested draw's group 0: frame, meshes, positions, attributes, the visibility
+    /// The hardware draw's group 0: frame, meshes, positions, attributes, the visibility
     /// buffer (fragment stage), indices; the material is group 1.
-    alpha_layout: Layout,
+    hardware_layout: Layout,
     capacity: Capacity,
     atomics: Atomics,
     clear: wgpu::ComputePipeline,
@@ -303,8 +304,8 @@ pub struct VisibilityPass {
     ids: Option<Pipelines>,
 }
 
-/// The alpha-tested meshes' draws of one binding.
-struct AlphaDraws {
+/// The hardware rasteriser's draws of one binding (alpha-tested meshes and those asked for).
+struct HardwareDraws {
     group: wgpu::BindGroup,
     /// Per mesh: its index slots, its index (the instance drawn), its material's group, and
     /// whether it is one-sided.
@@ -319,14 +320,15 @@ pub struct Visibility {
     passes: Passes,
     /// The narrow merge's id pass: per triangle again, and the depth pass's blocks.
     id_passes: Option<Passes>,
-    alpha: Option<AlphaDraws>,
-    /// The alpha-tested draw's pipelines, per pass.
-    alpha_pipelines: Vec<[wgpu::RenderPipeline; 2]>,
+    hardware_draws: Option<HardwareDraws>,
+    /// The hardware draw's pipelines, per pass.
+    hardware_pipelines: Vec<[wgpu::RenderPipeline; 2]>,
     /// The names the passes are timed under ([`Visibility::pass_names`]).
     names: Vec<String>,
     /// Meshes (indices in the uploaded scene's meshes) drawn with the hardware rasteriser:
-    /// their material discards fragments by alpha.
-    pub alpha_tested: Vec<usize>,
+    /// those whose material discards fragments by alpha, and those
+    /// [`VisibilityPass::bind_split`] was given.
+    pub hardware: Vec<usize>,
     /// Deferred triangles, setups and blocks appended, and entries that did not fit (four
     /// `u32`s; `COPY_SRC`).
     pub counts: wgpu::Buffer,
@@ -358,41 +360,41 @@ impl Visibility {
         }
         self.passes = self.passes.named(&self.names[0]);
         if let Some(ids) = self.id_passes.take() {
-            let at = if self.alpha.is_some() { 2 } else { 1 };
+            let at = if self.hardware_draws.is_some() { 2 } else { 1 };
             self.id_passes = Some(ids.named(&self.names[at]));
         }
         self
     }
 
-    /// The names the passes are timed under, in order: `visibility`, `visibility alpha-tested`
-    /// (with alpha-tested meshes), and for the narrow merge `visibility ids`, `visibility
-    /// alpha-tested ids` ([`Visibility::named`] puts a prefix before each).
+    /// The names the passes are timed under, in order: `visibility`, `visibility hardware`
+    /// (with meshes drawn by the hardware rasteriser), and for the narrow merge `visibility
+    /// ids`, `visibility hardware ids` ([`Visibility::named`] puts a prefix before each).
     pub fn pass_names(&self) -> &[String] {
         &self.names
     }
 
-    /// Records the frame's visibility buffer: the compute passes and, with alpha-tested meshes,
-    /// the hardware rasteriser's draw of them, whose depth attachment `depth` (a
+    /// Records the frame's visibility buffer: the compute passes and, with meshes for the
+    /// hardware rasteriser ([`Visibility::hardware`]), its draw of them, whose depth attachment `depth` (a
     /// [`crate::DEPTH_FORMAT`] render target of the buffer's size, e.g. the G-buffer's depth
     /// target) is cleared and not stored; then the narrow merge's id passes. Fails, recording
-    /// nothing, when alpha-tested meshes have no fitting `depth`.
+    /// nothing, when those meshes have no fitting `depth`.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         depth: Option<&wgpu::Texture>,
         timer: Option<&PassTimer>,
     ) -> Result<(), GBufferError> {
-        let attachment = match (&self.alpha, depth) {
+        let attachment = match (&self.hardware_draws, depth) {
             (None, _) => None,
             (Some(_), None) => {
                 return Err(GBufferError::InvalidOptions(format!(
-                    "meshes {:?} are alpha-tested: their draw into the visibility buffer needs a depth attachment",
-                    self.alpha_tested
+                    "meshes {:?} are drawn by the hardware rasteriser: their draw into the visibility buffer needs a depth attachment",
+                    self.hardware
                 )));
             }
             (Some(_), Some(depth)) => {
                 ::gpu::kernel::check_texture(
-                    "the alpha-tested draw's depth attachment",
+                    "the hardware draw's depth attachment",
                     depth,
                     self.size,
                     crate::DEPTH_FORMAT,
@@ -401,17 +403,17 @@ impl Visibility {
                 Some(depth.create_view(&Default::default()))
             }
         };
-        // Each phase's compute passes carry their name; its alpha-tested draw's follows it.
-        let mut alpha_names = self.names.iter().skip(1).step_by(2);
+        // Each phase's compute passes carry their name; its hardware draw's follows it.
+        let mut hardware_names = self.names.iter().skip(1).step_by(2);
         let phases = std::iter::once(&self.passes).chain(&self.id_passes);
-        for (passes, pipelines) in phases.zip(&self.alpha_pipelines) {
+        for (passes, pipelines) in phases.zip(&self.hardware_pipelines) {
             passes.encode(encoder, timer);
-            if let (Some(alpha), Some(view), Some(name)) =
-                (&self.alpha, &attachment, alpha_names.next())
+            if let (Some(draws), Some(view), Some(name)) =
+                (&self.hardware_draws, &attachment, hardware_names.next())
             {
-                draw_alpha(
+                draw_hardware(
                     encoder,
-                    alpha,
+                    draws,
                     pipelines,
                     view,
                     timer.and_then(|t| t.render_pass(name)),
@@ -422,30 +424,30 @@ impl Visibility {
     }
 }
 
-/// The passes' names: `visibility`, then the alpha-tested draw's (`alpha`), and the narrow
-/// merge's id passes and their draw (`narrow`).
-fn pass_names(alpha: bool, narrow: bool) -> Vec<String> {
+/// The passes' names: `visibility`, then the hardware rasteriser's draw's (`hardware`), and
+/// the narrow merge's id passes and their draw (`narrow`).
+fn pass_names(hardware: bool, narrow: bool) -> Vec<String> {
     let phases: &[&str] = if narrow { &["", " ids"] } else { &[""] };
     phases
         .iter()
         .flat_map(|phase| {
             let compute = format!("visibility{phase}");
-            let draw = alpha.then(|| format!("visibility alpha-tested{phase}"));
+            let draw = hardware.then(|| format!("visibility hardware{phase}"));
             std::iter::once(compute).chain(draw)
         })
         .collect()
 }
 
-/// The hardware rasteriser's pass drawing the alpha-tested meshes into the visibility buffer.
-fn draw_alpha(
+/// The hardware rasteriser's pass drawing its meshes into the visibility buffer.
+fn draw_hardware(
     encoder: &mut wgpu::CommandEncoder,
-    alpha: &AlphaDraws,
+    draws: &HardwareDraws,
     pipelines: &[wgpu::RenderPipeline; 2],
     depth: &wgpu::TextureView,
     timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
 ) {
     let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("visibility alpha-tested"),
+        label: Some("visibility hardware"),
         color_attachments: &[],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
             view: depth,
@@ -459,8 +461,8 @@ fn draw_alpha(
         occlusion_query_set: None,
         multiview_mask: None,
     });
-    pass.set_bind_group(0, &alpha.group, &[]);
-    for (slots, mesh, material, one_sided) in &alpha.draws {
+    pass.set_bind_group(0, &draws.group, &[]);
+    for (slots, mesh, material, one_sided) in &draws.draws {
         pass.set_pipeline(&pipelines[usize::from(*one_sided)]);
         pass.set_bind_group(1, material, &[]);
         pass.draw(slots.clone(), *mesh..*mesh + 1);
@@ -469,7 +471,7 @@ fn draw_alpha(
 
 impl VisibilityPass {
     /// Builds the kernels with the default [`Capacity`] and the [best](Atomics::best) merge;
-    /// materials bind as `gpass` binds them (the alpha-tested meshes' draw). The device must
+    /// materials bind as `gpass` binds them (the hardware rasteriser's draw). The device must
     /// have [`FEATURES`].
     pub fn new(device: &wgpu::Device, gpass: &super::GBufferPass) -> Result<Self, GBufferError> {
         Self::with(device, gpass, Capacity::default(), Atomics::best(device))
@@ -512,9 +514,9 @@ impl VisibilityPass {
         ];
         let both = wgpu::ShaderStages::VERTEX_FRAGMENT;
         let vertex = wgpu::ShaderStages::VERTEX;
-        let alpha_layout = Layout::staged(
+        let hardware_layout = Layout::staged(
             device,
-            "visibility alpha",
+            "visibility hardware",
             &[
                 (0, both, Binding::Uniform),
                 (1, vertex, Binding::StorageRead),
@@ -524,27 +526,27 @@ impl VisibilityPass {
                 (5, vertex, Binding::StorageRead),
             ],
         );
-        let alpha_pipeline_layout = kernel::pipeline_layout(
+        let hardware_pipeline_layout = kernel::pipeline_layout(
             device,
-            "visibility alpha",
-            &[&alpha_layout, &gpass.material_layout],
+            "visibility hardware",
+            &[&hardware_layout, &gpass.material_layout],
         );
         let module = |id_pass| {
             crate::SHADERS.module_with(device, "visibility.wgsl", &atomics.specialisation(id_pass))
         };
         let pipelines = |id_pass| -> Result<(wgpu::ShaderModule, Pipelines), GBufferError> {
             let compute = module(id_pass)?;
-            let alpha = crate::SHADERS.module_with(
+            let draw = crate::SHADERS.module_with(
                 device,
-                "visibility_alpha.wgsl",
+                "visibility_hardware.wgsl",
                 &atomics.specialisation(id_pass),
             )?;
             let pipeline = |entry| kernel::pipeline(device, &compute, entry, &[&layout], &[]);
             let built = Pipelines {
                 small: pipeline("raster_small"),
                 tiles: pipeline("raster_tiles"),
-                alpha: [None, Some(wgpu::Face::Back)]
-                    .map(|cull| alpha_pipeline(device, &alpha_pipeline_layout, &alpha, cull)),
+                hardware: [None, Some(wgpu::Face::Back)]
+                    .map(|cull| hardware_pipeline(device, &hardware_pipeline_layout, &draw, cull)),
             };
             Ok((compute, built))
         };
@@ -564,7 +566,7 @@ impl VisibilityPass {
                 &[],
             ),
             prepare_layouts,
-            alpha_layout,
+            hardware_layout,
             layout,
             capacity,
             atomics,
@@ -603,7 +605,8 @@ impl VisibilityPass {
     /// The passes writing `visibility` (a [`VisibilityPass::buffer`] of `size`) for the
     /// `uploaded` scene seen through `frame`, a [`Frame`](crate::Frame) uniform of that size (the G-buffer
     /// pass's [`GBufferPass::frame_buffer`](super::GBufferPass::frame_buffer): the passes
-    /// follow the camera it is written with).
+    /// follow the camera it is written with). Alpha-tested meshes are drawn by the hardware
+    /// rasteriser, the others by the compute rasteriser.
     pub fn bind(
         &self,
         device: &wgpu::Device,
@@ -612,8 +615,30 @@ impl VisibilityPass {
         size: (u32, u32),
         visibility: &wgpu::Buffer,
     ) -> Result<Visibility, GBufferError> {
+        self.bind_split(device, uploaded, frame, size, visibility, &[])
+    }
+
+    /// [`VisibilityPass::bind`] with the meshes `hardware` (indices in the uploaded scene's
+    /// meshes) drawn by the hardware rasteriser too, into the same buffer: the same ids and
+    /// depths but on triangle edges, where coverage follows the hardware's rules. Fails on
+    /// an index past the scene's meshes.
+    pub fn bind_split(
+        &self,
+        device: &wgpu::Device,
+        uploaded: &GpuScene,
+        frame: &wgpu::Buffer,
+        size: (u32, u32),
+        visibility: &wgpu::Buffer,
+        hardware: &[usize],
+    ) -> Result<Visibility, GBufferError> {
         check_buffer(visibility, size)?;
-        let table = mesh_table(uploaded);
+        if let Some(m) = hardware.iter().find(|&&m| m >= uploaded.draws.len()) {
+            return Err(GBufferError::InvalidOptions(format!(
+                "mesh {m} cannot be drawn by the hardware rasteriser: the scene has {} meshes",
+                uploaded.draws.len()
+            )));
+        }
+        let table = mesh_table(uploaded, hardware);
         let triangle_count = table.triangle_count;
         let storage = wgpu::BufferUsages::STORAGE;
         let list =
@@ -698,8 +723,8 @@ impl VisibilityPass {
                 vec![one(&ids.small, per_triangle), one(&ids.tiles, tiles)],
             )
         });
-        let alpha = (!table.alpha_tested.is_empty()).then(|| AlphaDraws {
-            group: self.alpha_layout.bind_buffers(
+        let hardware_draws = (!table.hardware.is_empty()).then(|| HardwareDraws {
+            group: self.hardware_layout.bind_buffers(
                 device,
                 &[
                     frame,
@@ -711,7 +736,7 @@ impl VisibilityPass {
                 ],
             ),
             draws: table
-                .alpha_tested
+                .hardware
                 .iter()
                 .map(|&m| {
                     let d = &uploaded.draws[m];
@@ -727,13 +752,13 @@ impl VisibilityPass {
         Ok(Visibility {
             passes: Passes::new().pass("visibility", dispatches),
             id_passes,
-            alpha,
-            alpha_pipelines: std::iter::once(&self.first)
+            hardware_draws,
+            hardware_pipelines: std::iter::once(&self.first)
                 .chain(&self.ids)
-                .map(|p| p.alpha.clone())
+                .map(|p| p.hardware.clone())
                 .collect(),
-            names: pass_names(!table.alpha_tested.is_empty(), self.ids.is_some()),
-            alpha_tested: table.alpha_tested,
+            names: pass_names(!table.hardware.is_empty(), self.ids.is_some()),
+            hardware: table.hardware,
             counts,
             materials: table.materials,
             buffer: visibility.clone(),
@@ -743,20 +768,20 @@ impl VisibilityPass {
     }
 }
 
-/// The alpha-tested meshes' render pipeline (`visibility_alpha.wgsl`) culling `cull`: the
+/// The hardware rasteriser's render pipeline (`visibility_hardware.wgsl`) culling `cull`: the
 /// G-buffer pass's winding, no colour target, a depth attachment neither tested nor written.
-fn alpha_pipeline(
+fn hardware_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     module: &wgpu::ShaderModule,
     cull_mode: Option<wgpu::Face>,
 ) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("visibility alpha"),
+        label: Some("visibility hardware"),
         layout: Some(layout),
         vertex: wgpu::VertexState {
             module,
-            entry_point: Some("vs_alpha"),
+            entry_point: Some("vs_hardware"),
             compilation_options: Default::default(),
             buffers: &[],
         },
@@ -775,7 +800,7 @@ fn alpha_pipeline(
         multisample: Default::default(),
         fragment: Some(wgpu::FragmentState {
             module,
-            entry_point: Some("fs_alpha"),
+            entry_point: Some("fs_hardware"),
             compilation_options: Default::default(),
             targets: &[],
         }),

@@ -1,9 +1,11 @@
 // #import gbuffer/gbuffer.wgsl
 // #import gbuffer/meshes.wgsl
 // #import gbuffer/visibility_word.wgsl
-// The visibility buffer's alpha-tested meshes (masked, or blended and dithered), drawn by the
-// hardware rasteriser: their coverage depends on the material's alpha, a texture lookup with
-// derivatives the compute rasteriser does not take. Each fragment the G-buffer pass would keep
+// The visibility buffer's meshes drawn by the hardware rasteriser: alpha-tested ones (masked,
+// or blended and dithered), whose coverage depends on the material's alpha, a texture lookup
+// with derivatives the compute rasteriser does not take, and meshes of large triangles the
+// caller routes here (`VisibilityPass::bind_split`; their alpha test keeps every fragment).
+// Each fragment the G-buffer pass would keep
 // (`surface_fragment`'s alpha test) merges its z/w and triangle id into the visibility buffer
 // as the compute rasteriser merges them (`visibility_word.wgsl`: in the narrow variant the
 // draw runs twice, once per pass). Vertices are pulled from the scene's
@@ -27,7 +29,7 @@ struct AlphaVertex {
 }
 
 @vertex
-fn vs_alpha(@builtin(vertex_index) slot: u32, @builtin(instance_index) m: u32) -> AlphaVertex {
+fn vs_hardware(@builtin(vertex_index) slot: u32, @builtin(instance_index) m: u32) -> AlphaVertex {
     let mesh = meshes[m];
     let v = mesh.base_vertex + indices[slot];
     let a = ATTRIBUTE_FLOATS * v;
@@ -40,7 +42,7 @@ fn vs_alpha(@builtin(vertex_index) slot: u32, @builtin(instance_index) m: u32) -
 }
 
 @fragment
-fn fs_alpha(in: AlphaVertex) {
+fn fs_hardware(in: AlphaVertex) {
     // `evaluate_fragment`'s coordinates and derivatives; the alpha reads nothing else.
     let footprint = max(frame.sampling.z, 1.0);
     let at = SurfaceAttributes(in.uv, dpdxFine(in.uv) * footprint, dpdyFine(in.uv) * footprint, vec3(0.0, 0.0, 1.0), false, vec4(0.0), in.color);
