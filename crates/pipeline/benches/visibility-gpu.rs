@@ -3,8 +3,9 @@
 //! pass), same scene, camera and run: Dabrovic Sponza at 1920×1080, 3840×2160 and the adaptive
 //! SSAA's supersampled 4096×3072, and the spot cage Loop-subdivided to level 5 (6 M triangles,
 //! subdivided on the CPU) at 1920×1080. Alpha-tested meshes take the hardware rasteriser in
-//! both paths (`Visibility::encode_alpha` in the visibility path). Also the share of pixels
-//! whose material word the two paths agree on.
+//! both paths (the hardware draw into the buffer in the visibility path). Also the share of
+//! pixels whose material word the two paths agree on, and the visibility path per split of the
+//! meshes between the two rasterisers (`pipeline::gpu::SPLIT_PIXELS`), the fastest reported.
 
 use anyhow::{Context, Result};
 use bench::{Header, Stat};
@@ -38,7 +39,7 @@ struct Row {
     triangles: usize,
     /// Z-prepass + G-buffer pass.
     hardware: Stat,
-    /// The compute rasteriser (with the alpha-tested draw), 64-bit atomics.
+    /// The compute rasteriser (with the hardware draw of alpha-tested meshes), 64-bit atomics.
     raster: Stat,
     /// The same with the 32-bit fallback's two passes (`Atomics::Narrow`).
     raster_narrow: Stat,
@@ -46,8 +47,30 @@ struct Row {
     visibility: Stat,
     /// Hardware ÷ visibility (medians).
     speedup: f64,
+    /// Rasteriser + resolve per split between the rasterisers, as the renderer's
+    /// `choose_gbuffer_path` measures them (the first is `visibility`'s).
+    splits: Vec<Split>,
     /// Pixels whose material word both paths wrote alike.
     agreement: f64,
+}
+
+/// Meshes of more than `above_pixels` pixels per triangle drawn into the visibility buffer by
+/// the hardware rasteriser (`VisibilityPass::bind_split`).
+#[derive(Serialize)]
+struct Split {
+    /// One of `pipeline::gpu::SPLIT_PIXELS` (`null`: none).
+    above_pixels: f32,
+    hardware_meshes: usize,
+    visibility: Stat,
+}
+
+impl Row {
+    /// The fastest split.
+    fn fastest(&self) -> Option<&Split> {
+        self.splits
+            .iter()
+            .min_by(|a, b| a.visibility.median_ms.total_cmp(&b.visibility.median_ms))
+    }
 }
 
 #[derive(Serialize)]
@@ -124,19 +147,20 @@ fn measure(
     let targets = GBufferTargets::new(device, w, h)?;
     let buffer = VisibilityPass::buffer(device, w, h)?;
     let frame_buffer = gpass.frame_buffer();
-    let bind = |atomics| -> Result<_> {
+    let bind = |atomics, hardware: &[usize]| -> Result<_> {
         Ok(
-            VisibilityPass::with(device, &gpass, Capacity::default(), atomics)?.bind(
+            VisibilityPass::with(device, &gpass, Capacity::default(), atomics)?.bind_split(
                 device,
                 &uploaded,
                 frame_buffer,
                 (w, h),
                 &buffer,
+                hardware,
             )?,
         )
     };
-    let (vis, narrow) = (bind(Atomics::Wide)?, bind(Atomics::Narrow)?);
-    // The depth attachment of the alpha-tested draw (cleared, not stored): the G-buffer's.
+    let (vis, narrow) = (bind(Atomics::Wide, &[])?, bind(Atomics::Narrow, &[])?);
+    // The depth attachment of the hardware draw (cleared, not stored): the G-buffer's.
     let depth = Some(&targets.depth);
     let raster_with = |vis: &gbuffer::gpu::visibility::Visibility| {
         bench::timing::time_encoded(gpu, &timer, frames, true, &|encoder, timer| {
@@ -146,13 +170,35 @@ fn measure(
     };
     let raster_narrow = raster_with(&narrow)?;
     let raster = raster_with(&vis)?;
-    let resolve =
-        ResolvePass::new(device, &gpass)?.bind(device, &uploaded, frame_buffer, &vis, &targets)?;
-    let visibility = bench::timing::time_encoded(gpu, &timer, frames, true, &|encoder, timer| {
-        vis.encode(encoder, depth, Some(timer))
-            .expect("depth target of the visibility buffer's size");
-        resolve.passes.encode(encoder, Some(timer));
-    })?;
+    let resolve_pass = ResolvePass::new(device, &gpass)?;
+    let visibility_with = |vis: &gbuffer::gpu::visibility::Visibility| -> Result<Stat> {
+        let resolve = resolve_pass.bind(device, &uploaded, frame_buffer, vis, &targets)?;
+        Ok(bench::timing::time_encoded(
+            gpu,
+            &timer,
+            frames,
+            true,
+            &|encoder, timer| {
+                vis.encode(encoder, depth, Some(timer))
+                    .expect("depth target of the visibility buffer's size");
+                resolve.passes.encode(encoder, Some(timer));
+            },
+        )?)
+    };
+    let pixels = uploaded.pixels_per_triangle(&frame);
+    let mut splits: Vec<(f32, Vec<usize>, Stat)> = Vec::new();
+    for above_pixels in pipeline::gpu::SPLIT_PIXELS {
+        let meshes: Vec<usize> = (0..pixels.len())
+            .filter(|&m| pixels[m] > above_pixels)
+            .collect();
+        if splits.last().is_some_and(|(_, last, _)| *last == meshes) {
+            continue;
+        }
+        let stat = visibility_with(&bind(Atomics::Wide, &meshes)?)?;
+        splits.push((above_pixels, meshes, stat));
+    }
+    // Last the split without hardware meshes, whose G-buffer is compared below.
+    let visibility = visibility_with(&vis)?;
     let (a, b) = (
         hardware_targets.read(device, &gpu.queue)?,
         targets.read(device, &gpu.queue)?,
@@ -175,17 +221,40 @@ fn measure(
         raster,
         raster_narrow,
         visibility,
+        splits: splits
+            .into_iter()
+            .map(|(above_pixels, meshes, visibility)| Split {
+                above_pixels,
+                hardware_meshes: meshes.len(),
+                visibility,
+            })
+            .collect(),
     };
+    let tried: Vec<String> = row
+        .splits
+        .iter()
+        .map(|s| format!("{} {:.3}", split_rule(s), s.visibility.median_ms))
+        .collect();
     println!(
-        "{name} {w}x{h}: hardware {:.3} ms, visibility {:.3} ms (raster {:.3}, 32-bit {:.3}), ×{:.2}, material words agree on {:.2} %",
+        "{name} {w}x{h}: hardware {:.3} ms, visibility {:.3} ms (raster {:.3}, 32-bit {:.3}), ×{:.2}, material words agree on {:.2} %; splits: {}",
         row.hardware.median_ms,
         row.visibility.median_ms,
         row.raster.median_ms,
         row.raster_narrow.median_ms,
         row.speedup,
-        row.agreement * 100.0
+        row.agreement * 100.0,
+        tried.join(", ")
     );
     Ok(row)
+}
+
+/// `none` or `> T px (n meshes)`: the meshes the split draws by the hardware rasteriser.
+fn split_rule(s: &Split) -> String {
+    if s.above_pixels.is_finite() {
+        format!("> {} px ({} meshes)", s.above_pixels, s.hardware_meshes)
+    } else {
+        "none".into()
+    }
 }
 
 fn main() -> Result<()> {
@@ -224,14 +293,17 @@ fn main() -> Result<()> {
          compute rasteriser (`gbuffer::gpu::visibility`, 64-bit atomicMin of depth and id) + \
          the hardware draw of alpha-tested meshes into it + the resolve into the same G-buffer \
          targets (pixels classified by 8×8 tile, one indirect dispatch per material); raster = \
-         the rasteriser with the alpha-tested draw; 32-bit = the same with the fallback's two \
+         the rasteriser with the hardware draw; 32-bit = the same with the fallback's two \
          passes of 32-bit atomics (`Atomics::Narrow`). Same scene, camera and run. \
          Agreement: pixels whose material word (roughness, metallic, material id) both wrote \
-         alike.\n\n| scene | size | triangles | hardware ms | visibility ms | raster ms | 32-bit raster ms | × | agreement |\n|---|---|---|---|---|---|---|---|---|\n",
+         alike. Best split: the fastest visibility path (rasteriser + resolve) over the splits \
+         `choose_gbuffer_path` tries — meshes of more than T pixels per triangle drawn into \
+         the buffer by the hardware rasteriser, T in `SPLIT_PIXELS` — and its rule.\n\n| scene | size | triangles | hardware ms | visibility ms | raster ms | 32-bit raster ms | × | agreement | best split ms | its rule | × best |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &rows {
+        let best = r.fastest().context("no split measured")?;
         md.push_str(&format!(
-            "| {} | {}×{} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} % |\n",
+            "| {} | {}×{} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} % | {:.3} | {} | {:.2} |\n",
             r.scene,
             r.width,
             r.height,
@@ -241,7 +313,10 @@ fn main() -> Result<()> {
             r.raster.median_ms,
             r.raster_narrow.median_ms,
             r.speedup,
-            r.agreement * 100.0
+            r.agreement * 100.0,
+            best.visibility.median_ms,
+            split_rule(best),
+            r.hardware.median_ms / best.visibility.median_ms
         ));
     }
     let report = Report {
