@@ -132,6 +132,10 @@ pub struct GpuEvaluator {
     pub adapter: String,
 }
 
+/// The workgroup size of OpenSubdiv's stencil kernel (`StencilEvalConfig`'s default): stencils
+/// per workgroup.
+const STENCILS_PER_GROUP: u32 = 64;
+
 /// A [`Refinement`]'s stencils and positions on the [`GpuEvaluator`]'s device.
 pub struct GpuRefinement {
     table: osd::wgpu::StencilTableGpu,
@@ -162,7 +166,10 @@ impl GpuEvaluator {
             required_limits: chosen.limits(),
             ..Default::default()
         }))?;
-        let pipeline = osd::wgpu::StencilEvalPipeline::new(&device, Default::default());
+        let config = osd::wgpu::WgslModuleConfig {
+            workgroup_size: std::num::NonZeroU32::new(STENCILS_PER_GROUP).context("workgroup")?,
+        };
+        let pipeline = osd::wgpu::StencilEvalPipeline::new(&device, config);
         let queries = device.create_query_set(&wgpu::QuerySetDescriptor {
             label: Some("opensubdiv bracket"),
             ty: wgpu::QueryType::Timestamp,
@@ -224,8 +231,21 @@ impl GpuEvaluator {
     }
 
     /// One evaluation of every stencil; its GPU time in ms: from the end of an empty pass
-    /// before OpenSubdiv's dispatch to the beginning of one after it.
+    /// before OpenSubdiv's dispatch to the beginning of one after it. Its kernel runs one
+    /// invocation per stencil in 64-wide workgroups along x alone: a dispatch holds at most the
+    /// device's workgroups per dimension (65 535 by default, 4.2 M stencils), so larger tables
+    /// go in batches of that many.
     pub fn evaluate(&self, g: &GpuRefinement) -> Result<f64> {
+        let groups = self.device.limits().max_compute_workgroups_per_dimension;
+        self.evaluate_in_batches(g, groups * STENCILS_PER_GROUP)
+    }
+
+    /// [`GpuEvaluator::evaluate`] in batches of `batch` stencils (its `batch_range`), one pass
+    /// each.
+    pub fn evaluate_in_batches(&self, g: &GpuRefinement, batch: u32) -> Result<f64> {
+        if batch == 0 {
+            bail!("a batch of OpenSubdiv's stencils must hold at least one");
+        }
         let mut encoder = self.device.create_command_encoder(&Default::default());
         let bracket = |encoder: &mut wgpu::CommandEncoder, before: bool| {
             encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -239,16 +259,18 @@ impl GpuEvaluator {
         };
         bracket(&mut encoder, true);
         let desc = osd::BufferDescriptor::new(0, 3, 3)?;
-        self.pipeline.encode(
-            &self.device,
-            &mut encoder,
-            &g.table,
-            &g.control,
-            &g.refined,
-            desc,
-            desc,
-            0..g.table.stencil_count,
-        )?;
+        for start in (0..g.table.stencil_count).step_by(batch as usize) {
+            self.pipeline.encode(
+                &self.device,
+                &mut encoder,
+                &g.table,
+                &g.control,
+                &g.refined,
+                desc,
+                desc,
+                start..g.table.stencil_count.min(start + batch),
+            )?;
+        }
         bracket(&mut encoder, false);
         encoder.resolve_query_set(&self.queries, 0..2, &self.resolved, 0);
         self.queue.submit([encoder.finish()]);

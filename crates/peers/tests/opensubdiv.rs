@@ -74,7 +74,7 @@ fn opensubdiv_refines_as_our_reference_and_tables() {
 }
 
 /// OpenSubdiv's GPU evaluator (wgpu 29, the toolkit's adapter) gives its CPU evaluator's
-/// positions, and its timing bracket measures something.
+/// positions, in one dispatch or in batches, and its timing bracket measures something.
 #[test]
 fn opensubdiv_gpu_evaluator_matches_its_cpu_evaluator() {
     let Some(mesh) = spot() else { return };
@@ -105,4 +105,10 @@ fn opensubdiv_gpu_evaluator_matches_its_cpu_evaluator() {
         })
         .fold(0.0, f64::max);
     assert!(worst / d <= 1e-6, "GPU vs CPU {:e}", worst / d);
+    // In batches (as tables past 4.2 M stencils run): the same positions, bit for bit.
+    evaluator
+        .evaluate_in_batches(&bound, 1000)
+        .expect("batches");
+    assert_eq!(evaluator.read(&bound).expect("read"), gpu);
+    assert!(evaluator.evaluate_in_batches(&bound, 0).is_err());
 }
