@@ -6,7 +6,10 @@
 #   bash docs/bench/logs-2026-12-06b/run.sh "visibility:170:visibility-gpu" \
 #     "indirect:40:indirect-gpu --vpls 256,1024" "ssaa:100:ssaa-gpu --quick" \
 #     "peers:100:peers-gpu --meshes spot,cesium-man,fandisk --levels 3,5 --cpu-runs 1 --python-level 0"
-# (no call of 2026-12-07 got a machine: every start failed until the device time was spent).
+# The first session of 2026-12-07 got no machine (every start failed). The second got an H100
+# for five minutes after eight failed starts: call1/ (visibility, ssaa) and call2/ (peers — which
+# stopped at fandisk level 5, see docs/peers.md —, indirect, then manylod and subdiv cut short
+# by their time limits, stdout only).
 set -euo pipefail
 bash ../shared/tools/device-prep.sh > /dev/null
 bins=$(mktemp -d)
