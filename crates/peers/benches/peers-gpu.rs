@@ -182,15 +182,18 @@ fn main() -> Result<()> {
             let (osd_cpu_ms, osd_positions) = wall(cpu_runs, || osd.evaluate_cpu(&control))?;
             let osd_triangles = osd.triangles()?;
             let osd_positions = peers::dvec3s(&osd_positions);
-            let (osd_gpu_stat, osd_gpu_positions) =
-                match osd_gpu.as_ref().map(|e| (e, e.bind(&osd, &control))) {
-                    Ok((e, Ok(bound))) => {
-                        let times = bench::warm_then_time(frames, || e.evaluate(&bound))?;
-                        (Ok(Stat::of(times)), Some(peers::dvec3s(&e.read(&bound)?)))
-                    }
-                    Ok((_, Err(why))) => (Err(format!("{why:#}")), None),
-                    Err(why) => (Err(why.clone()), None),
-                };
+            let (osd_gpu_stat, osd_gpu_positions) = match osd_gpu
+                .as_ref()
+                .map(|e| (e, e.bind(&osd, &control)))
+            {
+                // A refused evaluation is the row's, not the run's.
+                Ok((e, Ok(bound))) => match bench::warm_then_time(frames, || e.evaluate(&bound)) {
+                    Ok(times) => (Ok(Stat::of(times)), Some(peers::dvec3s(&e.read(&bound)?))),
+                    Err(why) => (Err(format!("{why:#}")), None),
+                },
+                Ok((_, Err(why))) => (Err(format!("{why:#}")), None),
+                Err(why) => (Err(why.clone()), None),
+            };
             let ours_gpu = g.level(&gpu.device, &sub, level).map_err(|e| e.to_string());
             let ours_gpu = match ours_gpu {
                 Ok(out) => {

@@ -246,6 +246,8 @@ impl GpuEvaluator {
         if batch == 0 {
             bail!("a batch of OpenSubdiv's stencils must hold at least one");
         }
+        // wgpu 29 panics on an error nobody captures: a refused dispatch becomes an `Err`.
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut encoder = self.device.create_command_encoder(&Default::default());
         let bracket = |encoder: &mut wgpu::CommandEncoder, before: bool| {
             encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -273,7 +275,11 @@ impl GpuEvaluator {
         }
         bracket(&mut encoder, false);
         encoder.resolve_query_set(&self.queries, 0..2, &self.resolved, 0);
-        self.queue.submit([encoder.finish()]);
+        let commands = encoder.finish();
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            bail!("wgpu refused OpenSubdiv's evaluation: {e}");
+        }
+        self.queue.submit([commands]);
         let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&self.read_bytes(&self.resolved)?);
         let period = f64::from(self.queue.get_timestamp_period());
         Ok(ticks[1].wrapping_sub(ticks[0]) as f64 * period * 1e-6)
