@@ -187,13 +187,7 @@ fn measure(
     };
     let pixels = uploaded.pixels_per_triangle(&frame);
     let mut splits: Vec<(f32, Vec<usize>, Stat)> = Vec::new();
-    for above_pixels in pipeline::gpu::SPLIT_PIXELS {
-        let meshes: Vec<usize> = (0..pixels.len())
-            .filter(|&m| pixels[m] > above_pixels)
-            .collect();
-        if splits.last().is_some_and(|(_, last, _)| *last == meshes) {
-            continue;
-        }
+    for (above_pixels, meshes) in pipeline::gpu::visibility_splits(&pixels) {
         let stat = visibility_with(&bind(Atomics::Wide, &meshes)?)?;
         splits.push((above_pixels, meshes, stat));
     }

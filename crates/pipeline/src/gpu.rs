@@ -204,6 +204,22 @@ fn exclusions(
 /// the visibility buffer, from none (infinity) to every mesh on screen (0).
 pub const SPLIT_PIXELS: [f32; 8] = [f32::INFINITY, 4096.0, 1024.0, 256.0, 64.0, 16.0, 4.0, 0.0];
 
+/// The distinct splits [`GpuRenderer::choose_gbuffer_path`] measures, given each mesh's
+/// pixels per triangle ([`GpuScene::pixels_per_triangle`]): for each of [`SPLIT_PIXELS`] in
+/// order, the threshold and the meshes above it, a threshold that moves no mesh left out.
+pub fn visibility_splits(pixels: &[f32]) -> Vec<(f32, Vec<usize>)> {
+    let mut splits: Vec<(f32, Vec<usize>)> = Vec::new();
+    for above_pixels in SPLIT_PIXELS {
+        let meshes: Vec<usize> = (0..pixels.len())
+            .filter(|&m| pixels[m] > above_pixels)
+            .collect();
+        if splits.last().is_none_or(|(_, last)| *last != meshes) {
+            splits.push((above_pixels, meshes));
+        }
+    }
+    splits
+}
+
 /// One sharing of the visibility buffer's meshes between the two rasterisers, measured by
 /// [`GpuRenderer::choose_gbuffer_path`].
 #[derive(Clone, Debug, PartialEq)]
@@ -235,8 +251,13 @@ pub struct GBufferChoice {
 impl GBufferChoice {
     /// The fastest split measured.
     pub fn fastest_split(&self) -> Option<&VisibilitySplit> {
-        self.splits.iter().min_by(|a, b| a.ms.total_cmp(&b.ms))
+        fastest_split(&self.splits)
     }
+}
+
+/// The split of least time among `splits`.
+fn fastest_split(splits: &[VisibilitySplit]) -> Option<&VisibilitySplit> {
+    splits.iter().min_by(|a, b| a.ms.total_cmp(&b.ms))
 }
 
 impl std::fmt::Display for GBufferChoice {
@@ -1522,16 +1543,7 @@ impl GpuRenderer {
                 let pixels = self
                     .scene
                     .pixels_per_triangle(&Frame::new(camera, width, height));
-                for above_pixels in SPLIT_PIXELS {
-                    let hardware_meshes: Vec<usize> = (0..pixels.len())
-                        .filter(|&m| pixels[m] > above_pixels)
-                        .collect();
-                    if splits
-                        .last()
-                        .is_some_and(|s| s.hardware_meshes == hardware_meshes)
-                    {
-                        continue;
-                    }
+                for (above_pixels, hardware_meshes) in visibility_splits(&pixels) {
                     self.set_visibility_split(device, &hardware_meshes)?;
                     let ms = self.median_ms(device, queue, frames.max(1), |name| {
                         name.starts_with("visibility") || name.starts_with("ss visibility")
@@ -1543,7 +1555,7 @@ impl GpuRenderer {
                     });
                 }
                 // The first split is always measured.
-                let fastest = splits.iter().min_by(|a, b| a.ms.total_cmp(&b.ms));
+                let fastest = fastest_split(&splits);
                 let (ms, meshes) = fastest.map_or((f64::INFINITY, Vec::new()), |s| {
                     (s.ms, s.hardware_meshes.clone())
                 });

@@ -305,3 +305,17 @@ fn redrawing_methods_are_refused() {
     assert!(e.to_string().contains("exclude each other"), "{e}");
     assert!(!renderer.visibility(), "the hardware path stays");
 }
+
+/// The splits measured: one per threshold of `SPLIT_PIXELS` that moves a mesh, meshes above it.
+#[test]
+fn splits_are_distinct_thresholds_of_pixels_per_triangle() {
+    let splits = pipeline::gpu::visibility_splits(&[10.0, 5000.0, 0.0]);
+    assert_eq!(
+        splits,
+        vec![
+            (f32::INFINITY, vec![]),
+            (4096.0, vec![1]),
+            (4.0, vec![0, 1]),
+        ]
+    );
+}
