@@ -441,6 +441,22 @@ impl Passes {
         self
     }
 
+    /// The same dispatches, each in a pass of its own named `name(i)` for the i-th dispatch
+    /// (counted across passes): a profile of a stage's dispatches (passes of one name are
+    /// summed by [`PassTimer`]'s readers that group by name).
+    pub fn per_dispatch(&self, mut name: impl FnMut(usize) -> String) -> Self {
+        let dispatches = self.0.iter().flat_map(|p| p.dispatches.iter().cloned());
+        Self(
+            dispatches
+                .enumerate()
+                .map(|(i, d)| Pass {
+                    name: name(i),
+                    dispatches: vec![d],
+                })
+                .collect(),
+        )
+    }
+
     /// The pass names, in order.
     pub fn names(&self) -> impl Iterator<Item = &str> {
         self.0.iter().map(|p| p.name.as_str())

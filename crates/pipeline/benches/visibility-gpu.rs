@@ -52,6 +52,16 @@ struct Row {
     splits: Vec<Split>,
     /// Pixels whose material word both paths wrote alike.
     agreement: f64,
+    /// The visibility path (64-bit atomics, no split) with each dispatch timed on its own
+    /// (`Visibility::profiled`, `Resolve::profiled`), in pass order.
+    stages: Vec<Stage>,
+}
+
+/// One stage of the profile.
+#[derive(Serialize)]
+struct Stage {
+    pass: String,
+    time: Stat,
 }
 
 /// Meshes of more than `above_pixels` pixels per triangle drawn into the visibility buffer by
@@ -191,6 +201,26 @@ fn measure(
         let stat = visibility_with(&bind(Atomics::Wide, &meshes)?)?;
         splits.push((above_pixels, meshes, stat));
     }
+    let stages = {
+        let profiled = bind(Atomics::Wide, &[])?.profiled();
+        let resolve = resolve_pass
+            .bind(device, &uploaded, frame_buffer, &profiled, &targets)?
+            .profiled();
+        let stages_timer = PassTimer::new(device, 64);
+        let by_name = bench::timing::time_recorded(gpu, &stages_timer, frames, |encoder, t| {
+            profiled
+                .encode(encoder, depth, Some(t))
+                .expect("depth target of the visibility buffer's size");
+            resolve.encode(encoder, Some(t));
+        })?;
+        by_name
+            .into_iter()
+            .map(|(pass, v)| Stage {
+                pass,
+                time: Stat::of(v),
+            })
+            .collect::<Vec<_>>()
+    };
     // Last the split without hardware meshes, whose G-buffer is compared below.
     let visibility = visibility_with(&vis)?;
     let (a, b) = (
@@ -211,6 +241,7 @@ fn measure(
         triangles: scene.triangle_count(),
         speedup: hardware.median_ms / visibility.median_ms,
         agreement: same as f64 / f64::from(w * h),
+        stages,
         hardware,
         raster,
         raster_narrow,
@@ -239,6 +270,12 @@ fn measure(
         row.agreement * 100.0,
         tried.join(", ")
     );
+    let profile: Vec<String> = row
+        .stages
+        .iter()
+        .map(|s| format!("{} {:.3}", s.pass, s.time.median_ms))
+        .collect();
+    println!("  stages, ms: {}", profile.join(", "));
     Ok(row)
 }
 
@@ -311,6 +348,26 @@ fn main() -> Result<()> {
             best.visibility.median_ms,
             split_rule(best),
             r.hardware.median_ms / best.visibility.median_ms
+        ));
+    }
+    md.push_str(
+        "\nStages of the visibility path (no split): each dispatch in a compute pass of its own \
+         (`Visibility::profiled`, `Resolve::profiled`; the pass boundaries add to the sum), \
+         median ms; `visibility hardware` is the hardware draw of the alpha-tested meshes, \
+         `visibility resolve materials` the materials' dispatches together.\n\n| scene | size | stages, ms |\n|---|---|---|\n",
+    );
+    for r in &rows {
+        let stages: Vec<String> = r
+            .stages
+            .iter()
+            .map(|s| format!("{} {:.3}", s.pass, s.time.median_ms))
+            .collect();
+        md.push_str(&format!(
+            "| {} | {}×{} | {} |\n",
+            r.scene,
+            r.width,
+            r.height,
+            stages.join(", ")
         ));
     }
     let report = Report {

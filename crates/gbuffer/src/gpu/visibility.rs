@@ -366,6 +366,24 @@ impl Visibility {
         self
     }
 
+    /// The same passes with each compute dispatch timed on its own, as `<name> <stage>` for
+    /// the stages of [`RASTER_STAGES`] (the narrow merge's id passes: `small`, `tiles`): a
+    /// profile for benchmarks, at the cost of a pass boundary between dispatches.
+    pub fn profiled(mut self) -> Self {
+        let stages = |name: String, stages: &'static [&'static str]| {
+            move |i: usize| format!("{name} {}", stages[i.min(stages.len() - 1)])
+        };
+        self.passes = self
+            .passes
+            .per_dispatch(stages(self.names[0].clone(), &RASTER_STAGES));
+        if let Some(ids) = self.id_passes.take() {
+            let at = if self.hardware_draws.is_some() { 2 } else { 1 };
+            let name = self.names[at].clone();
+            self.id_passes = Some(ids.per_dispatch(stages(name, &["small", "tiles"])));
+        }
+        self
+    }
+
     /// The names the passes are timed under, in order: `visibility`, `visibility hardware`
     /// (with meshes drawn by the hardware rasteriser), and for the narrow merge `visibility
     /// ids`, `visibility hardware ids` ([`Visibility::named`] puts a prefix before each).
@@ -423,6 +441,18 @@ impl Visibility {
         Ok(())
     }
 }
+
+/// The compute rasteriser's dispatches in order ([`Visibility::profiled`]): the buffer's
+/// clear, one invocation per triangle (`raster_small`), the indirect sizes, the deferred
+/// triangles' set-up, the sizes again, and the blocks (`raster_tiles`).
+pub const RASTER_STAGES: [&str; 6] = [
+    "clear",
+    "small",
+    "prepare",
+    "setup large",
+    "prepare",
+    "tiles",
+];
 
 /// The passes' names: `visibility`, then the hardware rasteriser's draw's (`hardware`), and
 /// the narrow merge's id passes and their draw (`narrow`).
@@ -854,6 +884,20 @@ pub struct Resolve {
     /// The classification (three dispatches), then one dispatch per material.
     pub passes: Passes,
     depth_group: wgpu::BindGroup,
+}
+
+/// The resolve's dispatches in order ([`Resolve::profiled`]): the classification's three, then
+/// the materials' (timed together).
+pub const RESOLVE_STAGES: [&str; 4] = ["count", "scan", "write", "materials"];
+
+impl Resolve {
+    /// The resolve's passes with each stage of [`RESOLVE_STAGES`] timed on its own, as
+    /// `visibility resolve <stage>`: a profile for benchmarks.
+    pub fn profiled(&self) -> Passes {
+        let last = RESOLVE_STAGES.len() - 1;
+        self.passes
+            .per_dispatch(|i| format!("visibility resolve {}", RESOLVE_STAGES[i.min(last)]))
+    }
 }
 
 impl ResolvePass {
