@@ -134,16 +134,31 @@ fn wide_product(a: i32, b: i32) -> vec2<u32> {
     return vec2(neg_lo, ~hi + select(0u, 1u, neg_lo == 0u));
 }
 
-// The sign (−1, 0, 1) of a · b − c · d, exact for any 32-bit operands' products.
-fn wide_sign(a: i32, b: i32, c: i32, d: i32) -> i32 {
+// a · b − c · d as a 64-bit two's complement (low word, high word), exact for any 32-bit
+// operands.
+fn wide_difference(a: i32, b: i32, c: i32, d: i32) -> vec2<u32> {
     let p = wide_product(a, b);
     let q = wide_product(c, d);
-    let lo = p.x - q.x;
-    let hi = p.y - q.y - select(0u, 1u, p.x < q.x);
-    if bitcast<i32>(hi) < 0 {
+    return vec2(p.x - q.x, p.y - q.y - select(0u, 1u, p.x < q.x));
+}
+
+// The sum of two 64-bit two's complements (low word, high word).
+fn wide_add(p: vec2<u32>, q: vec2<u32>) -> vec2<u32> {
+    let lo = p.x + q.x;
+    return vec2(lo, p.y + q.y + select(0u, 1u, lo < p.x));
+}
+
+// The sign (−1, 0, 1) of a 64-bit two's complement (low word, high word).
+fn wide_sign_of(v: vec2<u32>) -> i32 {
+    if bitcast<i32>(v.y) < 0 {
         return -1;
     }
-    return select(1, 0, hi == 0u && lo == 0u);
+    return select(1, 0, v.y == 0u && v.x == 0u);
+}
+
+// The sign (−1, 0, 1) of a · b − c · d, exact for any 32-bit operands' products.
+fn wide_sign(a: i32, b: i32, c: i32, d: i32) -> i32 {
+    return wide_sign_of(wide_difference(a, b, c, d));
 }
 
 // The sign of the edge function of a→b at p, (b − a) × (p − a): in 32 bits for a compact
@@ -230,15 +245,24 @@ fn cover(s: Setup, id: u32, px: i32, py: i32) {
     let x = px * SUBPIXEL + SUBPIXEL / 2;
     let y = py * SUBPIXEL + SUBPIXEL / 2;
     let compact = s.compact != 0u;
-    // Inside each edge: the edge function positive, or zero on a top or left edge.
     let e = vec3(
         edge_sign(s.x[1], s.y[1], s.x[2], s.y[2], x, y, compact),
         edge_sign(s.x[2], s.y[2], s.x[0], s.y[0], x, y, compact),
         edge_sign(s.x[0], s.y[0], s.x[1], s.y[1], x, y, compact),
     );
-    if any(e + s.top_left <= vec3(0)) {
-        return;
+    if inside(s, e) {
+        merge_covered(s, id, px, py);
     }
+}
+
+// Inside each edge, given the edge functions' signs `e`: positive, or zero on a top or left
+// edge.
+fn inside(s: Setup, e: vec3<i32>) -> bool {
+    return all(e + s.top_left > vec3(0));
+}
+
+// Covered pixel (px, py) of triangle `id`: merged in where its depth lies in [0, 1).
+fn merge_covered(s: Setup, id: u32, px: i32, py: i32) {
     // Depth from barycentrics of the unsnapped positions, as the CPU's plane equations.
     let c = vec2(f32(px) + 0.5, f32(py) + 0.5);
     let area = edge_f(s.screen[0], s.screen[1], s.screen[2]);
@@ -385,21 +409,71 @@ fn setup_large(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     }
 }
 
+// The edge functions at a block's corners that may be inside, per edge (`raster_tiles`).
+var<workgroup> reaches: array<atomic<u32>, 3>;
+
+// Edge i of a setup (opposite vertex i) at the snapped point (x, y), exactly in 64 bits.
+fn wide_edge(s: Setup, i: u32, x: i32, y: i32) -> vec2<u32> {
+    let j = (i + 1u) % 3u;
+    let k = (i + 2u) % 3u;
+    return wide_difference(s.x[k] - s.x[j], y - s.y[j], s.y[k] - s.y[j], x - s.x[j]);
+}
+
+// A block's pixels are covered by the workgroup's invocations, each walking one column two
+// rows at a time with its edge functions stepped by exact 64-bit additions (the same values
+// `cover` computes per pixel). Blocks some edge excludes at all four corners (the edge
+// function is linear, so everywhere in between) are skipped, after twelve invocations test one
+// corner of one edge each.
 @compute @workgroup_size(64)
 fn raster_tiles(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     let item = group.x + group.y * groups.x;
-    if item >= min(atomicLoad(&counts[WORK]), arrayLength(&work)) {
+    let valid = item < min(atomicLoad(&counts[WORK]), arrayLength(&work));
+    if lane < 3u {
+        atomicStore(&reaches[lane], 0u);
+    }
+    workgroupBarrier();
+    var large: LargeSetup;
+    var origin: vec2<i32>;
+    var last: vec2<i32>;
+    if valid {
+        let w = work[item];
+        large = setups[w.x];
+        let b = large.s.bounds;
+        let across = blocks(b).x;
+        origin = vec2(b.x + i32(w.y % across) * TILE, b.y + i32(w.y / across) * TILE);
+        last = min(origin + vec2(TILE - 1), b.zw);
+        if lane < 12u {
+            let corner = select(origin, last, vec2(lane % 2u == 1u, lane % 4u >= 2u));
+            let at = corner * SUBPIXEL + SUBPIXEL / 2;
+            if wide_sign_of(wide_edge(large.s, lane / 4u, at.x, at.y)) >= 0 {
+                atomicOr(&reaches[lane / 4u], 1u);
+            }
+        }
+    }
+    workgroupBarrier();
+    if !valid || atomicLoad(&reaches[0]) == 0u || atomicLoad(&reaches[1]) == 0u || atomicLoad(&reaches[2]) == 0u {
         return;
     }
-    let w = work[item];
-    let large = setups[w.x];
-    let b = large.s.bounds;
-    let across = blocks(b).x;
-    let origin = vec2(b.x + i32(w.y % across) * TILE, b.y + i32(w.y / across) * TILE);
-    for (var i = i32(lane); i < TILE * TILE; i += i32(WORKGROUP)) {
-        let p = origin + vec2(i % TILE, i / TILE);
-        if p.x <= b.z && p.y <= b.w {
-            cover(large.s, large.id, p.x, p.y);
+    let rows = i32(WORKGROUP) / TILE;
+    let px = origin.x + i32(lane) % TILE;
+    let x = px * SUBPIXEL + SUBPIXEL / 2;
+    let y = (origin.y + i32(lane) / TILE) * SUBPIXEL + SUBPIXEL / 2;
+    var e = array(wide_edge(large.s, 0u, x, y), wide_edge(large.s, 1u, x, y), wide_edge(large.s, 2u, x, y));
+    // Each edge's change over `rows` rows: (x_k − x_j) · rows · SUBPIXEL.
+    var step: array<vec2<u32>, 3>;
+    for (var i = 0u; i < 3u; i++) {
+        step[i] = wide_product(large.s.x[(i + 2u) % 3u] - large.s.x[(i + 1u) % 3u], rows * SUBPIXEL);
+    }
+    if px > last.x {
+        return;
+    }
+    for (var py = origin.y + i32(lane) / TILE; py <= last.y; py += rows) {
+        let signs = vec3(wide_sign_of(e[0]), wide_sign_of(e[1]), wide_sign_of(e[2]));
+        if inside(large.s, signs) {
+            merge_covered(large.s, large.id, px, py);
+        }
+        for (var i = 0u; i < 3u; i++) {
+            e[i] = wide_add(e[i], step[i]);
         }
     }
 }
