@@ -178,7 +178,13 @@ fn main() -> Result<()> {
             subdiv_bft::obj::ObjMesh::write(&positions, None, &indices),
         )?;
         for level in (1..=top).filter(|l| args.levels.is_empty() || args.levels.contains(l)) {
+            // Progress on stderr: a level-5 row takes minutes on the CPU side.
+            let began = Instant::now();
+            let step = |what: &str| {
+                eprintln!("{name} level {level}: {what} ({:.1} s)", began.elapsed().as_secs_f64())
+            };
             let osd = Refinement::new(&mesh, level)?;
+            step("OpenSubdiv refined, stencils built");
             let (osd_cpu_ms, osd_positions) = wall(cpu_runs, || osd.evaluate_cpu(&control))?;
             let osd_triangles = osd.triangles()?;
             let osd_positions = peers::dvec3s(&osd_positions);
@@ -194,6 +200,7 @@ fn main() -> Result<()> {
                 Ok((_, Err(why))) => (Err(format!("{why:#}")), None),
                 Err(why) => (Err(why.clone()), None),
             };
+            step("OpenSubdiv evaluated on the CPU and GPU");
             let ours_gpu = g.level(&gpu.device, &sub, level).map_err(|e| e.to_string());
             let ours_gpu = match ours_gpu {
                 Ok(out) => {
@@ -209,7 +216,9 @@ fn main() -> Result<()> {
                 wall(cpu_runs, || Ok(sub.evaluate_cpu(&bft, &positions, level)?))?;
             let ours = ours_gpu.as_ref().map_or(&ours_cpu, |(_, refined)| refined);
             let ours_positions: Vec<DVec3> = ours.positions.iter().map(|p| p.as_dvec3()).collect();
+            step("ours evaluated on the GPU and CPU");
             let (ours_cpu_recursive_ms, reference) = wall(cpu_runs, || Ok(mesh.subdivide(level)?))?;
+            step("recursive reference subdivided");
             // Distances beyond a thousandth of the diagonal read as infinite.
             let reach = 1e-3 * diagonal;
             let relative = |d: f64| d / diagonal;
@@ -222,6 +231,7 @@ fn main() -> Result<()> {
                 let gpu_surface = peers::surface_points(p, &osd_triangles);
                 relative(peers::hausdorff(&gpu_surface, &osd_surface, reach))
             });
+            step("OpenSubdiv's distances measured");
             let osd_mesh = TriMesh::new(osd_positions, triangles(&osd_triangles))?;
             let limit_vs_ours = relative(peers::hausdorff(
                 &peers::surface_points(&osd_mesh.limit_positions(), &osd_triangles),
