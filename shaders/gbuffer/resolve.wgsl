@@ -34,10 +34,8 @@ struct Resolve {
 @group(0) @binding(9) var albedo_out: texture_storage_2d<rgba8unorm, write>;
 @group(0) @binding(10) var material_out: texture_storage_2d<r32uint, write>;
 @group(0) @binding(11) var emission_out: texture_storage_2d<rgba16float, write>;
-// Per slot CLASS_WORDS words: its list's length and first entry in `tiles` (after
-// `classify_scan`), then per sub-list (tile k goes to sub-list k % SUBLISTS, so that tiles
-// of one material do not all count on one word) the tiles counted, the tiles listed so far,
-// and the sub-list's first entry; a slot's sub-lists lie one after the other.
+// Per slot three words: the tiles it appears in (counted), the tiles listed so far (after
+// `classify_write`: its list's length), the first entry of its list in `tiles`.
 @group(0) @binding(12) var<storage, read_write> classes: array<atomic<u32>>;
 // The tiles (x + y · tiles_x) of each slot's list.
 @group(0) @binding(13) var<storage, read_write> tiles: array<u32>;
@@ -52,18 +50,6 @@ const TILE: u32 = 8u;
 // Workgroups across a slot's dispatch (tile k of its list is workgroup (k % MAX_X, k / MAX_X)).
 const MAX_X: u32 = 32768u;
 const ATTRIBUTE_FLOATS: u32 = 15u;
-const SUBLISTS: u32 = 16u;
-const CLASS_WORDS: u32 = 2u + 3u * SUBLISTS;
-const LENGTH: u32 = 0u;
-const FIRST: u32 = 1u;
-const COUNTED: u32 = 2u;
-const LISTED: u32 = COUNTED + SUBLISTS;
-const SUB_FIRST: u32 = LISTED + SUBLISTS;
-
-// Word `field` (+ `sub`) of `slot`'s classes.
-fn class_word(slot: u32, field: u32, sub: u32) -> u32 {
-    return CLASS_WORDS * slot + field + sub;
-}
 
 fn world_position(v: u32) -> vec3<f32> {
     return vec3(positions[3u * v], positions[3u * v + 1u], positions[3u * v + 2u]);
@@ -147,8 +133,7 @@ fn classify_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_
         store(gid.xy, out);
     }
     if first_in_tile(lane, slot) {
-        let tile = gid.x / TILE + gid.y / TILE * resolve.tiles_x;
-        atomicAdd(&classes[class_word(slot, COUNTED, tile % SUBLISTS)], 1u);
+        atomicAdd(&classes[3u * slot], 1u);
     }
 }
 
@@ -158,19 +143,13 @@ fn classify_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_
 fn classify_scan() {
     var first = 0u;
     for (var s = 0u; s < resolve.slots; s++) {
-        atomicStore(&classes[class_word(s, FIRST, 0u)], first);
-        let start = first;
-        for (var k = 0u; k < SUBLISTS; k++) {
-            let n = atomicExchange(&classes[class_word(s, COUNTED, k)], 0u);
-            atomicStore(&classes[class_word(s, LISTED, k)], 0u);
-            atomicStore(&classes[class_word(s, SUB_FIRST, k)], first);
-            first += n;
-        }
-        let n = first - start;
-        atomicStore(&classes[class_word(s, LENGTH, 0u)], n);
+        let n = atomicExchange(&classes[3u * s], 0u);
+        atomicStore(&classes[3u * s + 1u], 0u);
+        atomicStore(&classes[3u * s + 2u], first);
         dispatch[3u * s] = min(n, MAX_X);
         dispatch[3u * s + 1u] = (n + MAX_X - 1u) / MAX_X;
         dispatch[3u * s + 2u] = 1u;
+        first += n;
     }
 }
 
@@ -178,20 +157,18 @@ fn classify_scan() {
 fn classify_write(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     let slot = pixel_slot(gid.xy);
     if first_in_tile(lane, slot) {
-        let tile = group.x + group.y * resolve.tiles_x;
-        let sub = tile % SUBLISTS;
-        let k = atomicAdd(&classes[class_word(slot, LISTED, sub)], 1u);
-        tiles[atomicLoad(&classes[class_word(slot, SUB_FIRST, sub)]) + k] = tile;
+        let k = atomicAdd(&classes[3u * slot + 1u], 1u);
+        tiles[atomicLoad(&classes[3u * slot + 2u]) + k] = group.x + group.y * resolve.tiles_x;
     }
 }
 
 @compute @workgroup_size(8, 8)
 fn resolve_material(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
     let entry = group.x + group.y * MAX_X;
-    if entry >= atomicLoad(&classes[class_word(resolve.slot, LENGTH, 0u)]) {
+    if entry >= atomicLoad(&classes[3u * resolve.slot + 1u]) {
         return;
     }
-    let tile = tiles[atomicLoad(&classes[class_word(resolve.slot, FIRST, 0u)]) + entry];
+    let tile = tiles[atomicLoad(&classes[3u * resolve.slot + 2u]) + entry];
     let pixel = vec2(tile % resolve.tiles_x, tile / resolve.tiles_x) * TILE + local.xy;
     let size = vec2<u32>(frame.viewport.xy);
     if any(pixel >= size) {

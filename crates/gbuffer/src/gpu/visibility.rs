@@ -886,10 +886,6 @@ pub struct Resolve {
     depth_group: wgpu::BindGroup,
 }
 
-/// Bytes of one slot's record in the resolve's classes (`CLASS_WORDS` of `resolve.wgsl`: its
-/// list's length and first entry, and three words per each of 16 sub-lists).
-const CLASS_BYTES: u64 = 4 * (2 + 3 * 16);
-
 /// The resolve's dispatches in order ([`Resolve::profiled`]): the classification's three, then
 /// the materials' (timed together).
 pub const RESOLVE_STAGES: [&str; 4] = ["count", "scan", "write", "materials"];
@@ -1061,7 +1057,7 @@ impl ResolvePass {
         let classes = transfer::buffer(
             device,
             "visibility resolve classes",
-            u64::from(slots.max(1)) * CLASS_BYTES,
+            u64::from(slots.max(1)) * 12,
             storage,
         )?;
         let tiles = transfer::buffer(device, "visibility resolve tiles", entries * 4, storage)?;
