@@ -34,7 +34,9 @@ struct Args {
     /// Scales of the ND + shading constants swept at 1024×768 (and in --quick), without stall.
     #[arg(long, value_delimiter = ',', default_value = "0.25,0.5,2,4")]
     sweep: Vec<f32>,
-    /// Also write the pictures of the docs (Sponza 1024×768, m = 4) into this folder.
+    /// Also write the pictures of the docs (Sponza 1024×768, m = 4) into this folder; at the
+    /// docs' size in run-once mode too (one frame per measurement: pictures on a software
+    /// adapter).
     #[arg(long)]
     images: Option<PathBuf>,
 }
@@ -170,7 +172,8 @@ fn main() -> Result<()> {
     let mut smaa_floor = Vec::new();
     for (name, scene, camera) in scenes(quick)? {
         let lights = lights(&scene)?;
-        for (w, h) in sizes.iter().copied().map(bench::size) {
+        let size = |s| if args.images.is_some() { s } else { bench::size(s) };
+        for (w, h) in sizes.iter().copied().map(size) {
             for &m in ms_list {
                 let base = SsaaConfig {
                     m,
