@@ -172,7 +172,13 @@ fn main() -> Result<()> {
     let mut smaa_floor = Vec::new();
     for (name, scene, camera) in scenes(quick)? {
         let lights = lights(&scene)?;
-        let size = |s| if args.images.is_some() { s } else { bench::size(s) };
+        let size = |s| {
+            if args.images.is_some() {
+                s
+            } else {
+                bench::size(s)
+            }
+        };
         for (w, h) in sizes.iter().copied().map(size) {
             for &m in ms_list {
                 let base = SsaaConfig {

@@ -181,7 +181,10 @@ fn main() -> Result<()> {
             // Progress on stderr: a level-5 row takes minutes on the CPU side.
             let began = Instant::now();
             let step = |what: &str| {
-                eprintln!("{name} level {level}: {what} ({:.1} s)", began.elapsed().as_secs_f64())
+                eprintln!(
+                    "{name} level {level}: {what} ({:.1} s)",
+                    began.elapsed().as_secs_f64()
+                )
             };
             let osd = Refinement::new(&mesh, level)?;
             step("OpenSubdiv refined, stencils built");

@@ -1,12 +1,13 @@
 //! `visibility-gpu`: the compute rasteriser's visibility buffer and its resolve into the
 //! G-buffer (issue 29) against the hardware path as the renderer runs it (z-prepass + G-buffer
 //! pass), same scene, camera and run: Dabrovic Sponza at 1920×1080, 3840×2160 and the adaptive
-//! SSAA's supersampled 4096×3072, and the spot cage Loop-subdivided to level 5 (6 M triangles,
-//! subdivided on the CPU) at 1920×1080. Alpha-tested meshes take the hardware rasteriser in
-//! both paths (the hardware draw into the buffer in the visibility path). Also the share of
-//! pixels whose material word the two paths agree on, and the visibility path per split of the
-//! meshes between the two rasterisers (`pipeline::gpu::SPLIT_PIXELS`), the fastest reported.
-
+//! SSAA's supersampled 4096×3072, and Loop-subdivided meshes of 1.5–17.8 M triangles (spot at
+//! levels 4 and 5, fandisk at 5, the bunny at 4; limit surfaces by the basis-function tables on
+//! the CPU) at 1920×1080. Alpha-tested meshes take the hardware rasteriser in both paths (the
+//! hardware draw into the buffer in the visibility path). Also the share of pixels whose
+//! material word the two paths agree on, the visibility path per split of the meshes between
+//! the two rasterisers (`pipeline::gpu::SPLIT_PIXELS`), the fastest reported, and each
+//! dispatch of the visibility path timed on its own.
 use anyhow::{Context, Result};
 use bench::{Header, Stat};
 use clap::Parser;
@@ -20,6 +21,7 @@ use gbuffer::{
 use gpu::{Gpu, PassTimer};
 use scene::{Camera, Scene};
 use serde::Serialize;
+use subdiv_bft::{BftSet, DEFAULT_LEVEL, MAX_VALENCE, Subdivider};
 
 /// Visibility buffer against the hardware G-buffer; writes docs/bench/visibility-<adapter>-<date>.{md,json}.
 #[derive(Parser, Debug)]
@@ -91,35 +93,32 @@ struct Report {
     rows: Vec<Row>,
 }
 
-/// The spot cage of the shared fixtures Loop-subdivided `levels` times on the CPU, with
-/// area-weighted vertex normals, one default material.
-fn subdivided_spot(levels: u32) -> Result<(Scene, Camera)> {
+/// The meshes subdivided for the visibility rows (issue 29: 1–25 M triangles): fixture, name,
+/// Loop level. Triangles: 1.5 M, 6.0 M, 13.3 M, 17.8 M.
+const SUBDIVIDED: [(&str, &str, u32); 4] = [
+    ("subdiv/spot/spot_triangulated.obj", "spot", 4),
+    ("subdiv/spot/spot_triangulated.obj", "spot", 5),
+    ("subdiv/fandisk.obj", "fandisk", 5),
+    ("stanford/stanford-bunny.obj", "bunny", 4),
+];
+
+/// The cage `file` of the shared fixtures Loop-subdivided `level` times by the basis-function
+/// tables on the CPU (limit positions and normals, `Subdivider::evaluate_cpu`), one default
+/// material, framed.
+fn subdivided(file: &str, name: &str, level: u32, bft: &BftSet) -> Result<(Scene, Camera)> {
     let fixtures = scene::shared_fixtures().context("../shared/fixtures not found")?;
-    let cage = subdiv_bft::obj::ObjMesh::read(&fixtures.join("subdiv/spot/spot_triangulated.obj"))?
-        .into_mesh()?;
-    let fine = cage.subdivide(levels)?;
-    let positions: Vec<glam::Vec3> = fine.positions.iter().map(|p| p.as_vec3()).collect();
-    let triangles = &fine.topology.triangles;
-    let mut normals = vec![glam::Vec3::ZERO; positions.len()];
-    for t in triangles {
-        let [a, b, c] = t.map(|i| positions[i as usize]);
-        let n = (b - a).cross(c - a);
-        for i in t {
-            normals[*i as usize] += n;
-        }
-    }
+    let cage = subdiv_bft::obj::ObjMesh::read(&fixtures.join(file))?.into_mesh()?;
+    let fine =
+        Subdivider::new(&cage.topology, bft)?.evaluate_cpu(bft, &cage.positions_f32(), level)?;
     let mesh = scene::Mesh {
-        name: format!("spot level {levels}"),
-        uvs: vec![glam::Vec2::ZERO; positions.len()],
-        normals: normals
-            .iter()
-            .map(|n| n.normalize_or(glam::Vec3::Y))
-            .collect(),
-        positions,
+        name: format!("{name} level {level}"),
+        uvs: vec![glam::Vec2::ZERO; fine.positions.len()],
+        normals: fine.normals,
+        positions: fine.positions,
         uvs1: Vec::new(),
         tangents: Vec::new(),
         colors: Vec::new(),
-        indices: triangles.iter().flatten().copied().collect(),
+        indices: fine.indices,
         material: 0,
     };
     let scene = Scene {
@@ -305,14 +304,22 @@ fn main() -> Result<()> {
         )?);
     }
     if !args.quick.quick && !bench::run_once() {
-        let (spot, camera) = subdivided_spot(5)?;
-        let size = bench::size((1920, 1080));
-        rows.push(measure(
-            &gpu,
-            ("spot level 5", &spot, &camera),
-            size,
-            frames,
-        )?);
+        let bft = BftSet::cached(
+            &BftSet::default_path(DEFAULT_LEVEL, MAX_VALENCE),
+            DEFAULT_LEVEL,
+            MAX_VALENCE,
+        )?;
+        for (file, name, level) in SUBDIVIDED {
+            let label = format!("{name} level {level}");
+            // A mesh the device cannot hold (its largest binding) is reported, not fatal.
+            let row = subdivided(file, name, level, &bft).and_then(|(scene, camera)| {
+                measure(&gpu, (&label, &scene, &camera), (1920, 1080), frames)
+            });
+            match row {
+                Ok(row) => rows.push(row),
+                Err(e) => println!("{label} 1920x1080: not measured: {e:#}"),
+            }
+        }
     }
     let header = Header::new(&gpu);
     let mut md = header.markdown(
