@@ -8,6 +8,7 @@
 //! material word the two paths agree on, the visibility path per split of the meshes between
 //! the two rasterisers (`pipeline::gpu::SPLIT_PIXELS`), the fastest reported, and each
 //! dispatch of the visibility path timed on its own.
+
 use anyhow::{Context, Result};
 use bench::{Header, Stat};
 use clap::Parser;
@@ -15,7 +16,7 @@ use gbuffer::{
     Frame,
     gpu::{
         GBufferPass, GBufferTargets, GpuScene,
-        visibility::{Atomics, Capacity, ResolvePass, VisibilityPass},
+        visibility::{Atomics, Capacity, RASTER_STAGES, ResolvePass, VisibilityPass},
     },
 };
 use gpu::{Gpu, PassTimer};
@@ -77,6 +78,16 @@ struct Split {
 }
 
 impl Row {
+    /// The profile as `pass ms, …`.
+    fn stages_line(&self) -> String {
+        let stages: Vec<String> = self
+            .stages
+            .iter()
+            .map(|s| format!("{} {:.3}", s.pass, s.time.median_ms))
+            .collect();
+        stages.join(", ")
+    }
+
     /// The fastest split.
     fn fastest(&self) -> Option<&Split> {
         self.splits
@@ -104,14 +115,14 @@ const SUBDIVIDED: [(&str, &str, u32); 4] = [
 
 /// The cage `file` of the shared fixtures Loop-subdivided `level` times by the basis-function
 /// tables on the CPU (limit positions and normals, `Subdivider::evaluate_cpu`), one default
-/// material, framed.
-fn subdivided(file: &str, name: &str, level: u32, bft: &BftSet) -> Result<(Scene, Camera)> {
+/// material named `label`, framed.
+fn subdivided(file: &str, label: &str, level: u32, bft: &BftSet) -> Result<(Scene, Camera)> {
     let fixtures = scene::shared_fixtures().context("../shared/fixtures not found")?;
     let cage = subdiv_bft::obj::ObjMesh::read(&fixtures.join(file))?.into_mesh()?;
     let fine =
         Subdivider::new(&cage.topology, bft)?.evaluate_cpu(bft, &cage.positions_f32(), level)?;
     let mesh = scene::Mesh {
-        name: format!("{name} level {level}"),
+        name: label.to_owned(),
         uvs: vec![glam::Vec2::ZERO; fine.positions.len()],
         normals: fine.normals,
         positions: fine.positions,
@@ -205,7 +216,9 @@ fn measure(
         let resolve = resolve_pass
             .bind(device, &uploaded, frame_buffer, &profiled, &targets)?
             .profiled();
-        let stages_timer = PassTimer::new(device, 64);
+        // A pass per rasteriser dispatch, the hardware draw, and a pass per resolve dispatch.
+        let passes = RASTER_STAGES.len() + 1 + resolve.names().count();
+        let stages_timer = PassTimer::new(device, passes as u32);
         let by_name = bench::timing::time_recorded(gpu, &stages_timer, frames, |encoder, t| {
             profiled
                 .encode(encoder, depth, Some(t))
@@ -269,12 +282,7 @@ fn measure(
         row.agreement * 100.0,
         tried.join(", ")
     );
-    let profile: Vec<String> = row
-        .stages
-        .iter()
-        .map(|s| format!("{} {:.3}", s.pass, s.time.median_ms))
-        .collect();
-    println!("  stages, ms: {}", profile.join(", "));
+    println!("  stages, ms: {}", row.stages_line());
     Ok(row)
 }
 
@@ -312,7 +320,7 @@ fn main() -> Result<()> {
         for (file, name, level) in SUBDIVIDED {
             let label = format!("{name} level {level}");
             // A mesh the device cannot hold (its largest binding) is reported, not fatal.
-            let row = subdivided(file, name, level, &bft).and_then(|(scene, camera)| {
+            let row = subdivided(file, &label, level, &bft).and_then(|(scene, camera)| {
                 measure(&gpu, (&label, &scene, &camera), (1920, 1080), frames)
             });
             match row {
@@ -364,17 +372,12 @@ fn main() -> Result<()> {
          `visibility resolve materials` the materials' dispatches together.\n\n| scene | size | stages, ms |\n|---|---|---|\n",
     );
     for r in &rows {
-        let stages: Vec<String> = r
-            .stages
-            .iter()
-            .map(|s| format!("{} {:.3}", s.pass, s.time.median_ms))
-            .collect();
         md.push_str(&format!(
             "| {} | {}×{} | {} |\n",
             r.scene,
             r.width,
             r.height,
-            stages.join(", ")
+            r.stages_line()
         ));
     }
     let report = Report {
