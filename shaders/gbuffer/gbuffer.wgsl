@@ -134,11 +134,16 @@ fn surface_fragment(in: VertexOut) -> SurfaceFragment {
 
 // The G-buffer texels of material sample m at view depth `view_depth`.
 fn gbuffer_texels(m: MaterialSample, view_depth: f32) -> GBufferOut {
+    return gbuffer_texels_of(material, m, view_depth);
+}
+
+// `gbuffer_texels` of a sample m of material `sampled`.
+fn gbuffer_texels_of(sampled: Material, m: MaterialSample, view_depth: f32) -> GBufferOut {
     var out: GBufferOut;
     out.linear_depth = view_depth;
     out.normal = pack2x16snorm(encode_octahedral_snorm(m.normal));
-    out.albedo = vec4<f32>(m.albedo, clamp(material.specular, 0.0, 1.0));
-    out.material = pack_material(m.roughness, m.metallic, material.id);
+    out.albedo = vec4<f32>(m.albedo, clamp(sampled.specular, 0.0, 1.0));
+    out.material = pack_material(m.roughness, m.metallic, sampled.id);
     out.emission = vec4<f32>(min(m.emission, vec3<f32>(HALF_MAX)), m.occlusion);
     return out;
 }

@@ -110,24 +110,42 @@ fn material_alpha(at: SurfaceAttributes) -> f32 {
     return base_color(at).a;
 }
 
-fn evaluate_material(at: SurfaceAttributes) -> MaterialSample {
+// The texels of a material's five textures at a surface point (white where it has none).
+struct MaterialTexels {
+    base_color: vec4<f32>,
+    metallic_roughness: vec4<f32>,
+    normal: vec4<f32>,
+    occlusion: vec4<f32>,
+    emissive: vec4<f32>,
+};
+
+// Material `m` at `at`, its textures read as `t`: `evaluate_material` of any material.
+fn evaluate_material_of(m: Material, at: SurfaceAttributes, t: MaterialTexels) -> MaterialSample {
     var out: MaterialSample;
-    let base = base_color(at);
-    let mr = read_slot(metallic_roughness_texture, metallic_roughness_sampler, material.slots[SLOT_METALLIC_ROUGHNESS], at);
-    let occlusion = read_slot(occlusion_texture, occlusion_sampler, material.slots[SLOT_OCCLUSION], at).x;
-    let emission = read_slot(emissive_texture, emissive_sampler, material.slots[SLOT_EMISSIVE], at).rgb;
-    out.albedo = clamp(base.rgb, vec3<f32>(0.0), vec3<f32>(1.0)) * (1.0 - material.transmission);
+    let base = m.base_color * t.base_color * at.color;
+    out.albedo = clamp(base.rgb, vec3<f32>(0.0), vec3<f32>(1.0)) * (1.0 - m.transmission);
     out.alpha = base.a;
-    out.roughness = clamp(material.roughness * mr.y, 0.0, 1.0);
-    out.metallic = clamp(material.metallic * mr.z, 0.0, 1.0);
-    out.occlusion = 1.0 + material.occlusion_strength * (occlusion - 1.0);
-    out.emission = material.emissive * emission;
+    out.roughness = clamp(m.roughness * t.metallic_roughness.y, 0.0, 1.0);
+    out.metallic = clamp(m.metallic * t.metallic_roughness.z, 0.0, 1.0);
+    out.occlusion = 1.0 + m.occlusion_strength * (t.occlusion.x - 1.0);
+    out.emission = m.emissive * t.emissive.rgb;
     out.normal = at.normal;
-    if material.slots[SLOT_NORMAL].offset.w != 0.0 {
-        let c = read_slot(normal_texture, normal_sampler, material.slots[SLOT_NORMAL], at).rgb * 2.0 - 1.0;
-        out.normal = perturb_normal(at, c * vec3<f32>(material.normal_scale, material.normal_scale, 1.0));
+    if m.slots[SLOT_NORMAL].offset.w != 0.0 {
+        let c = t.normal.rgb * 2.0 - 1.0;
+        out.normal = perturb_normal(at, c * vec3<f32>(m.normal_scale, m.normal_scale, 1.0));
     }
     return out;
+}
+
+fn evaluate_material(at: SurfaceAttributes) -> MaterialSample {
+    let t = MaterialTexels(
+        read_slot(base_color_texture, base_color_sampler, material.slots[SLOT_BASE_COLOR], at),
+        read_slot(metallic_roughness_texture, metallic_roughness_sampler, material.slots[SLOT_METALLIC_ROUGHNESS], at),
+        read_slot(normal_texture, normal_sampler, material.slots[SLOT_NORMAL], at),
+        read_slot(occlusion_texture, occlusion_sampler, material.slots[SLOT_OCCLUSION], at),
+        read_slot(emissive_texture, emissive_sampler, material.slots[SLOT_EMISSIVE], at),
+    );
+    return evaluate_material_of(material, at, t);
 }
 
 // The 4 × 4 ordered dither of blended materials (`scene::dither_threshold`).

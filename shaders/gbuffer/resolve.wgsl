@@ -88,6 +88,17 @@ fn store(p: vec2<u32>, out: GBufferOut) {
     textureStore(emission_out, p, out.emission);
 }
 
+// The texels of a pixel no triangle covers.
+fn store_cleared(p: vec2<u32>) {
+    var out: GBufferOut;
+    out.linear_depth = 0.0;
+    out.normal = 0u;
+    out.albedo = vec4(0.0);
+    out.material = NO_MATERIAL_WORD;
+    out.emission = vec4(0.0);
+    store(p, out);
+}
+
 // The material slot of the pixel at p (NO_SLOT outside the image or where no triangle is).
 fn pixel_slot(p: vec2<u32>) -> u32 {
     let size = vec2<u32>(frame.viewport.xy);
@@ -124,13 +135,7 @@ fn classify_count(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_
     let slot = pixel_slot(gid.xy);
     let size = vec2<u32>(frame.viewport.xy);
     if slot == NO_SLOT && all(gid.xy < size) {
-        var out: GBufferOut;
-        out.linear_depth = 0.0;
-        out.normal = 0u;
-        out.albedo = vec4(0.0);
-        out.material = NO_MATERIAL_WORD;
-        out.emission = vec4(0.0);
-        store(gid.xy, out);
+        store_cleared(gid.xy);
     }
     if first_in_tile(lane, slot) {
         atomicAdd(&classes[3u * slot], 1u);
@@ -162,26 +167,14 @@ fn classify_write(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(workgr
     }
 }
 
-@compute @workgroup_size(8, 8)
-fn resolve_material(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
-    let entry = group.x + group.y * MAX_X;
-    if entry >= atomicLoad(&classes[3u * resolve.slot + 1u]) {
-        return;
-    }
-    let tile = tiles[atomicLoad(&classes[3u * resolve.slot + 2u]) + entry];
-    let pixel = vec2(tile % resolve.tiles_x, tile / resolve.tiles_x) * TILE + local.xy;
-    let size = vec2<u32>(frame.viewport.xy);
-    if any(pixel >= size) {
-        return;
-    }
-    let id = visibility[pixel.y * size.x + pixel.x].x;
-    if id == NO_TRIANGLE {
-        return;
-    }
-    let mesh = meshes[mesh_of(id)];
-    if mesh.slot != resolve.slot {
-        return;
-    }
+// A pixel's surface: its attributes at the pixel centre and its view depth.
+struct ResolvedSurface {
+    at: SurfaceAttributes,
+    view_depth: f32,
+};
+
+// The surface triangle `id` (of `mesh`) shows at `pixel`.
+fn resolve_surface(mesh: Mesh, id: u32, pixel: vec2<u32>) -> ResolvedSurface {
     let t = id - mesh.first_id;
     var v: vec3<u32>;
     var clip: array<vec4<f32>, 3>;
@@ -211,8 +204,31 @@ fn resolve_material(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invo
         l.x * vertex_attribute(v.x, 2u) + l.y * vertex_attribute(v.y, 2u) + l.z * vertex_attribute(v.z, 2u),
     );
     let facing = facing_geometric(normal, geometric);
-    let at = SurfaceAttributes(uv, uv_dx, uv_dy, facing.normal, facing.back_face, interpolate(v, l, 7u), interpolate(v, l, 11u));
-    store(pixel, gbuffer_texels(evaluate_material(at), view_depth));
+    return ResolvedSurface(SurfaceAttributes(uv, uv_dx, uv_dy, facing.normal, facing.back_face, interpolate(v, l, 7u), interpolate(v, l, 11u)), view_depth);
+}
+
+@compute @workgroup_size(8, 8)
+fn resolve_material(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let entry = group.x + group.y * MAX_X;
+    if entry >= atomicLoad(&classes[3u * resolve.slot + 1u]) {
+        return;
+    }
+    let tile = tiles[atomicLoad(&classes[3u * resolve.slot + 2u]) + entry];
+    let pixel = vec2(tile % resolve.tiles_x, tile / resolve.tiles_x) * TILE + local.xy;
+    let size = vec2<u32>(frame.viewport.xy);
+    if any(pixel >= size) {
+        return;
+    }
+    let id = visibility[pixel.y * size.x + pixel.x].x;
+    if id == NO_TRIANGLE {
+        return;
+    }
+    let mesh = meshes[mesh_of(id)];
+    if mesh.slot != resolve.slot {
+        return;
+    }
+    let surface = resolve_surface(mesh, id, pixel);
+    store(pixel, gbuffer_texels(evaluate_material(surface.at), surface.view_depth));
 }
 
 const NO_MATERIAL_WORD: u32 = 0xFFFFFFFFu;

@@ -55,6 +55,7 @@ pub static SHADERS: ::gpu::shader::Library = ::gpu::shader_library!(
         "mips.wgsl",
         "normal_encoding.wgsl",
         "resolve.wgsl",
+        "resolve_bindless.wgsl",
         "visibility.wgsl",
         "visibility_hardware.wgsl",
         "visibility_word.wgsl",

@@ -98,7 +98,10 @@ pub const OPTIONAL_FEATURES: wgpu::Features = wgpu::Features::TIMESTAMP_QUERY
     .union(wgpu::Features::DEPTH_CLIP_CONTROL)
     // The visibility buffer's compute rasteriser (`gbuffer::gpu::visibility`).
     .union(wgpu::Features::SHADER_INT64)
-    .union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX);
+    .union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX)
+    // Its resolve in one dispatch (binding arrays of the scene's textures).
+    .union(wgpu::Features::TEXTURE_BINDING_ARRAY)
+    .union(wgpu::Features::SAMPLED_TEXTURE_AND_STORAGE_BUFFER_ARRAY_NON_UNIFORM_INDEXING);
 
 impl Gpu {
     /// Chooses an adapter from the environment and creates its device.

@@ -53,6 +53,11 @@ pub enum Binding {
     Sampler,
     /// `sampler` (non-filtering).
     SamplerNonFiltering,
+    /// `binding_array<texture_2d<f32>>` of this many filterable textures (needs
+    /// `wgpu::Features::TEXTURE_BINDING_ARRAY`).
+    Textures(std::num::NonZeroU32),
+    /// `binding_array<sampler>` of this many filtering samplers (as [`Binding::Textures`]).
+    Samplers(std::num::NonZeroU32),
 }
 
 impl Binding {
@@ -90,7 +95,7 @@ impl Binding {
             Self::Uniform => buffer(wgpu::BufferBindingType::Uniform),
             Self::Storage => buffer(wgpu::BufferBindingType::Storage { read_only: false }),
             Self::StorageRead => buffer(wgpu::BufferBindingType::Storage { read_only: true }),
-            Self::Texture => texture(S::Float { filterable: true }, d2),
+            Self::Texture | Self::Textures(_) => texture(S::Float { filterable: true }, d2),
             Self::TextureUnfilterable => texture(S::Float { filterable: false }, d2),
             Self::TextureUint => texture(S::Uint, d2),
             Self::TextureSint => texture(S::Sint, d2),
@@ -102,8 +107,16 @@ impl Binding {
             Self::TextureDepthArray => texture(S::Depth, wgpu::TextureViewDimension::D2Array),
             Self::StorageTexture(f) => storage(f, wgpu::StorageTextureAccess::WriteOnly),
             Self::StorageTextureReadWrite(f) => storage(f, wgpu::StorageTextureAccess::ReadWrite),
-            Self::Sampler => T::Sampler(wgpu::SamplerBindingType::Filtering),
+            Self::Sampler | Self::Samplers(_) => T::Sampler(wgpu::SamplerBindingType::Filtering),
             Self::SamplerNonFiltering => T::Sampler(wgpu::SamplerBindingType::NonFiltering),
+        }
+    }
+
+    /// The elements of a binding array; `None` for a single resource.
+    fn count(self) -> Option<std::num::NonZeroU32> {
+        match self {
+            Self::Textures(n) | Self::Samplers(n) => Some(n),
+            _ => None,
         }
     }
 }
@@ -172,7 +185,7 @@ impl Layout {
                 binding,
                 visibility,
                 ty: b.ty(),
-                count: None,
+                count: b.count(),
             })
             .collect();
         Self {

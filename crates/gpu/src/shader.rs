@@ -80,12 +80,24 @@ impl Library {
             .ok_or_else(|| missing(&format!("no such file in library {}", lib.name)))
     }
 
-    /// The source of `file` (of this library) with its `#import`s resolved.
+    /// The source of `file` (of this library) with its `#import`s resolved; its `enable`
+    /// directives (e.g. `enable wgpu_binding_array;`) moved to the top, where WGSL wants them.
     pub fn source(&self, file: &str) -> Result<String, GpuError> {
         let mut seen = Vec::new();
         let mut out = String::new();
         self.resolve(&format!("{}/{file}", self.name), &mut seen, &mut out)?;
-        Ok(out)
+        let (directives, rest): (Vec<&str>, Vec<&str>) = out
+            .lines()
+            .partition(|line| line.starts_with("enable ") && line.trim_end().ends_with(';'));
+        if directives.is_empty() {
+            return Ok(out);
+        }
+        Ok(directives
+            .into_iter()
+            .chain(rest)
+            .collect::<Vec<_>>()
+            .join("\n")
+            + "\n")
     }
 
     fn resolve(
@@ -295,6 +307,30 @@ mod tests {
         let src = TOP.source("k.wgsl").unwrap();
         assert!(src.find("const N").unwrap() < src.find("fn main").unwrap());
         TOP.validate("k.wgsl", &Specialisation::default()).unwrap();
+    }
+
+    #[test]
+    fn enable_directives_move_above_their_imports() {
+        static ENABLING: Library = Library {
+            name: "enabling",
+            files: &[(
+                "e.wgsl",
+                "enable wgpu_binding_array;\n// #import base/common.wgsl\n@group(0) @binding(0) var t: binding_array<texture_2d<f32>>;\n@compute @workgroup_size(1) fn main() { let d = textureDimensions(t[N]); }\n",
+            )],
+            imports: &[&BASE],
+        };
+        let src = ENABLING.source("e.wgsl").unwrap();
+        assert!(src.starts_with("enable wgpu_binding_array;\n"), "{src}");
+        assert_eq!(src.matches("enable ").count(), 1);
+        ENABLING
+            .validate("e.wgsl", &Specialisation::default())
+            .unwrap();
+        // Without the move the directive would follow the import, which WGSL refuses.
+        assert!(
+            TOP.source("k.wgsl")
+                .unwrap()
+                .starts_with("// ---- base/common.wgsl")
+        );
     }
 
     #[test]

@@ -6,8 +6,10 @@
 //! the CPU) at 1920×1080. Alpha-tested meshes take the hardware rasteriser in both paths (the
 //! hardware draw into the buffer in the visibility path). Also the share of pixels whose
 //! material word the two paths agree on, the visibility path per split of the meshes between
-//! the two rasterisers (`pipeline::gpu::SPLIT_PIXELS`), the fastest reported, and each
-//! dispatch of the visibility path timed on its own.
+//! the two rasterisers (`pipeline::gpu::SPLIT_PIXELS`), the fastest reported, each
+//! dispatch of the visibility path timed on its own, and the classified resolve (a list of
+//! tiles and a dispatch per material) against the one-dispatch resolve where the device has
+//! binding arrays.
 
 use anyhow::{Context, Result};
 use bench::{Header, Stat};
@@ -16,7 +18,7 @@ use gbuffer::{
     Frame,
     gpu::{
         GBufferPass, GBufferTargets, GpuScene,
-        visibility::{Atomics, Capacity, RASTER_STAGES, ResolvePass, VisibilityPass},
+        visibility::{Atomics, Capacity, RASTER_STAGES, ResolvePass, ResolvePath, VisibilityPass},
     },
 };
 use gpu::{Gpu, PassTimer};
@@ -46,8 +48,13 @@ struct Row {
     raster: Stat,
     /// The same with the 32-bit fallback's two passes (`Atomics::Narrow`).
     raster_narrow: Stat,
-    /// Rasteriser + resolve.
+    /// Rasteriser + resolve (along `resolve`).
     visibility: Stat,
+    /// The resolve's path: `OneDispatch` where the device has binding arrays for the
+    /// scene's textures, else `Classified`.
+    resolve: String,
+    /// Rasteriser + the classified resolve (`ResolvePath::Classified`), whatever the device.
+    classified: Stat,
     /// Hardware ÷ visibility (medians).
     speedup: f64,
     /// Rasteriser + resolve per split between the rasterisers, as the renderer's
@@ -191,31 +198,34 @@ fn measure(
     let raster_narrow = raster_with(&narrow)?;
     let raster = raster_with(&vis)?;
     let resolve_pass = ResolvePass::new(device, &gpass)?;
-    let visibility_with = |vis: &gbuffer::gpu::visibility::Visibility| -> Result<Stat> {
-        let resolve = resolve_pass.bind(device, &uploaded, frame_buffer, vis, &targets)?;
-        Ok(bench::timing::time_encoded(
-            gpu,
-            &timer,
-            frames,
-            true,
-            &|encoder, timer| {
-                vis.encode(encoder, depth, Some(timer))
-                    .expect("depth target of the visibility buffer's size");
-                resolve.passes.encode(encoder, Some(timer));
-            },
-        )?)
-    };
+    let classified_pass = ResolvePass::with(device, &gpass, ResolvePath::Classified)?;
+    let resolved_with =
+        |vis: &gbuffer::gpu::visibility::Visibility, resolve_pass: &ResolvePass| -> Result<Stat> {
+            let resolve = resolve_pass.bind(device, &uploaded, frame_buffer, vis, &targets)?;
+            Ok(bench::timing::time_encoded(
+                gpu,
+                &timer,
+                frames,
+                true,
+                &|encoder, timer| {
+                    vis.encode(encoder, depth, Some(timer))
+                        .expect("depth target of the visibility buffer's size");
+                    resolve.passes.encode(encoder, Some(timer));
+                },
+            )?)
+        };
+    let visibility_with =
+        |vis: &gbuffer::gpu::visibility::Visibility| resolved_with(vis, &resolve_pass);
     let pixels = uploaded.pixels_per_triangle(&frame);
     let mut splits: Vec<(f32, Vec<usize>, Stat)> = Vec::new();
     for (above_pixels, meshes) in pipeline::gpu::visibility_splits(&pixels) {
         let stat = visibility_with(&bind(Atomics::Wide, &meshes)?)?;
         splits.push((above_pixels, meshes, stat));
     }
-    let stages = {
+    let (stages, path) = {
         let profiled = bind(Atomics::Wide, &[])?.profiled();
-        let resolve = resolve_pass
-            .bind(device, &uploaded, frame_buffer, &profiled, &targets)?
-            .profiled();
+        let bound = resolve_pass.bind(device, &uploaded, frame_buffer, &profiled, &targets)?;
+        let resolve = bound.profiled();
         // A pass per rasteriser dispatch, the hardware draw, and a pass per resolve dispatch.
         let passes = RASTER_STAGES.len() + 1 + resolve.names().count();
         let stages_timer = PassTimer::new(device, passes as u32);
@@ -225,14 +235,16 @@ fn measure(
                 .expect("depth target of the visibility buffer's size");
             resolve.encode(encoder, Some(t));
         })?;
-        by_name
+        let stages = by_name
             .into_iter()
             .map(|(pass, v)| Stage {
                 pass,
                 time: Stat::of(v),
             })
-            .collect::<Vec<_>>()
+            .collect::<Vec<_>>();
+        (stages, bound.path)
     };
+    let classified = resolved_with(&vis, &classified_pass)?;
     // Last the split without hardware meshes, whose G-buffer is compared below.
     let visibility = visibility_with(&vis)?;
     let (a, b) = (
@@ -258,6 +270,8 @@ fn measure(
         raster,
         raster_narrow,
         visibility,
+        resolve: format!("{path:?}"),
+        classified,
         splits: splits
             .into_iter()
             .map(|(above_pixels, meshes, visibility)| Split {
@@ -273,9 +287,11 @@ fn measure(
         .map(|s| format!("{} {:.3}", split_rule(s), s.visibility.median_ms))
         .collect();
     println!(
-        "{name} {w}x{h}: hardware {:.3} ms, visibility {:.3} ms (raster {:.3}, 32-bit {:.3}), ×{:.2}, material words agree on {:.2} %; splits: {}",
+        "{name} {w}x{h}: hardware {:.3} ms, visibility {:.3} ms (resolve {}; classified {:.3}; raster {:.3}, 32-bit {:.3}), ×{:.2}, material words agree on {:.2} %; splits: {}",
         row.hardware.median_ms,
         row.visibility.median_ms,
+        row.resolve,
+        row.classified.median_ms,
         row.raster.median_ms,
         row.raster_narrow.median_ms,
         row.speedup,
@@ -338,24 +354,29 @@ fn main() -> Result<()> {
         "Hardware = z-prepass + G-buffer pass (as the renderer runs them); visibility = the \
          compute rasteriser (`gbuffer::gpu::visibility`, 64-bit atomicMin of depth and id) + \
          the hardware draw of alpha-tested meshes into it + the resolve into the same G-buffer \
-         targets (pixels classified by 8×8 tile, one indirect dispatch per material); raster = \
+         targets along the path `resolve` names: `OneDispatch` (every pixel in one dispatch, \
+         materials and textures through binding arrays) where the device has binding arrays, \
+         else `Classified` (pixels classified by 8×8 tile, one indirect dispatch per \
+         material); classified = the visibility path with the classified resolve, same run; raster = \
          the rasteriser with the hardware draw; 32-bit = the same with the fallback's two \
          passes of 32-bit atomics (`Atomics::Narrow`). Same scene, camera and run. \
          Agreement: pixels whose material word (roughness, metallic, material id) both wrote \
          alike. Best split: the fastest visibility path (rasteriser + resolve) over the splits \
          `choose_gbuffer_path` tries — meshes of more than T pixels per triangle drawn into \
-         the buffer by the hardware rasteriser, T in `SPLIT_PIXELS` — and its rule.\n\n| scene | size | triangles | hardware ms | visibility ms | raster ms | 32-bit raster ms | × | agreement | best split ms | its rule | × best |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+         the buffer by the hardware rasteriser, T in `SPLIT_PIXELS` — and its rule.\n\n| scene | size | triangles | hardware ms | visibility ms | resolve | classified ms | raster ms | 32-bit raster ms | × | agreement | best split ms | its rule | × best |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in &rows {
         let best = r.fastest().context("no split measured")?;
         md.push_str(&format!(
-            "| {} | {}×{} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} % | {:.3} | {} | {:.2} |\n",
+            "| {} | {}×{} | {} | {:.3} | {:.3} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} % | {:.3} | {} | {:.2} |\n",
             r.scene,
             r.width,
             r.height,
             r.triangles,
             r.hardware.median_ms,
             r.visibility.median_ms,
+            r.resolve,
+            r.classified.median_ms,
             r.raster.median_ms,
             r.raster_narrow.median_ms,
             r.speedup,
@@ -369,7 +390,8 @@ fn main() -> Result<()> {
         "\nStages of the visibility path (no split): each dispatch in a compute pass of its own \
          (`Visibility::profiled`, `Resolve::profiled`; the pass boundaries add to the sum), \
          median ms; `visibility hardware` is the hardware draw of the alpha-tested meshes, \
-         `visibility resolve materials` the materials' dispatches together.\n\n| scene | size | stages, ms |\n|---|---|---|\n",
+         `visibility resolve materials` the classified resolve's material dispatches together, \
+         `visibility resolve one dispatch` the one-dispatch resolve.\n\n| scene | size | stages, ms |\n|---|---|---|\n",
     );
     for r in &rows {
         md.push_str(&format!(

@@ -53,14 +53,18 @@ pub fn run_with(
 
 /// Like [`run_with`] through the visibility buffer ([`super::visibility`]) with pixels merged
 /// as `atomics` says: the compute rasteriser (alpha-tested meshes by the hardware draw into
-/// it), the resolve and the depth target drawn from the visibility buffer.
+/// it), the resolve along `path` and the depth target drawn from the visibility buffer. An
+/// error where the device cannot take `path` (for [`ResolvePath::OneDispatch`]: see
+/// [`super::visibility::bindless_needs`]).
+///
+/// [`ResolvePath::OneDispatch`]: super::visibility::ResolvePath::OneDispatch
 pub fn run_visibility(
     gpu: &Gpu,
     scene: &Scene,
     camera: &Camera,
     (width, height): (u32, u32),
     options: &TextureOptions,
-    atomics: super::visibility::Atomics,
+    (atomics, path): (super::visibility::Atomics, super::visibility::ResolvePath),
 ) -> Result<GBuffer, GBufferError> {
     use super::visibility::{Capacity, ResolvePass, VisibilityPass};
     crate::validate_size(width, height)?;
@@ -79,8 +83,16 @@ pub fn run_visibility(
         (width, height),
         &buffer,
     )?;
-    let resolve_pass = ResolvePass::new(device, &pass)?;
+    let resolve_pass = ResolvePass::with(device, &pass, path)?;
     let resolve = resolve_pass.bind(device, &gpu_scene, frame, &vis, &targets)?;
+    if resolve.path != path {
+        return Err(GBufferError::InvalidOptions(format!(
+            "the resolve along {path:?} needs binding arrays of the scene's {} textures (features {:?}); the device resolves along {:?}",
+            gpu_scene.textures.all().len(),
+            super::visibility::BINDLESS_FEATURES,
+            resolve.path
+        )));
+    }
     let mut encoder = device.create_command_encoder(&Default::default());
     vis.encode(&mut encoder, Some(&targets.depth), None)?;
     resolve.passes.encode(&mut encoder, None);

@@ -177,6 +177,26 @@ impl MaterialTextures {
         t.and_then(|t| self.get(t.texture, ::scene::role_space(role)))
             .unwrap_or(&self.white)
     }
+
+    /// Every texture of the store once: the sRGB ones, the linear ones, then white (the
+    /// entries of a binding array, [`MaterialTextures::index_for_role`] indexing it).
+    pub fn all(&self) -> Vec<&GpuTexture> {
+        self.srgb
+            .iter()
+            .chain(&self.linear)
+            .flatten()
+            .chain(std::iter::once(&self.white))
+            .collect()
+    }
+
+    /// The index in [`MaterialTextures::all`] of the texture a material's role binds.
+    pub(super) fn index_for_role(&self, role: &str, t: Option<::scene::TextureRef>) -> u32 {
+        let wanted = self.for_role(role, t);
+        self.all()
+            .iter()
+            .position(|&g| std::ptr::eq(g, wanted))
+            .expect("for_role returns a texture of the store") as u32
+    }
 }
 
 fn address(wrap: Wrap) -> wgpu::AddressMode {

@@ -81,6 +81,10 @@ pub struct GpuScene {
     pub(super) indices: wgpu::Buffer,
     pub(super) draws: Vec<Draw>,
     pub(super) material_groups: Vec<wgpu::BindGroup>,
+    /// Every material in one binding (`array<Material>`, storage) and per material the
+    /// indices in [`MaterialTextures::all`] of its five textures: what reaches every
+    /// material from one kernel (the visibility buffer's one-dispatch resolve).
+    pub(super) material_table: [wgpu::Buffer; 2],
     pub(super) blended: BlendedSurfaces,
     /// The textures the materials read.
     pub textures: MaterialTextures,
@@ -267,15 +271,31 @@ impl GpuScene {
             wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::STORAGE,
         )?;
         let textures = MaterialTextures::upload(device, queue, scene, options)?;
+        let materials: Vec<GpuMaterial> = (scene.materials.iter().enumerate())
+            .map(|(i, m)| GpuMaterial::new(m, i as u32))
+            .collect();
+        let texture_indices: Vec<u32> = (scene.materials.iter())
+            .flat_map(|m| m.roles().map(|(role, t)| textures.index_for_role(role, t)))
+            .collect();
+        let table = |label, bytes: &[u8]| {
+            // A binding is never empty: a scene without materials gets one zeroed entry.
+            let zeroed = [0; size_of::<GpuMaterial>()];
+            let bytes = if bytes.is_empty() { &zeroed[..] } else { bytes };
+            transfer::buffer_init(device, label, bytes, wgpu::BufferUsages::STORAGE)
+        };
+        let material_table = [
+            table("materials", bytemuck::cast_slice(&materials))?,
+            table("material textures", bytemuck::cast_slice(&texture_indices))?,
+        ];
         let material_groups = scene
             .materials
             .iter()
-            .enumerate()
-            .map(|(i, m)| {
+            .zip(&materials)
+            .map(|(m, gpu_material)| {
                 let uniform = transfer::buffer_init(
                     device,
                     "material",
-                    bytemuck::bytes_of(&GpuMaterial::new(m, i as u32)),
+                    bytemuck::bytes_of(gpu_material),
                     wgpu::BufferUsages::UNIFORM,
                 )?;
                 let mut resources = vec![uniform.as_entire_binding()];
@@ -293,6 +313,7 @@ impl GpuScene {
             indices,
             draws,
             material_groups,
+            material_table,
             blended: BlendedSurfaces::Dithered,
             textures,
             triangle_count: scene.triangle_count() as u64,

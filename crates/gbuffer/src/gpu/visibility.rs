@@ -63,6 +63,25 @@ pub const FEATURES: wgpu::Features = wgpu::Features::empty();
 pub const WIDE_FEATURES: wgpu::Features =
     wgpu::Features::SHADER_INT64.union(wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX);
 
+/// What the resolve in one dispatch ([`ResolvePath::OneDispatch`]) needs: binding arrays of
+/// textures and samplers, indexed by values that differ between invocations; and room in
+/// them for every texture of the scene ([`bindless_needs`]).
+pub const BINDLESS_FEATURES: wgpu::Features = wgpu::Features::TEXTURE_BINDING_ARRAY
+    .union(wgpu::Features::SAMPLED_TEXTURE_AND_STORAGE_BUFFER_ARRAY_NON_UNIFORM_INDEXING);
+
+/// [`device_needs`] with [`BINDLESS_FEATURES`] and binding arrays of `textures` textures and
+/// samplers: a device on which a scene of that many textures
+/// ([`super::MaterialTextures::all`]) resolves in one dispatch.
+pub fn bindless_needs(textures: u32) -> ::gpu::DeviceNeeds {
+    let mut needs = device_needs();
+    needs.features |= BINDLESS_FEATURES;
+    needs.limits.max_binding_array_elements_per_shader_stage = textures;
+    needs
+        .limits
+        .max_binding_array_sampler_elements_per_shader_stage = textures;
+    needs
+}
+
 /// Storage textures the resolve writes in one stage (the five colour targets; WebGPU's
 /// default limit is 4).
 pub const STORAGE_TEXTURES: u32 = 5;
@@ -854,6 +873,20 @@ struct ResolveUniform {
     _pad: u32,
 }
 
+/// How [`ResolvePass::bind`] reaches the materials.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ResolvePath {
+    /// Pixels classified by 8 × 8 tile into a list per material, then one indirect dispatch
+    /// per material with its bind group: runs on every device.
+    Classified,
+    /// One dispatch over every pixel, each reading its material from one table and its
+    /// textures from binding arrays (`resolve_bindless.wgsl`): no classification and no
+    /// dispatch per material. Needs [`BINDLESS_FEATURES`] and binding arrays as large as the
+    /// scene's textures ([`bindless_needs`]); [`ResolvePass::bind`] falls back to
+    /// [`ResolvePath::Classified`] elsewhere.
+    OneDispatch,
+}
+
 /// The side of the tiles the resolve classifies pixels by.
 const RESOLVE_TILE: u32 = 8;
 
@@ -876,34 +909,57 @@ pub struct ResolvePass {
     /// The depth target's pass: the frame (binding 0) and the visibility buffer (binding 2).
     depth_layout: Layout,
     depth: wgpu::RenderPipeline,
+    /// `resolve_bindless.wgsl`, where the device has [`BINDLESS_FEATURES`] and
+    /// [`ResolvePath::OneDispatch`] is asked for.
+    bindless: Option<wgpu::ShaderModule>,
 }
 
 /// [`ResolvePass::bind`]'s result: the compute passes writing the colour targets, and what
 /// [`ResolvePass::encode_depth`] draws the depth target with.
 pub struct Resolve {
-    /// The classification (three dispatches), then one dispatch per material.
+    /// [`ResolvePath::Classified`]: the classification (three dispatches), then one dispatch
+    /// per material; [`ResolvePath::OneDispatch`]: one dispatch.
     pub passes: Passes,
+    /// The path bound.
+    pub path: ResolvePath,
     depth_group: wgpu::BindGroup,
 }
 
-/// The resolve's dispatches in order ([`Resolve::profiled`]): the classification's three, then
-/// the materials' (timed together).
+/// The classified resolve's dispatches in order ([`Resolve::profiled`]): the classification's
+/// three, then the materials' (timed together).
 pub const RESOLVE_STAGES: [&str; 4] = ["count", "scan", "write", "materials"];
 
 impl Resolve {
     /// The resolve's passes with each stage of [`RESOLVE_STAGES`] timed on its own, as
-    /// `visibility resolve <stage>`: a profile for benchmarks.
+    /// `visibility resolve <stage>` (the one dispatch of [`ResolvePath::OneDispatch`] as
+    /// `visibility resolve one dispatch`): a profile for benchmarks.
     pub fn profiled(&self) -> Passes {
         let last = RESOLVE_STAGES.len() - 1;
-        self.passes
-            .per_dispatch(|i| format!("visibility resolve {}", RESOLVE_STAGES[i.min(last)]))
+        let path = self.path;
+        self.passes.per_dispatch(|i| match path {
+            ResolvePath::Classified => {
+                format!("visibility resolve {}", RESOLVE_STAGES[i.min(last)])
+            }
+            ResolvePath::OneDispatch => "visibility resolve one dispatch".into(),
+        })
     }
 }
 
 impl ResolvePass {
     /// Builds the kernels; materials bind as `gpass` binds them. The device must allow
-    /// [`STORAGE_TEXTURES`] storage textures per stage.
+    /// [`STORAGE_TEXTURES`] storage textures per stage. [`ResolvePass::bind`] resolves in one
+    /// dispatch where the device allows it ([`ResolvePath::OneDispatch`]).
     pub fn new(device: &wgpu::Device, gpass: &super::GBufferPass) -> Result<Self, GBufferError> {
+        Self::with(device, gpass, ResolvePath::OneDispatch)
+    }
+
+    /// [`ResolvePass::new`] with the path `bind` prefers: [`ResolvePath::Classified`] binds the
+    /// classified path whatever the device.
+    pub fn with(
+        device: &wgpu::Device,
+        gpass: &super::GBufferPass,
+        path: ResolvePath,
+    ) -> Result<Self, GBufferError> {
         let allowed = device.limits().max_storage_textures_per_shader_stage;
         if allowed < STORAGE_TEXTURES {
             return Err(GBufferError::InvalidOptions(format!(
@@ -987,6 +1043,10 @@ impl ResolvePass {
             multiview_mask: None,
             cache: None,
         });
+        let bindless = (path == ResolvePath::OneDispatch
+            && device.features().contains(BINDLESS_FEATURES))
+        .then(|| crate::SHADERS.module(device, "resolve_bindless.wgsl"))
+        .transpose()?;
         Ok(Self {
             layout,
             dispatch_layout,
@@ -996,7 +1056,57 @@ impl ResolvePass {
             classify_write,
             depth_layout,
             depth,
+            bindless,
         })
+    }
+
+    /// The one-dispatch resolve's kernel and its group 1 for `uploaded`'s materials, where
+    /// the device's binding arrays hold every texture of the scene.
+    fn bind_one_dispatch(
+        &self,
+        device: &wgpu::Device,
+        uploaded: &GpuScene,
+    ) -> Option<(wgpu::ComputePipeline, wgpu::BindGroup)> {
+        let module = self.bindless.as_ref()?;
+        let textures = uploaded.textures.all();
+        let limits = device.limits();
+        let count = u32::try_from(textures.len()).ok()?;
+        if count > limits.max_binding_array_elements_per_shader_stage
+            || count > limits.max_binding_array_sampler_elements_per_shader_stage
+        {
+            return None;
+        }
+        let n = std::num::NonZeroU32::new(count)?;
+        let layout = Layout::compute_numbered(
+            device,
+            "visibility resolve materials",
+            &[
+                (12, Binding::StorageRead),
+                (13, Binding::StorageRead),
+                (14, Binding::Textures(n)),
+                (15, Binding::Samplers(n)),
+            ],
+        );
+        let pipeline = kernel::pipeline(
+            device,
+            module,
+            "resolve_bindless",
+            &[&self.layout, &layout],
+            &[],
+        );
+        let views: Vec<&wgpu::TextureView> = textures.iter().map(|t| &t.view).collect();
+        let samplers: Vec<&wgpu::Sampler> = textures.iter().map(|t| &t.sampler).collect();
+        let [materials, texture_indices] = &uploaded.material_table;
+        let group = layout.bind(
+            device,
+            &[
+                materials.as_entire_binding(),
+                texture_indices.as_entire_binding(),
+                wgpu::BindingResource::TextureViewArray(&views),
+                wgpu::BindingResource::SamplerArray(&samplers),
+            ],
+        );
+        Some((pipeline, group))
     }
 
     /// Records the pass writing `depth` (the G-buffer's [`crate::DEPTH_FORMAT`] target, of the
@@ -1051,8 +1161,13 @@ impl ResolvePass {
         let slots = visibility.materials.len() as u32;
         let tiles_x = width.div_ceil(RESOLVE_TILE);
         let tile_count = u64::from(tiles_x) * u64::from(height.div_ceil(RESOLVE_TILE));
-        // A tile holds at most one entry per slot, and at most 64 slots (one per pixel).
-        let entries = tile_count * u64::from(slots.clamp(1, RESOLVE_TILE * RESOLVE_TILE));
+        let one_dispatch = self.bind_one_dispatch(device, uploaded);
+        // A tile holds at most one entry per slot, and at most 64 slots (one per pixel); the
+        // one dispatch lists no tiles.
+        let entries = match one_dispatch {
+            Some(_) => 1,
+            None => tile_count * u64::from(slots.clamp(1, RESOLVE_TILE * RESOLVE_TILE)),
+        };
         let storage = wgpu::BufferUsages::STORAGE;
         let classes = transfer::buffer(
             device,
@@ -1102,6 +1217,25 @@ impl ResolvePass {
         };
         let first = group(0)?;
         let covering = Workgroups::covering(width, height, RESOLVE_TILE);
+        let depth_group = self.depth_layout.bind(
+            device,
+            &[
+                frame.as_entire_binding(),
+                visibility.buffer.as_entire_binding(),
+            ],
+        );
+        if let Some((pipeline, materials)) = one_dispatch {
+            let one = Dispatch {
+                pipeline,
+                groups: vec![first, materials],
+                workgroups: covering,
+            };
+            return Ok(Resolve {
+                passes: Passes::new().pass("visibility resolve", vec![one]),
+                path: ResolvePath::OneDispatch,
+                depth_group,
+            });
+        }
         let on_first = |pipeline: &wgpu::ComputePipeline, groups, workgroups| Dispatch {
             pipeline: pipeline.clone(),
             groups,
@@ -1133,13 +1267,8 @@ impl ResolvePass {
         }
         Ok(Resolve {
             passes: Passes::new().pass("visibility resolve", dispatches),
-            depth_group: self.depth_layout.bind(
-                device,
-                &[
-                    frame.as_entire_binding(),
-                    visibility.buffer.as_entire_binding(),
-                ],
-            ),
+            path: ResolvePath::Classified,
+            depth_group,
         })
     }
 }

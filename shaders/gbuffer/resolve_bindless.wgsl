@@ -1,0 +1,48 @@
+enable wgpu_binding_array;
+// #import gbuffer/resolve.wgsl
+// The resolve in one dispatch over every pixel, for devices with binding arrays of textures
+// indexed by non-uniform values: each pixel reads its mesh's material from `materials` and
+// that material's textures through `textures`/`samplers`, so no pixel waits for a
+// classification by material and no dispatch per material is needed (the visibility-buffer
+// shading of Burns & Hunt 2013 §3 with every material in reach of one kernel). The same
+// texels as `resolve_material` (`evaluate_material_of` of the same material and textures).
+
+// The scene's materials (`gbuffer::gpu::GpuMaterial`), by material index.
+@group(1) @binding(12) var<storage, read> materials: array<Material>;
+// Per material five entries of `textures` and `samplers`: its base colour, metallic-roughness,
+// normal, occlusion and emissive texture (white where it has none).
+@group(1) @binding(13) var<storage, read> material_textures: array<u32>;
+@group(1) @binding(14) var textures: binding_array<texture_2d<f32>>;
+@group(1) @binding(15) var samplers: binding_array<sampler>;
+
+// Texture `role` (`SLOT_*`) of material `k` (`m`) at `at`.
+fn read_role(k: u32, m: Material, role: u32, at: SurfaceAttributes) -> vec4<f32> {
+    let i = material_textures[5u * k + role];
+    return read_slot(textures[i], samplers[i], m.slots[role], at);
+}
+
+@compute @workgroup_size(8, 8)
+fn resolve_bindless(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let pixel = gid.xy;
+    let size = vec2<u32>(frame.viewport.xy);
+    if any(pixel >= size) {
+        return;
+    }
+    let id = visibility[pixel.y * size.x + pixel.x].x;
+    if id == NO_TRIANGLE {
+        store_cleared(pixel);
+        return;
+    }
+    let mesh = meshes[mesh_of(id)];
+    let surface = resolve_surface(mesh, id, pixel);
+    let k = mesh.material;
+    let m = materials[k];
+    let t = MaterialTexels(
+        read_role(k, m, SLOT_BASE_COLOR, surface.at),
+        read_role(k, m, SLOT_METALLIC_ROUGHNESS, surface.at),
+        read_role(k, m, SLOT_NORMAL, surface.at),
+        read_role(k, m, SLOT_OCCLUSION, surface.at),
+        read_role(k, m, SLOT_EMISSIVE, surface.at),
+    );
+    store(pixel, gbuffer_texels_of(m, evaluate_material_of(m, surface.at, t), surface.view_depth));
+}
