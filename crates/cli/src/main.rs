@@ -8,6 +8,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
+use gbuffer::gpu::visibility::ResolvePath;
 use glam::Vec3;
 use instant_radiosity::{
     IndirectConfig, IndirectStages, Interleaving,
@@ -1670,7 +1671,11 @@ fn gpu_renderer(
             .context("--visibility=auto")?
             .to_string(),
         Some(VisibilityMode::On) => {
-            "visibility buffer (compute rasteriser, resolve, depth drawn from it)".into()
+            let resolve = match renderer.visibility_resolve() {
+                Some(ResolvePath::OneDispatch) => "resolve in one dispatch",
+                _ => "resolve by material tiles",
+            };
+            format!("visibility buffer (compute rasteriser, {resolve}, depth drawn from it)")
         }
         None => "hardware rasteriser (z-prepass, then the G-buffer pass)".into(),
     };

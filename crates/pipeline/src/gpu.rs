@@ -1439,6 +1439,13 @@ impl GpuRenderer {
         self.visibility.is_some()
     }
 
+    /// How the visibility path resolves the frame's G-buffer: in one dispatch where the
+    /// device has binding arrays for the scene's textures, else classified by material
+    /// (`gbuffer::gpu::visibility::ResolvePath`); `None` without the path.
+    pub fn visibility_resolve(&self) -> Option<gbuffer::gpu::visibility::ResolvePath> {
+        self.visibility.as_ref().map(|v| v.main.resolved.path)
+    }
+
     /// Draws the meshes `hardware` (indices in the scene's meshes) into the visibility buffer
     /// with the hardware rasteriser instead of the compute rasteriser (alpha-tested meshes are
     /// drawn so anyway): meshes of large triangles, which it covers faster
