@@ -70,17 +70,30 @@ struct MaterialSample {
     emission: vec3<f32>,
 };
 
-// One texture of the material through its slot, filtered by the coordinates' derivatives.
-fn read_slot(t: texture_2d<f32>, s: sampler, slot: TextureSlot, at: SurfaceAttributes) -> vec4<f32> {
-    if slot.offset.w == 0.0 {
-        return vec4<f32>(1.0);
-    }
+// Where a texture slot reads at a surface point: its coordinates and their derivatives,
+// through the slot's transform.
+struct SlotCoordinates {
+    uv: vec2<f32>,
+    dx: vec2<f32>,
+    dy: vec2<f32>,
+};
+
+fn slot_coordinates(slot: TextureSlot, at: SurfaceAttributes) -> SlotCoordinates {
     let set1 = slot.offset.z != 0.0;
     let uv = select(at.uv.xy, at.uv.zw, set1);
     let dx = select(at.uv_dx.xy, at.uv_dx.zw, set1);
     let dy = select(at.uv_dy.xy, at.uv_dy.zw, set1);
     let m = mat2x2<f32>(slot.linear.xy, slot.linear.zw);
-    return textureSampleGrad(t, s, m * uv + slot.offset.xy, m * dx, m * dy);
+    return SlotCoordinates(m * uv + slot.offset.xy, m * dx, m * dy);
+}
+
+// One texture of the material through its slot, filtered by the coordinates' derivatives.
+fn read_slot(t: texture_2d<f32>, s: sampler, slot: TextureSlot, at: SurfaceAttributes) -> vec4<f32> {
+    if slot.offset.w == 0.0 {
+        return vec4<f32>(1.0);
+    }
+    let c = slot_coordinates(slot, at);
+    return textureSampleGrad(t, s, c.uv, c.dx, c.dy);
 }
 
 // The normal map's tangent-space normal `c` in the surface's tangent frame (glTF §3.9.3,

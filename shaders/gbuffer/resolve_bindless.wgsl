@@ -7,18 +7,29 @@ enable wgpu_binding_array;
 // shading of Burns & Hunt 2013 §3 with every material in reach of one kernel). The same
 // texels as `resolve_material` (`evaluate_material_of` of the same material and textures).
 
-// The scene's materials (`gbuffer::gpu::GpuMaterial`), by material index.
-@group(1) @binding(12) var<storage, read> materials: array<Material>;
-// Per material five entries of `textures` and `samplers`: its base colour, metallic-roughness,
-// normal, occlusion and emissive texture (white where it has none).
-@group(1) @binding(13) var<storage, read> material_textures: array<u32>;
+// A material of the scene (`gbuffer::gpu::GpuMaterial`) and its five textures' entries in
+// `textures` and `samplers` (base colour, metallic-roughness, normal, occlusion, emissive;
+// white where it has none): `gbuffer::gpu::upload::MaterialEntry`.
+struct MaterialEntry {
+    material: Material,
+    textures: array<u32, 5>,
+    _pad: array<u32, 3>,
+};
+
+// By material index.
+@group(1) @binding(12) var<storage, read> materials: array<MaterialEntry>;
 @group(1) @binding(14) var textures: binding_array<texture_2d<f32>>;
 @group(1) @binding(15) var samplers: binding_array<sampler>;
 
-// Texture `role` (`SLOT_*`) of material `k` (`m`) at `at`.
-fn read_role(k: u32, m: Material, role: u32, at: SurfaceAttributes) -> vec4<f32> {
-    let i = material_textures[5u * k + role];
-    return read_slot(textures[i], samplers[i], m.slots[role], at);
+// Texture `role` (`SLOT_*`) of material `k` at `at` (`read_slot` through the arrays).
+fn read_role(k: u32, role: u32, at: SurfaceAttributes) -> vec4<f32> {
+    let slot = materials[k].material.slots[role];
+    if slot.offset.w == 0.0 {
+        return vec4<f32>(1.0);
+    }
+    let i = materials[k].textures[role];
+    let c = slot_coordinates(slot, at);
+    return textureSampleGrad(textures[i], samplers[i], c.uv, c.dx, c.dy);
 }
 
 @compute @workgroup_size(8, 8)
@@ -36,13 +47,13 @@ fn resolve_bindless(@builtin(global_invocation_id) gid: vec3<u32>) {
     let mesh = meshes[mesh_of(id)];
     let surface = resolve_surface(mesh, id, pixel);
     let k = mesh.material;
-    let m = materials[k];
+    let m = materials[k].material;
     let t = MaterialTexels(
-        read_role(k, m, SLOT_BASE_COLOR, surface.at),
-        read_role(k, m, SLOT_METALLIC_ROUGHNESS, surface.at),
-        read_role(k, m, SLOT_NORMAL, surface.at),
-        read_role(k, m, SLOT_OCCLUSION, surface.at),
-        read_role(k, m, SLOT_EMISSIVE, surface.at),
+        read_role(k, SLOT_BASE_COLOR, surface.at),
+        read_role(k, SLOT_METALLIC_ROUGHNESS, surface.at),
+        read_role(k, SLOT_NORMAL, surface.at),
+        read_role(k, SLOT_OCCLUSION, surface.at),
+        read_role(k, SLOT_EMISSIVE, surface.at),
     );
     store(pixel, gbuffer_texels_of(m, evaluate_material_of(m, surface.at, t), surface.view_depth));
 }

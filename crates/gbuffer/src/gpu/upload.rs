@@ -72,6 +72,17 @@ pub(super) struct Draw {
     pub(super) indirect: Option<wgpu::Buffer>,
 }
 
+/// A material and the indices in [`MaterialTextures::all`] of its five textures (WGSL
+/// `MaterialEntry` of `gbuffer/resolve_bindless.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub(super) struct MaterialEntry {
+    material: GpuMaterial,
+    /// Base colour, metallic-roughness, normal, occlusion, emissive.
+    textures: [u32; 5],
+    _pad: [u32; 3],
+}
+
 /// A scene uploaded for the G-buffer pass: positions (vertex buffer slot 0) and the other
 /// attributes ([`GpuAttributes`], slot 1), one index buffer, the textures with their mip
 /// chains ([`MaterialTextures`]) and a bind group per material.
@@ -81,10 +92,9 @@ pub struct GpuScene {
     pub(super) indices: wgpu::Buffer,
     pub(super) draws: Vec<Draw>,
     pub(super) material_groups: Vec<wgpu::BindGroup>,
-    /// Every material in one binding (`array<Material>`, storage) and per material the
-    /// indices in [`MaterialTextures::all`] of its five textures: what reaches every
-    /// material from one kernel (the visibility buffer's one-dispatch resolve).
-    pub(super) material_table: [wgpu::Buffer; 2],
+    /// Every material in one binding ([`MaterialEntry`] per material, storage): what
+    /// reaches every material from one kernel (the visibility buffer's one-dispatch resolve).
+    pub(super) material_table: wgpu::Buffer,
     pub(super) blended: BlendedSurfaces,
     /// The textures the materials read.
     pub textures: MaterialTextures,
@@ -274,19 +284,23 @@ impl GpuScene {
         let materials: Vec<GpuMaterial> = (scene.materials.iter().enumerate())
             .map(|(i, m)| GpuMaterial::new(m, i as u32))
             .collect();
-        let texture_indices: Vec<u32> = (scene.materials.iter())
-            .flat_map(|m| m.roles().map(|(role, t)| textures.index_for_role(role, t)))
+        let mut entries: Vec<MaterialEntry> = (scene.materials.iter().zip(&materials))
+            .map(|(m, &material)| MaterialEntry {
+                material,
+                textures: m.roles().map(|(role, t)| textures.index_for_role(role, t)),
+                _pad: [0; 3],
+            })
             .collect();
-        let table = |label, bytes: &[u8]| {
-            // A binding is never empty: a scene without materials gets one zeroed entry.
-            let zeroed = [0; size_of::<GpuMaterial>()];
-            let bytes = if bytes.is_empty() { &zeroed[..] } else { bytes };
-            transfer::buffer_init(device, label, bytes, wgpu::BufferUsages::STORAGE)
-        };
-        let material_table = [
-            table("materials", bytemuck::cast_slice(&materials))?,
-            table("material textures", bytemuck::cast_slice(&texture_indices))?,
-        ];
+        // A binding is never empty: a scene without materials gets one zeroed entry.
+        if entries.is_empty() {
+            entries.push(bytemuck::Zeroable::zeroed());
+        }
+        let material_table = transfer::buffer_init(
+            device,
+            "materials",
+            bytemuck::cast_slice(&entries),
+            wgpu::BufferUsages::STORAGE,
+        )?;
         let material_groups = scene
             .materials
             .iter()

@@ -1082,7 +1082,6 @@ impl ResolvePass {
             "visibility resolve materials",
             &[
                 (12, Binding::StorageRead),
-                (13, Binding::StorageRead),
                 (14, Binding::Textures(n)),
                 (15, Binding::Samplers(n)),
             ],
@@ -1096,12 +1095,10 @@ impl ResolvePass {
         );
         let views: Vec<&wgpu::TextureView> = textures.iter().map(|t| &t.view).collect();
         let samplers: Vec<&wgpu::Sampler> = textures.iter().map(|t| &t.sampler).collect();
-        let [materials, texture_indices] = &uploaded.material_table;
         let group = layout.bind(
             device,
             &[
-                materials.as_entire_binding(),
-                texture_indices.as_entire_binding(),
+                uploaded.material_table.as_entire_binding(),
                 wgpu::BindingResource::TextureViewArray(&views),
                 wgpu::BindingResource::SamplerArray(&samplers),
             ],
