@@ -16,10 +16,15 @@ struct MaterialEntry {
     _pad: array<u32, 3>,
 };
 
+// The scene's textures (`gbuffer::gpu::MaterialTextures::all`), set per scene: sized arrays
+// (an unsized binding array becomes a runtime array of descriptors in SPIR-V, which needs a
+// capability naga does not declare).
+const MATERIAL_TEXTURES: u32 = 1u;
+
 // By material index.
 @group(1) @binding(12) var<storage, read> materials: array<MaterialEntry>;
-@group(1) @binding(14) var textures: binding_array<texture_2d<f32>>;
-@group(1) @binding(15) var samplers: binding_array<sampler>;
+@group(1) @binding(14) var textures: binding_array<texture_2d<f32>, MATERIAL_TEXTURES>;
+@group(1) @binding(15) var samplers: binding_array<sampler, MATERIAL_TEXTURES>;
 
 // Texture `role` (`SLOT_*`) of material `k` at `at` (`read_slot` through the arrays).
 fn read_role(k: u32, role: u32, at: SurfaceAttributes) -> vec4<f32> {

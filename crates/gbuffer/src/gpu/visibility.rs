@@ -909,9 +909,10 @@ pub struct ResolvePass {
     /// The depth target's pass: the frame (binding 0) and the visibility buffer (binding 2).
     depth_layout: Layout,
     depth: wgpu::RenderPipeline,
-    /// `resolve_bindless.wgsl`, where the device has [`BINDLESS_FEATURES`] and
-    /// [`ResolvePath::OneDispatch`] is asked for.
-    bindless: Option<wgpu::ShaderModule>,
+    /// Whether [`ResolvePath::OneDispatch`] was asked for and the device has
+    /// [`BINDLESS_FEATURES`] (its kernel is built per scene, its arrays sized to the scene's
+    /// textures).
+    bindless: bool,
 }
 
 /// [`ResolvePass::bind`]'s result: the compute passes writing the colour targets, and what
@@ -1043,10 +1044,8 @@ impl ResolvePass {
             multiview_mask: None,
             cache: None,
         });
-        let bindless = (path == ResolvePath::OneDispatch
-            && device.features().contains(BINDLESS_FEATURES))
-        .then(|| crate::SHADERS.module(device, "resolve_bindless.wgsl"))
-        .transpose()?;
+        let bindless =
+            path == ResolvePath::OneDispatch && device.features().contains(BINDLESS_FEATURES);
         Ok(Self {
             layout,
             dispatch_layout,
@@ -1066,17 +1065,24 @@ impl ResolvePass {
         &self,
         device: &wgpu::Device,
         uploaded: &GpuScene,
-    ) -> Option<(wgpu::ComputePipeline, wgpu::BindGroup)> {
-        let module = self.bindless.as_ref()?;
+    ) -> Result<Option<(wgpu::ComputePipeline, wgpu::BindGroup)>, GBufferError> {
+        if !self.bindless {
+            return Ok(None);
+        }
         let textures = uploaded.textures.all();
         let limits = device.limits();
-        let count = u32::try_from(textures.len()).ok()?;
-        if count > limits.max_binding_array_elements_per_shader_stage
-            || count > limits.max_binding_array_sampler_elements_per_shader_stage
-        {
-            return None;
-        }
-        let n = std::num::NonZeroU32::new(count)?;
+        let count = u32::try_from(textures.len()).unwrap_or(u32::MAX);
+        let Some(n) = std::num::NonZeroU32::new(count).filter(|_| {
+            count <= limits.max_binding_array_elements_per_shader_stage
+                && count <= limits.max_binding_array_sampler_elements_per_shader_stage
+        }) else {
+            return Ok(None);
+        };
+        let module = crate::SHADERS.module_with(
+            device,
+            "resolve_bindless.wgsl",
+            &Specialisation::default().set("MATERIAL_TEXTURES", format!("{count}u")),
+        )?;
         let layout = Layout::compute_numbered(
             device,
             "visibility resolve materials",
@@ -1088,7 +1094,7 @@ impl ResolvePass {
         );
         let pipeline = kernel::pipeline(
             device,
-            module,
+            &module,
             "resolve_bindless",
             &[&self.layout, &layout],
             &[],
@@ -1103,7 +1109,7 @@ impl ResolvePass {
                 wgpu::BindingResource::SamplerArray(&samplers),
             ],
         );
-        Some((pipeline, group))
+        Ok(Some((pipeline, group)))
     }
 
     /// Records the pass writing `depth` (the G-buffer's [`crate::DEPTH_FORMAT`] target, of the
@@ -1158,7 +1164,7 @@ impl ResolvePass {
         let slots = visibility.materials.len() as u32;
         let tiles_x = width.div_ceil(RESOLVE_TILE);
         let tile_count = u64::from(tiles_x) * u64::from(height.div_ceil(RESOLVE_TILE));
-        let one_dispatch = self.bind_one_dispatch(device, uploaded);
+        let one_dispatch = self.bind_one_dispatch(device, uploaded)?;
         // A tile holds at most one entry per slot, and at most 64 slots (one per pixel); the
         // one dispatch lists no tiles.
         let entries = match one_dispatch {
