@@ -14,7 +14,7 @@
 // `raster_small` gives each triangle one invocation, which covers the pixels of its bounding
 // box when the box has at most SMALL_PIXELS pixels and no vertex lies outside a clip plane;
 // every other triangle is appended to `deferred`. `setup_large` gives each deferred triangle
-// a workgroup, which clips it into a fan, stores each fan triangle's setup and appends one
+// an invocation, which clips it into a fan, stores each fan triangle's setup and appends one
 // work item per TILE × TILE block of its box; `raster_tiles` gives each work item a workgroup,
 // whose invocations cover the block together. `prepare` sizes the indirect dispatches.
 
@@ -376,49 +376,32 @@ fn blocks(b: vec4<i32>) -> vec2<u32> {
     return vec2(across, across * u32((b.w - b.y) / TILE + 1));
 }
 
-// `setup_large`'s fan triangles of one deferred triangle: each one's setup slot, its first
-// work item and how many blocks it has.
-var<workgroup> fan: array<vec3<u32>, 7>;
-var<workgroup> fan_count: u32;
-
-// One workgroup per deferred triangle: its first invocation clips it into a fan and sets up
-// each fan triangle, then every invocation writes a share of their work items (a triangle
-// across the image has thousands of blocks: one invocation writing them all was the frame's
-// longest thread).
 @compute @workgroup_size(64)
-fn setup_large(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
-    let d = group.x + group.y * groups.x;
-    if lane == 0u {
-        var n = 0u;
-        if d < min(atomicLoad(&counts[DEFERRED]), arrayLength(&deferred)) {
-            let id = deferred[d];
-            let mesh = meshes[mesh_of(id)];
-            let t = id - mesh.first_id;
-            var polygon: array<vec4<f32>, 9>;
-            let vertices = clip_triangle(clip_position(mesh, t, 0u), clip_position(mesh, t, 1u), clip_position(mesh, t, 2u), &polygon);
-            for (var k = 1u; k + 1u < vertices; k++) {
-                var s: Setup;
-                if !setup(polygon[0], polygon[k], polygon[k + 1u], mesh.cull_back != 0u, &s) {
-                    continue;
-                }
-                let at = append(SETUPS, arrayLength(&setups));
-                if at >= arrayLength(&setups) {
-                    break;
-                }
-                setups[at] = LargeSetup(s, id);
-                let count = blocks(s.bounds).y;
-                fan[n] = vec3(at, atomicAdd(&counts[WORK], count), count);
-                n++;
-            }
-        }
-        fan_count = n;
+fn setup_large(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let d = gid.x + gid.y * groups.x * WORKGROUP;
+    if d >= min(atomicLoad(&counts[DEFERRED]), arrayLength(&deferred)) {
+        return;
     }
-    let n = workgroupUniformLoad(&fan_count);
-    for (var f = 0u; f < n; f++) {
-        let entry = fan[f];
-        for (var i = lane; i < entry.z; i += WORKGROUP) {
-            if entry.y + i < arrayLength(&work) {
-                work[entry.y + i] = vec2(entry.x, i);
+    let id = deferred[d];
+    let mesh = meshes[mesh_of(id)];
+    let t = id - mesh.first_id;
+    var polygon: array<vec4<f32>, 9>;
+    let n = clip_triangle(clip_position(mesh, t, 0u), clip_position(mesh, t, 1u), clip_position(mesh, t, 2u), &polygon);
+    for (var k = 1u; k + 1u < n; k++) {
+        var s: Setup;
+        if !setup(polygon[0], polygon[k], polygon[k + 1u], mesh.cull_back != 0u, &s) {
+            continue;
+        }
+        let at = append(SETUPS, arrayLength(&setups));
+        if at >= arrayLength(&setups) {
+            return;
+        }
+        setups[at] = LargeSetup(s, id);
+        let count = blocks(s.bounds).y;
+        let first = atomicAdd(&counts[WORK], count);
+        for (var i = 0u; i < count; i++) {
+            if first + i < arrayLength(&work) {
+                work[first + i] = vec2(at, i);
             } else {
                 atomicAdd(&counts[OVERFLOW], 1u);
             }
@@ -511,7 +494,8 @@ fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups)
 // `raster_small`), `raster_tiles` over the work items (after `setup_large`).
 @compute @workgroup_size(1)
 fn prepare() {
-    set_dispatch(0u, min(atomicLoad(&counts[DEFERRED]), arrayLength(&deferred)));
+    let deferred_groups = (min(atomicLoad(&counts[DEFERRED]), arrayLength(&deferred)) + WORKGROUP - 1u) / WORKGROUP;
+    set_dispatch(0u, deferred_groups);
     set_dispatch(3u, min(atomicLoad(&counts[WORK]), arrayLength(&work)));
 }
 
