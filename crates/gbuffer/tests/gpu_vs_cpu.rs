@@ -499,19 +499,26 @@ fn the_one_dispatch_resolve_writes_the_classified_texels() {
     }
     if let Some(gpu) = gpu::test_device(&needs(1)) {
         // Any textured scene has more than one texture: its own and white.
-        let gallery = scene::material_gallery();
-        let asked = (Atomics::Wide, ResolvePath::OneDispatch);
-        let e = run_visibility(
-            gpu,
-            &gallery,
-            &gallery.camera_or_framed(),
-            (64, 48),
-            &options,
-            asked,
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("along Classified"), "{e}");
+        let e = one_dispatch_refusal(gpu);
+        assert!(e.contains("along Classified"), "{e}");
     }
+}
+
+/// Why `gpu` refuses the material gallery's resolve in one dispatch.
+fn one_dispatch_refusal(gpu: &gpu::Gpu) -> String {
+    let gallery = scene::material_gallery();
+    let options = gbuffer::TextureOptions { max_anisotropy: 1 };
+    let asked = (Atomics::Wide, ResolvePath::OneDispatch);
+    run_visibility(
+        gpu,
+        &gallery,
+        &gallery.camera_or_framed(),
+        (64, 48),
+        &options,
+        asked,
+    )
+    .expect_err("the one-dispatch resolve refused")
+    .to_string()
 }
 
 /// Asked of a device without binding arrays, the one-dispatch resolve is refused with the
@@ -521,20 +528,9 @@ fn the_one_dispatch_resolve_is_refused_without_binding_arrays() {
     let Some(gpu) = gpu::test_device(&gbuffer::gpu::visibility::device_needs()) else {
         return;
     };
-    let gallery = scene::material_gallery();
-    let options = gbuffer::TextureOptions { max_anisotropy: 1 };
-    let asked = (Atomics::Wide, ResolvePath::OneDispatch);
-    let e = run_visibility(
-        gpu,
-        &gallery,
-        &gallery.camera_or_framed(),
-        (64, 48),
-        &options,
-        asked,
-    )
-    .unwrap_err();
-    assert!(e.to_string().contains("TEXTURE_BINDING_ARRAY"), "{e}");
-    assert!(e.to_string().contains("along Classified"), "{e}");
+    let e = one_dispatch_refusal(gpu);
+    assert!(e.contains("TEXTURE_BINDING_ARRAY"), "{e}");
+    assert!(e.contains("along Classified"), "{e}");
 }
 
 /// The z-prepass path writes the same G-buffer as the single pass (the random scenes have no
