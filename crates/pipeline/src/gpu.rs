@@ -307,6 +307,10 @@ struct VisibilityStage {
     /// Meshes drawn by the hardware rasteriser besides the alpha-tested ones
     /// ([`GpuRenderer::set_visibility_split`]).
     hardware_meshes: Vec<usize>,
+    /// The pixels per triangle above which a mesh goes to the hardware rasteriser, re-applied
+    /// as the camera moves ([`GpuRenderer::set_visibility_split_rule`]); `None` for a split
+    /// by hand.
+    split_rule: Option<f32>,
     main: BoundVisibility,
     ss: Option<BoundVisibility>,
 }
@@ -341,6 +345,7 @@ impl VisibilityStage {
             raster,
             resolve,
             hardware_meshes: Vec::new(),
+            split_rule: None,
             main,
             ss: None,
         })
@@ -1451,8 +1456,91 @@ impl GpuRenderer {
     /// drawn so anyway): meshes of large triangles, which it covers faster
     /// (`gbuffer::gpu::visibility::VisibilityPass::bind_split`). Needs the visibility path on
     /// ([`GpuRenderer::set_visibility`]); an index past the scene's meshes is refused and the
-    /// split left as it was. [`GpuRenderer::choose_gbuffer_path`] measures where to split.
+    /// split left as it was. A split by hand ends a split rule
+    /// ([`GpuRenderer::set_visibility_split_rule`]); [`GpuRenderer::choose_gbuffer_path`]
+    /// measures where to split.
     pub fn set_visibility_split(
+        &mut self,
+        device: &wgpu::Device,
+        hardware: &[usize],
+    ) -> Result<(), RenderError> {
+        self.split_meshes(device, hardware)?;
+        if let Some(v) = &mut self.visibility {
+            v.split_rule = None;
+        }
+        Ok(())
+    }
+
+    /// Splits the visibility buffer's meshes by their size on screen from the camera set, and
+    /// again whenever a frame is rendered from another ([`GpuRenderer::follow_visibility_split`]):
+    /// meshes whose triangles cover more than `above_pixels` pixels on average
+    /// ([`GpuScene::pixels_per_triangle`]) go to the hardware rasteriser — the split rule
+    /// [`GpuRenderer::choose_gbuffer_path`] measures and keeps. Needs the visibility path on
+    /// and a camera; `f32::INFINITY` hands no mesh over.
+    pub fn set_visibility_split_rule(
+        &mut self,
+        device: &wgpu::Device,
+        above_pixels: f32,
+    ) -> Result<(), RenderError> {
+        if above_pixels.is_nan() {
+            return Err(RenderError::Visibility(
+                "a split rule's pixels per triangle must be a number (f32::INFINITY: none)".into(),
+            ));
+        }
+        let meshes = self.meshes_above(above_pixels)?;
+        self.split_meshes(device, &meshes)?;
+        if let Some(v) = &mut self.visibility {
+            v.split_rule = Some(above_pixels);
+        }
+        Ok(())
+    }
+
+    /// The split rule in force ([`GpuRenderer::set_visibility_split_rule`]); `None` without
+    /// the path or for a split by hand.
+    pub fn visibility_split_rule(&self) -> Option<f32> {
+        self.visibility.as_ref().and_then(|v| v.split_rule)
+    }
+
+    /// Applies the split rule ([`GpuRenderer::set_visibility_split_rule`]) to the camera set:
+    /// binds the visibility path again if another set of meshes is above it now, and says
+    /// whether it did. [`GpuRenderer::render`] and [`GpuRenderer::time_frame`] call it; call it
+    /// after [`GpuRenderer::set_camera`] when recording frames with
+    /// [`GpuRenderer::encode`]. Nothing to do without a rule.
+    pub fn follow_visibility_split(&mut self, device: &wgpu::Device) -> Result<bool, RenderError> {
+        let Some(rule) = self.visibility_split_rule() else {
+            return Ok(false);
+        };
+        let meshes = self.meshes_above(rule)?;
+        if self
+            .visibility
+            .as_ref()
+            .is_some_and(|v| v.hardware_meshes == meshes)
+        {
+            return Ok(false);
+        }
+        self.split_meshes(device, &meshes)?;
+        Ok(true)
+    }
+
+    /// The meshes whose triangles cover more than `above_pixels` pixels on average from the
+    /// camera set.
+    fn meshes_above(&self, above_pixels: f32) -> Result<Vec<usize>, RenderError> {
+        let Some(camera) = &self.camera else {
+            return Err(RenderError::Visibility(
+                "a split rule measures meshes on screen: set a camera first (set_camera)".into(),
+            ));
+        };
+        let (width, height) = self.size();
+        let pixels = self
+            .scene
+            .pixels_per_triangle(&Frame::new(camera, width, height));
+        Ok((0..pixels.len())
+            .filter(|&m| pixels[m] > above_pixels)
+            .collect())
+    }
+
+    /// [`GpuRenderer::set_visibility_split`] without touching the split rule.
+    fn split_meshes(
         &mut self,
         device: &wgpu::Device,
         hardware: &[usize],
@@ -1518,7 +1606,8 @@ impl GpuRenderer {
     /// [`SPLIT_PIXELS`], the meshes whose triangles cover more pixels on average
     /// ([`GpuScene::pixels_per_triangle`] from `camera`) drawn by the hardware rasteriser
     /// into the buffer, the others by the compute rasteriser (a split equal to the one before
-    /// is not measured again); its fastest split is kept. The visibility path is skipped,
+    /// is not measured again); its fastest split's threshold is kept as the split rule, which
+    /// follows the camera ([`GpuRenderer::set_visibility_split_rule`]). The visibility path is skipped,
     /// with the reason, where it cannot run (a missing device feature, Forward+, the light
     /// pre-pass). Needs timestamp queries; renders `frames` frames per path and split and
     /// leaves the camera set.
@@ -1563,10 +1652,9 @@ impl GpuRenderer {
                 }
                 // The first split is always measured.
                 let fastest = fastest_split(&splits);
-                let (ms, meshes) = fastest.map_or((f64::INFINITY, Vec::new()), |s| {
-                    (s.ms, s.hardware_meshes.clone())
-                });
-                self.set_visibility_split(device, &meshes)?;
+                let (ms, rule) =
+                    fastest.map_or((f64::INFINITY, f32::INFINITY), |s| (s.ms, s.above_pixels));
+                self.set_visibility_split_rule(device, rule)?;
                 Ok(ms)
             }
             Err(e) => Err(e.to_string()),
@@ -2438,6 +2526,7 @@ impl GpuRenderer {
     ) -> Result<Vec<PassTiming>, RenderError> {
         self.set_camera(queue, camera)?;
         self.set_ambient(queue, ambient);
+        self.follow_visibility_split(device)?;
         self.run_timed(device, queue)
     }
 

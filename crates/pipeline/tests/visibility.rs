@@ -286,6 +286,77 @@ fn a_split_between_the_rasterisers_renders_the_hardware_frame() {
         .expect("a frame with the split kept");
 }
 
+/// A split rule re-splits the meshes as the camera moves: meshes whose triangles cover more
+/// than the threshold from the camera (measured here on the scene uploaded on its own) go to
+/// the hardware rasteriser, frame by frame, and the frame stays the hardware path's; a split
+/// by hand ends the rule, and a rule needs a camera and a number.
+#[test]
+fn a_split_rule_follows_the_camera() {
+    let Some(gpu) = device() else { return };
+    let s = scene::cornell_box();
+    let (d, q) = (&gpu.device, &gpu.queue);
+    let (w, h) = (96, 72);
+    let mut renderer = GpuRenderer::new(d, q, &s, &s.lights, w, h).expect("renderer");
+    renderer.set_visibility(d, true).expect("visibility");
+    let e = renderer
+        .set_visibility_split_rule(d, 64.0)
+        .expect_err("no camera yet");
+    assert!(e.to_string().contains("set_camera"), "{e}");
+    let far = s.camera_or_framed();
+    let near = scene::Camera {
+        eye: far.eye + (far.target - far.eye) * 0.6,
+        ..far
+    };
+    // The meshes above the threshold from each camera, measured apart from the renderer.
+    let gpass = gbuffer::gpu::GBufferPass::new(d).expect("G-buffer pass");
+    let uploaded = gbuffer::gpu::GpuScene::upload(d, q, &s, &gpass).expect("upload");
+    let above = |camera: &scene::Camera, t: f32| -> Vec<usize> {
+        let pixels = uploaded.pixels_per_triangle(&gbuffer::Frame::new(camera, w, h));
+        (0..pixels.len()).filter(|&m| pixels[m] > t).collect()
+    };
+    // A threshold between the two views: some mesh crosses it as the camera comes near.
+    let threshold = [16.0, 64.0, 256.0, 1024.0]
+        .into_iter()
+        .find(|&t| above(&far, t) != above(&near, t))
+        .expect("a threshold some mesh crosses");
+    renderer.set_camera(q, &far).expect("camera");
+    renderer
+        .set_visibility_split_rule(d, threshold)
+        .expect("rule");
+    assert_eq!(renderer.visibility_split_rule(), Some(threshold));
+    for camera in [far, near, far] {
+        let split = renderer
+            .render(d, q, &camera, Vec3::splat(0.05))
+            .expect("frame");
+        let expected = above(&camera, threshold);
+        assert_eq!(
+            renderer.visibility_hardware_meshes(),
+            Some(expected.as_slice()),
+            "eye {:?}",
+            camera.eye
+        );
+        assert!(
+            !renderer.follow_visibility_split(d).expect("follow"),
+            "already followed"
+        );
+        let mut hardware = GpuRenderer::new(d, q, &s, &s.lights, w, h).expect("renderer");
+        let reference = hardware
+            .render(d, q, &camera, Vec3::splat(0.05))
+            .expect("hardware frame");
+        let db = psnr(&reference.image, &split.image);
+        assert!(db >= 40.0, "PSNR {db:.1} dB between the two paths");
+    }
+    renderer.set_visibility_split(d, &[0]).expect("by hand");
+    assert_eq!(renderer.visibility_split_rule(), None);
+    renderer.set_camera(q, &near).expect("camera");
+    assert!(!renderer.follow_visibility_split(d).expect("no rule"));
+    assert_eq!(renderer.visibility_hardware_meshes(), Some(&[0][..]));
+    let e = renderer
+        .set_visibility_split_rule(d, f32::NAN)
+        .expect_err("not a number");
+    assert!(e.to_string().contains("number"), "{e}");
+}
+
 #[test]
 fn redrawing_methods_are_refused() {
     let Some(gpu) = device() else { return };
