@@ -2179,6 +2179,7 @@ fn gpu_sequence(
             seq.camera(args, setup, t, pose)
         })?;
         renderer.set_camera(q, &camera)?;
+        renderer.follow_visibility_split(d)?;
         let submitted_us = seq.start.elapsed().as_secs_f64() * 1e6;
         let mut encoder = d.create_command_encoder(&Default::default());
         renderer.encode(&mut encoder);

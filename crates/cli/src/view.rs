@@ -1336,6 +1336,7 @@ impl Viewer {
             )?;
         }
         live.renderer.set_camera(q, &camera)?;
+        live.renderer.follow_visibility_split(d)?;
         let mut encoder = d.create_command_encoder(&Default::default());
         live.renderer.encode(&mut encoder);
         self.present.encode(&mut encoder);
