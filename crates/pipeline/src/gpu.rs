@@ -1992,7 +1992,7 @@ impl GpuRenderer {
     /// and the irradiance is upsampled edge-aware to the frame — instead of the VPLs' indirect
     /// stage, which this removes (with its near field); or removes it (`None`). The surfels stay
     /// where `lit` sampled them (meshes that move later are not followed). The cut lists hold
-    /// [`PBGI_NODE_VIEWS_PER_CELL`] node-views per `(tile / ε)²` of every view (at most the
+    /// `PBGI_NODE_VIEWS_PER_CELL` node-views per `(tile / ε)²` of every view (at most the
     /// device's largest binding); [`GpuRenderer::check_pbgi`] grows them when a frame's cut
     /// did not fit.
     pub fn set_pbgi(

@@ -1,6 +1,6 @@
 //! GPU G-buffer creation: a render pipeline writing all targets at once (MRT), the twin of
 //! [`crate::cpu::rasterize`] ([`gbuffer`], shader `shaders/gbuffer/gbuffer.wgsl`); the targets
-//! it writes ([`targets`]); the scene it draws ([`upload`]); test helpers ([`run`]); the
+//! it writes ([`targets`]); the scene it draws ([`upload`]); test helpers ([`run()`]); the
 //! visibility buffer of a compute rasteriser ([`visibility`]).
 
 pub mod gbuffer;

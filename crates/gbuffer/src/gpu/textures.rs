@@ -179,7 +179,7 @@ impl MaterialTextures {
     }
 
     /// Every texture of the store once: the sRGB ones, the linear ones, then white (the
-    /// entries of a binding array, [`MaterialTextures::index_for_role`] indexing it).
+    /// entries of a binding array; a material's textures are indexed in it by role).
     pub fn all(&self) -> Vec<&GpuTexture> {
         self.srgb
             .iter()
