@@ -1666,20 +1666,32 @@ fn gpu_renderer(
     }
     renderer.set_ambient(q, setup.ambient);
     let gbuffer = match args.visibility {
-        Some(VisibilityMode::Auto) => renderer
-            .choose_gbuffer_path(d, q, &setup.camera, 5)
-            .context("--visibility=auto")?
-            .to_string(),
+        Some(VisibilityMode::Auto) => {
+            let choice = renderer
+                .choose_gbuffer_path(d, q, &setup.camera, 5)
+                .context("--visibility=auto")?;
+            match renderer.visibility_resolve() {
+                Some(path) => format!("{choice}; {}", resolve_words(path)),
+                None => choice.to_string(),
+            }
+        }
         Some(VisibilityMode::On) => {
-            let resolve = match renderer.visibility_resolve() {
-                Some(ResolvePath::OneDispatch) => "resolve in one dispatch",
-                _ => "resolve by material tiles",
-            };
+            let resolve = renderer
+                .visibility_resolve()
+                .map_or("resolve", resolve_words);
             format!("visibility buffer (compute rasteriser, {resolve}, depth drawn from it)")
         }
         None => "hardware rasteriser (z-prepass, then the G-buffer pass)".into(),
     };
     Ok((renderer, gbuffer))
+}
+
+/// How the visibility buffer's resolve runs, for the `gbuffer:` line.
+fn resolve_words(path: ResolvePath) -> &'static str {
+    match path {
+        ResolvePath::OneDispatch => "resolve in one dispatch",
+        ResolvePath::Classified => "resolve by material tiles",
+    }
 }
 
 /// `--ssao METHOD [--ssao-kernel K --ssao-radius R]` (checked).
