@@ -210,14 +210,20 @@ pub const SPLIT_PIXELS: [f32; 8] = [f32::INFINITY, 4096.0, 1024.0, 256.0, 64.0, 
 pub fn visibility_splits(pixels: &[f32]) -> Vec<(f32, Vec<usize>)> {
     let mut splits: Vec<(f32, Vec<usize>)> = Vec::new();
     for above_pixels in SPLIT_PIXELS {
-        let meshes: Vec<usize> = (0..pixels.len())
-            .filter(|&m| pixels[m] > above_pixels)
-            .collect();
+        let meshes = meshes_above(pixels, above_pixels);
         if splits.last().is_none_or(|(_, last)| *last != meshes) {
             splits.push((above_pixels, meshes));
         }
     }
     splits
+}
+
+/// The meshes whose pixels per triangle (`pixels`, per mesh) exceed `above_pixels`: those a
+/// split of that threshold hands to the hardware rasteriser.
+fn meshes_above(pixels: &[f32], above_pixels: f32) -> Vec<usize> {
+    (0..pixels.len())
+        .filter(|&m| pixels[m] > above_pixels)
+        .collect()
 }
 
 /// One sharing of the visibility buffer's meshes between the two rasterisers, measured by
@@ -1487,7 +1493,7 @@ impl GpuRenderer {
                 "a split rule's pixels per triangle must be a number (f32::INFINITY: none)".into(),
             ));
         }
-        let meshes = self.meshes_above(above_pixels)?;
+        let meshes = self.meshes_on_screen_above(above_pixels)?;
         self.split_meshes(device, &meshes)?;
         if let Some(v) = &mut self.visibility {
             v.split_rule = Some(above_pixels);
@@ -1507,10 +1513,11 @@ impl GpuRenderer {
     /// after [`GpuRenderer::set_camera`] when recording frames with
     /// [`GpuRenderer::encode`]. Nothing to do without a rule.
     pub fn follow_visibility_split(&mut self, device: &wgpu::Device) -> Result<bool, RenderError> {
-        let Some(rule) = self.visibility_split_rule() else {
+        // An infinite threshold moves no mesh, whatever the camera.
+        let Some(rule) = self.visibility_split_rule().filter(|r| r.is_finite()) else {
             return Ok(false);
         };
-        let meshes = self.meshes_above(rule)?;
+        let meshes = self.meshes_on_screen_above(rule)?;
         if self
             .visibility
             .as_ref()
@@ -1524,7 +1531,7 @@ impl GpuRenderer {
 
     /// The meshes whose triangles cover more than `above_pixels` pixels on average from the
     /// camera set.
-    fn meshes_above(&self, above_pixels: f32) -> Result<Vec<usize>, RenderError> {
+    fn meshes_on_screen_above(&self, above_pixels: f32) -> Result<Vec<usize>, RenderError> {
         let Some(camera) = &self.camera else {
             return Err(RenderError::Visibility(
                 "a split rule measures meshes on screen: set a camera first (set_camera)".into(),
@@ -1534,9 +1541,7 @@ impl GpuRenderer {
         let pixels = self
             .scene
             .pixels_per_triangle(&Frame::new(camera, width, height));
-        Ok((0..pixels.len())
-            .filter(|&m| pixels[m] > above_pixels)
-            .collect())
+        Ok(meshes_above(&pixels, above_pixels))
     }
 
     /// [`GpuRenderer::set_visibility_split`] without touching the split rule.

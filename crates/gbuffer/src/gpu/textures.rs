@@ -189,13 +189,15 @@ impl MaterialTextures {
             .collect()
     }
 
-    /// The index in [`MaterialTextures::all`] of the texture a material's role binds.
-    pub(super) fn index_for_role(&self, role: &str, t: Option<::scene::TextureRef>) -> u32 {
-        let wanted = self.for_role(role, t);
-        self.all()
-            .iter()
-            .position(|&g| std::ptr::eq(g, wanted))
-            .expect("for_role returns a texture of the store") as u32
+    /// The indices in [`MaterialTextures::all`] of the textures `material`'s roles bind.
+    pub(super) fn indices_of(&self, material: &::scene::Material) -> [u32; 5] {
+        let all = self.all();
+        material.roles().map(|(role, t)| {
+            let wanted = self.for_role(role, t);
+            all.iter()
+                .position(|&g| std::ptr::eq(g, wanted))
+                .expect("for_role returns a texture of the store") as u32
+        })
     }
 }
 

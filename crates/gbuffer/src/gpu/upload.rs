@@ -287,7 +287,7 @@ impl GpuScene {
         let mut entries: Vec<MaterialEntry> = (scene.materials.iter().zip(&materials))
             .map(|(m, &material)| MaterialEntry {
                 material,
-                textures: m.roles().map(|(role, t)| textures.index_for_role(role, t)),
+                textures: textures.indices_of(m),
                 _pad: [0; 3],
             })
             .collect();
