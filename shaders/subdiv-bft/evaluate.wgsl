@@ -1,17 +1,23 @@
-// Main GPU subdivision step (Holländer 2013 §2.2.3, Listing 2.1): one workgroup per M¹ patch.
-// The patch's one-ring positions and normals go to workgroup memory; each thread evaluates grid
-// vertices (i, j) that the patch owns as the weighted sum of the ring with the level-L table
-// sampled at (i·step, j·step), the normal the same sum over M¹ normals, normalised
-// (Subdivision Shading).
+// Main GPU subdivision step (Holländer 2013 §2.2.3, Listing 2.1). The one-ring positions and
+// normals of a patch go to workgroup memory; each thread evaluates grid vertices (i, j) that the
+// patch owns as the weighted sum of the ring with the level-L table sampled at (i·step, j·step),
+// the normal the same sum over M¹ normals, normalised (Subdivision Shading).
 //
 // `evaluate`: uniform tessellation with s segments per patch; mirrors
-// `subdiv_bft::patch::{Patches::evaluate, output_vertex}`.
-// `evaluate_adaptive`: per-edge factors (§2.2.3 "Adaptive Refinement", Figs. 2.10/2.11), the
-// patch at the finest of its edges, coarser edges snapped, linear geomorph, triangles appended
-// to an indirect draw; mirrors `subdiv_bft::adaptive`.
+// `subdiv_bft::patch::{Patches::evaluate, output_vertex}`. A workgroup holds SLOTS patches
+// (several small grids at low levels, one from level 4 on).
+// `evaluate_adaptive` (built with SLOTS = 1): one workgroup per patch, per-edge factors
+// (§2.2.3 "Adaptive Refinement", Figs. 2.10/2.11), the patch at the finest of its edges,
+// coarser edges snapped, linear geomorph, triangles appended to an indirect draw; mirrors
+// `subdiv_bft::adaptive`.
 
 const MAX_RING: u32 = 24u;
 const REVERSED: u32 = 0x80000000u;
+const WORKGROUP: u32 = 64u;
+// Patches a workgroup of `evaluate` holds at once, WORKGROUP / SLOTS threads each: the host
+// builds this module with 4 for grids of at most 16 vertices, else 1 (`patch_slots`). Each
+// thread loads at most two ring entries (SLOTS · MAX_RING ≤ 2 · WORKGROUP).
+const SLOTS: u32 = 4u;
 
 struct Params {
     // Segments per patch edge of this tessellation (adaptive: of the vertex layout, s_max).
@@ -54,8 +60,9 @@ struct Patch {
 // Triangle q of the s-segment grid, in `Patches::triangulate` order, for s = 1, 2, 4, …
 @group(0) @binding(12) var<storage, read> triangle_walk: array<u32>;
 
-var<workgroup> ring_p: array<vec3<f32>, MAX_RING>;
-var<workgroup> ring_n: array<vec3<f32>, MAX_RING>;
+// The one-rings of the workgroup's patches (slot k at entry k · MAX_RING).
+var<workgroup> ring_p: array<vec3<f32>, SLOTS * MAX_RING>;
+var<workgroup> ring_n: array<vec3<f32>, SLOTS * MAX_RING>;
 
 fn grid_index(i: u32, j: u32, s: u32) -> u32 {
     return j * (s + 1u) - (j * max(j, 1u) - j) / 2u + i;
@@ -95,19 +102,26 @@ fn output_vertex(pt: Patch, p: u32, i: u32, j: u32) -> vec2<u32> {
     return vec2<u32>(base + row + i - 1u, 1u);
 }
 
-// The patch's one-ring positions and normals into workgroup memory (thread lid loads entry lid).
-fn load_ring(pt: Patch, lid: u32) {
-    if lid < MAX_RING {
-        var q = vec3<f32>(0.0);
-        var n = vec3<f32>(0.0);
-        if lid < pt.ring_size {
-            let v = rings[pt.ring_offset + lid];
+// Entry e of the rings of the patches from `first` on (slot e / MAX_RING, ring entry
+// e % MAX_RING) into workgroup memory: the M¹ position and normal, zero past the ring.
+fn load_ring_entry(first: u32, e: u32) {
+    if e >= SLOTS * MAX_RING {
+        return;
+    }
+    var q = vec3<f32>(0.0);
+    var n = vec3<f32>(0.0);
+    let p = first + e / MAX_RING;
+    if p < params.patch_count {
+        let pt = patches[p];
+        let r = e % MAX_RING;
+        if r < pt.ring_size {
+            let v = rings[pt.ring_offset + r];
             q = p1[v].xyz;
             n = n1[v].xyz;
         }
-        ring_p[lid] = q;
-        ring_n[lid] = n;
     }
+    ring_p[e] = q;
+    ring_n[e] = n;
 }
 
 struct Vertex {
@@ -115,8 +129,9 @@ struct Vertex {
     n: vec3<f32>,
 };
 
-// Limit position and unit Subdivision Shading normal of grid vertex (i, j) of an s-segment grid.
-fn eval_grid(pt: Patch, i: u32, j: u32, s: u32) -> Vertex {
+// Limit position and unit Subdivision Shading normal of grid vertex (i, j) of an s-segment grid,
+// the patch's ring at entry `base` of the workgroup's rings.
+fn eval_grid(pt: Patch, base: u32, i: u32, j: u32, s: u32) -> Vertex {
     let step = params.table_segments / s;
     let stride = (pt.ring_size + 3u) / 4u;
     let row = pt.table_offset + grid_index(i * step, j * step, params.table_segments) * stride;
@@ -124,7 +139,7 @@ fn eval_grid(pt: Patch, i: u32, j: u32, s: u32) -> Vertex {
     var nrm = vec3<f32>(0.0);
     for (var c = 0u; c < stride; c++) {
         let w = tables[row + c];
-        let r = 4u * c;
+        let r = base + 4u * c;
         pos += w.x * ring_p[r];
         nrm += w.x * ring_n[r];
         pos += w.y * ring_p[r + 1u];
@@ -142,20 +157,28 @@ fn unit(n: vec3<f32>) -> vec3<f32> {
     return select(vec3<f32>(0.0), n / len, len > 0.0);
 }
 
+// SLOTS patches per workgroup, WORKGROUP / SLOTS threads each.
 @compute @workgroup_size(64)
 fn evaluate(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let p = wid.x + wid.y * groups.x;
+    let first = (wid.x + wid.y * groups.x) * SLOTS;
+    if first >= params.patch_count {
+        return;
+    }
+    load_ring_entry(first, lid);
+    load_ring_entry(first, lid + WORKGROUP);
+    workgroupBarrier();
+    let lanes = WORKGROUP / SLOTS;
+    let slot = lid / lanes;
+    let p = first + slot;
     if p >= params.patch_count {
         return;
     }
     let pt = patches[p];
-    load_ring(pt, lid);
-    workgroupBarrier();
-    for (var g = lid; g < params.grid_count; g += 64u) {
+    for (var g = lid % lanes; g < params.grid_count; g += lanes) {
         let ij = walk[g];
         let i = ij & 0xffffu;
         let j = ij >> 16u;
@@ -163,7 +186,7 @@ fn evaluate(
         if out.y == 0u {
             continue;
         }
-        let v = eval_grid(pt, i, j, params.s);
+        let v = eval_grid(pt, slot * MAX_RING, i, j, params.s);
         out_positions[out.x] = vec4<f32>(v.p, 1.0);
         out_normals[out.x] = vec4<f32>(v.n, 0.0);
     }
@@ -274,7 +297,7 @@ fn evaluate_adaptive(
     if lid == 0u {
         triangle_base = atomicAdd(&draw[0], 3u * s * s) / 3u;
     }
-    load_ring(pt, lid);
+    load_ring_entry(p, lid);
     workgroupBarrier();
 
     // Every vertex this patch owns; one that is new at this level moves from its parents'
@@ -323,10 +346,10 @@ fn evaluate_adaptive(
             a = snap(l, a);
             b = snap(l, b);
         }
-        var v = eval_grid(pt, i, j, s);
+        var v = eval_grid(pt, 0u, i, j, s);
         if morph && alpha < 1.0 {
-            let va = eval_grid(pt, a.x, a.y, s);
-            let vb = eval_grid(pt, b.x, b.y, s);
+            let va = eval_grid(pt, 0u, a.x, a.y, s);
+            let vb = eval_grid(pt, 0u, b.x, b.y, s);
             let mp = 0.5 * (va.p + vb.p);
             let mn = 0.5 * (va.n + vb.n);
             v = Vertex(mp + alpha * (v.p - mp), unit(mn + alpha * (v.n - mn)));

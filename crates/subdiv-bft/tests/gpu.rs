@@ -50,6 +50,7 @@ fn initial_and_main_step_cpu_equals_gpu() {
         return;
     };
     let bft = tables();
+    let mut slots = std::collections::BTreeSet::new();
     for (name, mesh) in meshes() {
         let sub = Subdivider::new(&mesh.topology, bft).expect("subdivider");
         let diag = mesh.diagonal();
@@ -79,6 +80,7 @@ fn initial_and_main_step_cpu_equals_gpu() {
                 .expect("read level");
             // Main step from the GPU's own M¹ (so only the evaluation is compared).
             let s = sub.segments(level).expect("segments");
+            slots.insert(subdiv_bft::gpu::patch_slots(s));
             let (cp, cn) = sub.patches.evaluate(bft, s, &p1, &n1);
             compare(
                 &format!("{name} level {level}: positions"),
@@ -97,6 +99,8 @@ fn initial_and_main_step_cpu_equals_gpu() {
             assert_eq!(got.indices, sub.patches.triangulate(s), "{name}: indices");
         }
     }
+    // Both kernels: several patches per workgroup (levels 1–3) and one.
+    assert_eq!(slots.into_iter().collect::<Vec<_>>(), [1, 4]);
 }
 
 /// Crack-free: shared edges are one set of vertices (the output of a closed mesh is a closed

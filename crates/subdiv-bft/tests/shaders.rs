@@ -2,5 +2,9 @@
 
 #[test]
 fn every_shader_validates() {
-    gpu::shader::assert_valid(&subdiv_bft::SHADERS, env!("CARGO_MANIFEST_DIR"), &[]);
+    gpu::shader::assert_valid(
+        &subdiv_bft::SHADERS,
+        env!("CARGO_MANIFEST_DIR"),
+        &subdiv_bft::gpu::shader_variants(),
+    );
 }

@@ -183,7 +183,7 @@ impl GpuSubdivider {
             factor_params,
             factor_bind,
             bind: evaluate_bind,
-            groups: self.patch_groups(),
+            groups: super::dispatch(self.patch_count),
         })
     }
 

@@ -78,7 +78,7 @@ impl GpuSubdivider {
             vertex_count: vertex_count as u32,
             index_count: index_count as u32,
             bind,
-            groups: self.patch_groups(),
+            groups: self.main_step_groups(s),
         })
     }
 
@@ -133,9 +133,13 @@ impl GpuSubdivider {
         level: &GpuLevel,
         timer: Option<&PassTimer>,
     ) {
+        let pipeline = match super::patch_slots(level.segments) {
+            1 => &self.evaluate.0,
+            _ => &self.evaluate_slots,
+        };
         pass(
             "main step: evaluate",
-            &self.evaluate.0,
+            pipeline,
             &[&level.bind],
             level.groups,
         )

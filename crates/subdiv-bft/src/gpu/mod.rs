@@ -16,6 +16,7 @@ pub use adaptive::{GpuAdaptive, MAX_SEGMENTS};
 pub use run::{run, run_adaptive};
 
 use ::gpu::kernel::{self, Binding, Layout, Passes, Workgroups};
+use ::gpu::shader::Specialisation;
 use ::gpu::{PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -43,6 +44,17 @@ pub struct EvaluateParams {
     pub inner_count: u32,
 }
 
+/// Patches a 64-thread workgroup of the uniform main step holds at once for `s` segments
+/// (`SLOTS` of `evaluate.wgsl`): 4 while each still has a thread per grid vertex (s ≤ 4, up to
+/// 15 grid vertices; one patch would leave most of the workgroup idle), else 1.
+pub fn patch_slots(s: u32) -> u32 {
+    if crate::bft::grid_count(s) as u32 <= WORKGROUP / 4 {
+        4
+    } else {
+        1
+    }
+}
+
 const WORKGROUP: u32 = 64;
 const MAX_GROUPS_X: u32 = 65_535;
 
@@ -68,6 +80,18 @@ const EVALUATE_BINDINGS: [Binding; 9] = [
     Binding::Storage,
     Binding::Storage,
 ];
+
+/// `evaluate.wgsl` for one patch per workgroup (its file's `SLOTS` is 4): the uniform main step
+/// of grids larger than 16 vertices and the adaptive kernels.
+fn one_slot() -> Specialisation {
+    Specialisation::default().set("SLOTS", "1u")
+}
+
+/// The variants of this crate's shaders its kernels build besides each file's own (for the
+/// shader validation test).
+pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
+    vec![("evaluate.wgsl", one_slot())]
+}
 
 /// Storage buffers the adaptive kernel binds (`evaluate_adaptive`: 8 + factors, indices, draw
 /// arguments, triangle walk), above `wgpu::Limits::default()`'s 8.
@@ -128,7 +152,10 @@ pub struct GpuLevel {
 pub struct GpuSubdivider {
     refine: wgpu::ComputePipeline,
     normals: wgpu::ComputePipeline,
+    /// The uniform main step with one patch per workgroup, and its layout.
     evaluate: (wgpu::ComputePipeline, Layout),
+    /// The same with [`patch_slots`]`(s) = 4` patches per workgroup (same layout).
+    evaluate_slots: wgpu::ComputePipeline,
     /// The adaptive kernels (`evaluate_adaptive`, `edge_factors`), where the device binds
     /// [`ADAPTIVE_STORAGE_BUFFERS`] storage buffers.
     adaptive: Option<[(wgpu::ComputePipeline, Layout); 2]>,
@@ -162,7 +189,8 @@ impl GpuSubdivider {
             )));
         }
         let initial = crate::SHADERS.module(device, "initial.wgsl")?;
-        let evaluate_module = crate::SHADERS.module(device, "evaluate.wgsl")?;
+        let evaluate_module = crate::SHADERS.module_with(device, "evaluate.wgsl", &one_slot())?;
+        let slots_module = crate::SHADERS.module(device, "evaluate.wgsl")?;
         let read = Binding::StorageRead;
         let refine = kernel(
             device,
@@ -179,6 +207,8 @@ impl GpuSubdivider {
         let (evaluate, mut evaluate_layout) =
             kernel(device, &evaluate_module, "evaluate", &[&EVALUATE_BINDINGS]);
         let evaluate = (evaluate, evaluate_layout.remove(0));
+        let evaluate_slots =
+            kernel::pipeline(device, &slots_module, "evaluate", &[&evaluate.1], &[]);
         let adaptive = (device.limits().max_storage_buffers_per_shader_stage
             >= ADAPTIVE_STORAGE_BUFFERS)
             .then(|| -> Result<_, SubdivError> {
@@ -278,6 +308,7 @@ impl GpuSubdivider {
             refine: refine.0,
             normals: normals.0,
             evaluate,
+            evaluate_slots,
             adaptive,
             edge_ends,
             m0_positions,
@@ -313,10 +344,9 @@ impl GpuSubdivider {
         Ok(())
     }
 
-    /// Workgroups of a dispatch with one per patch (x at most 65 535).
-    fn patch_groups(&self) -> (u32, u32) {
-        let x = self.patch_count.clamp(1, MAX_GROUPS_X);
-        (x, self.patch_count.div_ceil(x).max(1))
+    /// Workgroups of the uniform main step for `s` segments.
+    fn main_step_groups(&self, s: u32) -> (u32, u32) {
+        dispatch(self.patch_count.div_ceil(patch_slots(s)))
     }
 
     /// Records both steps.
@@ -329,6 +359,12 @@ impl GpuSubdivider {
         self.encode_initial(encoder, timer);
         self.encode_evaluate(encoder, level, timer);
     }
+}
+
+/// `count` workgroups laid out as (x, y) with x at most 65 535 (the kernels flatten them).
+fn dispatch(count: u32) -> (u32, u32) {
+    let x = count.clamp(1, MAX_GROUPS_X);
+    (x, count.div_ceil(x).max(1))
 }
 
 fn read_vec3(
