@@ -51,6 +51,7 @@ use ::gpu::kernel::{self, Binding, Dispatch, Layout, Passes, Workgroups};
 use ::gpu::shader::Specialisation;
 use ::gpu::{PassTimer, transfer, wgpu};
 use bytemuck::{Pod, Zeroable};
+use std::sync::Mutex;
 
 use super::upload::GpuScene;
 use crate::GBufferError;
@@ -913,6 +914,9 @@ pub struct ResolvePass {
     /// [`BINDLESS_FEATURES`] (its kernel is built per scene, its arrays sized to the scene's
     /// textures).
     bindless: bool,
+    /// The one-dispatch kernel and its group-1 layout last built, for this many textures: a
+    /// rebind with as many (the split rule moving a mesh, a resize) reuses them.
+    one_dispatch_kernel: Mutex<Option<(u32, wgpu::ComputePipeline, Layout)>>,
 }
 
 /// [`ResolvePass::bind`]'s result: the compute passes writing the colour targets, and what
@@ -1056,6 +1060,7 @@ impl ResolvePass {
             depth_layout,
             depth,
             bindless,
+            one_dispatch_kernel: Mutex::new(None),
         })
     }
 
@@ -1078,27 +1083,40 @@ impl ResolvePass {
         }) else {
             return Ok(None);
         };
-        let module = crate::SHADERS.module_with(
-            device,
-            "resolve_bindless.wgsl",
-            &Specialisation::default().set("MATERIAL_TEXTURES", format!("{count}u")),
-        )?;
-        let layout = Layout::compute_numbered(
-            device,
-            "visibility resolve materials",
-            &[
-                (12, Binding::StorageRead),
-                (14, Binding::Textures(n)),
-                (15, Binding::Samplers(n)),
-            ],
-        );
-        let pipeline = kernel::pipeline(
-            device,
-            &module,
-            "resolve_bindless",
-            &[&self.layout, &layout],
-            &[],
-        );
+        let mut cached = self
+            .one_dispatch_kernel
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        let (pipeline, layout) = match &*cached {
+            Some((built, pipeline, layout)) if *built == count => {
+                (pipeline.clone(), layout.clone())
+            }
+            _ => {
+                let module = crate::SHADERS.module_with(
+                    device,
+                    "resolve_bindless.wgsl",
+                    &Specialisation::default().set("MATERIAL_TEXTURES", format!("{count}u")),
+                )?;
+                let layout = Layout::compute_numbered(
+                    device,
+                    "visibility resolve materials",
+                    &[
+                        (12, Binding::StorageRead),
+                        (14, Binding::Textures(n)),
+                        (15, Binding::Samplers(n)),
+                    ],
+                );
+                let pipeline = kernel::pipeline(
+                    device,
+                    &module,
+                    "resolve_bindless",
+                    &[&self.layout, &layout],
+                    &[],
+                );
+                *cached = Some((count, pipeline.clone(), layout.clone()));
+                (pipeline, layout)
+            }
+        };
         let views: Vec<&wgpu::TextureView> = textures.iter().map(|t| &t.view).collect();
         let samplers: Vec<&wgpu::Sampler> = textures.iter().map(|t| &t.sampler).collect();
         let group = layout.bind(
