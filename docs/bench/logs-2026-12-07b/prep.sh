@@ -7,13 +7,7 @@
 # and `subdivision` test programs too (`cargo test --release -p deferred-pipeline --test
 # visibility --test subdivision --no-run`, stripped, packed as .gpu-bin/tests.tar.xz).
 set -euo pipefail
-executables() {
-  python3 -c "import sys, json
-for l in sys.stdin:
-    d = json.loads(l)
-    if d.get('reason') == 'compiler-artifact' and d.get('executable'):
-        print(d['target']['name'], d['executable'])"
-}
+source docs/bench/executables.sh
 bins=$(mktemp -d)
 tar xJf .gpu-bin/bins.tar.xz -C "$bins"
 cargo bench -p deferred-pipeline --bench visibility-gpu --no-run --message-format=json 2>/dev/null \

@@ -9,13 +9,7 @@
 #   cd .gpu-bin/t && ./subdiv-gpu-test > $OUT/subdiv-gpu-test.txt 2>&1
 #   ./gbuffer-gpu_vs_cpu --ignored one_dispatch > $OUT/gbuffer-one-dispatch.txt 2>&1
 set -euo pipefail
-executables() {
-  python3 -c "import sys, json
-for l in sys.stdin:
-    d = json.loads(l)
-    if d.get('reason') == 'compiler-artifact' and d.get('executable'):
-        print(d['target']['name'], d['executable'])"
-}
+source docs/bench/executables.sh
 # The Vulkan loader (.gl), the fixtures the programs read and the level-5 tables (.gpu-data).
 bash ../shared/tools/device-prep.sh > /dev/null
 rm -rf .gpu-data && mkdir -p .gpu-data/fixtures/stanford .gpu-data/bft
