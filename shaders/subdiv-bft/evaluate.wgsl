@@ -15,7 +15,7 @@ const MAX_RING: u32 = 24u;
 const REVERSED: u32 = 0x80000000u;
 const WORKGROUP: u32 = 64u;
 // Patches a workgroup of `evaluate` holds at once, WORKGROUP / SLOTS threads each: the host
-// builds this module with 4 for grids of at most 16 vertices, else 1 (`patch_slots`). Each
+// specialises it per level (`patch_slots`: 4 for grids of at most 16 vertices, else 1). Each
 // thread loads at most two ring entries (SLOTS · MAX_RING ≤ 2 · WORKGROUP).
 const SLOTS: u32 = 4u;
 

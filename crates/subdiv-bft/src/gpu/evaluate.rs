@@ -133,9 +133,10 @@ impl GpuSubdivider {
         level: &GpuLevel,
         timer: Option<&PassTimer>,
     ) {
-        let pipeline = match super::patch_slots(level.segments) {
-            1 => &self.evaluate.0,
-            _ => &self.evaluate_slots,
+        let pipeline = if super::patch_slots(level.segments) == 1 {
+            &self.evaluate.0
+        } else {
+            &self.evaluate_slots
         };
         pass(
             "main step: evaluate",

@@ -44,12 +44,15 @@ pub struct EvaluateParams {
     pub inner_count: u32,
 }
 
+/// Patches per workgroup of the uniform main step at low levels.
+const SMALL_GRID_SLOTS: u32 = 4;
+
 /// Patches a 64-thread workgroup of the uniform main step holds at once for `s` segments
 /// (`SLOTS` of `evaluate.wgsl`): 4 while each still has a thread per grid vertex (s ≤ 4, up to
 /// 15 grid vertices; one patch would leave most of the workgroup idle), else 1.
 pub fn patch_slots(s: u32) -> u32 {
-    if crate::bft::grid_count(s) as u32 <= WORKGROUP / 4 {
-        4
+    if crate::bft::grid_count(s) as u32 <= WORKGROUP / SMALL_GRID_SLOTS {
+        SMALL_GRID_SLOTS
     } else {
         1
     }
@@ -81,16 +84,17 @@ const EVALUATE_BINDINGS: [Binding; 9] = [
     Binding::Storage,
 ];
 
-/// `evaluate.wgsl` for one patch per workgroup (its file's `SLOTS` is 4): the uniform main step
-/// of grids larger than 16 vertices and the adaptive kernels.
-fn one_slot() -> Specialisation {
-    Specialisation::default().set("SLOTS", "1u")
+/// `evaluate.wgsl` with `slots` patches per workgroup: 1 for the uniform main step of grids
+/// larger than 16 vertices and the adaptive kernels, [`SMALL_GRID_SLOTS`] for smaller grids.
+fn with_slots(slots: u32) -> Specialisation {
+    Specialisation::default().set("SLOTS", format!("{slots}u"))
 }
 
-/// The variants of this crate's shaders its kernels build besides each file's own (for the
-/// shader validation test).
+/// The variants of this crate's shaders its kernels build (for the shader validation test).
 pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
-    vec![("evaluate.wgsl", one_slot())]
+    [1, SMALL_GRID_SLOTS]
+        .map(|slots| ("evaluate.wgsl", with_slots(slots)))
+        .into()
 }
 
 /// Storage buffers the adaptive kernel binds (`evaluate_adaptive`: 8 + factors, indices, draw
@@ -154,7 +158,7 @@ pub struct GpuSubdivider {
     normals: wgpu::ComputePipeline,
     /// The uniform main step with one patch per workgroup, and its layout.
     evaluate: (wgpu::ComputePipeline, Layout),
-    /// The same with [`patch_slots`]`(s) = 4` patches per workgroup (same layout).
+    /// The same with [`SMALL_GRID_SLOTS`] patches per workgroup (same layout).
     evaluate_slots: wgpu::ComputePipeline,
     /// The adaptive kernels (`evaluate_adaptive`, `edge_factors`), where the device binds
     /// [`ADAPTIVE_STORAGE_BUFFERS`] storage buffers.
@@ -189,8 +193,10 @@ impl GpuSubdivider {
             )));
         }
         let initial = crate::SHADERS.module(device, "initial.wgsl")?;
-        let evaluate_module = crate::SHADERS.module_with(device, "evaluate.wgsl", &one_slot())?;
-        let slots_module = crate::SHADERS.module(device, "evaluate.wgsl")?;
+        let evaluate_module =
+            crate::SHADERS.module_with(device, "evaluate.wgsl", &with_slots(1))?;
+        let slots_module =
+            crate::SHADERS.module_with(device, "evaluate.wgsl", &with_slots(SMALL_GRID_SLOTS))?;
         let read = Binding::StorageRead;
         let refine = kernel(
             device,
