@@ -6,10 +6,11 @@
 // `evaluate`: uniform tessellation with s segments per patch; mirrors
 // `subdiv_bft::patch::{Patches::evaluate, output_vertex}`. A workgroup holds SLOTS patches
 // (several small grids at low levels, one from level 4 on).
-// `evaluate_adaptive` (built with SLOTS = 1): one workgroup per patch, per-edge factors
-// (§2.2.3 "Adaptive Refinement", Figs. 2.10/2.11), the patch at the finest of its edges,
-// coarser edges snapped, linear geomorph, triangles appended to an indirect draw; mirrors
-// `subdiv_bft::adaptive`.
+// `evaluate_adaptive` (built with SLOTS = 1): per-edge factors (§2.2.3 "Adaptive
+// Refinement", Figs. 2.10/2.11), the patch at the finest of its edges, coarser edges snapped,
+// linear geomorph, triangles appended to an indirect draw; mirrors `subdiv_bft::adaptive`. A
+// workgroup takes one chunk of a patch (CHUNK_VERTICES grid vertices and CHUNK_TRIANGLES
+// triangles), so a fine patch spreads over several workgroups and a coarse one over one.
 
 const MAX_RING: u32 = 24u;
 const REVERSED: u32 = 0x80000000u;
@@ -18,6 +19,10 @@ const WORKGROUP: u32 = 64u;
 // specialises it per level (`patch_slots`: 4 for grids of at most 16 vertices, else 1). Each
 // thread loads at most two ring entries (SLOTS · MAX_RING ≤ 2 · WORKGROUP).
 const SLOTS: u32 = 4u;
+// Grid vertices and triangles of a patch one workgroup of `evaluate_adaptive` takes (the host
+// specialises them: `ADAPTIVE_CHUNK`).
+const CHUNK_VERTICES: u32 = 128u;
+const CHUNK_TRIANGLES: u32 = 256u;
 
 struct Params {
     // Segments per patch edge of this tessellation (adaptive: of the vertex layout, s_max).
@@ -280,31 +285,49 @@ fn walk_offset(s: u32) -> u32 {
     return offset;
 }
 
+// Chunks of a patch with s segments: enough for its grid vertices and for its s² triangles.
+fn chunk_count(s: u32) -> u32 {
+    let vertices = (s + 1u) * (s + 2u) / 2u;
+    return max((vertices + CHUNK_VERTICES - 1u) / CHUNK_VERTICES,
+               (s * s + CHUNK_TRIANGLES - 1u) / CHUNK_TRIANGLES);
+}
+
+// Workgroup `item` takes chunk item % chunk_count(s_max) of patch item / chunk_count(s_max);
+// chunks past the patch's own count return at once.
 @compute @workgroup_size(64)
 fn evaluate_adaptive(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) lid: u32,
 ) {
-    let p = wid.x + wid.y * groups.x;
+    let item = wid.x + wid.y * groups.x;
+    let chunks = chunk_count(params.s);
+    let p = item / chunks;
+    let chunk = item % chunks;
     if p >= params.patch_count {
         return;
     }
     let pt = patches[p];
     let l = patch_levels(pt);
     let s = l.s;
+    if chunk >= chunk_count(s) {
+        return;
+    }
     let m = params.s / s;
-    if lid == 0u {
-        triangle_base = atomicAdd(&draw[0], 3u * s * s) / 3u;
+    let vertex_end = min((chunk + 1u) * CHUNK_VERTICES, (s + 1u) * (s + 2u) / 2u);
+    let triangle_first = chunk * CHUNK_TRIANGLES;
+    let triangle_end = min(triangle_first + CHUNK_TRIANGLES, s * s);
+    if lid == 0u && triangle_first < triangle_end {
+        triangle_base = atomicAdd(&draw[0], 3u * (triangle_end - triangle_first)) / 3u;
     }
     load_ring_entry(p, lid);
     workgroupBarrier();
 
-    // Every vertex this patch owns; one that is new at this level moves from its parents'
-    // midpoint (geomorph; parents evaluated here too, which measured faster on the H100 than
-    // sharing them through workgroup memory behind a barrier).
+    // The chunk's vertices this patch owns; one that is new at this level moves from its
+    // parents' midpoint (geomorph; parents evaluated here too, which measured faster on the
+    // H100 than sharing them through workgroup memory behind a barrier).
     let fine_walk = walk_offset(s);
-    for (var g = lid; g < (s + 1u) * (s + 2u) / 2u; g += 64u) {
+    for (var g = chunk * CHUNK_VERTICES + lid; g < vertex_end; g += WORKGROUP) {
         let ij = walk[fine_walk + g];
         let i = ij & 0xffffu;
         let j = ij >> 16u;
@@ -364,7 +387,7 @@ fn evaluate_adaptive(
     for (var c = 1u; c < s; c *= 2u) {
         tri_offset += c * c;
     }
-    for (var q = lid; q < s * s; q += 64u) {
+    for (var q = triangle_first + lid; q < triangle_end; q += WORKGROUP) {
         let w = triangle_walk[tri_offset + q];
         let i = w & 0xffu;
         let j = (w >> 8u) & 0xffu;
@@ -378,7 +401,7 @@ fn evaluate_adaptive(
                 vec2<u32>(i, j + 1u),
             );
         }
-        let o = 3u * (triangle_base + q);
+        let o = 3u * (triangle_base + q - triangle_first);
         for (var c = 0u; c < 3u; c++) {
             out_indices[o + c] = adaptive_vertex(pt, p, l, t[c]);
         }

@@ -301,8 +301,67 @@ fn triangle_set(indices: &[u32]) -> Vec<[u32; 3]> {
     v
 }
 
-/// CPU == GPU: the same triangles (as sets; patches append in any order), the same vertices
-/// where triangles use them; factors from the GPU metric == the CPU metric.
+/// GPU adaptive main step == CPU for factors from `seeds` up to `max_level`: the same triangles
+/// (as sets; workgroups append in any order), the same vertices where triangles use them.
+/// Returns the finest patch segments any seed used.
+fn adaptive_matches_cpu(
+    gpu: &gpu::Gpu,
+    bft: &subdiv_bft::bft::BftSet,
+    name: &str,
+    mesh: &TriMesh,
+    max_level: u32,
+    seeds: std::ops::RangeInclusive<u32>,
+) -> (Subdivider, GpuSubdivider, subdiv_bft::gpu::GpuAdaptive, u32) {
+    let sub = Subdivider::new(&mesh.topology, bft).expect("subdivider");
+    let g = GpuSubdivider::new(&gpu.device, &sub, bft).expect("gpu");
+    let a = g.adaptive(&gpu.device, &sub, max_level).expect("adaptive");
+    g.set_positions(&gpu.queue, &mesh.positions_f32())
+        .expect("positions");
+    let tol = (1e-5 * mesh.diagonal()) as f32;
+    let s_max = 1 << (max_level - 1);
+    let mut finest = 0;
+    for seed in seeds {
+        let f = factors(sub.m1.edges.len(), max_level as f32, seed);
+        a.set_factors(&gpu.queue, &f).expect("factors");
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        g.encode_initial(&mut encoder, None);
+        g.encode_adaptive(&mut encoder, &a, None);
+        gpu.queue.submit([encoder.finish()]);
+        let got = g.read_adaptive(&gpu.device, &gpu.queue, &a).expect("read");
+        let (p1, n1) = g.read_m1(&gpu.device, &gpu.queue).expect("M1");
+        let (cp, cn) = sub.patches.evaluate_adaptive(bft, &f, s_max, &p1, &n1);
+        let want = sub.patches.triangulate_adaptive(&f, s_max);
+        assert_eq!(
+            triangle_set(&got.indices),
+            triangle_set(&want),
+            "{name} seed {seed}: triangles"
+        );
+        for &v in &want {
+            let v = v as usize;
+            let d = cp[v].distance(got.positions[v]);
+            assert!(
+                d <= tol,
+                "{name} seed {seed}: vertex {v} CPU {} GPU {}",
+                cp[v],
+                got.positions[v]
+            );
+            let c = 1.0 - cn[v].dot(got.normals[v]);
+            assert!(
+                c <= 1e-5,
+                "{name} seed {seed}: normal {v} CPU {} GPU {}",
+                cn[v],
+                got.normals[v]
+            );
+        }
+        let levels =
+            (0..sub.patches.patches.len()).map(|p| sub.patches.patch_levels(p, &f, s_max).segments);
+        finest = finest.max(levels.max().unwrap_or(0));
+    }
+    (sub, g, a, finest)
+}
+
+/// CPU == GPU: the adaptive main step (above), and the factors of the GPU metric == the CPU
+/// metric's.
 #[test]
 fn adaptive_cpu_equals_gpu() {
     let Some(gpu) = gpu::test_device(&subdiv_bft::adaptive_device_needs()) else {
@@ -311,47 +370,7 @@ fn adaptive_cpu_equals_gpu() {
     let bft = tables();
     let max_level = bft.level + 1;
     for (name, mesh) in [("bipyramid 9", bipyramid(9)), ("half disk 5", half_disk(5))] {
-        let sub = Subdivider::new(&mesh.topology, bft).expect("subdivider");
-        let g = GpuSubdivider::new(&gpu.device, &sub, bft).expect("gpu");
-        let a = g.adaptive(&gpu.device, &sub, max_level).expect("adaptive");
-        g.set_positions(&gpu.queue, &mesh.positions_f32())
-            .expect("positions");
-        let tol = (1e-5 * mesh.diagonal()) as f32;
-        for seed in 1..=3 {
-            let f = factors(sub.m1.edges.len(), max_level as f32, seed);
-            a.set_factors(&gpu.queue, &f).expect("factors");
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            g.encode_initial(&mut encoder, None);
-            g.encode_adaptive(&mut encoder, &a, None);
-            gpu.queue.submit([encoder.finish()]);
-            let got = g.read_adaptive(&gpu.device, &gpu.queue, &a).expect("read");
-            let (p1, n1) = g.read_m1(&gpu.device, &gpu.queue).expect("M1");
-            let s_max = 1 << (max_level - 1);
-            let (cp, cn) = sub.patches.evaluate_adaptive(bft, &f, s_max, &p1, &n1);
-            let want = sub.patches.triangulate_adaptive(&f, s_max);
-            assert_eq!(
-                triangle_set(&got.indices),
-                triangle_set(&want),
-                "{name} seed {seed}: triangles"
-            );
-            for &v in &want {
-                let v = v as usize;
-                let d = cp[v].distance(got.positions[v]);
-                assert!(
-                    d <= tol,
-                    "{name} seed {seed}: vertex {v} CPU {} GPU {}",
-                    cp[v],
-                    got.positions[v]
-                );
-                let c = 1.0 - cn[v].dot(got.normals[v]);
-                assert!(
-                    c <= 1e-5,
-                    "{name} seed {seed}: normal {v} CPU {} GPU {}",
-                    cn[v],
-                    got.normals[v]
-                );
-            }
-        }
+        let (sub, g, a, _) = adaptive_matches_cpu(&gpu, bft, name, &mesh, max_level, 1..=3);
         // The metric on the GPU.
         let view_proj = scene::Camera::look_at(Vec3::new(0.5, 0.8, 4.0), Vec3::ZERO)
             .view_projection(640.0 / 480.0);
@@ -378,4 +397,17 @@ fn adaptive_cpu_equals_gpu() {
             assert!((w - f).abs() <= 1e-4, "{name}: edge {e}: CPU {w} GPU {f}");
         }
     }
+}
+
+/// A patch of 32 segments (561 grid vertices, 1 024 triangles) spreads over several workgroups
+/// of the GPU kernel, each a chunk of its vertices and triangles: CPU == GPU still, with
+/// level-5 tables.
+#[test]
+fn fine_patches_span_several_workgroups() {
+    let Some(gpu) = gpu::test_device(&subdiv_bft::adaptive_device_needs()) else {
+        return;
+    };
+    let bft = subdiv_bft::bft::BftSet::build(5, 9).expect("level-5 tables");
+    let (.., finest) = adaptive_matches_cpu(&gpu, &bft, "bipyramid 7", &bipyramid(7), 6, 4..=5);
+    assert_eq!(finest, 32, "no patch reached 32 segments");
 }

@@ -6,7 +6,9 @@
 use ::gpu::{PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 
-use super::{ADAPTIVE_STORAGE_BUFFERS, GpuSubdivider, WORKGROUP, pass, read_mesh, storage};
+use super::{
+    ADAPTIVE_STORAGE_BUFFERS, GpuSubdivider, WORKGROUP, adaptive_chunks, pass, read_mesh, storage,
+};
 use crate::{
     Refined, SubdivError, Subdivider,
     adaptive::{ScreenView, check_factors},
@@ -114,6 +116,16 @@ impl GpuSubdivider {
                 "adaptive up to level {max_level}: {vertex_count} vertices, {index_count} indices exceed 32 bits"
             )));
         }
+        let workgroups = self
+            .patch_count
+            .checked_mul(adaptive_chunks(s))
+            .ok_or_else(|| {
+                SubdivError::TooLarge(format!(
+                    "adaptive up to level {max_level}: {} patches of {} chunks exceed 32 bits of workgroups",
+                    self.patch_count,
+                    adaptive_chunks(s)
+                ))
+            })?;
         let out =
             wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let positions =
@@ -183,7 +195,7 @@ impl GpuSubdivider {
             factor_params,
             factor_bind,
             bind: evaluate_bind,
-            groups: super::dispatch(self.patch_count),
+            groups: super::dispatch(workgroups),
         })
     }
 

@@ -86,8 +86,26 @@ const EVALUATE_BINDINGS: [Binding; 9] = [
 
 /// `evaluate.wgsl` with `slots` patches per workgroup: 1 for the uniform main step of grids
 /// larger than 16 vertices and the adaptive kernels, [`SMALL_GRID_SLOTS`] for smaller grids.
+/// The adaptive kernel's chunk sizes are set here too (its module is the `slots = 1` one).
 fn with_slots(slots: u32) -> Specialisation {
-    Specialisation::default().set("SLOTS", format!("{slots}u"))
+    let (vertices, triangles) = ADAPTIVE_CHUNK;
+    Specialisation::default()
+        .set("SLOTS", format!("{slots}u"))
+        .set("CHUNK_VERTICES", format!("{vertices}u"))
+        .set("CHUNK_TRIANGLES", format!("{triangles}u"))
+}
+
+/// Grid vertices and triangles of one patch that one workgroup of the adaptive main step
+/// (`evaluate_adaptive`) takes: a fine patch spreads over several workgroups, so patches of
+/// different levels no longer leave one workgroup each busy for very different times.
+const ADAPTIVE_CHUNK: (u32, u32) = (128, 256);
+
+/// Chunks of a patch with `s` segments (`chunk_count` in `evaluate.wgsl`).
+fn adaptive_chunks(s: u32) -> u32 {
+    let (vertices, triangles) = ADAPTIVE_CHUNK;
+    (crate::bft::grid_count(s) as u32)
+        .div_ceil(vertices)
+        .max((s * s).div_ceil(triangles))
 }
 
 /// The variants of this crate's shaders its kernels build (for the shader validation test).
