@@ -153,7 +153,10 @@ fn main() -> Result<()> {
     let ms_list: &[u32] = if quick { &[4] } else { &[2, 3, 4] };
     let stalls: &[u32] = if quick { &[1] } else { &[1, STALL] };
     let nd = Some(GeometricMetric::NormalDepth);
-    let mut methods: Vec<Method> = vec![("ND+shading".into(), nd, true, Resolve::Loop, 1.0)];
+    let mut methods: Vec<Method> = vec![
+        ("ND+shading".into(), nd, true, Resolve::Loop, 1.0),
+        ("ND+shading tiles".into(), nd, true, Resolve::Tiles, 1.0),
+    ];
     if !quick {
         methods.push(("ND+shading sorted".into(), nd, true, Resolve::Sorted, 1.0));
         methods.extend(
@@ -339,6 +342,13 @@ fn main() -> Result<()> {
                             Ok(())
                         },
                     )?;
+                    // What the resolve costs: ND + shading without it (S and the evaluation).
+                    r.ssaa.set_config(&gpu.queue, &method_config(&methods[0]))?;
+                    let metrics_ms = time(&gpu, &timer, frames, &|e, t| {
+                        r.ssaa.encode_first(e, Some(t));
+                        r.ssaa.encode_evaluate(e, Some(t));
+                    })?;
+                    rows.push(row("ND+shading, no resolve", metrics_ms, &first, one, one));
                     r.ssaa.set_config(&gpu.queue, &base)?;
                 }
             }

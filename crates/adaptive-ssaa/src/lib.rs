@@ -205,14 +205,22 @@ pub enum Resolve {
     /// Pixels grouped by sample count (a counting sort on the GPU), then one invocation per
     /// pixel over the sorted list: the §4.3.5 alternatives that group or sort pixels by `k`.
     Sorted,
+    /// The samples of each 8×8 tile's pixels listed one after the other and shaded by all of
+    /// the tile's invocations alike, each pixel then summing its own (no invocation idles while
+    /// another shades its pixel's sixteenth sample).
+    Tiles,
 }
 
 impl Resolve {
+    /// Every resolve.
+    pub const ALL: [Self; 3] = [Self::Loop, Self::Sorted, Self::Tiles];
+
     /// Short name for reports and the command line.
     pub fn name(self) -> &'static str {
         match self {
             Self::Loop => "loop",
             Self::Sorted => "sorted",
+            Self::Tiles => "tiles",
         }
     }
 }
@@ -220,7 +228,7 @@ impl Resolve {
 impl FromStr for Resolve {
     type Err = SsaaError;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        [Self::Loop, Self::Sorted]
+        Self::ALL
             .into_iter()
             .find(|r| r.name() == s)
             .ok_or_else(|| SsaaError::UnknownResolve(s.into()))
@@ -459,5 +467,6 @@ mod tests {
         assert!("nd".parse::<GeometricMetric>().is_ok());
         assert!("xx".parse::<GeometricMetric>().is_err());
         assert!("sorted".parse::<Resolve>().is_ok());
+        assert_eq!("tiles".parse::<Resolve>().ok(), Some(Resolve::Tiles));
     }
 }

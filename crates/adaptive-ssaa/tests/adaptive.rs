@@ -251,7 +251,7 @@ fn forcing_every_sample_equals_full_supersampling_exactly() {
             ..Default::default()
         };
         let (full, _, _) = f.gpu(&base, true);
-        for resolve in [Resolve::Loop, Resolve::Sorted] {
+        for resolve in Resolve::ALL {
             let config = SsaaConfig { resolve, ..base };
             let (image, _, counts) = f.gpu(&config, false);
             assert!(counts.pixels().iter().all(|&k| k == m * m));
@@ -283,7 +283,7 @@ fn zero_constants_give_one_sample_per_pixel() {
         ..Default::default()
     };
     for metric in GeometricMetric::ALL {
-        for resolve in [Resolve::Loop, Resolve::Sorted] {
+        for resolve in Resolve::ALL {
             let config = SsaaConfig {
                 metric: Some(metric),
                 resolve,
@@ -376,21 +376,18 @@ fn images_cpu_match_gpu_and_beat_one_sample() {
             e_adaptive < 0.5 * e_first,
             "adaptive MSE {e_adaptive} vs one sample {e_first}"
         );
-        // Sorted resolve: the same pixels shaded by the same function — bit for bit with
-        // trilinear filtering; llvmpipe's anisotropic filter depends on which pixels share a
-        // SIMD group, so with anisotropy only closely.
-        let (sorted, _, _) = f.gpu(
-            &SsaaConfig {
-                resolve: Resolve::Sorted,
-                ..config
-            },
-            false,
-        );
-        if anisotropy == 1 {
-            assert_same(&sorted, &image, "sorted vs loop");
-        } else {
-            let e = mse(&sorted, &image);
-            assert!(e < tolerance, "sorted vs loop MSE {e}");
+        // Sorted and tiled resolves: the same pixels shaded by the same function and summed in
+        // the same order — bit for bit with trilinear filtering; llvmpipe's anisotropic filter
+        // depends on which pixels share a SIMD group, so with anisotropy only closely.
+        for resolve in [Resolve::Sorted, Resolve::Tiles] {
+            let (other, _, _) = f.gpu(&SsaaConfig { resolve, ..config }, false);
+            let what = format!("{resolve:?} vs loop");
+            if anisotropy == 1 {
+                assert_same(&other, &image, &what);
+            } else {
+                let e = mse(&other, &image);
+                assert!(e < tolerance, "{what}: MSE {e}");
+            }
         }
     }
 }

@@ -2,7 +2,7 @@
 //! (`shaders/adaptive-ssaa/gbuffer.wgsl`, the G-buffer's vertex stage with a texture-coordinate
 //! fragment stage, [`gbuffer`]); the rest are compute passes over one bind group
 //! (`common.wgsl`), one module per stage with the stem of its WGSL file and CPU twin:
-//! `shade_first` ([`shade`]) → `evaluate` ([`evaluate`]) → `shade_adaptive` (or the sorted
+//! `shade_first` ([`shade`]) → `evaluate` ([`evaluate`]) → `shade_adaptive` (or `shade_tiles`, or the sorted
 //! resolve `sort_count` → `sort_scan` → `sort_scatter` → `shade_sorted`, [`sort`]), and the
 //! baselines `shade_full` and `fxaa` ([`fxaa`]). Pipelines, buffers and bind groups are built
 //! once per image size; nothing is read back between passes (the sorted resolve sizes its last
@@ -110,6 +110,7 @@ struct Pipelines {
     first: wgpu::ComputePipeline,
     evaluate: wgpu::ComputePipeline,
     adaptive: wgpu::ComputePipeline,
+    tiles: wgpu::ComputePipeline,
     full: wgpu::ComputePipeline,
     sort_count: wgpu::ComputePipeline,
     sort_scan: wgpu::ComputePipeline,
@@ -276,6 +277,7 @@ impl Ssaa {
             first: make(&shade, "shade_first"),
             evaluate: make(&evaluate, "evaluate"),
             adaptive: make(&shade, "shade_adaptive"),
+            tiles: make(&shade, "shade_tiles"),
             full: make(&shade, "shade_full"),
             sort_count: make(&sort, "sort_count"),
             sort_scan: kernel::pipeline(

@@ -19,6 +19,7 @@ impl Ssaa {
                 self.dispatch(encoder, &self.pipelines.adaptive, timer, "shade adaptive")
             }
             Resolve::Sorted => self.encode_sorted(encoder, timer),
+            Resolve::Tiles => self.dispatch(encoder, &self.pipelines.tiles, timer, "shade tiles"),
         }
     }
 
