@@ -20,8 +20,11 @@ struct FactorParams {
 @group(0) @binding(3) var<storage, read_write> factors: array<f32>;
 
 @compute @workgroup_size(64)
-fn edge_factors(@builtin(global_invocation_id) id: vec3<u32>) {
-    let e = id.x;
+fn edge_factors(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let e = id.x + id.y * groups.x * 64u;
     if e >= params.edge_count {
         return;
     }

@@ -19,8 +19,11 @@ struct Counts {
 @group(0) @binding(4) var<storage, read_write> p1_out: array<vec4<f32>>;
 
 @compute @workgroup_size(64)
-fn refine_m1(@builtin(global_invocation_id) id: vec3<u32>) {
-    let v = id.x;
+fn refine_m1(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let v = id.x + id.y * groups.x * 64u;
     if v >= counts.vertices {
         return;
     }
@@ -38,8 +41,11 @@ fn refine_m1(@builtin(global_invocation_id) id: vec3<u32>) {
 @group(1) @binding(3) var<storage, read_write> n1_out: array<vec4<f32>>;
 
 @compute @workgroup_size(64)
-fn normals_m1(@builtin(global_invocation_id) id: vec3<u32>) {
-    let v = id.x;
+fn normals_m1(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let v = id.x + id.y * groups.x * 64u;
     if v >= counts.vertices {
         return;
     }

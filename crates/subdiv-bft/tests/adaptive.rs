@@ -411,3 +411,17 @@ fn fine_patches_span_several_workgroups() {
     let (.., finest) = adaptive_matches_cpu(&gpu, &bft, "bipyramid 7", &bipyramid(7), 6, 4..=5);
     assert_eq!(finest, 32, "no patch reached 32 segments");
 }
+
+/// 40 960 patches of up to 2 chunks: more workgroups than one row of a dispatch holds
+/// (`Workgroups::linear`, 32 768), so the kernel's workgroup index spans rows; CPU == GPU still.
+#[test]
+fn many_patches_span_several_rows_of_workgroups() {
+    let Some(gpu) = gpu::test_device(&subdiv_bft::adaptive_device_needs()) else {
+        return;
+    };
+    let bft = tables();
+    let mesh = torus(80, 64);
+    assert_eq!(mesh.topology.triangles.len() * 4, 40_960);
+    let (.., finest) = adaptive_matches_cpu(&gpu, bft, "torus", &mesh, bft.level + 1, 6..=6);
+    assert_eq!(finest, 16, "no patch reached 16 segments (two chunks)");
+}

@@ -3,7 +3,7 @@
 //! index buffer and their count to `DrawIndexedIndirect` arguments, so a frame's tessellation
 //! never goes through the CPU.
 
-use ::gpu::{PassTimer, transfer};
+use ::gpu::{PassTimer, kernel::Workgroups, transfer};
 use bytemuck::{Pod, Zeroable};
 
 use super::{
@@ -58,7 +58,7 @@ pub struct GpuAdaptive {
     factor_params: wgpu::Buffer,
     factor_bind: wgpu::BindGroup,
     bind: wgpu::BindGroup,
-    groups: (u32, u32),
+    groups: Workgroups,
 }
 
 impl GpuAdaptive {
@@ -195,7 +195,7 @@ impl GpuSubdivider {
             factor_params,
             factor_bind,
             bind: evaluate_bind,
-            groups: super::dispatch(workgroups),
+            groups: Workgroups::linear(workgroups, 1),
         })
     }
 
@@ -210,7 +210,7 @@ impl GpuSubdivider {
         let Some([_, (edge_factors, _)]) = &self.adaptive else {
             return; // `adaptive` refused to make `adaptive` without the kernels.
         };
-        let groups = (self.edge_count.div_ceil(WORKGROUP).max(1), 1);
+        let groups = Workgroups::linear(self.edge_count, WORKGROUP);
         pass(
             "adaptive: edge factors",
             edge_factors,
@@ -236,7 +236,7 @@ impl GpuSubdivider {
             "main step: evaluate adaptive",
             evaluate_adaptive,
             &[&adaptive.bind],
-            adaptive.groups,
+            adaptive.groups.clone(),
         )
         .encode(encoder, timer);
     }

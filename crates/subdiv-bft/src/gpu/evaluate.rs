@@ -142,7 +142,7 @@ impl GpuSubdivider {
             "main step: evaluate",
             pipeline,
             &[&level.bind],
-            level.groups,
+            level.groups.clone(),
         )
         .encode(encoder, timer);
     }

@@ -2,7 +2,7 @@
 //! computational entries and normal entries of [`crate::Subdivider`] (CPU twin: the entries
 //! applied by [`crate::Subdivider::evaluate_cpu`], built by [`crate::cpu::loop_step`]).
 
-use ::gpu::PassTimer;
+use ::gpu::{PassTimer, kernel::Workgroups};
 use glam::Vec3;
 
 use super::{GpuSubdivider, WORKGROUP, pass, read_vec3};
@@ -11,13 +11,13 @@ use crate::SubdivError;
 impl GpuSubdivider {
     /// Records the initial step (M⁰ → M¹ positions, then normals).
     pub fn encode_initial(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        let groups = (self.m1_count.div_ceil(WORKGROUP).max(1), 1);
+        let groups = Workgroups::linear(self.m1_count, WORKGROUP);
         let [counts, normals] = &self.normals_bind;
         pass(
             "initial step: positions",
             &self.refine,
             &[&self.refine_bind],
-            groups,
+            groups.clone(),
         )
         .then(pass(
             "initial step: normals",

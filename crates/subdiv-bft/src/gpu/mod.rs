@@ -59,7 +59,6 @@ pub fn patch_slots(s: u32) -> u32 {
 }
 
 const WORKGROUP: u32 = 64;
-const MAX_GROUPS_X: u32 = 65_535;
 
 fn storage(device: &wgpu::Device, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, SubdivError> {
     Ok(transfer::buffer_init(
@@ -139,13 +138,13 @@ fn pass(
     name: &str,
     pipeline: &wgpu::ComputePipeline,
     groups: &[&wgpu::BindGroup],
-    workgroups: (u32, u32),
+    workgroups: Workgroups,
 ) -> Passes {
     Passes::one(
         name,
         pipeline,
         groups.iter().map(|&g| g.clone()).collect(),
-        Workgroups::Direct([workgroups.0, workgroups.1, 1]),
+        workgroups,
     )
 }
 
@@ -167,7 +166,7 @@ pub struct GpuLevel {
     /// Indices.
     pub index_count: u32,
     bind: wgpu::BindGroup,
-    groups: (u32, u32),
+    groups: Workgroups,
 }
 
 /// The GPU subdivision of one control mesh: pipelines, static buffers, M¹ buffers.
@@ -369,8 +368,8 @@ impl GpuSubdivider {
     }
 
     /// Workgroups of the uniform main step for `s` segments.
-    fn main_step_groups(&self, s: u32) -> (u32, u32) {
-        dispatch(self.patch_count.div_ceil(patch_slots(s)))
+    fn main_step_groups(&self, s: u32) -> Workgroups {
+        Workgroups::linear(self.patch_count.div_ceil(patch_slots(s)), 1)
     }
 
     /// Records both steps.
@@ -383,12 +382,6 @@ impl GpuSubdivider {
         self.encode_initial(encoder, timer);
         self.encode_evaluate(encoder, level, timer);
     }
-}
-
-/// `count` workgroups laid out as (x, y) with x at most 65 535 (the kernels flatten them).
-fn dispatch(count: u32) -> (u32, u32) {
-    let x = count.clamp(1, MAX_GROUPS_X);
-    (x, count.div_ceil(x).max(1))
 }
 
 fn read_vec3(

@@ -68,6 +68,31 @@ pub fn half_disk(faces: u32) -> TriMesh {
     TriMesh::new(p, t).expect("half disk")
 }
 
+/// Closed torus of `nu × nv` quads split into triangles (every vertex of valence 6), radii 1
+/// and 0.4, wobbled so nothing is symmetric.
+pub fn torus(nu: u32, nv: u32) -> TriMesh {
+    let mut p = Vec::new();
+    for j in 0..nv {
+        for i in 0..nu {
+            let (a, b) = (
+                2.0 * PI * f64::from(i) / f64::from(nu),
+                2.0 * PI * f64::from(j) / f64::from(nv),
+            );
+            let r = 1.0 + (0.4 + 0.02 * f64::from((i + j) % 3)) * b.cos();
+            p.push(DVec3::new(r * a.cos(), r * a.sin(), 0.4 * b.sin()));
+        }
+    }
+    let at = |i: u32, j: u32| (j % nv) * nu + i % nu;
+    let mut t = Vec::new();
+    for j in 0..nv {
+        for i in 0..nu {
+            t.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            t.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    TriMesh::new(p, t).expect("torus")
+}
+
 /// Nearest-neighbour distance from every point of `a` to the set `b`, maximum (brute force
 /// through a uniform grid).
 pub fn max_nearest(a: &[DVec3], b: &[DVec3]) -> f64 {
