@@ -370,7 +370,7 @@ fn adaptive_cpu_equals_gpu() {
     let bft = tables();
     let max_level = bft.level + 1;
     for (name, mesh) in [("bipyramid 9", bipyramid(9)), ("half disk 5", half_disk(5))] {
-        let (sub, g, a, _) = adaptive_matches_cpu(&gpu, bft, name, &mesh, max_level, 1..=3);
+        let (sub, g, a, _) = adaptive_matches_cpu(gpu, bft, name, &mesh, max_level, 1..=3);
         // The metric on the GPU.
         let view_proj = scene::Camera::look_at(Vec3::new(0.5, 0.8, 4.0), Vec3::ZERO)
             .view_projection(640.0 / 480.0);
@@ -408,7 +408,7 @@ fn fine_patches_span_several_workgroups() {
         return;
     };
     let bft = subdiv_bft::bft::BftSet::build(5, 9).expect("level-5 tables");
-    let (.., finest) = adaptive_matches_cpu(&gpu, &bft, "bipyramid 7", &bipyramid(7), 6, 4..=5);
+    let (.., finest) = adaptive_matches_cpu(gpu, &bft, "bipyramid 7", &bipyramid(7), 6, 4..=5);
     assert_eq!(finest, 32, "no patch reached 32 segments");
 }
 
@@ -422,6 +422,6 @@ fn many_patches_span_several_rows_of_workgroups() {
     let bft = tables();
     let mesh = torus(80, 64);
     assert_eq!(mesh.topology.triangles.len() * 4, 40_960);
-    let (.., finest) = adaptive_matches_cpu(&gpu, bft, "torus", &mesh, bft.level + 1, 6..=6);
+    let (.., finest) = adaptive_matches_cpu(gpu, bft, "torus", &mesh, bft.level + 1, 6..=6);
     assert_eq!(finest, 16, "no patch reached 16 segments (two chunks)");
 }
