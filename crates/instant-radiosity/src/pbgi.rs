@@ -851,10 +851,7 @@ impl GpuGather {
     /// the upsampling into the frame's output (`pbgi upsample`).
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
         if let Some(l) = &self.lighting {
-            let groups = |count: u32| {
-                let g = count.div_ceil(64);
-                Workgroups::Direct([g.min(MAX_GROUPS_X), g.div_ceil(MAX_GROUPS_X), 1])
-            };
+            let groups = |count: u32| Workgroups::linear(count, 64);
             let mut dispatches = vec![
                 l.leaves
                     .0
@@ -879,13 +876,11 @@ impl GpuGather {
         }
         self.manylod.encode_cut(encoder, CutKind::Basic, timer);
         self.manylod.encode_splat(encoder, timer);
-        let x = self.views.min(MAX_GROUPS_X);
-        let y = self.views.div_ceil(MAX_GROUPS_X);
         Passes::one(
             "pbgi convolve",
             &self.convolve.pipeline,
             vec![self.bind.clone()],
-            Workgroups::Direct([x, y, 1]),
+            Workgroups::linear(self.views, 1),
         )
         .encode(encoder, timer);
         if let Some(f) = &self.frame {
@@ -937,9 +932,6 @@ fn pad_lights(lights: &[GpuLight], capacity: usize) -> Vec<GpuLight> {
     padded.resize(capacity, bytemuck::Zeroable::zeroed());
     padded
 }
-
-/// Most workgroups along x in one dispatch dimension.
-const MAX_GROUPS_X: u32 = 32_768;
 
 /// `cos θ · dω` of texel `(x, y)` of a `tile`-texel paraboloid view (0 outside the disc):
 /// `(1 − r²)/(1 + r²) · 4/(1 + r²)² · (2/tile)²` at the texel centre's radius `r`. The weights

@@ -258,8 +258,6 @@ struct ReflectParams {
     _pad: [u32; 2],
 }
 
-const MAX_GROUPS_X: u32 = 32_768;
-
 /// The GPU reflection maps ([`LitPoints::reflection_maps`]' twin): the probes' views' cut and
 /// nearest-node splat (`manylod::gpu::GpuManyLod`), then `reflections.wgsl`'s `resolve`: one
 /// `vec4<f32>` of radiance per texel, probe by probe.
@@ -485,13 +483,12 @@ impl GpuReflections {
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
         self.manylod.encode_cut(encoder, CutKind::Basic, timer);
         self.manylod.encode_splat(encoder, timer);
-        let g = self.texels.div_ceil(256);
         let (kernel, bind) = &self.resolve;
         Passes::one(
             "reflection maps",
             &kernel.pipeline,
             vec![bind.clone()],
-            Workgroups::Direct([g.min(MAX_GROUPS_X), g.div_ceil(MAX_GROUPS_X), 1]),
+            Workgroups::linear(self.texels, 256),
         )
         .encode(encoder, timer);
         if let Some((kernel, bind, (w, h))) = &self.frame {

@@ -136,7 +136,6 @@ const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
     .union(wgpu::BufferUsages::COPY_DST);
 const WORKGROUP: u32 = 256;
-const MAX_GROUPS_X: u32 = 32_768;
 
 /// A hybrid cut's timing: wall-clock milliseconds of the whole cut and of its parts.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -259,8 +258,7 @@ impl GpuHybridCut {
             _pad: 0,
         };
         queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-        let g = (count as u32).div_ceil(WORKGROUP);
-        let groups = Workgroups::Direct([g.min(MAX_GROUPS_X), g.div_ceil(MAX_GROUPS_X), 1]);
+        let groups = Workgroups::linear(count as u32, WORKGROUP);
         Passes::new()
             .pass("hybrid", vec![kernel.dispatch(&self.bind, groups)])
             .encode(encoder, None);

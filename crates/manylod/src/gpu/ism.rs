@@ -3,7 +3,7 @@
 use ::gpu::kernel::{Passes, Workgroups};
 use ::gpu::{PassTimer, transfer};
 
-use super::{AtlasParams, CUT_SLOTS, GpuManyLod, STORAGE, groups, uniform};
+use super::{AtlasParams, CUT_SLOTS, GpuManyLod, STORAGE, WORKGROUP, uniform};
 use crate::{ManyLodError, Node, NodeView};
 
 /// The imperfect-shadow-map baseline on the GPU ([`crate::splat::ism`]): a fixed list of
@@ -72,11 +72,11 @@ impl GpuIsm {
         m: &GpuManyLod,
         timer: Option<&PassTimer>,
     ) {
-        let (x, y) = groups(self.count);
+        let groups = Workgroups::linear(self.count, WORKGROUP);
         let dispatches: Vec<_> = m
             .clear_dispatch()
             .into_iter()
-            .chain([m.splat.dispatch(&self.bind, Workgroups::Direct([x, y, 1]))])
+            .chain([m.splat.dispatch(&self.bind, groups)])
             .collect();
         Passes::new().pass("ism", dispatches).encode(encoder, timer);
     }

@@ -124,7 +124,6 @@ const PROCESSED: usize = 9;
 const ITERATIONS: usize = 10;
 const COUNTERS: u64 = 16 * 4;
 const WORKGROUP: u32 = 256;
-const MAX_GROUPS_X: u32 = 32_768;
 const NODE_VIEW: u64 = 8;
 
 const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
@@ -135,12 +134,6 @@ const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
 struct CutPass {
     step: wgpu::BindGroup,
     prepare: wgpu::BindGroup,
-}
-
-/// `(x, y)` workgroups covering `n` threads of a 256-wide kernel.
-fn groups(n: u32) -> (u32, u32) {
-    let g = n.div_ceil(WORKGROUP);
-    (g.min(MAX_GROUPS_X), g.div_ceil(MAX_GROUPS_X))
 }
 
 fn uniform(device: &wgpu::Device, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, ManyLodError> {
@@ -509,14 +502,15 @@ impl GpuManyLod {
     /// then, where enabled, the nearest nodes ([`Self::enable_nearest_nodes`]).
     pub fn encode_splat(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
         let c = self.current;
-        let (x, y) = groups(self.atlas_pixels);
         let first = self.layout.first_view == 0;
         let mut dispatches: Vec<Dispatch> = self
             .clear_dispatch()
             .into_iter()
             .chain(self.nearest.as_ref().filter(|_| first).map(|n| {
-                n.clear
-                    .dispatch(&n.clear_bind, Workgroups::Direct([x, y, 1]))
+                n.clear.dispatch(
+                    &n.clear_bind,
+                    Workgroups::linear(self.atlas_pixels, WORKGROUP),
+                )
             }))
             .chain([
                 self.prepare
@@ -629,14 +623,10 @@ impl GpuManyLod {
                 "the in-place ballot compaction needs subgroups, which this device lacks",
             ))?;
         encoder.clear_buffer(&self.counters, 8 * 4, Some(8 * 4));
-        let (x, y) = (
-            self.view_count.min(MAX_GROUPS_X),
-            self.view_count.div_ceil(MAX_GROUPS_X),
-        );
         let dispatches: Vec<Dispatch> = self
             .clear_dispatch()
             .into_iter()
-            .chain([kernel.dispatch(bind, Workgroups::Direct([x, y, 1]))])
+            .chain([kernel.dispatch(bind, Workgroups::linear(self.view_count, 1))])
             .collect();
         Passes::new()
             .pass("in-place", dispatches)
@@ -648,10 +638,11 @@ impl GpuManyLod {
     /// Clearing the atlas, done by the set holding view 0 only: a later batch of views
     /// ([`AtlasLayout::batch`]) splats into the atlas that set cleared, so it is encoded first.
     fn clear_dispatch(&self) -> Option<Dispatch> {
-        let (x, y) = groups(self.atlas_pixels);
         (self.layout.first_view == 0).then(|| {
-            self.clear
-                .dispatch(&self.clear_bind, Workgroups::Direct([x, y, 1]))
+            self.clear.dispatch(
+                &self.clear_bind,
+                Workgroups::linear(self.atlas_pixels, WORKGROUP),
+            )
         })
     }
 

@@ -5,7 +5,7 @@ use ::gpu::{PassTimer, transfer};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::{GpuManyLod, STORAGE, groups, uniform};
+use super::{GpuManyLod, STORAGE, WORKGROUP, uniform};
 use crate::{Bsh, ManyLodError, Node, Surfel, surfels::check_mesh};
 
 #[repr(C)]
@@ -199,19 +199,16 @@ impl GpuRefit {
 
     /// Records the refit (one pass, timed as `refit`).
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: Option<&PassTimer>) {
-        let (x, y) = groups(self.leaf_count);
-        let mut dispatches = vec![
-            self.leaves
-                .dispatch(&self.leaves_bind, Workgroups::Direct([x, y, 1])),
-        ];
+        let leaves = Workgroups::linear(self.leaf_count, WORKGROUP);
+        let mut dispatches = vec![self.leaves.dispatch(&self.leaves_bind, leaves.clone())];
         dispatches.extend(self.levels.iter().map(|(bind, count)| {
-            let (x, y) = groups(*count);
-            self.merge.dispatch(bind, Workgroups::Direct([x, y, 1]))
+            self.merge
+                .dispatch(bind, Workgroups::linear(*count, WORKGROUP))
         }));
         dispatches.extend(
             self.points
                 .iter()
-                .map(|bind| self.leaves.dispatch(bind, Workgroups::Direct([x, y, 1]))),
+                .map(|bind| self.leaves.dispatch(bind, leaves.clone())),
         );
         Passes::new()
             .pass("refit", dispatches)
