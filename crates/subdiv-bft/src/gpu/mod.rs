@@ -83,10 +83,10 @@ const EVALUATE_BINDINGS: [Binding; 9] = [
     Binding::Storage,
 ];
 
-/// `evaluate.wgsl` with `slots` patches per workgroup: 1 for the uniform main step of grids
-/// larger than 16 vertices and the adaptive kernels, [`SMALL_GRID_SLOTS`] for smaller grids.
-/// The adaptive kernel's chunk sizes are set here too (its module is the `slots = 1` one).
-fn with_slots(slots: u32) -> Specialisation {
+/// `evaluate.wgsl` specialised: `slots` patches per workgroup of the uniform main step (1 for
+/// grids larger than 16 vertices and the adaptive kernel's module, [`SMALL_GRID_SLOTS`] for
+/// smaller grids) and the adaptive kernel's [`ADAPTIVE_CHUNK`].
+fn evaluate_specialisation(slots: u32) -> Specialisation {
     let (vertices, triangles) = ADAPTIVE_CHUNK;
     Specialisation::default()
         .set("SLOTS", format!("{slots}u"))
@@ -110,7 +110,7 @@ fn adaptive_chunks(s: u32) -> u32 {
 /// The variants of this crate's shaders its kernels build (for the shader validation test).
 pub fn shader_variants() -> Vec<(&'static str, Specialisation)> {
     [1, SMALL_GRID_SLOTS]
-        .map(|slots| ("evaluate.wgsl", with_slots(slots)))
+        .map(|slots| ("evaluate.wgsl", evaluate_specialisation(slots)))
         .into()
 }
 
@@ -211,9 +211,12 @@ impl GpuSubdivider {
         }
         let initial = crate::SHADERS.module(device, "initial.wgsl")?;
         let evaluate_module =
-            crate::SHADERS.module_with(device, "evaluate.wgsl", &with_slots(1))?;
-        let slots_module =
-            crate::SHADERS.module_with(device, "evaluate.wgsl", &with_slots(SMALL_GRID_SLOTS))?;
+            crate::SHADERS.module_with(device, "evaluate.wgsl", &evaluate_specialisation(1))?;
+        let slots_module = crate::SHADERS.module_with(
+            device,
+            "evaluate.wgsl",
+            &evaluate_specialisation(SMALL_GRID_SLOTS),
+        )?;
         let read = Binding::StorageRead;
         let refine = kernel(
             device,
