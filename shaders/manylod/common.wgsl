@@ -26,7 +26,8 @@ struct Problem {
     view_count: u32,
     // First leaf node (2^d − 1).
     leaf_start: u32,
-    pad: u32,
+    // Tree levels a cut pass descends (`GpuManyLod::set_levels_per_pass`, 1 to 4).
+    levels: u32,
 }
 
 const PARABOLOID: u32 = 0u;

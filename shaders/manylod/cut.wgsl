@@ -1,8 +1,9 @@
 // Many-view cuts on the GPU (§3.5.2, §3.7, Listing 3.1): one thread per active node-view,
 // ping-pong active lists with atomic appends, the cut appended to a third list. `prepare`
 // (one thread) turns the next pass's input count into its indirect dispatch size, so the
-// iterations run without reading counts back. Mirrors `manylod::cut::refine`, including its
-// merge that climbs to the highest valid ancestor at once.
+// iterations run without reading counts back. Mirrors `manylod::cut::refine_levels`, including
+// its merge that climbs to the highest valid ancestor at once and its passes that descend more
+// than one tree level.
 // #import manylod/common.wgsl
 
 // What one pass does: read `in_slot`'s list (or the roots), append splits to `out_slot`'s,
@@ -77,11 +78,19 @@ fn parent_valid(node: u32, view: u32) -> bool {
     return node > 0u && is_valid((node - 1u) / 2u, view);
 }
 
+// Node-views below a split decided in the same pass (`problem.levels` > 1): bit r of a mask
+// stands for the split node's descendant r, numbered in heap order relative to it (0 the node
+// itself, 1 and 2 its children, 3 to 6 its grandchildren …), which is node s · 2^depth(r) + r.
+fn descendant(s: u32, r: u32) -> u32 {
+    return (s << firstLeadingBit(r + 1u)) + r;
+}
+
 // Appends are aggregated per workgroup: each thread takes its place with a workgroup atomic,
 // one thread reserves the workgroup's total in the global list (one global atomic per list and
 // workgroup instead of one per node-view).
 var<workgroup> group_out: atomic<u32>;
 var<workgroup> group_cut: atomic<u32>;
+var<workgroup> group_processed: atomic<u32>;
 var<workgroup> base_out: u32;
 var<workgroup> base_cut: u32;
 
@@ -96,6 +105,7 @@ fn step(
     if t == 0u {
         atomicStore(&group_out, 0u);
         atomicStore(&group_cut, 0u);
+        atomicStore(&group_processed, 0u);
     }
     workgroupBarrier();
     let i = gid.x + gid.y * groups.x * WORKGROUP;
@@ -139,31 +149,69 @@ fn step(
             }
         }
     }
+    // A split's descendants down to `problem.levels − 1` levels below it: each whose parent
+    // splits is decided here (Listing 3.1's steps 1 and 2, as the next passes would); the
+    // children of those that split on the last of these levels go to the next pass.
+    var splits = 0u;
+    var cut_bits = 0u;
+    var culled_bits = 0u;
+    // Descendants 2^(levels − 1) − 1 up to `end` − 1 lie on the last level decided here.
+    let end = (1u << problem.levels) - 1u;
+    let deepest = ((1u << end) - 1u) & ~((1u << ((1u << (problem.levels - 1u)) - 1u)) - 1u);
+    if split != NONE {
+        splits = 1u;
+        for (var r = 1u; r < end; r++) {
+            if (splits & (1u << ((r - 1u) / 2u))) != 0u {
+                let node = descendant(split, r);
+                let cr = c_of(node, nv.y);
+                if node >= problem.leaf_start || cr < problem.epsilon {
+                    cut_bits |= 1u << r;
+                    culled_bits |= select(0u, 1u << r, cr == 0.0);
+                } else {
+                    splits |= 1u << r;
+                }
+            }
+        }
+    }
+    let out_count = 2u * countOneBits(splits & deepest);
+    let cut_count = countOneBits(cut_bits) + select(0u, 1u, drawn != NONE);
+    let descendants = countOneBits(cut_bits | (splits & ~1u));
     var out_at = 0u;
     var cut_at = 0u;
-    if split != NONE {
-        out_at = atomicAdd(&group_out, 2u);
+    if out_count > 0u {
+        out_at = atomicAdd(&group_out, out_count);
     }
-    if drawn != NONE {
-        cut_at = atomicAdd(&group_cut, 1u);
+    if cut_count > 0u {
+        cut_at = atomicAdd(&group_cut, cut_count);
+    }
+    if descendants > 0u {
+        atomicAdd(&group_processed, descendants);
     }
     workgroupBarrier();
     if t == 0u {
         base_out = atomicAdd(&counters[pass_.out_slot], atomicLoad(&group_out));
         base_cut = atomicAdd(&counters[pass_.cut_slot], atomicLoad(&group_cut));
+        let processed = atomicLoad(&group_processed);
+        if processed > 0u {
+            atomicAdd(&counters[PROCESSED], processed);
+        }
     }
     workgroupBarrier();
-    if split != NONE {
-        let o = base_out + out_at;
+    var o = base_out + out_at;
+    var outs = splits & deepest;
+    while outs != 0u {
+        let node = descendant(split, firstTrailingBit(outs));
+        outs &= outs - 1u;
         if o + 1u < arrayLength(&list_out) {
-            list_out[o] = vec2<u32>(2u * split + 1u, nv.y);
-            list_out[o + 1u] = vec2<u32>(2u * split + 2u, nv.y);
+            list_out[o] = vec2<u32>(2u * node + 1u, nv.y);
+            list_out[o + 1u] = vec2<u32>(2u * node + 2u, nv.y);
         } else {
             atomicAdd(&counters[OVERFLOW], 2u);
         }
+        o += 2u;
     }
+    o = base_cut + cut_at;
     if drawn != NONE {
-        let o = base_cut + cut_at;
         if o < arrayLength(&cut) {
             if c < 0.0 {
                 c = c_of(drawn, nv.y);
@@ -172,5 +220,19 @@ fn step(
         } else {
             atomicAdd(&counters[OVERFLOW], 1u);
         }
+        o += 1u;
+    }
+    var cuts = cut_bits;
+    while cuts != 0u {
+        let r = firstTrailingBit(cuts);
+        cuts &= cuts - 1u;
+        let node = descendant(split, r);
+        if o < arrayLength(&cut) {
+            let culled = (culled_bits & (1u << r)) != 0u;
+            cut[o] = vec2<u32>(select(node, node | CULLED, culled), nv.y);
+        } else {
+            atomicAdd(&counters[OVERFLOW], 1u);
+        }
+        o += 1u;
     }
 }

@@ -152,8 +152,46 @@ pub fn roots(views: usize) -> Vec<NodeView> {
 /// One node-view's step of Listing 3.1: what goes to the cut and what stays active.
 enum Step {
     Cut(NodeView),
-    Split(NodeView, NodeView),
+    /// The node-view split: what its descendants decided in the same iteration put into the
+    /// cut, what stays active, and how many descendants were processed.
+    Split {
+        cut: Vec<NodeView>,
+        active: Vec<NodeView>,
+        processed: u64,
+    },
     Drop,
+}
+
+/// The most tree levels one iteration of [`refine_levels`] descends.
+pub const MAX_LEVELS_PER_ITERATION: u32 = 4;
+
+/// The children of a node-view.
+fn children(nv: NodeView) -> [NodeView; 2] {
+    let c = first_child(nv.node);
+    [NodeView { node: c, ..nv }, NodeView { node: c + 1, ..nv }]
+}
+
+/// A split of `nv` whose descendants down to `levels − 1` levels below it are decided at once
+/// (steps 1 and 2; their parents split, so none merges).
+fn split(problem: &CutProblem, nv: NodeView, levels: u32) -> Step {
+    let (mut cut, mut active, mut processed) = (Vec::new(), children(nv).to_vec(), 0);
+    for _ in 1..levels {
+        let mut next = Vec::with_capacity(2 * active.len());
+        for nv in active {
+            processed += 1;
+            if problem.is_valid(nv) {
+                cut.push(nv);
+            } else {
+                next.extend(children(nv));
+            }
+        }
+        active = next;
+    }
+    Step::Split {
+        cut,
+        active,
+        processed,
+    }
 }
 
 /// Runs Listing 3.1 from `active` for at most `max_iterations` (`None`: until no node-view is
@@ -163,7 +201,25 @@ pub fn refine(
     active: Vec<NodeView>,
     max_iterations: Option<u32>,
 ) -> Result<Cut, ManyLodError> {
+    refine_levels(problem, active, max_iterations, 1)
+}
+
+/// [`refine`] with iterations that descend up to `levels` tree levels (1 to
+/// [`MAX_LEVELS_PER_ITERATION`]; 1 is Listing 3.1): a split's children are decided in the same
+/// iteration, and theirs, down to `levels − 1` levels below it, so fewer iterations process the
+/// same node-views. A converged cut is the same for every `levels`; a lazy one goes deeper.
+pub fn refine_levels(
+    problem: &CutProblem,
+    active: Vec<NodeView>,
+    max_iterations: Option<u32>,
+    levels: u32,
+) -> Result<Cut, ManyLodError> {
     problem.check()?;
+    if !(1..=MAX_LEVELS_PER_ITERATION).contains(&levels) {
+        return Err(ManyLodError::Mismatch(format!(
+            "{levels} tree levels per iteration: must be 1 to {MAX_LEVELS_PER_ITERATION}"
+        )));
+    }
     let n = problem.bsh.nodes.len() as u32;
     if let Some(bad) = active
         .iter()
@@ -186,8 +242,7 @@ pub fn refine(
                     if problem.is_valid(nv) {
                         Step::Cut(nv)
                     } else {
-                        let c = first_child(nv.node);
-                        Step::Split(NodeView { node: c, ..nv }, NodeView { node: c + 1, ..nv })
+                        split(problem, nv, levels)
                     }
                 } else {
                     match problem.merge_target(nv) {
@@ -201,7 +256,15 @@ pub fn refine(
         for s in steps {
             match s {
                 Step::Cut(nv) => cut.node_views.push(nv),
-                Step::Split(a, b) => active.extend([a, b]),
+                Step::Split {
+                    cut: c,
+                    active: a,
+                    processed,
+                } => {
+                    cut.node_views.extend(c);
+                    active.extend(a);
+                    cut.processed += processed;
+                }
                 Step::Drop => {}
             }
         }

@@ -6,7 +6,7 @@ use glam::Vec3;
 use manylod::{
     Bsh, CutProblem, NodeView, View,
     bsh::{angle_between, level, parent},
-    cut::{basic, refine, roots},
+    cut::{self, basic, refine, refine_levels, roots},
     surfels,
     view::{MAX_SPLAT_RADIUS, MIN_SPLAT_RADIUS},
 };
@@ -238,6 +238,75 @@ fn incremental_cut_equals_the_basic_cut() {
         );
         assert_valid_cut(&problem, &inc.node_views);
         last = inc.node_views;
+    }
+}
+
+/// Iterations descending several tree levels: the same basic and incremental cuts from the
+/// same work in ⌈(depth + 1) / levels⌉ iterations; lazy cuts under motion still partition every
+/// view's leaves; a level count out of range is an error.
+#[test]
+fn iterations_of_several_levels_find_the_same_cuts() {
+    let (bsh, _, _) = tree(1 << 12);
+    let epsilon = 3.0;
+    let (v0, v1) = (views(0.0), views(10f32.to_radians()));
+    let problem = |v| CutProblem {
+        bsh: &bsh,
+        views: v,
+        epsilon,
+    };
+    let want = basic(&problem(&v0)).expect("basic");
+    assert_eq!(want.iterations, bsh.depth + 1, "the cut reaches the leaves");
+    let want_next = refine(&problem(&v1), want.node_views.clone(), None).expect("incremental");
+    for levels in 1..=cut::MAX_LEVELS_PER_ITERATION {
+        let got = refine_levels(&problem(&v0), roots(v0.len()), None, levels).expect("basic");
+        assert_eq!(
+            sorted(got.node_views.clone()),
+            sorted(want.node_views.clone()),
+            "{levels} levels"
+        );
+        assert_eq!(
+            (got.iterations, got.processed, got.converged, got.culled),
+            (
+                (bsh.depth + 1).div_ceil(levels),
+                want.processed,
+                true,
+                want.culled
+            ),
+            "{levels} levels: iterations, work, converged, culled"
+        );
+        let next = refine_levels(&problem(&v1), got.node_views, None, levels).expect("inc");
+        assert_eq!(
+            sorted(next.node_views),
+            sorted(want_next.node_views.clone()),
+            "{levels} levels, incremental"
+        );
+        assert_eq!(
+            next.processed, want_next.processed,
+            "{levels} levels, incremental work"
+        );
+        let mut lazy = roots(v0.len());
+        for frame in 0..6 {
+            let v = views(frame as f32 * 10f32.to_radians());
+            let moved = CutProblem {
+                bsh: &bsh,
+                views: &v,
+                epsilon,
+            };
+            let l = refine_levels(&moved, lazy, Some(2), levels).expect("lazy");
+            assert_partition(&moved, &l.node_views, frame);
+            lazy = l.node_views;
+        }
+    }
+    for levels in [0, cut::MAX_LEVELS_PER_ITERATION + 1] {
+        assert_eq!(
+            refine_levels(&problem(&v0), roots(v0.len()), None, levels)
+                .err()
+                .map(|e| e.to_string()),
+            Some(format!(
+                "{levels} tree levels per iteration: must be 1 to {}",
+                cut::MAX_LEVELS_PER_ITERATION
+            ))
+        );
     }
 }
 

@@ -8,7 +8,7 @@ use glam::Vec3;
 use manylod::{
     AtlasLayout, Bsh, CutProblem, ManyLodError,
     bsh::angle_between,
-    cut::{basic, refine},
+    cut::{basic, refine_levels, roots},
     gpu::{Compaction, CutKind, GpuIsm, GpuManyLod, GpuRefit},
     splat::{self, CLEAR},
     surfels,
@@ -94,10 +94,26 @@ fn refit_matches_the_cpu() {
 
 #[test]
 fn cuts_match_the_cpu() {
+    cuts_match_the_cpu_at(1);
+}
+
+/// Passes that descend several tree levels (`set_levels_per_pass`) against the CPU's
+/// iterations of as many levels: the same cuts, iterations and work over the same frames.
+#[test]
+fn cuts_of_several_levels_per_pass_match_the_cpu() {
+    for levels in 2..=manylod::cut::MAX_LEVELS_PER_ITERATION {
+        cuts_match_the_cpu_at(levels);
+    }
+}
+
+/// Six frames of basic, incremental and lazy cuts at `levels` tree levels per pass, each
+/// against [`refine_levels`].
+fn cuts_match_the_cpu_at(levels: u32) {
     let (bsh, _, _) = tree(1 << 12);
     let Some((gpu, mut m)) = setup(&bsh, 0.0, 1 << 18) else {
         return;
     };
+    m.set_levels_per_pass(&gpu.queue, levels).expect("levels");
     let mut last = Vec::new();
     // Iterations and work match while the GPU's earlier cuts (its starting points) did.
     let mut exact = true;
@@ -111,14 +127,17 @@ fn cuts_match_the_cpu() {
         };
         // Frame 0 basic, then incremental, lazy (q = 2), incremental, basic, lazy.
         let (kind, want) = match frame {
-            0 | 4 => (CutKind::Basic, basic(&problem).expect("basic")),
+            0 | 4 => (
+                CutKind::Basic,
+                refine_levels(&problem, roots(v.len()), None, levels).expect("basic"),
+            ),
             2 | 5 => (
                 CutKind::Lazy(2),
-                refine(&problem, last.clone(), Some(2)).expect("lazy"),
+                refine_levels(&problem, last.clone(), Some(2), levels).expect("lazy"),
             ),
             _ => (
                 CutKind::Incremental,
-                refine(&problem, last.clone(), None).expect("inc"),
+                refine_levels(&problem, last.clone(), None, levels).expect("inc"),
             ),
         };
         let got = run_cut(gpu, &mut m, kind);
@@ -133,7 +152,7 @@ fn cuts_match_the_cpu() {
         let allowed = if gpu.is_software() { 0 } else { w.len() / 1000 };
         assert!(
             differ <= allowed,
-            "frame {frame} {kind:?}: {differ} node-views differ of {}",
+            "{levels} levels per pass, frame {frame} {kind:?}: {differ} node-views differ of {}",
             w.len()
         );
         if kind != CutKind::Lazy(2) {
@@ -144,7 +163,7 @@ fn cuts_match_the_cpu() {
             assert_eq!(
                 (got.iterations, got.processed, got.converged, got.culled),
                 (want.iterations, want.processed, want.converged, want.culled),
-                "frame {frame} {kind:?}: iterations, work, converged, culled"
+                "{levels} levels per pass, frame {frame} {kind:?}: iterations, work, converged, culled"
             );
         }
         last = want.node_views;

@@ -1,10 +1,10 @@
 //! `manylod-bench`: many-view LoD cuts (Holländer 2013 Tables 3.1/3.2) on Sponza. The scene is
 //! sampled into 2^20 and 2^21 surfels (the paper: 1.3 M points); 1024 VPLs (32×32 paraboloid
-//! micro-views, a 1024×1024 atlas) come from a spot light orbiting 10° per frame. Per threshold
-//! ε = 1, 2, 4 px: the CPU build, the GPU refit, and over the animation the cut (basic,
-//! incremental, lazy with q = 2) and the splat of each, the in-place variant, and the ISM
-//! baseline (8 k random points per view, Table 3.1) measured in the same run; then 4096 views
-//! at ε = 1 and 4.
+//! micro-views, a 1024×1024 atlas) come from a spot light orbiting 10° per frame. The CPU
+//! build and the GPU refit; per threshold ε = 4, 2, 1 px, over the animation, the cut (basic
+//! with one to four tree levels per pass, incremental, lazy with q = 2) and the splat of each,
+//! the in-place variant, and at ε = 1 the ISM baseline (8 k random points per view, Table 3.1)
+//! measured in the same run; then 4096 views at ε = 4 and 1. `--quick`: 2^20 points, ε = 4.
 //! Writes `manylod-<adapter>-<date>.{md,json}`.
 
 use anyhow::{Context, Result};
@@ -28,6 +28,9 @@ use serde::Serialize;
 struct Args {
     #[command(flatten)]
     common: bench::SceneArgs,
+    /// With `--quick`: 2^20 points at ε = 4 px only (issue 28's rows).
+    #[command(flatten)]
+    quick: bench::Quick,
 }
 
 const TILE: u32 = 32;
@@ -187,22 +190,27 @@ fn gpu_manylod(
     }
 }
 
-/// What a row measures: a list-based cut and its splat, or the in-place variant.
+/// What a row measures: a list-based cut (with its tree levels per pass) and its splat, or
+/// the in-place variant.
 #[derive(Clone, Copy)]
 enum Variant {
-    Cut(CutKind),
+    Cut(CutKind, u32),
     InPlace(Compaction),
 }
 
-/// The variants measured at a set-up: basic, incremental and (with `lazy`) lazy cuts, and the
-/// in-place variant with each compaction the device runs.
+/// The variants measured at a set-up: basic cuts of one to four tree levels per pass,
+/// incremental and (with `lazy`) lazy cuts, and the in-place variant with each compaction the
+/// device runs.
 fn variants(m: &GpuManyLod, lazy: bool) -> Vec<(&'static str, Variant)> {
     let mut v = vec![
-        ("basic", Variant::Cut(CutKind::Basic)),
-        ("incremental", Variant::Cut(CutKind::Incremental)),
+        ("basic", Variant::Cut(CutKind::Basic, 1)),
+        ("basic, 2 levels/pass", Variant::Cut(CutKind::Basic, 2)),
+        ("basic, 3 levels/pass", Variant::Cut(CutKind::Basic, 3)),
+        ("basic, 4 levels/pass", Variant::Cut(CutKind::Basic, 4)),
+        ("incremental", Variant::Cut(CutKind::Incremental, 1)),
     ];
     if lazy {
-        v.push(("lazy q=2", Variant::Cut(CutKind::Lazy(2))));
+        v.push(("lazy q=2", Variant::Cut(CutKind::Lazy(2), 1)));
     }
     for c in m.compactions() {
         v.push(match c {
@@ -224,8 +232,11 @@ fn variant_row(
     epsilon: f32,
     (name, variant): (&str, Variant),
 ) -> Result<Row> {
+    if let Variant::Cut(_, levels) = variant {
+        m.set_levels_per_pass(&gpu.queue, levels)?;
+    }
     let by_name = time_animation(gpu, timer, frames, views, m, &|m, e, t| match variant {
-        Variant::Cut(k) => {
+        Variant::Cut(k, _) => {
             m.encode_cut(e, k, Some(t));
             m.encode_splat(e, Some(t));
             Ok(())
@@ -237,7 +248,7 @@ fn variant_row(
         &["cut", "splat", "in-place"],
     ));
     let (cut_size, culled, processed, iterations) = match variant {
-        Variant::Cut(_) => {
+        Variant::Cut(..) => {
             let c = m.read_cut(&gpu.device, &gpu.queue)?;
             (
                 c.node_views.len() as u64,
@@ -287,16 +298,20 @@ fn main() -> Result<()> {
     let timer = PassTimer::new(&gpu.device, 8);
     let mut setups = Vec::new();
     let mut rows = Vec::new();
-    for points in [1usize << 20, 1 << 21].map(|p| p / shrink) {
+    for &points in args
+        .quick
+        .sweep(&[1usize << 20, 1 << 21].map(|p| p / shrink))
+    {
         let start = std::time::Instant::now();
         let s = surfels::sample(&positions, &indices, points, 1)?;
         let (p, n) = surfels::evaluate(&s, &positions, &indices);
         let bsh = Bsh::build(&p, &n, surfels::disc_radius(&positions, &indices, points))?;
         let build_cpu_ms = start.elapsed().as_secs_f64() * 1e3;
         let first_row = rows.len();
-        for epsilon in [1.0f32, 2.0, 4.0] {
+        let epsilons = args.quick.sweep(&[4.0f32, 2.0, 1.0]);
+        for &epsilon in epsilons {
             let mut m = gpu_manylod(&gpu, &bsh, &views_1k, epsilon, diagonal)?;
-            if epsilon == 1.0 {
+            if epsilon == epsilons[0] {
                 let refit = GpuRefit::new(&gpu.device, &m, &bsh, &s, &positions, &indices)?;
                 let refit_stat = bench::time_encoded(&gpu, &timer, frames, false, &|e, t| {
                     refit.encode(e, Some(t));
@@ -316,7 +331,7 @@ fn main() -> Result<()> {
                     &gpu, &timer, frames, &views_1k, &mut m, points, epsilon, variant,
                 )?);
             }
-            if epsilon == 1.0 {
+            if Some(&epsilon) == epsilons.last() {
                 let n = bsh.leaf_count();
                 let (ism_points, list) =
                     splat::ism(&bsh.nodes[n - 1..], views_1k[0].len(), 8192, 3)?;
@@ -369,7 +384,7 @@ fn main() -> Result<()> {
                 Ok(())
             },
         )?;
-        for epsilon in [1.0f32, 4.0] {
+        for &epsilon in args.quick.sweep(&[4.0f32, 1.0]) {
             let mut m = gpu_manylod(&gpu, &bsh, &views_4k, epsilon, diagonal)?;
             for variant in variants(&m, false) {
                 rows.push(variant_row(

@@ -71,7 +71,7 @@ struct Problem {
     epsilon: f32,
     view_count: u32,
     leaf_start: u32,
-    _pad: u32,
+    levels: u32,
 }
 
 #[repr(C)]
@@ -167,6 +167,9 @@ pub struct GpuManyLod {
     /// Node bounds in heap order (`Node`, 32 bytes); the refit writes them.
     pub nodes: wgpu::Buffer,
     views: wgpu::Buffer,
+    /// `common.wgsl`'s `Problem` and its values.
+    problem: wgpu::Buffer,
+    problem_values: Problem,
     counters: wgpu::Buffer,
     dispatch: wgpu::Buffer,
     cuts: [wgpu::Buffer; 2],
@@ -288,15 +291,16 @@ impl GpuManyLod {
             bytemuck::cast_slice(&gpu_views),
             STORAGE,
         )?;
+        let problem_values = Problem {
+            epsilon,
+            view_count: views.len() as u32,
+            leaf_start: bsh.leaf_count() as u32 - 1,
+            levels: 1,
+        };
         let problem = uniform(
             device,
             "manylod problem",
-            bytemuck::bytes_of(&Problem {
-                epsilon,
-                view_count: views.len() as u32,
-                leaf_start: bsh.leaf_count() as u32 - 1,
-                _pad: 0,
-            }),
+            bytemuck::bytes_of(&problem_values),
         )?;
         let counters = transfer::buffer(device, "manylod counters", COUNTERS, STORAGE)?;
         let dispatch = transfer::buffer(
@@ -416,6 +420,8 @@ impl GpuManyLod {
             inplace,
             nodes,
             views: views_buffer,
+            problem,
+            problem_values,
             counters,
             atlas,
             roots: unwrap2(roots)?,
@@ -462,8 +468,30 @@ impl GpuManyLod {
         self.layout
     }
 
+    /// Tree levels each pass of [`Self::encode_cut`] descends from now on (1, the default, is
+    /// Listing 3.1; up to [`crate::cut::MAX_LEVELS_PER_ITERATION`]): the node-views below a split
+    /// are decided by the thread that split it, so `levels` passes' work takes one pass — the
+    /// same cut from fewer, larger dependent dispatches ([`crate::cut::refine_levels`]). A lazy
+    /// frame's `q` passes then go `q · levels` levels deep.
+    pub fn set_levels_per_pass(
+        &mut self,
+        queue: &wgpu::Queue,
+        levels: u32,
+    ) -> Result<(), ManyLodError> {
+        if !(1..=crate::cut::MAX_LEVELS_PER_ITERATION).contains(&levels) {
+            return Err(ManyLodError::Mismatch(format!(
+                "{levels} tree levels per pass: must be 1 to {}",
+                crate::cut::MAX_LEVELS_PER_ITERATION
+            )));
+        }
+        self.problem_values.levels = levels;
+        queue.write_buffer(&self.problem, 0, bytemuck::bytes_of(&self.problem_values));
+        Ok(())
+    }
+
     /// Records one frame's cut into the other cut list (one compute pass, timed as `cut`):
-    /// `depth + 1` indirect iterations at most (each one `prepare` + `step`), then a flush.
+    /// ⌈(`depth` + 1) / levels per pass⌉ indirect iterations at most (each one `prepare` +
+    /// `step`), then a flush.
     pub fn encode_cut(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
@@ -482,9 +510,11 @@ impl GpuManyLod {
             );
             dispatches.push(self.step.dispatch(&p.step, self.indirect()));
         };
+        // The tree's depth + 1 levels, `levels` per pass: ⌈(depth + 1) / levels⌉ passes.
+        let full = self.depth / self.problem_values.levels;
         let (first, more) = match kind {
-            CutKind::Basic => (&self.roots[c], self.depth),
-            CutKind::Incremental => (&self.start[c], self.depth),
+            CutKind::Basic => (&self.roots[c], full),
+            CutKind::Incremental => (&self.start[c], full),
             CutKind::Lazy(q) => (&self.start[c], q.saturating_sub(1)),
         };
         run(first);
