@@ -60,22 +60,31 @@ fn plane_normals(scene: &scene::Scene) -> Vec<Vec3> {
 /// `plane`: the unit plane normal of the pixel's triangle. Where the CPU's normal lies nearly
 /// in that plane, the GPU's may also be it turned round or the plane's normal; where the CPU
 /// took the plane's normal, the GPU's may lie nearly in the plane. Where the pixel's material
-/// has a normal map, the normal may differ by [`NORMAL_MAP_TOL_DEG`].
-fn pixel_matches(
+/// has a normal map, the normal may differ by [`NORMAL_MAP_TOL_DEG`]. Returns the checks that
+/// fail, each with how far off the pixel is in its tolerance's unit (none: the pixel matches).
+fn pixel_mismatches(
     scene: &scene::Scene,
     (cpu, gpu): (&GBuffer, &GBuffer),
     x: u32,
     y: u32,
     plane: Option<Vec3>,
-) -> bool {
+) -> Vec<(&'static str, f32)> {
     let (dc, dg) = (cpu.depth.get(x, y), gpu.depth.get(x, y));
     if (dc - dg).abs() > DEPTH_TOL {
-        return false;
+        return vec![("depth", (dc - dg).abs())];
     }
     if dc >= 1.0 {
-        return gpu.material.get(x, y) == gbuffer::NO_MATERIAL;
+        return if gpu.material.get(x, y) == gbuffer::NO_MATERIAL {
+            Vec::new()
+        } else {
+            vec![("background material", 1.0)]
+        };
     }
+    let mut off = Vec::new();
     let (lc, lg) = (cpu.linear_depth.get(x, y), gpu.linear_depth.get(x, y));
+    if (lc - lg).abs() > LINEAR_DEPTH_REL_TOL * lc {
+        off.push(("linear depth (relative)", (lc - lg).abs() / lc));
+    }
     let (nc, ng) = (
         normal::unpack_octahedral(cpu.normal.get(x, y)),
         normal::unpack_octahedral(gpu.normal.get(x, y)),
@@ -99,27 +108,41 @@ fn pixel_matches(
             (in_plane(nc) && (close(-nc) || close(g) || close(-g)))
                 || (nc.dot(g).abs() >= 1.0 - 1e-4 && in_plane(ng))
         });
-    let albedo_ok = cpu
-        .albedo
-        .get(x, y)
-        .iter()
-        .zip(gpu.albedo.get(x, y))
-        .all(|(&a, b)| (i32::from(a) - i32::from(b)).abs() <= ALBEDO_TOL);
+    if !normal_ok {
+        off.push(("normal (degrees)", normal::angle_deg(nc, ng)));
+    }
+    let steps = |a: &[u8], b: &[u8]| {
+        a.iter()
+            .zip(b)
+            .map(|(&a, &b)| (i32::from(a) - i32::from(b)).abs())
+            .max()
+            .unwrap_or(0)
+    };
+    let albedo_steps = steps(&cpu.albedo.get(x, y), &gpu.albedo.get(x, y));
+    if albedo_steps > ALBEDO_TOL {
+        off.push(("albedo (8-bit steps)", albedo_steps as f32));
+    }
     // Emission and occlusion: half floats of the same filtered texels.
-    let emission_ok = cpu
+    let emission_off = cpu
         .emission
         .get(x, y)
         .iter()
         .zip(gpu.emission.get(x, y))
-        .all(|(&a, b)| (a - b).abs() <= EMISSION_REL_TOL * a.abs().max(b.abs()) + EMISSION_ABS_TOL);
+        .map(|(&a, b)| (a - b).abs() / (EMISSION_REL_TOL * a.abs().max(b.abs()) + EMISSION_ABS_TOL))
+        .fold(0.0, f32::max);
+    if emission_off > 1.0 {
+        off.push(("emission (× tolerance)", emission_off));
+    }
+    if id != id_g {
+        off.push(("material id", 1.0));
+    }
     // Roughness and metallic: texture-filtered like the albedo.
     let step = |a: f32, b: f32| ((a - b) * 255.0).round().abs() as i32;
-    let material_ok = id == id_g && step(rc, rg) <= ALBEDO_TOL && step(mc, mg) <= ALBEDO_TOL;
-    (lc - lg).abs() <= LINEAR_DEPTH_REL_TOL * lc
-        && normal_ok
-        && albedo_ok
-        && emission_ok
-        && material_ok
+    let material_steps = step(rc, rg).max(step(mc, mg));
+    if material_steps > ALBEDO_TOL {
+        off.push(("roughness or metallic (8-bit steps)", material_steps as f32));
+    }
+    off
 }
 
 /// Vulkan's least sub-pixel precision (`subPixelPrecisionBits` ≥ 4): a pixel centre this close
@@ -215,11 +238,14 @@ fn compare_path(
     .map_err(|e| e.to_string())?;
     let (mut matched, mut bad_interior) = (0u32, Vec::new());
     let mut diff = vec![[0u8, 0, 0, 255]; (w * h) as usize];
+    // Per failing check: interior pixels it failed on and the largest miss among them.
+    let mut misses: std::collections::BTreeMap<&str, (u32, f32)> = Default::default();
     let planes = plane_normals(scene);
     for y in 0..h {
         for x in 0..w {
             let plane = planes.get(expected.triangle_id.get(x, y) as usize).copied();
-            if pixel_matches(scene, (&expected.gbuffer, &actual), x, y, plane) {
+            let off = pixel_mismatches(scene, (&expected.gbuffer, &actual), x, y, plane);
+            if off.is_empty() {
                 matched += 1;
             } else if common::is_edge(&expected.triangle_id, x, y)
                 || near_an_edge(scene, camera, (w, h), x, y)
@@ -228,6 +254,10 @@ fn compare_path(
             } else {
                 diff[(y * w + x) as usize] = [255, 0, 0, 255];
                 bad_interior.push((x, y));
+                for (check, by) in off {
+                    let m = misses.entry(check).or_default();
+                    *m = (m.0 + 1, m.1.max(by));
+                }
             }
         }
     }
@@ -235,6 +265,10 @@ fn compare_path(
     if bad_interior.is_empty() && fraction >= 0.995 {
         return Ok(());
     }
+    let misses: Vec<String> = misses
+        .iter()
+        .map(|(check, (n, worst))| format!("{check} on {n} (worst {worst:e})"))
+        .collect();
     let dir = common::test_output(name);
     common::write_rgba8(
         dir.join("expected_albedo.png"),
@@ -246,9 +280,10 @@ fn compare_path(
     common::write_rgba8(dir.join("difference.png"), w, h, &diff);
     let (x, y) = bad_interior.first().copied().unwrap_or((0, 0));
     Err(format!(
-        "{name}: {:.3}% matched, {} interior mismatches, e.g. ({x},{y}): depth {} vs {}, lin {} vs {}, normal {:08x} vs {:08x}, albedo {:?} vs {:?}, material {:08x} vs {:08x}; images in {}",
+        "{name}: {:.3}% matched of {w}×{h}, {} interior mismatches [{}], e.g. ({x},{y}): depth {} vs {}, lin {} vs {}, normal {:08x} vs {:08x}, albedo {:?} vs {:?}, material {:08x} vs {:08x}; images in {}",
         fraction * 100.0,
         bad_interior.len(),
+        misses.join("; "),
         expected.gbuffer.depth.get(x, y),
         actual.depth.get(x, y),
         expected.gbuffer.linear_depth.get(x, y),
