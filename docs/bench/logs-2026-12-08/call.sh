@@ -1,6 +1,7 @@
 # Issue 28, 2026-12-08: the device call of this session (carry .gl .gpu-bin .gpu-data, built by
 # ../logs-2026-12-07c/prep.sh, ../logs-2026-12-07d/prep.sh, then the manylod bench and test
-# binaries and the gbuffer test binary of this session's commits, see .gpu-bin/built-from).
+# binaries and the gbuffer test binary of this session's commits, and prep-splat.sh; see
+# .gpu-bin/built-from).
 # The GPU tests first (each output in $OUT/<name>.txt), then the benches through
 # ../logs-2026-12-06b/run.sh (results.tar), the most wanted first.
 source docs/bench/device-env.sh
@@ -15,5 +16,6 @@ mkdir -p .gpu-bin/t && tar xJf .gpu-bin/tests.tar.xz -C .gpu-bin/t
   echo "gbuffer-gpu_vs_cpu rc=$?"
 )
 bash docs/bench/logs-2026-12-06b/run.sh "c128:65:subdiv-gpu-c128" "b1e174e:55:subdiv-gpu" \
-  "ssaa:75:ssaa-gpu --quick" "manylod:60:manylod-gpu --quick" "c64:55:subdiv-gpu-c64" \
+  "ssaa:75:ssaa-gpu --quick" "manylod:60:manylod-gpu --quick" \
+  "loadmin:50:manylod-gpu-loadmin --quick" "c64:55:subdiv-gpu-c64" \
   "c256:55:subdiv-gpu-c256" "f013d2d:50:subdiv-gpu-f013d2d"
