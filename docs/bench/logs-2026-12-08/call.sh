@@ -15,7 +15,9 @@ mkdir -p .gpu-bin/t && tar xJf .gpu-bin/tests.tar.xz -C .gpu-bin/t
   timeout 25 ./gbuffer-gpu_vs_cpu --include-ignored > "$OUT/gbuffer-gpu_vs_cpu.txt" 2>&1
   echo "gbuffer-gpu_vs_cpu rc=$?"
 )
-bash docs/bench/logs-2026-12-06b/run.sh "c128:65:subdiv-gpu-c128" "b1e174e:55:subdiv-gpu" \
+# Arguments: the bench specs to run instead of the full list (a shorter call).
+[ $# -gt 0 ] || set -- "c128:65:subdiv-gpu-c128" "b1e174e:55:subdiv-gpu" \
   "ssaa:75:ssaa-gpu --quick" "manylod:60:manylod-gpu --quick" \
   "loadmin:50:manylod-gpu-loadmin --quick" "c64:55:subdiv-gpu-c64" \
   "c256:55:subdiv-gpu-c256" "f013d2d:50:subdiv-gpu-f013d2d"
+bash docs/bench/logs-2026-12-06b/run.sh "$@"
