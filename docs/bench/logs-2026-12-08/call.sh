@@ -15,7 +15,11 @@ mkdir -p .gpu-bin/t && tar xJf .gpu-bin/tests.tar.xz -C .gpu-bin/t
   timeout 25 ./gbuffer-gpu_vs_cpu --include-ignored > "$OUT/gbuffer-gpu_vs_cpu.txt" 2>&1
   echo "gbuffer-gpu_vs_cpu rc=$?"
 )
-# Arguments: the bench specs to run instead of the full list (a shorter call).
+# Arguments: the bench specs to run instead of the default list (the first call: the most
+# wanted first). The second call, after prep-indirect.sh:
+#   bash docs/bench/logs-2026-12-08/call.sh "ind-old:60:indirect-gpu-1e1fc9b --quick" \
+#     "ind:60:indirect-gpu --quick" "ind-1080:90:indirect-gpu --quick --vpls 256,1024" \
+#     "c64:55:subdiv-gpu-c64" "c256:55:subdiv-gpu-c256" "f013d2d:50:subdiv-gpu-f013d2d"
 [ $# -gt 0 ] || set -- "c128:65:subdiv-gpu-c128" "b1e174e:55:subdiv-gpu" \
   "ssaa:75:ssaa-gpu --quick" "manylod:60:manylod-gpu --quick" \
   "loadmin:50:manylod-gpu-loadmin --quick" "c64:55:subdiv-gpu-c64" \
