@@ -2,9 +2,10 @@
 //! sampled into 2^20 and 2^21 surfels (the paper: 1.3 M points); 1024 VPLs (32×32 paraboloid
 //! micro-views, a 1024×1024 atlas) come from a spot light orbiting 10° per frame. The CPU
 //! build and the GPU refit; per threshold ε = 4, 2, 1 px, over the animation, the cut (basic
-//! with one to four tree levels per pass, incremental, lazy with q = 2) and the splat of each,
-//! the in-place variant, and at ε = 1 the ISM baseline (8 k random points per view, Table 3.1)
-//! measured in the same run; then 4096 views at ε = 4 and 1. `--quick`: 2^20 points, ε = 4.
+//! with one to four tree levels per pass, incremental with one to three, lazy with q = 2) and
+//! the splat of each, the in-place variant, and at ε = 1 the ISM baseline (8 k random points per
+//! view, Table 3.1) measured in the same run; then 4096 views at ε = 4 and 1. `--quick`: 2^20
+//! points, ε = 4.
 //! Writes `manylod-<adapter>-<date>.{md,json}`.
 
 use anyhow::{Context, Result};
@@ -199,7 +200,7 @@ enum Variant {
 }
 
 /// The variants measured at a set-up: basic cuts of one to four tree levels per pass,
-/// incremental and (with `lazy`) lazy cuts, and the in-place variant with each compaction the
+/// incremental cuts of one to three and (with `lazy`) lazy cuts, and the in-place variant with each compaction the
 /// device runs.
 fn variants(m: &GpuManyLod, lazy: bool) -> Vec<(&'static str, Variant)> {
     let mut v = vec![
@@ -208,6 +209,14 @@ fn variants(m: &GpuManyLod, lazy: bool) -> Vec<(&'static str, Variant)> {
         ("basic, 3 levels/pass", Variant::Cut(CutKind::Basic, 3)),
         ("basic, 4 levels/pass", Variant::Cut(CutKind::Basic, 4)),
         ("incremental", Variant::Cut(CutKind::Incremental, 1)),
+        (
+            "incremental, 2 levels/pass",
+            Variant::Cut(CutKind::Incremental, 2),
+        ),
+        (
+            "incremental, 3 levels/pass",
+            Variant::Cut(CutKind::Incremental, 3),
+        ),
     ];
     if lazy {
         v.push(("lazy q=2", Variant::Cut(CutKind::Lazy(2), 1)));
