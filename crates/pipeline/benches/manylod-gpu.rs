@@ -370,15 +370,15 @@ fn main() -> Result<()> {
                 });
             }
         }
-        // Along ε for each variant with 1024 views.
+        // Along ε for each variant with the 1024 views (64 in run-once mode).
         bench::remeasure_outliers(
             &mut rows[first_row..],
             |r: &Row| (r.variant.clone(), f64::from(r.epsilon)),
             |r| r.total.median_ms,
             |r| {
                 format!(
-                    "{points} points, 1024 views, ε {}: {}",
-                    r.epsilon, r.variant
+                    "{points} points, {} views, ε {}: {}",
+                    r.views, r.epsilon, r.variant
                 )
             },
             |r| -> Result<()> {
