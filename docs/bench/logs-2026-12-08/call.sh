@@ -21,7 +21,7 @@ mkdir -p .gpu-bin/t && tar xJf .gpu-bin/tests.tar.xz -C .gpu-bin/t
 #     "ind:60:indirect-gpu --quick" "ind-1080:90:indirect-gpu --quick --vpls 256,1024" \
 #     "c64:55:subdiv-gpu-c64" "c256:55:subdiv-gpu-c256" "f013d2d:50:subdiv-gpu-f013d2d"
 [ $# -gt 0 ] || set -- "c128:65:subdiv-gpu-c128" "b1e174e:55:subdiv-gpu" \
-  "ssaa:75:ssaa-gpu --quick" "manylod:60:manylod-gpu --quick" \
-  "loadmin:50:manylod-gpu-loadmin --quick" "c64:55:subdiv-gpu-c64" \
+  "ssaa:75:ssaa-gpu --quick" "manylod:80:manylod-gpu --quick" \
+  "loadmin:70:manylod-gpu-loadmin --quick" "c64:55:subdiv-gpu-c64" \
   "c256:55:subdiv-gpu-c256" "f013d2d:50:subdiv-gpu-f013d2d"
 bash docs/bench/logs-2026-12-06b/run.sh "$@"
